@@ -1,0 +1,103 @@
+"""Kirby's asymmetric Gaussian function (AGF), the paper's Algorithm 1."""
+
+from __future__ import annotations
+
+import dataclasses as dc
+import math
+from typing import Sequence
+
+import numpy as np
+
+__all__ = ["PersonalSpace", "agf", "agf_algorithm1", "people_array"]
+
+
+@dc.dataclass(frozen=True)
+class PersonalSpace:
+    """Variances of the AGF and the threshold (the paper's values by default).
+
+    Attributes:
+        sigma_h: along the facing direction, metres.
+        sigma_s: to the sides, metres.
+        sigma_r: to the rear, metres.
+        threshold: AGF values <= threshold count as 0.
+    """
+
+    sigma_h: float = 2.0
+    sigma_s: float = 4.0 / 3.0
+    sigma_r: float = 1.0
+    threshold: float = 0.2
+
+    @classmethod
+    def from_options(cls, options) -> "PersonalSpace":
+        """From a :class:`drake_social.scenario.SocialCostOptions`."""
+        return cls(
+            sigma_h=options.sigma_h,
+            sigma_s=options.side_ratio * options.sigma_h,
+            sigma_r=options.rear_ratio * options.sigma_h,
+            threshold=options.threshold,
+        )
+
+    def reach(self, direction: str = "front") -> float:
+        """Distance from the person at which the AGF falls to the threshold.
+
+        Args:
+            direction: "front", "side" or "rear".
+        """
+        sigma = {"front": self.sigma_h, "side": self.sigma_s, "rear": self.sigma_r}[direction]
+        if self.threshold <= 0:
+            return math.inf
+        return sigma * math.sqrt(-2.0 * math.log(self.threshold))
+
+
+def people_array(people) -> np.ndarray:
+    """(H, 3) array of [x, y, theta] from scenario :class:`Person` objects."""
+    return np.array([[p.x, p.y, p.theta] for p in people], dtype=float).reshape(-1, 3)
+
+
+def agf(points: np.ndarray, people: np.ndarray, space: PersonalSpace) -> np.ndarray:
+    """Thresholded AGF of every point for every person.
+
+    In the person's frame (u along the facing direction, v to the left) the
+    AGF of Algorithm 1 is ``exp(-(u^2 / (2 sigma^2) + v^2 / (2 sigma_s^2)))``
+    with ``sigma = sigma_h`` in front (u > 0) and ``sigma_r`` behind: the
+    quadratic form a, b, c of Algorithm 1 is exactly this rotated ellipse, and
+    its normalised angle ``alpha`` is positive precisely when u > 0 (on u = 0
+    both branches agree). This form avoids atan2 and angle normalisation.
+
+    Args:
+        points: world points (..., 2), metres.
+        people: (H, 3) rows [x, y, theta].
+        space: variances and threshold.
+
+    Returns:
+        (..., H) values in [0, 1]; values <= threshold are 0.
+    """
+    points = np.asarray(points, dtype=float)
+    people = np.asarray(people, dtype=float).reshape(-1, 3)
+    dx = points[..., 0:1] - people[:, 0]
+    dy = points[..., 1:2] - people[:, 1]
+    c, s = np.cos(people[:, 2]), np.sin(people[:, 2])
+    u = c * dx + s * dy
+    v = c * dy - s * dx
+    inv_front = 1.0 / (2.0 * space.sigma_h**2)
+    inv_rear = 1.0 / (2.0 * space.sigma_r**2)
+    inv_side = 1.0 / (2.0 * space.sigma_s**2)
+    value = np.exp(-(u * u * np.where(u > 0, inv_front, inv_rear) + v * v * inv_side))
+    return np.where(value > space.threshold, value, 0.0)
+
+
+def agf_algorithm1(x: float, y: float, person: Sequence[float], space: PersonalSpace) -> float:
+    """Algorithm 1 of the paper, line by line, for one point and one person.
+
+    A scalar reference used by the tests to check :func:`agf`.
+    """
+    x_i, y_i, theta = person
+    alpha = math.atan2(y - y_i, x - x_i) - theta + math.pi / 2
+    alpha = math.atan2(math.sin(alpha), math.cos(alpha))  # normalise to (-pi, pi]
+    sigma = space.sigma_r if alpha <= 0 else space.sigma_h
+    a = math.cos(theta) ** 2 / (2 * sigma**2) + math.sin(theta) ** 2 / (2 * space.sigma_s**2)
+    b = math.sin(2 * theta) / (4 * sigma**2) - math.sin(2 * theta) / (4 * space.sigma_s**2)
+    c = math.sin(theta) ** 2 / (2 * sigma**2) + math.cos(theta) ** 2 / (2 * space.sigma_s**2)
+    dx, dy = x - x_i, y - y_i
+    value = math.exp(-(a * dx * dx + 2 * b * dx * dy + c * dy * dy))
+    return value if value > space.threshold else 0.0

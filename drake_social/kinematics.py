@@ -1,0 +1,216 @@
+"""Planar mobile-manipulator kinematics, batched over configurations (pure numpy).
+
+Conventions (the paper's configuration ``q = [x, y, psi1, psi2]``):
+
+* the base is a disc centred at ``p_WB = (x, y)``; it translates, never rotates;
+* link 1 starts at the base centre, at angle ``psi1`` from the world x axis;
+* link 2 starts at the tip of link 1, at angle ``psi2`` relative to link 1;
+* the gripper frame G sits at the tip of link 2 with its x axis along link 2,
+  so its world angle is ``psi1 + psi2``;
+* the object is rigid in G: a polyline of vertices ``p_GO`` with a thickness.
+
+Every function takes ``q`` of shape ``(..., 4)`` and keeps the leading shape.
+Motions are straight lines in these coordinates (``(1 - t) q_a + t q_b``).
+"""
+
+from __future__ import annotations
+
+import dataclasses as dc
+
+import numpy as np
+
+from drake_social.scenario import Bar, LShape, Polyline, Scenario
+
+__all__ = [
+    "ArmGeometry",
+    "config_distance",
+    "object_polyline",
+    "object_interest_points",
+]
+
+
+def object_polyline(obj: Bar | LShape | Polyline) -> np.ndarray:
+    """The object's vertices in the gripper frame, shape (M, 2), metres."""
+    if isinstance(obj, Bar):
+        h = obj.length / 2
+        return np.array([[0.0, -h], [0.0, h]])
+    if isinstance(obj, LShape):
+        la, lb = obj.lengths
+        return np.array([[0.0, -la / 2], [0.0, la / 2], [lb, la / 2]])
+    return np.asarray(obj.points, dtype=float).reshape(-1, 2)
+
+
+def object_interest_points(obj: Bar | LShape | Polyline) -> np.ndarray:
+    """The object's interest points in the gripper frame, shape (P, 2).
+
+    Defaults: the two ends of a bar, the three vertices of an L, the first and
+    last vertex of a polyline.
+    """
+    if obj.interest_points is not None:
+        return np.asarray(obj.interest_points, dtype=float).reshape(-1, 2)
+    pts = object_polyline(obj)
+    if isinstance(obj, Polyline):
+        return pts[[0, -1]]
+    return pts
+
+
+def _rot(angle: np.ndarray) -> np.ndarray:
+    """Rotation matrices of shape (..., 2, 2) for angles of shape (...)."""
+    c, s = np.cos(angle), np.sin(angle)
+    return np.stack([np.stack([c, -s], -1), np.stack([s, c], -1)], -2)
+
+
+@dc.dataclass(frozen=True)
+class ArmGeometry:
+    """Dimensions of the robot and its object; all lengths in metres.
+
+    Attributes:
+        base_radius: radius of the base disc.
+        link_lengths: (l1, l2).
+        link_radius: radius of the link capsules (half the link width).
+        object_points: (M, 2) object polyline in the gripper frame.
+        object_radius: radius of the object capsules (half its thickness).
+        object_interest: (P, 2) object interest points in the gripper frame.
+    """
+
+    base_radius: float
+    link_lengths: tuple[float, float]
+    link_radius: float
+    object_points: np.ndarray
+    object_radius: float
+    object_interest: np.ndarray
+
+    @classmethod
+    def from_scenario(cls, scenario: Scenario) -> "ArmGeometry":
+        r, o = scenario.robot, scenario.object
+        return cls(
+            base_radius=float(r.base_radius),
+            link_lengths=(float(r.link_lengths[0]), float(r.link_lengths[1])),
+            link_radius=float(r.link_width) / 2,
+            object_points=object_polyline(o),
+            object_radius=float(o.thickness) / 2,
+            object_interest=object_interest_points(o),
+        )
+
+    # ---- names and counts -------------------------------------------------
+
+    @property
+    def num_interest_points(self) -> int:
+        """Base, link-1 tip, link-2 tip, then the object's points."""
+        return 3 + len(self.object_interest)
+
+    @property
+    def interest_names(self) -> list[str]:
+        return ["base", "link1_tip", "link2_tip"] + [
+            f"object_{k + 1}" for k in range(len(self.object_interest))
+        ]
+
+    @property
+    def num_segments(self) -> int:
+        """Link 1, link 2, then the M - 1 object segments."""
+        return 2 + len(self.object_points) - 1
+
+    @property
+    def segment_radii(self) -> np.ndarray:
+        """(S,) capsule radii, in the order of :meth:`segments`."""
+        n_obj = len(self.object_points) - 1
+        return np.array([self.link_radius] * 2 + [self.object_radius] * n_obj)
+
+    # ---- forward kinematics ------------------------------------------------
+
+    def joints(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Shoulder (base centre), elbow and gripper origin, each (..., 2)."""
+        q = np.asarray(q, dtype=float)
+        l1, l2 = self.link_lengths
+        a1 = q[..., 2]
+        a2 = a1 + q[..., 3]
+        p_WB = q[..., :2]
+        p_WE = p_WB + l1 * np.stack([np.cos(a1), np.sin(a1)], -1)
+        p_WG = p_WE + l2 * np.stack([np.cos(a2), np.sin(a2)], -1)
+        return p_WB, p_WE, p_WG
+
+    def gripper_to_world(self, q: np.ndarray, p_G: np.ndarray) -> np.ndarray:
+        """Maps gripper-frame points (K, 2) to world points (..., K, 2)."""
+        q = np.asarray(q, dtype=float)
+        _, _, p_WG = self.joints(q)
+        R_WG = _rot(q[..., 2] + q[..., 3])  # (..., 2, 2)
+        return p_WG[..., None, :] + np.einsum("...ij,kj->...ki", R_WG, np.asarray(p_G, float))
+
+    def interest_points(self, q: np.ndarray) -> np.ndarray:
+        """World interest points (..., 3 + P, 2), in :attr:`interest_names` order."""
+        p_WB, p_WE, p_WG = self.joints(q)
+        obj = self.gripper_to_world(q, self.object_interest)
+        return np.concatenate([np.stack([p_WB, p_WE, p_WG], -2), obj], -2)
+
+    def segments(self, q: np.ndarray) -> np.ndarray:
+        """Capsule axes (..., S, 2, 2): link 1, link 2, object segments.
+
+        ``segments(q)[..., s, 0]`` and ``[..., s, 1]`` are the ends of capsule s,
+        whose radius is ``segment_radii[s]``. The base disc is ``q[..., :2]``
+        with radius :attr:`base_radius`.
+        """
+        p_WB, p_WE, p_WG = self.joints(q)
+        links = np.stack([np.stack([p_WB, p_WE], -2), np.stack([p_WE, p_WG], -2)], -3)
+        verts = self.gripper_to_world(q, self.object_points)  # (..., M, 2)
+        obj = np.stack([verts[..., :-1, :], verts[..., 1:, :]], -2)  # (..., M-1, 2, 2)
+        return np.concatenate([links, obj], -3)
+
+    # ---- displacement bounds -------------------------------------------------
+
+    def reach(self, include_body: bool = False, active: np.ndarray | None = None) -> np.ndarray:
+        """Lever arms (1, 1, c1, c2) bounding point displacement per coordinate.
+
+        ``c2`` is the largest distance of a tracked point from the elbow and
+        ``c1`` bounds its distance from the shoulder (``l1 + c2``); see
+        :meth:`max_displacement`.
+
+        Args:
+            include_body: False tracks interest points (for the social
+                integral); True tracks every point of the links and the object,
+                capsule radii included (for collision checking).
+            active: with include_body False, the indices of the tracked
+                interest points (None = all); e.g. only those with a weight.
+        """
+        l1, l2 = self.link_lengths
+        if include_body:
+            extra = max(self.object_radius, self.link_radius)
+            from_elbow = [l2, *np.hypot(l2 + self.object_points[:, 0], self.object_points[:, 1])]
+            c2 = max(from_elbow) + extra
+            return np.array([1.0, 1.0, l1 + c2, c2])
+        idx = set(range(self.num_interest_points) if active is None else np.asarray(active).tolist())
+        from_elbow = [l2] if 2 in idx else []
+        from_elbow += [
+            float(np.hypot(l2 + p[0], p[1])) for k, p in enumerate(self.object_interest) if 3 + k in idx
+        ]
+        c2 = max(from_elbow, default=0.0)
+        c1 = l1 + c2 if from_elbow else (l1 if 1 in idx else 0.0)
+        return np.array([1.0, 1.0, c1, c2])
+
+    def max_displacement(
+        self, q_a: np.ndarray, q_b: np.ndarray, include_body: bool = False, active: np.ndarray | None = None
+    ) -> np.ndarray:
+        """An upper bound (...,) on how far any tracked point moves from q_a to q_b.
+
+        A point at distance c from a joint moves at most c * |d angle| when the
+        joint turns, and the base translation moves every point by the same
+        vector, so ``hypot(dx, dy) + c1 |dpsi1| + c2 |dpsi2|`` bounds the arc.
+        """
+        d = np.asarray(q_b, float) - np.asarray(q_a, float)
+        c = self.reach(include_body, active)
+        return np.hypot(d[..., 0], d[..., 1]) + c[2] * np.abs(d[..., 2]) + c[3] * np.abs(d[..., 3])
+
+
+def config_distance(q_a: np.ndarray, q_b: np.ndarray, weights: np.ndarray | None = None) -> np.ndarray:
+    """Configuration-space distance ``|| W (q_b - q_a) ||`` (the paper's norm).
+
+    Args:
+        q_a, q_b: configurations (..., 4), broadcastable.
+        weights: optional per-coordinate scale factors (4,); None = all ones.
+
+    Returns:
+        Distances of the broadcast leading shape.
+    """
+    d = np.asarray(q_b, float) - np.asarray(q_a, float)
+    if weights is not None:
+        d = d * np.asarray(weights, float)
+    return np.sqrt(np.einsum("...i,...i->...", d, d))

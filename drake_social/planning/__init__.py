@@ -1,0 +1,1 @@
+"""Sampling-based planning (pure numpy): state space, validity protocol, RRT* family."""

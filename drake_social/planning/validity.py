@@ -1,0 +1,36 @@
+"""The validity-checker protocol the planners use (implemented in numpy and in Drake)."""
+
+from __future__ import annotations
+
+from typing import Protocol, runtime_checkable
+
+import numpy as np
+
+__all__ = ["ValidityChecker"]
+
+
+@runtime_checkable
+class ValidityChecker(Protocol):
+    """Answers whether configurations and straight motions are collision-free.
+
+    Configurations are ``q = [x, y, psi1, psi2]`` (metres, radians); a motion
+    is the straight line ``(1 - t) q_a + t q_b``, t in [0, 1]. A valid
+    configuration keeps the base, the links and the object clear of obstacles,
+    people and walls, inside the joint limits.
+    """
+
+    def is_valid(self, q: np.ndarray) -> bool:
+        """One configuration (4,)."""
+
+    def are_valid(self, qs: np.ndarray) -> np.ndarray:
+        """Many configurations (N, 4) -> (N,) bool."""
+
+    def is_motion_valid(self, q_a: np.ndarray, q_b: np.ndarray) -> bool:
+        """The straight motion from q_a to q_b, ends included."""
+
+    def are_motions_valid(self, q_a: np.ndarray, q_b: np.ndarray) -> np.ndarray:
+        """Many motions (E, 4), (E, 4) -> (E,) bool."""
+
+    def clearance(self, q: np.ndarray) -> float:
+        """Signed distance (metres) from the robot and object to the nearest
+        obstacle, person or wall; negative when penetrating."""

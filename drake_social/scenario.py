@@ -1,0 +1,415 @@
+"""The scenario schema and its loading: the one place that knows the YAML format.
+
+A scenario is a typed tree of dataclasses (in the style of Drake's
+``examples/hardware_sim``): every field has a comment with its unit, defaults are
+the paper's values, and files are loaded with
+:func:`pydrake.common.yaml.yaml_load_typed`, which already rejects unknown
+keys. :func:`load_scenario` then validates the values and raises one
+:class:`ScenarioError` naming the file, the field and what is allowed.
+
+Angles are radians, lengths metres. Configurations are ``q = [x, y, psi1,
+psi2]``: base position, the angle of link 1 from the world x axis (the base
+does not rotate) and the angle of link 2 relative to link 1.
+
+This module imports pydrake lazily (only inside :func:`load_scenario`), so the
+pure-numpy core may use the dataclasses without importing Drake.
+"""
+
+
+import dataclasses as dc
+import math
+from pathlib import Path
+from typing import Optional, Union
+
+import numpy as np
+
+__all__ = [
+    "ALGORITHMS",
+    "INFORMED_MODES",
+    "Bar",
+    "Box",
+    "LShape",
+    "Person",
+    "PlannerOptions",
+    "Polyline",
+    "Robot",
+    "Scenario",
+    "ScenarioError",
+    "SocialCostOptions",
+    "World",
+    "load_scenario",
+    "validate_scenario",
+]
+
+#: Planner names accepted in ``planner.algorithm`` (see ``drake_social.planning``).
+ALGORITHMS = (
+    "rrt_star",
+    "social_rrt_star",
+    "base_rrt_star",
+    "informed_social_rrt_star",
+    "informed_base_rrt_star",
+)
+
+#: Modes of the informed sampler (see ``drake_social.planning.sampling``).
+INFORMED_MODES = ("paper", "admissible")
+
+
+class ScenarioError(ValueError):
+    """A scenario file or override is invalid; the message names file and field."""
+
+
+@dc.dataclass
+class Box:
+    """A rectangular obstacle, extruded over the robot's height."""
+
+    # Centre [x, y] of the box in the world frame, metres.
+    center: list[float] = dc.field(default_factory=lambda: [0.0, 0.0])
+    # Side lengths [along its own x axis, along its own y axis], metres (> 0).
+    size: list[float] = dc.field(default_factory=lambda: [1.0, 1.0])
+    # Rotation of the box about z, radians, counter-clockwise from world +x.
+    yaw: float = 0.0
+
+
+@dc.dataclass
+class World:
+    """The room: its walls and the obstacles inside it."""
+
+    # Room bounds [x_min, y_min, x_max, y_max], metres; walls stand on them.
+    bounds: list[float] = dc.field(default_factory=lambda: [0.0, 0.0, 10.0, 10.0])
+    # Static obstacles (desks, walls, shelves).
+    obstacles: list[Box] = dc.field(default_factory=list)
+    # Thickness of the four boundary walls, metres, built outside the bounds.
+    wall_thickness: float = 0.1
+
+
+@dc.dataclass
+class Person:
+    """A static person: a body disc and a facing direction."""
+
+    # Position of the body centre in the world frame, metres.
+    x: float = 0.0
+    y: float = 0.0
+    # Facing direction, radians, counter-clockwise from world +x.
+    theta: float = 0.0
+    # Body radius, metres (> 0); the body is an obstacle too.
+    radius: float = 0.25
+    # Optional label used in figures and error messages.
+    name: str = ""
+
+
+@dc.dataclass
+class Robot:
+    """The planar mobile manipulator: a holonomic disc base and a 2-link arm."""
+
+    # Radius of the (non-rotating) base disc, metres (> 0).
+    base_radius: float = 0.35
+    # Lengths [l1, l2] of the two links, metres (> 0). Link 1 starts at the
+    # base centre; the gripper frame sits at the tip of link 2.
+    link_lengths: list[float] = dc.field(default_factory=lambda: [0.6, 0.5])
+    # Width of both links, metres (> 0); links are capsules of radius width/2.
+    link_width: float = 0.08
+    # Lower joint limits [psi1, psi2], radians.
+    joint_lower: list[float] = dc.field(default_factory=lambda: [-math.pi, -math.pi])
+    # Upper joint limits [psi1, psi2], radians (> lower).
+    joint_upper: list[float] = dc.field(default_factory=lambda: [math.pi, math.pi])
+
+
+@dc.dataclass
+class Bar:
+    """A straight bar held at its middle, across link 2 (gripper y axis).
+
+    In the gripper frame its ends are (0, -length/2) and (0, +length/2), and
+    these two ends are its default interest points.
+    """
+
+    # Bar length, metres (> 0).
+    length: float = 1.5
+    # Bar thickness, metres (> 0); the bar is a capsule of radius thickness/2.
+    thickness: float = 0.05
+    # Interest points [[x, y], ...] in the gripper frame, metres; None = the ends.
+    interest_points: Optional[list[list[float]]] = None
+
+
+@dc.dataclass
+class LShape:
+    """Two bars joined at a right angle.
+
+    The first bar (``lengths[0]``) is held at its middle across link 2, from
+    (0, -l_a/2) to (0, +l_a/2) in the gripper frame; the second
+    (``lengths[1]``) leaves its +y end along the gripper x axis, to
+    (l_b, +l_a/2). Default interest points: the three vertices.
+    """
+
+    # Lengths [first bar, second bar], metres (> 0).
+    lengths: list[float] = dc.field(default_factory=lambda: [3.0, 2.0])
+    # Bar thickness, metres (> 0).
+    thickness: float = 0.05
+    # Interest points [[x, y], ...] in the gripper frame, metres; None = vertices.
+    interest_points: Optional[list[list[float]]] = None
+
+
+@dc.dataclass
+class Polyline:
+    """A general object: an open polyline in the gripper frame."""
+
+    # Vertices [[x, y], ...] in the gripper frame, metres (at least two).
+    points: list[list[float]] = dc.field(default_factory=lambda: [[0.0, -0.5], [0.0, 0.5]])
+    # Thickness, metres (> 0); every segment is a capsule of radius thickness/2.
+    thickness: float = 0.05
+    # Interest points [[x, y], ...] in the gripper frame; None = first and last vertex.
+    interest_points: Optional[list[list[float]]] = None
+
+
+@dc.dataclass
+class SocialCostOptions:
+    """Kirby's asymmetric Gaussian personal space and the multi-point sum."""
+
+    # Variance along the facing direction, metres (the paper: 2).
+    sigma_h: float = 2.0
+    # sigma_s = side_ratio * sigma_h (the paper: 2/3).
+    side_ratio: float = 2.0 / 3.0
+    # sigma_r = rear_ratio * sigma_h (the paper: 1/2).
+    rear_ratio: float = 0.5
+    # AGF values <= threshold count as 0 (the paper: 0.2), in [0, 1).
+    threshold: float = 0.2
+    # One weight >= 0 per interest point, in the order base, link-1 tip,
+    # link-2 tip, then the object's points. None = 1 for every point.
+    weights: Optional[list[float]] = None
+    # Path-length weight lambda >= 0 added to the social integral
+    # (0 = the paper's pure social cost).
+    length_weight: float = 0.0
+    # Largest workspace displacement of any interest point between two samples
+    # of the trapezoid rule along a motion, metres (> 0).
+    resolution: float = 0.05
+
+
+@dc.dataclass
+class PlannerOptions:
+    """Options of the RRT* family (the paper's Algorithm 2)."""
+
+    # One of ALGORITHMS.
+    algorithm: str = "social_rrt_star"
+    # Number of samples drawn, K (>= 1).
+    iterations: int = 2000
+    # Steer distance delta in configuration space (> 0).
+    planning_range: float = 1.5
+    # Near-set radius r_near in configuration space (> 0).
+    near_radius: float = 2.5
+    # Probability in [0, 1) of sampling the goal instead of a random state.
+    goal_bias: float = 0.05
+    # Informed variants: "paper" (ellipse from the best path's XY length) or
+    # "admissible" (from best cost / length_weight; needs length_weight > 0).
+    informed_mode: str = "paper"
+    # Per-coordinate weights (>= 0, 4 values) of the configuration distance.
+    distance_weights: list[float] = dc.field(default_factory=lambda: [1.0, 1.0, 1.0, 1.0])
+    # Largest displacement of any robot or object point between two checked
+    # configurations of a motion, metres (> 0).
+    collision_resolution: float = 0.05
+
+
+@dc.dataclass
+class Scenario:
+    """Everything needed to plan and simulate one transport task."""
+
+    # Free text shown in figures and reports.
+    description: str = ""
+    # The room and its obstacles.
+    world: World = dc.field(default_factory=World)
+    # Static people.
+    people: list[Person] = dc.field(default_factory=list)
+    # The mobile manipulator.
+    robot: Robot = dc.field(default_factory=Robot)
+    # The carried object, tagged in YAML as !Bar, !LShape or !Polyline.
+    object: Union[Bar, LShape, Polyline] = dc.field(default_factory=Bar)
+    # Start configuration [x, y, psi1, psi2] (metres, radians).
+    start: list[float] = dc.field(default_factory=lambda: [1.0, 1.0, 0.0, 0.0])
+    # Goal configuration [x, y, psi1, psi2] (metres, radians).
+    goal: list[float] = dc.field(default_factory=lambda: [9.0, 9.0, 0.0, 0.0])
+    # Social cost options.
+    social: SocialCostOptions = dc.field(default_factory=SocialCostOptions)
+    # Planner options.
+    planner: PlannerOptions = dc.field(default_factory=PlannerOptions)
+    # Seed of every random choice (planner sampling, studies), an integer >= 0.
+    random_seed: int = 0
+
+
+def load_scenario(path: str | Path, overrides: str | None = None) -> Scenario:
+    """Loads and validates a scenario file.
+
+    Args:
+        path: a YAML file following the :class:`Scenario` schema.
+        overrides: optional YAML text applied on top of the file, e.g.
+            ``"random_seed: 3\\nsocial: {weights: [1, 0, 0, 0, 0]}"``.
+
+    Returns:
+        The validated scenario.
+
+    Raises:
+        ScenarioError: the file is missing, malformed, has unknown keys or
+            invalid values; the message names the file and the field.
+    """
+    from pydrake.common.yaml import yaml_load_typed  # lazy: keep pydrake out of the core
+
+    path = Path(path)
+    if not path.is_file():
+        raise ScenarioError(f"{path}: no such scenario file")
+    try:
+        scenario = yaml_load_typed(schema=Scenario, filename=str(path))
+    except Exception as e:  # yaml / schema errors carry no file name: add it
+        raise ScenarioError(f"{path}: {e}") from e
+    if overrides:
+        try:
+            scenario = yaml_load_typed(schema=Scenario, data=overrides, defaults=scenario)
+        except Exception as e:
+            raise ScenarioError(f"{path} (overrides): {e}") from e
+    validate_scenario(scenario, source=str(path))
+    return scenario
+
+
+# --------------------------------------------------------------------------
+# Validation. Each check names the field by its dotted path.
+
+
+class _Checker:
+    def __init__(self, source: str):
+        self.source = source
+
+    def fail(self, field: str, message: str):
+        raise ScenarioError(f"{self.source}: {field}: {message}")
+
+    def finite(self, field: str, value) -> None:
+        arr = np.asarray(value, dtype=float)
+        if not np.all(np.isfinite(arr)):
+            self.fail(field, f"must be finite numbers, got {value}")
+
+    def positive(self, field: str, value) -> None:
+        self.finite(field, value)
+        if not np.all(np.asarray(value, dtype=float) > 0):
+            self.fail(field, f"must be > 0, got {value}")
+
+    def nonnegative(self, field: str, value) -> None:
+        self.finite(field, value)
+        if not np.all(np.asarray(value, dtype=float) >= 0):
+            self.fail(field, f"must be >= 0, got {value}")
+
+    def length(self, field: str, value, n: int) -> None:
+        if len(value) != n:
+            self.fail(field, f"must have {n} values, got {len(value)}: {value}")
+
+    def points(self, field: str, value, min_count: int) -> None:
+        if len(value) < min_count:
+            self.fail(field, f"needs at least {min_count} points [x, y], got {len(value)}")
+        for i, p in enumerate(value):
+            self.length(f"{field}[{i}]", p, 2)
+            self.finite(f"{field}[{i}]", p)
+
+
+def interest_point_count(obj: Union[Bar, LShape, Polyline]) -> int:
+    """The number of object interest points (explicit or default)."""
+    if obj.interest_points is not None:
+        return len(obj.interest_points)
+    return 3 if isinstance(obj, LShape) else 2
+
+
+def validate_scenario(scenario: Scenario, source: str = "<scenario>") -> None:
+    """Checks values that the schema's types cannot express.
+
+    Raises:
+        ScenarioError: naming ``source``, the dotted field and what is allowed.
+    """
+    c = _Checker(source)
+    w = scenario.world
+    c.length("world.bounds", w.bounds, 4)
+    c.finite("world.bounds", w.bounds)
+    x_min, y_min, x_max, y_max = w.bounds
+    if not (x_max > x_min and y_max > y_min):
+        c.fail("world.bounds", f"must be [x_min, y_min, x_max, y_max] with max > min, got {w.bounds}")
+    c.positive("world.wall_thickness", w.wall_thickness)
+    for i, box in enumerate(w.obstacles):
+        c.length(f"world.obstacles[{i}].center", box.center, 2)
+        c.finite(f"world.obstacles[{i}].center", box.center)
+        c.length(f"world.obstacles[{i}].size", box.size, 2)
+        c.positive(f"world.obstacles[{i}].size", box.size)
+        c.finite(f"world.obstacles[{i}].yaw", box.yaw)
+
+    def inside(field: str, x: float, y: float) -> None:
+        if not (x_min <= x <= x_max and y_min <= y <= y_max):
+            c.fail(field, f"position ({x}, {y}) is outside world.bounds {w.bounds}")
+
+    for i, p in enumerate(scenario.people):
+        c.finite(f"people[{i}]", [p.x, p.y, p.theta])
+        c.positive(f"people[{i}].radius", p.radius)
+        inside(f"people[{i}]", p.x, p.y)
+
+    r = scenario.robot
+    c.positive("robot.base_radius", r.base_radius)
+    c.length("robot.link_lengths", r.link_lengths, 2)
+    c.positive("robot.link_lengths", r.link_lengths)
+    c.positive("robot.link_width", r.link_width)
+    c.length("robot.joint_lower", r.joint_lower, 2)
+    c.finite("robot.joint_lower", r.joint_lower)
+    c.length("robot.joint_upper", r.joint_upper, 2)
+    c.finite("robot.joint_upper", r.joint_upper)
+    if not all(u > lo for lo, u in zip(r.joint_lower, r.joint_upper)):
+        c.fail("robot.joint_upper", f"must exceed robot.joint_lower {r.joint_lower}, got {r.joint_upper}")
+
+    o = scenario.object
+    if isinstance(o, Bar):
+        c.positive("object.length", o.length)
+    elif isinstance(o, LShape):
+        c.length("object.lengths", o.lengths, 2)
+        c.positive("object.lengths", o.lengths)
+    else:
+        c.points("object.points", o.points, 2)
+    c.positive("object.thickness", o.thickness)
+    if o.interest_points is not None:
+        c.points("object.interest_points", o.interest_points, 1)
+
+    for name in ("start", "goal"):
+        q = getattr(scenario, name)
+        c.length(name, q, 4)
+        c.finite(name, q)
+        inside(name, q[0], q[1])
+        for j in range(2):
+            if not (r.joint_lower[j] <= q[2 + j] <= r.joint_upper[j]):
+                c.fail(
+                    f"{name}[{2 + j}]",
+                    f"psi{j + 1} = {q[2 + j]} is outside the joint range "
+                    f"[{r.joint_lower[j]}, {r.joint_upper[j]}]",
+                )
+
+    s = scenario.social
+    c.positive("social.sigma_h", s.sigma_h)
+    c.positive("social.side_ratio", s.side_ratio)
+    c.positive("social.rear_ratio", s.rear_ratio)
+    c.finite("social.threshold", s.threshold)
+    if not 0.0 <= s.threshold < 1.0:
+        c.fail("social.threshold", f"must be in [0, 1), got {s.threshold}")
+    n_points = 3 + interest_point_count(o)
+    if s.weights is not None:
+        c.length("social.weights", s.weights, n_points)
+        c.nonnegative("social.weights", s.weights)
+    c.nonnegative("social.length_weight", s.length_weight)
+    c.positive("social.resolution", s.resolution)
+
+    p = scenario.planner
+    if p.algorithm not in ALGORITHMS:
+        c.fail("planner.algorithm", f"unknown algorithm {p.algorithm!r}; allowed: {', '.join(ALGORITHMS)}")
+    if p.iterations < 1:
+        c.fail("planner.iterations", f"must be >= 1, got {p.iterations}")
+    c.positive("planner.planning_range", p.planning_range)
+    c.positive("planner.near_radius", p.near_radius)
+    c.finite("planner.goal_bias", p.goal_bias)
+    if not 0.0 <= p.goal_bias < 1.0:
+        c.fail("planner.goal_bias", f"must be in [0, 1), got {p.goal_bias}")
+    if p.informed_mode not in INFORMED_MODES:
+        c.fail("planner.informed_mode", f"unknown mode {p.informed_mode!r}; allowed: {', '.join(INFORMED_MODES)}")
+    if p.informed_mode == "admissible" and p.algorithm.startswith("informed") and s.length_weight <= 0:
+        c.fail("planner.informed_mode", "'admissible' needs social.length_weight > 0")
+    c.length("planner.distance_weights", p.distance_weights, 4)
+    c.nonnegative("planner.distance_weights", p.distance_weights)
+    if not all(v > 0 for v in p.distance_weights):
+        c.fail("planner.distance_weights", f"must all be > 0, got {p.distance_weights}")
+    c.positive("planner.collision_resolution", p.collision_resolution)
+    if scenario.random_seed < 0:
+        c.fail("random_seed", f"must be >= 0, got {scenario.random_seed}")
