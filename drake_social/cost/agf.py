@@ -77,12 +77,16 @@ def agf(points: np.ndarray, people: np.ndarray, space: PersonalSpace) -> np.ndar
     dx = points[..., 0:1] - people[:, 0]
     dy = points[..., 1:2] - people[:, 1]
     c, s = np.cos(people[:, 2]), np.sin(people[:, 2])
-    u = c * dx + s * dy
-    v = c * dy - s * dx
     inv_front = 1.0 / (2.0 * space.sigma_h**2)
     inv_rear = 1.0 / (2.0 * space.sigma_r**2)
     inv_side = 1.0 / (2.0 * space.sigma_s**2)
-    value = np.exp(-(u * u * np.where(u > 0, inv_front, inv_rear) + v * v * inv_side))
+    # Offsets beyond ~1e154 m overflow to inf in u, v or their squares (never
+    # to NaN: each is a sum of same-signed overflows); exp(-inf) = 0 is exactly
+    # the right value there, so the overflow is not worth a warning.
+    with np.errstate(over="ignore"):
+        u = c * dx + s * dy
+        v = c * dy - s * dx
+        value = np.exp(-(u * u * np.where(u > 0, inv_front, inv_rear) + v * v * inv_side))
     return np.where(value > space.threshold, value, 0.0)
 
 
