@@ -1,0 +1,208 @@
+"""A :class:`ValidityChecker` backed by Drake's SceneGraphCollisionChecker.
+
+Configurations ``q = [x, y, psi1, psi2]`` are the plant's positions. A
+configuration is valid when it lies within the room bounds (base centre) and
+the joint limits, and no robot body (base, link 1, link 2, object) touches
+the environment: SceneGraph reports a collision when a signed distance is
+<= 0. Robot-robot pairs are filtered in the model (the arm carries the object
+above the base; see :mod:`drake_social.model.robot_model`).
+
+Motions. Drake checks an edge at ``ceil(d / edge_step_size)`` equal steps of
+its configuration distance d. We use a
+``LinearDistanceAndInterpolationProvider`` with weights
+``w = ArmGeometry.reach(include_body=True) = (1, 1, c1, c2)`` (the lever arm of
+each coordinate), so ``d = sqrt(dx^2 + dy^2 + (c1 dpsi1)^2 + (c2 dpsi2)^2)``.
+Any body point moves at most ``hypot(dx, dy) + c1 |dpsi1| + c2 |dpsi2|``,
+which is <= sqrt(3) d (Cauchy-Schwarz over three terms). Hence
+``edge_step_size = resolution / sqrt(3)`` guarantees that no point moves more
+than ``resolution`` between two checked configurations. The limits are a box,
+so a motion between two configurations within them stays within them.
+"""
+
+from __future__ import annotations
+
+import dataclasses as dc
+import math
+
+import numpy as np
+from pydrake.common import Parallelism
+from pydrake.planning import LinearDistanceAndInterpolationProvider, SceneGraphCollisionChecker
+
+from drake_social.kinematics import ArmGeometry
+from drake_social.model.plant import ScenarioDiagram, build_robot_diagram
+from drake_social.scenario import Scenario, ScenarioError
+
+__all__ = ["Contact", "SceneGraphChecker", "check_start_goal"]
+
+
+@dc.dataclass(frozen=True)
+class Contact:
+    """A robot body touching or penetrating an environment shape.
+
+    Attributes:
+        robot_body: ``base``, ``link1``, ``link2`` or ``object``.
+        other: the environment shape (``obstacle[i]``, ``person[i] 'name'``,
+            ``wall_<side>``).
+        distance: their signed distance, metres (<= 0).
+    """
+
+    robot_body: str
+    other: str
+    distance: float
+
+    def __str__(self) -> str:
+        return f"{self.robot_body} with {self.other} ({self.distance:+.3f} m)"
+
+
+class SceneGraphChecker:
+    """Configuration and motion validity from SceneGraph collision queries.
+
+    Args:
+        scenario: the room, people, robot and object.
+        resolution: largest displacement of any body point between two
+            checked configurations of a motion, metres; None =
+            ``scenario.planner.collision_resolution``.
+        parallelism: threads of the batched calls (:meth:`are_valid`,
+            :meth:`are_motions_valid`): True = all cores, False = 1, or a count.
+
+    Attributes:
+        geometry: the robot's :class:`ArmGeometry`.
+        lower, upper: (4,) limits of ``q`` (room bounds, joint limits).
+        resolution: see above.
+        edge_step_size: Drake's step in its weighted configuration distance,
+            ``resolution / sqrt(3)``.
+        model: the :class:`ScenarioDiagram` checked.
+        drake: the underlying ``SceneGraphCollisionChecker``.
+    """
+
+    def __init__(self, scenario: Scenario, resolution: float | None = None, parallelism: bool | int = True):
+        self.geometry = ArmGeometry.from_scenario(scenario)
+        self.resolution = float(scenario.planner.collision_resolution if resolution is None else resolution)
+        if not self.resolution > 0:
+            raise ValueError(f"resolution must be > 0 metres, got {resolution}")
+        self.parallelism = Parallelism(parallelism)
+        b, r = scenario.world.bounds, scenario.robot
+        self.lower = np.array([b[0], b[1], *r.joint_lower], float)
+        self.upper = np.array([b[2], b[3], *r.joint_upper], float)
+        self.model: ScenarioDiagram = build_robot_diagram(scenario)
+        plant = self.model.diagram.plant()
+        provider = LinearDistanceAndInterpolationProvider(plant, self.geometry.reach(include_body=True))
+        self.edge_step_size = self.resolution / math.sqrt(3.0)
+        self.drake = SceneGraphCollisionChecker(
+            model=self.model.diagram,
+            robot_model_instances=[self.model.robot],
+            distance_and_interpolation_provider=provider,
+            edge_step_size=self.edge_step_size,
+            env_collision_padding=0.0,
+            self_collision_padding=0.0,
+        )
+        self._report_context = self.drake.MakeStandaloneModelContext()
+        # With every room dimension, no pair can be further apart than this.
+        self._influence = float(np.hypot(b[2] - b[0], b[3] - b[1])) + 2 * scenario.world.wall_thickness
+
+    def in_limits(self, qs: np.ndarray) -> np.ndarray:
+        """Whether configurations (..., 4) lie within :attr:`lower`, :attr:`upper`."""
+        qs = np.asarray(qs, float)
+        return np.all((qs >= self.lower) & (qs <= self.upper), axis=-1)
+
+    # ---- ValidityChecker ------------------------------------------------------
+
+    def is_valid(self, q: np.ndarray) -> bool:
+        """One configuration (4,)."""
+        q = np.asarray(q, float)
+        return bool(self.in_limits(q)) and self.drake.CheckConfigCollisionFree(q)
+
+    def are_valid(self, qs: np.ndarray) -> np.ndarray:
+        """Many configurations (N, 4) -> (N,) bool, checked in parallel."""
+        qs = np.asarray(qs, float).reshape(-1, 4)
+        ok = self.in_limits(qs)
+        if ok.any():
+            free = self.drake.CheckConfigsCollisionFree(list(qs[ok]), self.parallelism)
+            ok[ok] = np.asarray(free, bool)
+        return ok
+
+    def is_motion_valid(self, q_a: np.ndarray, q_b: np.ndarray) -> bool:
+        """The straight motion from q_a to q_b (4,), ends included."""
+        q_a, q_b = np.asarray(q_a, float), np.asarray(q_b, float)
+        if not (self.in_limits(q_a) and self.in_limits(q_b)):
+            return False
+        return self.drake.CheckEdgeCollisionFree(q_a, q_b)
+
+    def are_motions_valid(self, q_a: np.ndarray, q_b: np.ndarray) -> np.ndarray:
+        """Many motions (E, 4), (E, 4) -> (E,) bool, checked in parallel."""
+        q_a = np.asarray(q_a, float).reshape(-1, 4)
+        q_b = np.asarray(q_b, float).reshape(-1, 4)
+        ok = self.in_limits(q_a) & self.in_limits(q_b)
+        if ok.any():
+            free = self.drake.CheckEdgesCollisionFree(list(zip(q_a[ok], q_b[ok])), self.parallelism)
+            ok[ok] = np.asarray(free, bool)
+        return ok
+
+    def clearance(self, q: np.ndarray) -> float:
+        """Smallest signed distance (metres) from a robot body to the environment.
+
+        Negative when penetrating; ignores the limits (see :meth:`in_limits`).
+        """
+        result = self.drake.CalcRobotClearance(np.asarray(q, float), self._influence)
+        d = result.distances()
+        return float(d.min()) if len(d) else math.inf
+
+    # ---- reports --------------------------------------------------------------
+
+    def contacts(self, q: np.ndarray) -> list[Contact]:
+        """The (robot body, environment shape) pairs at signed distance <= 0.
+
+        One entry per pair (the deepest of its shapes), deepest first.
+        """
+        context = self._report_context
+        self.drake.UpdateContextPositions(context, np.asarray(q, float))
+        query = context.GetQueryObject()
+        inspector = query.inspector()
+        plant = self.model.diagram.plant()
+        world = plant.world_body().index()
+        deepest: dict[tuple[str, str], float] = {}
+        for pair in query.ComputeSignedDistancePairwiseClosestPoints(max_distance=0.0):
+            if pair.distance > 0.0:
+                continue
+            bodies = [plant.GetBodyFromFrameId(inspector.GetFrameId(g)) for g in (pair.id_A, pair.id_B)]
+            if bodies[0].index() == world:
+                bodies.reverse()
+                ids = (pair.id_B, pair.id_A)
+            else:
+                ids = (pair.id_A, pair.id_B)
+            if bodies[1].index() != world:  # robot-robot pairs are filtered in the model
+                continue
+            key = (bodies[0].name(), inspector.GetName(ids[1]))
+            deepest[key] = min(pair.distance, deepest.get(key, math.inf))
+        return sorted((Contact(a, b, d) for (a, b), d in deepest.items()), key=lambda c: c.distance)
+
+
+def check_start_goal(
+    scenario: Scenario, checker: SceneGraphChecker | None = None, source: str = "<scenario>"
+) -> None:
+    """Rejects a scenario whose start or goal configuration is not valid.
+
+    Args:
+        scenario: the scenario to check.
+        checker: a checker of this scenario (built if None).
+        source: the file name used in the message.
+
+    Raises:
+        ScenarioError: naming ``source``, the field (``start`` or ``goal``),
+            the configuration and which robot bodies collide with which
+            obstacles, people or walls (or which limit is exceeded).
+    """
+    checker = checker or SceneGraphChecker(scenario)
+    for field in ("start", "goal"):
+        q = np.asarray(getattr(scenario, field), float)
+        if not checker.in_limits(q):
+            raise ScenarioError(
+                f"{source}: {field}: configuration {q.tolist()} is outside the limits "
+                f"lower={checker.lower.tolist()}, upper={checker.upper.tolist()} (world.bounds, robot.joint_*)"
+            )
+        contacts = checker.contacts(q)
+        if contacts:
+            raise ScenarioError(
+                f"{source}: {field}: configuration {q.tolist()} is in collision: "
+                + "; ".join(str(c) for c in contacts)
+            )

@@ -1,0 +1,143 @@
+"""A MultibodyPlant + SceneGraph of a scenario: the robot, its object and the room.
+
+Everything is planar honestly: each collision shape is a vertical extrusion
+over the same slab z in [0, COLLISION_HEIGHT] (cylinders for the base and the
+people, boxes for obstacles and walls, box + end-cylinder stadia for the links
+and the object; see :mod:`drake_social.model.robot_model`), so SceneGraph's
+signed distances between shapes that are apart equal the 2-D distances.
+
+The environment is anchored: its shapes are registered on the world body under
+readable names (:func:`environment_names`), which the collision reports use.
+The four walls stand outside the bounds, ``world.wall_thickness`` thick; the
+south and north walls run past the corners so the room is closed.
+"""
+
+from __future__ import annotations
+
+import dataclasses as dc
+
+import numpy as np
+from pydrake.geometry import Box as DrakeBox
+from pydrake.geometry import Cylinder
+from pydrake.math import RigidTransform, RotationMatrix
+from pydrake.multibody.parsing import Parser
+from pydrake.multibody.plant import CoulombFriction, MultibodyPlant
+from pydrake.multibody.tree import ModelInstanceIndex
+from pydrake.planning import RobotDiagram, RobotDiagramBuilder
+
+from drake_social.model.robot_model import COLLISION_HEIGHT, robot_sdf
+from drake_social.scenario import Box, Scenario
+
+__all__ = [
+    "ScenarioDiagram",
+    "add_environment",
+    "add_robot",
+    "build_robot_diagram",
+    "environment_names",
+    "wall_boxes",
+]
+
+_FRICTION = CoulombFriction(static_friction=0.5, dynamic_friction=0.5)
+_ENV_COLOURS = {"obstacle": (0.55, 0.45, 0.35, 1.0), "person": (0.85, 0.2, 0.2, 1.0), "wall": (0.6, 0.6, 0.6, 1.0)}
+
+
+def wall_boxes(scenario: Scenario) -> dict[str, Box]:
+    """The four boundary walls as boxes outside ``world.bounds``, by name.
+
+    South and north walls span x in [x_min - t, x_max + t] to close the
+    corners; west and east walls span y in [y_min, y_max]; t is
+    ``world.wall_thickness`` (metres).
+    """
+    x_min, y_min, x_max, y_max = (float(v) for v in scenario.world.bounds)
+    t = float(scenario.world.wall_thickness)
+    cx, cy = (x_min + x_max) / 2, (y_min + y_max) / 2
+    w, h = x_max - x_min, y_max - y_min
+    return {
+        "wall_south": Box(center=[cx, y_min - t / 2], size=[w + 2 * t, t]),
+        "wall_north": Box(center=[cx, y_max + t / 2], size=[w + 2 * t, t]),
+        "wall_west": Box(center=[x_min - t / 2, cy], size=[t, h]),
+        "wall_east": Box(center=[x_max + t / 2, cy], size=[t, h]),
+    }
+
+
+def environment_names(scenario: Scenario) -> list[str]:
+    """Names of the environment's collision shapes, as used in error messages.
+
+    ``obstacle[i]`` for ``world.obstacles[i]``, ``person[i]`` (plus its name
+    in quotes, when it has one) for ``people[i]``, and ``wall_<side>``.
+    """
+    names = [f"obstacle[{i}]" for i in range(len(scenario.world.obstacles))]
+    names += [f"person[{i}] {p.name!r}" if p.name else f"person[{i}]" for i, p in enumerate(scenario.people)]
+    return names + list(wall_boxes(scenario))
+
+
+def _register(plant: MultibodyPlant, name: str, X_WG: RigidTransform, shape, kind: str) -> None:
+    world = plant.world_body()
+    plant.RegisterCollisionGeometry(world, X_WG, shape, name, _FRICTION)
+    plant.RegisterVisualGeometry(world, X_WG, shape, name, np.array(_ENV_COLOURS[kind]))
+
+
+def add_environment(plant: MultibodyPlant, scenario: Scenario) -> list[str]:
+    """Anchors the obstacles, people and walls of ``scenario`` to the world.
+
+    Must be called before ``plant.Finalize()``.
+
+    Returns:
+        The registered shape names, in the order of :func:`environment_names`.
+    """
+    names = environment_names(scenario)
+    boxes = [(n, b, "obstacle") for n, b in zip(names, scenario.world.obstacles)]
+    boxes += [(n, b, "wall") for n, b in wall_boxes(scenario).items()]
+    for name, box, kind in boxes:
+        X_WG = RigidTransform(RotationMatrix.MakeZRotation(float(box.yaw)), [*box.center, COLLISION_HEIGHT / 2])
+        _register(plant, name, X_WG, DrakeBox(box.size[0], box.size[1], COLLISION_HEIGHT), kind)
+    person_names = names[len(scenario.world.obstacles) : len(scenario.world.obstacles) + len(scenario.people)]
+    for name, p in zip(person_names, scenario.people):
+        X_WG = RigidTransform([p.x, p.y, COLLISION_HEIGHT / 2])
+        _register(plant, name, X_WG, Cylinder(p.radius, COLLISION_HEIGHT), "person")
+    return names
+
+
+def add_robot(plant: MultibodyPlant, scenario: Scenario, parser: Parser | None = None) -> ModelInstanceIndex:
+    """Adds the robot and its welded object (:func:`robot_sdf`) to ``plant``.
+
+    Must be called before ``plant.Finalize()``. Its positions are
+    ``[x, y, psi1, psi2]`` when it is the plant's only model with joints.
+    """
+    parser = parser or Parser(plant)
+    (instance,) = parser.AddModelsFromString(robot_sdf(scenario), "sdf")
+    return instance
+
+
+@dc.dataclass(frozen=True)
+class ScenarioDiagram:
+    """A finalized RobotDiagram of a scenario.
+
+    Attributes:
+        diagram: the RobotDiagram (plant + scene graph).
+        robot: the model instance of the robot and its object.
+        environment: names of the anchored shapes (see
+            :func:`environment_names`).
+    """
+
+    diagram: RobotDiagram
+    robot: ModelInstanceIndex
+    environment: list[str]
+
+
+def build_robot_diagram(scenario: Scenario) -> ScenarioDiagram:
+    """Builds the robot, its object and the room into a RobotDiagram.
+
+    The plant is continuous (time step 0); it only serves kinematics and
+    collision queries. The plant's positions are ``[x, y, psi1, psi2]``.
+    """
+    builder = RobotDiagramBuilder(time_step=0.0)
+    robot = add_robot(builder.plant(), scenario, builder.parser())
+    names = add_environment(builder.plant(), scenario)
+    builder.plant().Finalize()
+    diagram = builder.Build()
+    plant = diagram.plant()
+    order = [plant.GetJointByName(n, robot).position_start() for n in ("base_x", "base_y", "psi1", "psi2")]
+    if order != [0, 1, 2, 3] or plant.num_positions() != 4:  # our own model: a bug if it fails
+        raise RuntimeError(f"unexpected position order {order} of {plant.num_positions()} positions")
+    return ScenarioDiagram(diagram=diagram, robot=robot, environment=names)
