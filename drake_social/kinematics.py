@@ -54,10 +54,20 @@ def object_interest_points(obj: Bar | LShape | Polyline) -> np.ndarray:
     return pts
 
 
-def _rot(angle: np.ndarray) -> np.ndarray:
-    """Rotation matrices of shape (..., 2, 2) for angles of shape (...)."""
-    c, s = np.cos(angle), np.sin(angle)
+def _rot(c: np.ndarray, s: np.ndarray) -> np.ndarray:
+    """Rotation matrices (..., 2, 2) from the cosines and sines (...) of their angles."""
     return np.stack([np.stack([c, -s], -1), np.stack([s, c], -1)], -2)
+
+
+def _gripper_cos_sin(q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """cos and sin of the gripper's world angle psi1 + psi2, shape (...).
+
+    By the angle-addition formulas: the sum itself overflows to inf (and its
+    cosine to NaN) for finite angles beyond ~9e307.
+    """
+    c1, s1 = np.cos(q[..., 2]), np.sin(q[..., 2])
+    c2, s2 = np.cos(q[..., 3]), np.sin(q[..., 3])
+    return c1 * c2 - s1 * s2, s1 * c2 + c1 * s2
 
 
 @dc.dataclass(frozen=True)
@@ -123,17 +133,17 @@ class ArmGeometry:
         q = np.asarray(q, dtype=float)
         l1, l2 = self.link_lengths
         a1 = q[..., 2]
-        a2 = a1 + q[..., 3]
+        c12, s12 = _gripper_cos_sin(q)
         p_WB = q[..., :2]
         p_WE = p_WB + l1 * np.stack([np.cos(a1), np.sin(a1)], -1)
-        p_WG = p_WE + l2 * np.stack([np.cos(a2), np.sin(a2)], -1)
+        p_WG = p_WE + l2 * np.stack([c12, s12], -1)
         return p_WB, p_WE, p_WG
 
     def gripper_to_world(self, q: np.ndarray, p_G: np.ndarray) -> np.ndarray:
         """Maps gripper-frame points (K, 2) to world points (..., K, 2)."""
         q = np.asarray(q, dtype=float)
         _, _, p_WG = self.joints(q)
-        R_WG = _rot(q[..., 2] + q[..., 3])  # (..., 2, 2)
+        R_WG = _rot(*_gripper_cos_sin(q))  # (..., 2, 2)
         return p_WG[..., None, :] + np.einsum("...ij,kj->...ki", R_WG, np.asarray(p_G, float))
 
     def interest_points(self, q: np.ndarray) -> np.ndarray:

@@ -6,6 +6,8 @@ import math
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from drake_social.kinematics import ArmGeometry, config_distance, object_interest_points, object_polyline
 from drake_social.scenario import Bar, LShape, Polyline, Robot, Scenario
@@ -180,17 +182,29 @@ def test_reach_lever_arms_by_hand():
     np.testing.assert_allclose(L_SHAPE.reach(include_body=True), [1, 1, 0.6 + far_l + 0.04, far_l + 0.04])
 
 
-def body_points_scalar(dut: ArmGeometry, q, body: dict[str, np.ndarray]) -> np.ndarray:
-    """World positions of body-fixed points of the base, the links and the object."""
-    x, y, psi1, psi2 = (float(v) for v in q)
+def body_points(dut: ArmGeometry, qs: np.ndarray, body: dict[str, np.ndarray]) -> np.ndarray:
+    """World positions (T, K, 2) of body-fixed points of the base, links and object.
+
+    Written from the conventions, independently of the library's kinematics.
+    """
     l1, l2 = dut.link_lengths
-    base = np.array([x, y])
-    elbow = base + rot(psi1, [l1, 0.0])
-    grip = elbow + rot(psi1 + psi2, [l2, 0.0])
-    out = [base + o for o in body["base"]]  # the base translates only
-    out += [base + rot(psi1, p) for p in body["link1"]]  # in the link-1 frame, origin at the shoulder
-    out += [grip + rot(psi1 + psi2, p) for p in body["grip"]]  # link 2 and object, in G
-    return np.array(out)
+    x, y, psi1, psi2 = qs.T
+    base = np.stack([x, y], -1)[:, None, :]
+
+    def rotate(angle, p):  # angle (T,), p (K, 2) -> (T, K, 2)
+        c, s = np.cos(angle)[:, None], np.sin(angle)[:, None]
+        return np.stack([c * p[:, 0] - s * p[:, 1], s * p[:, 0] + c * p[:, 1]], -1)
+
+    elbow = base + rotate(psi1, np.array([[l1, 0.0]]))
+    grip = elbow + rotate(psi1 + psi2, np.array([[l2, 0.0]]))
+    return np.concatenate(
+        [
+            base + body["base"],  # the base translates only
+            base + rotate(psi1, body["link1"]),  # link-1 frame, origin at the shoulder
+            grip + rotate(psi1 + psi2, body["grip"]),  # link 2 and object, in G
+        ],
+        1,
+    )
 
 
 def random_body_points(dut: ArmGeometry, rng, n: int = 40) -> dict[str, np.ndarray]:
@@ -246,7 +260,7 @@ def test_max_displacement_bounds_every_interest_and_body_point(dut, rng):
         arcs = arc_lengths(track)
         assert np.all(arcs <= bound_pts[e] * (1 + 1e-9) + 1e-12)
         assert np.all(np.linalg.norm(track[-1] - track[0], axis=-1) <= bound_pts[e] + 1e-12)
-        body_track = np.array([body_points_scalar(dut, q, body) for q in qs[::4]])
+        body_track = body_points(dut, qs, body)
         assert np.all(arc_lengths(body_track) <= bound_body[e] * (1 + 1e-9) + 1e-12)
         # Subsets of interest points: each bound covers its own points.
         for active in ([0], [1], [2], [0, 3], [len(arcs) - 1]):
@@ -268,3 +282,25 @@ def test_max_displacement_is_tight_for_simple_motions():
     assert BAR.max_displacement(q, q) == 0.0
     # Batched over (..., 4) like everything else.
     assert BAR.max_displacement(np.zeros((2, 3, 4)), np.ones((2, 3, 4))).shape == (2, 3)
+
+
+# ---- properties ---------------------------------------------------------------------------------
+
+finite = st.floats(allow_nan=False, allow_infinity=False)
+
+
+@settings(max_examples=200)
+@given(q=st.tuples(finite, finite, finite, finite))
+def test_property_finite_for_any_finite_q(q):
+    """Even absurd joint angles (psi1 + psi2 would overflow past 1.8e308) stay finite."""
+    q = np.array(q)
+    for dut in (BAR, L_SHAPE):
+        pts = dut.interest_points(q)
+        assert np.all(np.isfinite(pts))
+        assert np.all(np.isfinite(dut.segments(q)))
+        np.testing.assert_array_equal(pts[0], q[:2])
+        # Every point stays within the arm's reach of the base (relative to the
+        # base's magnitude: at 1e308 the sums round).
+        reach = dut.reach()[2]
+        scale = max(1.0, float(np.abs(q[:2]).max()))
+        assert np.all(np.abs(pts - q[:2]) <= reach * (1 + 1e-9) + 1e-15 * scale)

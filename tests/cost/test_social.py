@@ -1,0 +1,444 @@
+"""The multi-point social cost S(q), its motion integral Msc and the field G."""
+
+from __future__ import annotations
+
+import dataclasses as dc
+import math
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from drake_social.cost import PersonalSpace, SocialCost, agf, agf_algorithm1
+from drake_social.kinematics import ArmGeometry, config_distance
+from drake_social.scenario import LShape, Robot, Scenario
+
+PI = math.pi
+PAPER = PersonalSpace()
+
+# Three people at awkward poses: rotated by pi/4, facing ~pi, more than a turn.
+PEOPLE_3 = np.array([[0.0, 0.0, PI / 4], [3.0, 1.0, PI - 1e-9], [1.0, -3.0, 2 * PI + 2.0]])
+
+
+def l_shape_cost(**kwargs) -> SocialCost:
+    """The 3 m x 2 m L-shape (6 interest points) among three people."""
+    geometry = ArmGeometry.from_scenario(Scenario(robot=Robot(), object=LShape(lengths=[3.0, 2.0])))
+    weights = kwargs.pop("weights", np.array([1.0, 0.5, 1.0, 2.0, 1.0, 1.5]))
+    return SocialCost(geometry, PEOPLE_3, weights=weights, **kwargs)
+
+
+@pytest.fixture
+def bar_cost(tiny_scenario) -> SocialCost:
+    """The tiny scenario's cost: the 1.5 m bar and one person at (4, 3.8) facing -y."""
+    return SocialCost.from_scenario(tiny_scenario)
+
+
+@pytest.fixture(params=["bar", "L"])
+def cost(request, tiny_scenario) -> SocialCost:
+    if request.param == "bar":
+        return SocialCost.from_scenario(tiny_scenario)
+    return l_shape_cost()
+
+
+def near_people(dut: SocialCost, rng, n: int, spread: float = 3.0) -> np.ndarray:
+    """n configurations with the base within ``spread`` metres of some person."""
+    who = rng.integers(0, len(dut.people), n)
+    xy = dut.people[who, :2] + rng.uniform(-spread, spread, (n, 2))
+    return np.column_stack([xy, rng.uniform(-PI, PI, (n, 2))])
+
+
+def random_edges(dut: SocialCost, rng, n: int) -> tuple[np.ndarray, np.ndarray]:
+    """Edges of configuration length 0.2 .. 1.5 (the planning range) near people."""
+    q_a = near_people(dut, rng, n)
+    d = rng.normal(size=(n, 4))
+    d *= rng.uniform(0.2, 1.5, (n, 1)) / np.linalg.norm(d, axis=1, keepdims=True)
+    return q_a, q_a + d
+
+
+# ---- independent references ------------------------------------------------------------
+
+
+def s_loop(dut: SocialCost, q) -> float:
+    """S(q) for one configuration by plain loops over the literal Algorithm 1."""
+    pts = dut.geometry.interest_points(np.asarray(q, float))
+    total = 0.0
+    for j, (x, y) in enumerate(pts):
+        for person in dut.people:
+            total += dut.weights[j] * agf_algorithm1(float(x), float(y), person, dut.space)
+    return total
+
+
+def reference_integral(dut: SocialCost, q_a, q_b, steps: int = 2000) -> float:
+    """Trapezoid rule over ``steps + 1`` linearly interpolated configurations,
+    each step weighted by its configuration-space norm (the paper's ds)."""
+    t = np.linspace(0.0, 1.0, steps + 1)[:, None]
+    qs = q_a + t * (q_b - q_a)
+    s = dut(qs)
+    ds = config_distance(qs[:-1], qs[1:], dut.distance_weights)
+    return float(np.sum(0.5 * ds * (s[1:] + s[:-1])))
+
+
+def crossing_budget(dut: SocialCost, q_a, q_b, steps: int = 2000) -> float:
+    """Largest trapezoid error the threshold jumps can explain, for Msc and the reference.
+
+    Write each point/person term as ``f = g - g 1[g <= tau]``: on a step of
+    length h where the thresholded part switches on or off, both its exact
+    integral and its trapezoid lie in [0, h tau], so the step's error is at
+    most ``w_j tau h``. Steps without a switch are smooth. The switches are
+    counted on the dense samples of the reference.
+    """
+    t = np.linspace(0.0, 1.0, steps + 1)[:, None]
+    pts = dut.geometry.interest_points(q_a + t * (q_b - q_a))
+    raw = agf(pts, dut.people, dc.replace(dut.space, threshold=0.0))  # (T, J, H)
+    switches = np.abs(np.diff((raw > dut.space.threshold).astype(int), axis=0)).sum(0)  # (J, H)
+    length = float(config_distance(q_a, q_b, dut.distance_weights))
+    h_dut = length / int(dut.segments(q_a, q_b))
+    h_ref = length / steps
+    return dut.space.threshold * float(np.sum(dut.weights[:, None] * switches)) * (h_dut + h_ref)
+
+
+# ---- S(q) ---------------------------------------------------------------------------------
+
+
+def test_s_equals_a_plain_loop_over_configurations(cost, rng):
+    dut = cost
+    q = near_people(dut, rng, 120).reshape(3, 40, 4)
+    got = dut(q)
+    point = dut.point_costs(q)
+    assert got.shape == (3, 40)
+    assert point.shape == (3, 40, dut.geometry.num_interest_points)
+    for idx in np.ndindex(q.shape[:-1]):
+        assert got[idx] == pytest.approx(s_loop(dut, q[idx]), rel=1e-9, abs=1e-12)
+        assert dut(q[idx]) == pytest.approx(got[idx], rel=1e-12, abs=1e-15)
+        pts = dut.geometry.interest_points(q[idx])
+        per_point = [sum(agf_algorithm1(x, y, p, dut.space) for p in dut.people) for x, y in pts]
+        np.testing.assert_allclose(point[idx], per_point, rtol=1e-9, atol=1e-12)
+    np.testing.assert_allclose(point @ dut.weights, got, rtol=1e-12, atol=1e-15)
+    assert np.count_nonzero(got) > 60  # the configurations really are near people
+
+
+def test_s_by_hand_base_in_front_of_the_tiny_person(bar_cost):
+    # The person at (4, 3.8) faces -y. Base 1 m ahead at (4, 2.8), arm folded so
+    # that every other point is far: only the base counts, exp(-1/8).
+    dut = bar_cost.with_weights(np.array([1.0, 0, 0, 0, 0]))
+    assert dut(np.array([4.0, 2.8, 0.3, 2.0])) == pytest.approx(math.exp(-1 / 8), rel=1e-4)
+
+
+def test_base_only_weights_equal_an_independent_base_only_cost(cost, rng):
+    n = cost.geometry.num_interest_points
+    dut = cost.with_weights(np.r_[1.0, np.zeros(n - 1)])
+    q = near_people(cost, rng, 300)
+    # The base point is (x, y) and does not depend on the arm.
+    ref = [sum(agf_algorithm1(x, y, p, cost.space) for p in cost.people) for x, y, _, _ in q]
+    np.testing.assert_allclose(dut(q), ref, rtol=1e-9, atol=1e-12)
+    assert np.count_nonzero(ref) > 100
+    scaled = cost.with_weights(np.r_[2.5, np.zeros(n - 1)])
+    np.testing.assert_allclose(scaled(q), 2.5 * np.array(ref), rtol=1e-12)
+
+    # Msc: only the base is tracked, so the step count comes from the base path.
+    q_a, q_b = random_edges(cost, rng, 40)
+    for a, b in zip(q_a, q_b):
+        steps = max(1, math.ceil(math.hypot(*(b[:2] - a[:2])) / dut.resolution - 1e-9))
+        assert dut.segments(a, b) == steps
+        xy = [a[:2] + k / steps * (b[:2] - a[:2]) for k in range(steps + 1)]
+        s = [sum(agf_algorithm1(x, y, p, cost.space) for p in cost.people) for x, y in xy]
+        h = math.dist(a, b) / steps
+        ref_msc = h * (sum(s) - 0.5 * (s[0] + s[-1]))
+        assert dut.motion_cost(a, b) == pytest.approx(ref_msc, rel=1e-9, abs=1e-12)
+
+    # Turning the arm in place: one step, S constant, Msc = length * S.
+    a = np.array([*cost.people[0, :2] + [0.5, 0.5], 0.0, 0.0])
+    b = a + [0, 0, 1.0, -2.0]
+    assert dut.segments(a, b) == 1
+    assert dut(a) > 0.2
+    assert dut.motion_cost(a, b) == pytest.approx(math.sqrt(5.0) * dut(a), rel=1e-12)
+
+
+def test_all_zero_weights_cost_nothing(cost, rng):
+    dut = cost.with_weights(np.zeros(cost.geometry.num_interest_points))
+    q_a, q_b = random_edges(cost, rng, 20)
+    np.testing.assert_array_equal(dut(q_a), 0.0)
+    np.testing.assert_array_equal(dut.motion_cost(q_a, q_b), 0.0)
+    assert cost(q_a).max() > 0  # the same configurations do cost something with weights
+
+
+def test_s_is_linear_in_the_weights(cost, rng):
+    n = cost.geometry.num_interest_points
+    q = near_people(cost, rng, 200)
+    w1 = rng.uniform(0, 2, n) * (rng.uniform(size=n) < 0.6)  # with zeros
+    w2 = rng.uniform(0, 2, n) * (rng.uniform(size=n) < 0.6)
+    s1, s2 = cost.with_weights(w1)(q), cost.with_weights(w2)(q)
+    np.testing.assert_allclose(cost.with_weights(w1 + 3.0 * w2)(q), s1 + 3.0 * s2, rtol=1e-12, atol=1e-14)
+    # One weight at a time reproduces the per-point costs.
+    for j in range(n):
+        np.testing.assert_allclose(cost.with_weights(np.eye(n)[j])(q), cost.point_costs(q)[:, j], rtol=1e-12)
+
+
+def test_msc_is_linear_in_weights_of_the_same_support(cost, rng):
+    """With every weight > 0 the step counts are the same, so Msc is exactly linear.
+
+    (Different supports track different points and may step differently; the
+    results then agree only to discretisation error.)
+    """
+    n = cost.geometry.num_interest_points
+    q_a, q_b = random_edges(cost, rng, 30)
+    w1, w2 = rng.uniform(0.1, 2, n), rng.uniform(0.1, 2, n)
+    m1 = cost.with_weights(w1).motion_cost(q_a, q_b)
+    m2 = cost.with_weights(w2).motion_cost(q_a, q_b)
+    m12 = cost.with_weights(w1 + 2.0 * w2).motion_cost(q_a, q_b)
+    np.testing.assert_allclose(m12, m1 + 2.0 * m2, rtol=1e-12, atol=1e-14)
+    assert np.count_nonzero(m1) > 10
+
+
+def test_a_far_person_changes_nothing(cost, rng):
+    q_a, q_b = random_edges(cost, rng, 40)
+    # Farther than the AGF's longest reach plus the arm and object from every
+    # configuration used here: every one of its AGF values is exactly 0.
+    far = np.array([[60.0, -40.0, 2.2], [-50.0, 45.0, -7.0]])
+    dut = SocialCost(cost.geometry, np.vstack([cost.people, far]), cost.space, cost.weights, cost.resolution)
+    np.testing.assert_array_equal(dut(q_a), cost(q_a))
+    np.testing.assert_array_equal(dut.point_costs(q_a), cost.point_costs(q_a))
+    np.testing.assert_array_equal(dut.motion_cost(q_a, q_b), cost.motion_cost(q_a, q_b))
+    x, y = np.meshgrid(np.linspace(-5, 8, 40), np.linspace(-6, 6, 30))
+    np.testing.assert_array_equal(dut.field(x, y), cost.field(x, y))
+    # ... but the same person near the robot does count.
+    near = np.array([[q_a[0, 0] + 1.0, q_a[0, 1], PI]])
+    moved = SocialCost(cost.geometry, np.vstack([cost.people, near]), cost.space, cost.weights, cost.resolution)
+    assert moved(q_a[0]) > cost(q_a[0]) + 0.2
+
+
+def test_no_people_cost_nothing(cost, rng):
+    dut = SocialCost(cost.geometry, np.zeros((0, 3)), cost.space, cost.weights)
+    q_a, q_b = random_edges(cost, rng, 10)
+    np.testing.assert_array_equal(dut(q_a), 0.0)
+    assert dut(q_a).shape == (10,)
+    np.testing.assert_array_equal(dut.motion_cost(q_a, q_b), 0.0)
+    assert dut.motion_cost(q_a[0], q_b[0]) == 0.0
+    np.testing.assert_array_equal(dut.point_costs(q_a), 0.0)
+    np.testing.assert_array_equal(dut.field(np.zeros(3), np.ones(3)), 0.0)
+
+
+# ---- Msc against a 2,000-step reference -------------------------------------------------------
+
+
+def test_msc_matches_2000_step_reference_without_threshold(cost, rng):
+    """tau = 0 (a smooth integrand): the default resolution is well within 1%."""
+    dut = SocialCost(cost.geometry, cost.people, dc.replace(cost.space, threshold=0.0), cost.weights)
+    q_a, q_b = random_edges(cost, rng, 60)
+    got = dut.motion_cost(q_a, q_b)
+    ref = np.array([reference_integral(dut, a, b) for a, b in zip(q_a, q_b)])
+    assert np.all(ref > 0)
+    np.testing.assert_allclose(got, ref, rtol=0.01)
+
+
+def test_msc_error_at_the_paper_threshold_is_explained_by_the_jumps(cost, rng):
+    """tau = 0.2: |Msc - reference| <= 1% + what the threshold jumps can cause.
+
+    Edges that never cross the threshold have a zero budget and must be within
+    1%; edges that cross it may be off by at most ``w tau h`` per crossing and
+    step length h, for Msc and for the reference alike (see crossing_budget).
+    """
+    dut = cost
+    q_a, q_b = random_edges(dut, rng, 80)
+    got = dut.motion_cost(q_a, q_b)
+    crossed = 0
+    for e, (a, b) in enumerate(zip(q_a, q_b)):
+        ref = reference_integral(dut, a, b)
+        budget = crossing_budget(dut, a, b)
+        crossed += budget > 0
+        assert abs(got[e] - ref) <= 0.01 * ref + budget + 1e-12, (e, got[e], ref, budget)
+    assert crossed > 20  # the test really exercises the jumps
+    assert np.count_nonzero(got) > 60
+
+
+@pytest.mark.xfail(
+    strict=True,
+    reason="Known limitation, reported: the AGF threshold makes S jump by up to 0.2 w_j, so the "
+    "trapezoid error is first order at crossings. At resolution 0.05 m about 8% of random edges "
+    "near people exceed 1% (worst ~180% on an edge whose integral is ~1e-3); see "
+    "test_msc_error_at_the_paper_threshold_is_explained_by_the_jumps for the bound that holds.",
+)
+def test_msc_within_1pct_of_reference_at_the_paper_threshold(bar_cost, rng):
+    q_a, q_b = random_edges(bar_cost, rng, 150)
+    got = bar_cost.motion_cost(q_a, q_b)
+    ref = np.array([reference_integral(bar_cost, a, b) for a, b in zip(q_a, q_b)])
+    np.testing.assert_allclose(got, ref, rtol=0.01, atol=1e-12)
+
+
+def test_msc_is_the_trapezoid_rule_with_the_adaptive_step_count(cost, rng):
+    q_a, q_b = random_edges(cost, rng, 15)
+    for a, b in zip(q_a, q_b):
+        n = int(cost.segments(a, b))
+        bound = cost.geometry.max_displacement(a, b, active=np.flatnonzero(cost.weights))
+        assert n == max(1, math.ceil(bound / cost.resolution - 1e-9))
+        s = [s_loop(cost, a + k / n * (b - a)) for k in range(n + 1)]
+        h = math.dist(a, b) / n
+        by_hand = sum(0.5 * h * (s[k] + s[k + 1]) for k in range(n))
+        assert cost.motion_cost(a, b) == pytest.approx(by_hand, rel=1e-9, abs=1e-12)
+
+
+def test_step_count_follows_the_farthest_point(bar_cost):
+    q = np.array([2.0, 2.0, 0.3, -0.4])
+    # 1 m of base translation at 0.05 m: 20 steps.
+    assert bar_cost.segments(q, q + [0.6, 0.8, 0, 0]) == 20
+    # The bar end is hypot(0.5, 0.75) = 0.901 m from the elbow: 0.2 rad -> 0.18 m -> 4 steps.
+    assert bar_cost.segments(q, q + [0, 0, 0, 0.2]) == 4
+    # The issue's example: the L's far corner (hypot(2.5, 1.5) = 2.92 m from the
+    # elbow) swinging 0.1 rad moves 0.29 m: 6 steps, not a fixed N.
+    dut = l_shape_cost(resolution=0.05)
+    assert dut.segments(q, q + [0, 0, 0, 0.1]) == math.ceil(math.hypot(2.5, 1.5) * 0.1 / 0.05)
+
+
+def test_msc_sees_a_person_between_two_free_ends(bar_cost):
+    # 10 m straight past the tiny person, 1 m in front of them: both ends and a
+    # one-step trapezoid cost 0, the adaptive rule does not.
+    a = np.array([-1.0, 2.8, -PI / 2, 0.0])
+    b = np.array([9.0, 2.8, -PI / 2, 0.0])
+    assert bar_cost(a) == 0.0 and bar_cost(b) == 0.0
+    got = bar_cost.motion_cost(a, b)
+    ref = reference_integral(bar_cost, a, b)
+    assert got > 1.0
+    assert abs(got - ref) <= 0.01 * ref + crossing_budget(bar_cost, a, b)
+
+
+def test_zero_length_edge_costs_zero(cost, rng):
+    q = near_people(cost, rng, 30)
+    assert cost(q).max() > 0.2
+    np.testing.assert_array_equal(cost.motion_cost(q, q), 0.0)
+    assert cost.motion_cost(q[0], q[0]) == 0.0
+    np.testing.assert_array_equal(cost.segments(q, q), 1)
+
+
+def test_msc_is_symmetric(cost, rng):
+    q_a, q_b = random_edges(cost, rng, 60)
+    ab = cost.motion_cost(q_a, q_b)
+    np.testing.assert_allclose(cost.motion_cost(q_b, q_a), ab, rtol=1e-9, atol=1e-12)
+    assert np.count_nonzero(ab) > 40
+
+
+def test_batched_msc_equals_one_at_a_time(cost, rng):
+    q_a, q_b = random_edges(cost, rng, 50)
+    q_b[3] = q_a[3]  # a zero-length edge inside the batch
+    batch = cost.motion_cost(q_a, q_b)
+    assert batch.shape == (50,)
+    singles = [cost.motion_cost(a, b) for a, b in zip(q_a, q_b)]
+    assert all(np.ndim(s) == 0 for s in singles)
+    np.testing.assert_allclose(batch, singles, rtol=1e-12, atol=1e-15)
+    np.testing.assert_array_equal(cost.segments(q_a, q_b), [cost.segments(a, b) for a, b in zip(q_a, q_b)])
+    # One start broadcast against many ends, and a batch of one.
+    fan = cost.motion_cost(q_a[0], q_b)
+    np.testing.assert_allclose(fan, [cost.motion_cost(q_a[0], b) for b in q_b], rtol=1e-12, atol=1e-15)
+    assert cost.motion_cost(q_a[:1], q_b[:1]).shape == (1,)
+    assert cost.motion_cost(np.zeros((0, 4)), np.zeros((0, 4))).shape == (0,)
+
+
+def test_cached_end_costs_give_the_same_result(cost, rng):
+    q_a, q_b = random_edges(cost, rng, 40)
+    s_a, s_b = cost(q_a), cost(q_b)
+    plain = cost.motion_cost(q_a, q_b)
+    np.testing.assert_allclose(cost.motion_cost(q_a, q_b, s_a=s_a, s_b=s_b), plain, rtol=1e-12, atol=1e-15)
+    np.testing.assert_allclose(cost.motion_cost(q_a, q_b, s_a=s_a), plain, rtol=1e-12, atol=1e-15)
+    assert cost.motion_cost(q_a[0], q_b[0], s_a=s_a[0], s_b=s_b[0]) == pytest.approx(plain[0], rel=1e-12)
+    # The cache really is used, with the trapezoid's end weight h / 2.
+    h = config_distance(q_a, q_b) / cost.segments(q_a, q_b)
+    np.testing.assert_allclose(cost.motion_cost(q_a, q_b, s_a=s_a + 1.0), plain + h / 2, rtol=1e-12)
+
+
+def test_distance_weights_scale_ds(cost, rng):
+    dut = SocialCost(cost.geometry, cost.people, cost.space, cost.weights, distance_weights=[1, 1, 2, 2])
+    q_a = near_people(cost, rng, 20)
+    q_b = q_a + rng.normal(size=(20, 4)) * [0, 0, 0.5, 0.5]  # joints only: every ds doubles
+    np.testing.assert_allclose(dut.motion_cost(q_a, q_b), 2 * cost.motion_cost(q_a, q_b), rtol=1e-12)
+    assert dut.motion_cost(q_a, q_b).max() > 0
+    a, b = q_a[0], q_a[0] + [0.3, 0.4, 0.5, 0]
+    assert dut.motion_cost(a, b) == pytest.approx(reference_integral(dut, a, b), rel=0.01, abs=1e-12)
+
+
+# ---- the field, construction ---------------------------------------------------------------------
+
+
+def test_field_is_the_sum_of_agf_over_people(cost):
+    x = np.linspace(-4, 6, 25)
+    y = np.linspace(-6, 4, 20)
+    dut = cost.field(x[:, None], y[None, :])
+    assert dut.shape == (25, 20)
+    for i, xi in enumerate(x):
+        for k, yk in enumerate(y):
+            ref = sum(agf_algorithm1(xi, yk, p, cost.space) for p in cost.people)
+            assert dut[i, k] == pytest.approx(ref, rel=1e-9, abs=1e-12)
+    assert np.count_nonzero(dut) > 50
+    # Independent of the robot and its weights.
+    np.testing.assert_array_equal(cost.with_weights(np.zeros(cost.geometry.num_interest_points)).field(x, 0.0),
+                                  cost.field(x, 0.0))
+
+
+def test_from_scenario(tiny_scenario):
+    dut = SocialCost.from_scenario(tiny_scenario)
+    np.testing.assert_array_equal(dut.weights, np.ones(5))
+    np.testing.assert_allclose(dut.people, [[4.0, 3.8, -1.5708]])
+    assert dut.space == PersonalSpace(2.0, 4.0 / 3.0, 1.0, 0.2)
+    assert dut.resolution == tiny_scenario.social.resolution
+    np.testing.assert_array_equal(dut.distance_weights, tiny_scenario.planner.distance_weights)
+    base_only = SocialCost.from_scenario(tiny_scenario, weights=[1, 0, 0, 0, 0])
+    np.testing.assert_array_equal(base_only.weights, [1, 0, 0, 0, 0])
+    scenario = dc.replace(tiny_scenario, social=dc.replace(tiny_scenario.social, weights=[0, 0, 0, 2, 2]))
+    np.testing.assert_array_equal(SocialCost.from_scenario(scenario).weights, [0, 0, 0, 2, 2])
+
+
+@pytest.mark.parametrize(
+    "kwargs, match",
+    [
+        ({"weights": np.ones(4)}, "weights must have 5 values"),
+        ({"weights": [1, 1, -1, 1, 1]}, ">= 0"),
+        ({"weights": [1, 1, np.nan, 1, 1]}, "finite"),
+        ({"resolution": 0.0}, "resolution"),
+        ({"resolution": -1.0}, "resolution"),
+    ],
+)
+def test_bad_construction_is_refused(bar_cost, kwargs, match):
+    args = {"weights": None, "resolution": 0.05, **kwargs}
+    with pytest.raises(ValueError, match=match):
+        SocialCost(bar_cost.geometry, bar_cost.people, bar_cost.space, **args)
+
+
+# ---- properties ------------------------------------------------------------------------------------
+
+finite = st.floats(allow_nan=False, allow_infinity=False)
+angle = st.floats(min_value=-50, max_value=50, allow_nan=False)
+person = st.tuples(
+    st.floats(min_value=-1e6, max_value=1e6, allow_nan=False),
+    st.floats(min_value=-1e6, max_value=1e6, allow_nan=False),
+    finite,  # any facing
+)
+L_GEOMETRY = l_shape_cost().geometry
+
+
+@settings(max_examples=200)
+@given(q=st.tuples(finite, finite, finite, finite), people=st.lists(person, min_size=1, max_size=4))
+def test_property_s_is_finite_and_non_negative(q, people):
+    """Any finite q (up to +-1.8e308, any joint angle) and any person pose."""
+    dut = SocialCost(L_GEOMETRY, np.array(people), weights=np.array([1.0, 0.5, 1.0, 2.0, 1.0, 1.5]))
+    s = dut(np.array(q))
+    assert np.isfinite(s) and s >= 0.0
+    assert s <= dut.weights.sum() * len(people) + 1e-12
+    assert np.all(np.isfinite(dut.point_costs(np.array(q))))
+
+
+box = st.floats(min_value=-15, max_value=15, allow_nan=False)
+
+
+@settings(max_examples=60)
+@given(
+    q_a=st.tuples(box, box, angle, angle),
+    q_b=st.tuples(box, box, angle, angle),
+    people=st.lists(st.tuples(box, box, finite), min_size=1, max_size=3),
+)
+def test_property_msc_is_finite_and_non_negative(q_a, q_b, people):
+    """Edges anywhere in a 30 m room with any joint angles in +-50 rad."""
+    dut = SocialCost(L_GEOMETRY, np.array(people), resolution=0.1)
+    a, b = np.array(q_a), np.array(q_b)
+    m = dut.motion_cost(a, b)
+    assert np.isfinite(m) and m >= 0.0
+    # Bounded by the largest possible S times the edge length.
+    assert m <= dut.weights.sum() * len(people) * math.dist(q_a, q_b) * (1 + 1e-12) + 1e-12
