@@ -1,0 +1,110 @@
+"""The scene picture: the map, its people and their social cost, and the
+robot carrying its object at start and goal (``drake-social show``)."""
+
+from __future__ import annotations
+
+import logging
+from pathlib import Path
+
+import numpy as np
+from matplotlib.axes import Axes
+from matplotlib.figure import Figure
+from matplotlib.patches import Circle
+
+from drake_social.cost import SocialCost
+from drake_social.kinematics import ArmGeometry
+from drake_social.scenario import Scenario
+from drake_social.viz.robot import draw_robot
+from drake_social.viz.world import VIEW_MARGIN, draw_social_field, draw_world
+
+__all__ = ["START_COLOR", "GOAL_COLOR", "draw_start_goal", "scene_figure", "show_figure", "write_show"]
+
+_log = logging.getLogger(__name__)
+
+#: Ring around the base at the start (the paper: a yellow circle).
+START_COLOR = "#e6c200"
+#: Ring around the base at the goal (the paper: a green circle).
+GOAL_COLOR = "#2ca02c"
+
+
+def scene_figure(scenario: Scenario, *, width: float = 11.0, max_map_height: float = 8.5) -> tuple[Figure, Axes]:
+    """An empty figure with one map axes of the map's aspect ratio.
+
+    The layout is fixed (no layout engine, so every rendering is identical):
+    margins in inches leave room for the axis labels, the titles, a colour
+    bar drawn by :func:`~drake_social.viz.world.draw_social_field` on the
+    right, and a legend of two rows at the bottom.
+
+    Args:
+        scenario: gives the map bounds and wall thickness.
+        width: figure width, inches (reduced for tall maps).
+        max_map_height: largest height of the map axes, inches.
+    """
+    x0, y0, x1, y1 = scenario.world.bounds
+    pad = scenario.world.wall_thickness + VIEW_MARGIN
+    view_w, view_h = x1 - x0 + 2 * pad, y1 - y0 + 2 * pad
+    left, right, bottom, top = 0.75, 1.15, 1.0, 0.62  # inches
+    map_w = min(width - left - right, max_map_height * view_w / view_h)
+    map_h = map_w * view_h / view_w
+    fig_w, fig_h = left + map_w + right, bottom + map_h + top
+    fig = Figure(figsize=(fig_w, fig_h))
+    ax = fig.add_axes((left / fig_w, bottom / fig_h, map_w / fig_w, map_h / fig_h))
+    return fig, ax
+
+
+def draw_start_goal(ax: Axes, scenario: Scenario, *, labels: bool = True) -> list:
+    """Rings around the base at the start and the goal configurations."""
+    ring = scenario.robot.base_radius + 0.2
+    artists = []
+    for q, color, text in ((scenario.start, START_COLOR, "start"), (scenario.goal, GOAL_COLOR, "goal")):
+        patch = Circle((q[0], q[1]), ring, facecolor="none", edgecolor=color, linewidth=2.5, zorder=4.5,
+                       label=text if labels else None)
+        artists.append(ax.add_patch(patch))
+    return artists
+
+
+def show_figure(scenario: Scenario, *, title: str | None = None, resolution: float = 0.05) -> Figure:
+    """The scene picture of a scenario.
+
+    The social-cost heat map ``G(x, y)`` with its colour bar, walls and
+    obstacles, people with their facing arrows, and the robot with arm and
+    object at the start and the goal configurations.
+
+    Args:
+        scenario: a validated scenario.
+        title: the figure title; None = the scenario's description.
+        resolution: heat-map cell size, metres.
+
+    Returns:
+        A matplotlib figure (not attached to pyplot; save it with ``savefig``).
+    """
+    fig, ax = scene_figure(scenario)
+    cost = SocialCost.from_scenario(scenario)
+    draw_social_field(ax, cost, scenario.world.bounds, resolution)
+    draw_world(ax, scenario)
+    draw_start_goal(ax, scenario)
+    geometry = ArmGeometry.from_scenario(scenario)
+    draw_robot(ax, geometry, np.asarray(scenario.start, float), labels=True)
+    draw_robot(ax, geometry, np.asarray(scenario.goal, float))
+    s_start, s_goal = cost(np.array([scenario.start, scenario.goal], float))
+    fig.suptitle(title if title is not None else scenario.description or "scenario")
+    n = len(scenario.people)
+    people = "1 person" if n == 1 else f"{n} people"
+    ax.set_title(f"{people}; social cost S(start) = {s_start:.2f}, S(goal) = {s_goal:.2f}", fontsize=9)
+    fig.legend(loc="lower center", bbox_to_anchor=(0.5, 0.0), ncol=5, fontsize=8, frameon=False)
+    return fig
+
+
+def write_show(scenario: Scenario, out_dir: str | Path, *, name: str = "scene.png", title: str | None = None,
+               dpi: int = 150) -> Path:
+    """Writes :func:`show_figure` as a PNG into ``out_dir`` (created if needed).
+
+    Returns:
+        The path of the written picture.
+    """
+    out_dir = Path(out_dir)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    path = out_dir / name
+    show_figure(scenario, title=title).savefig(path, dpi=dpi)
+    _log.info("wrote %s", path)
+    return path

@@ -1,0 +1,162 @@
+"""Drawing the room: walls, obstacles, people and the social-cost heat map.
+
+Every function draws on a caller's :class:`matplotlib.axes.Axes` and returns
+its artists, so figures are built by composing calls (the scene picture of
+:mod:`drake_social.viz.show`, and later path figures on top of it). Nothing
+here uses ``pyplot``: figures are plain :class:`matplotlib.figure.Figure`
+objects, independent of any GUI backend.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Sequence
+
+import numpy as np
+from matplotlib.axes import Axes
+from matplotlib.image import AxesImage
+from matplotlib.patches import Circle, FancyArrow, Polygon, Rectangle
+
+from drake_social.cost import SocialCost
+from drake_social.scenario import Box, Scenario
+
+__all__ = [
+    "FIELD_CMAP",
+    "OBSTACLE_COLOR",
+    "PERSON_COLOR",
+    "VIEW_MARGIN",
+    "box_corners",
+    "draw_social_field",
+    "draw_world",
+    "field_grid",
+]
+
+#: Fill of walls and obstacles.
+OBSTACLE_COLOR = "#5b5b5b"
+#: Fill of person bodies.
+PERSON_COLOR = "#e8c39e"
+#: Colour map of the social-cost heat map (white at zero cost).
+FIELD_CMAP = "Reds"
+#: Free space shown around the outer walls, metres.
+VIEW_MARGIN = 0.3
+
+
+def box_corners(box: Box) -> np.ndarray:
+    """The four corners (4, 2) of a box obstacle in the world frame, metres."""
+    c, s = math.cos(box.yaw), math.sin(box.yaw)
+    hx, hy = box.size[0] / 2, box.size[1] / 2
+    local = np.array([[-hx, -hy], [hx, -hy], [hx, hy], [-hx, hy]])
+    return np.asarray(box.center, float) + local @ np.array([[c, s], [-s, c]])
+
+
+def draw_world(ax: Axes, scenario: Scenario, *, names: bool = True, margin: float = VIEW_MARGIN) -> dict[str, list]:
+    """Draws the boundary walls, the obstacles and the people.
+
+    People are discs of their body radius with an arrow along their facing
+    direction ``theta``. Sets equal aspect and limits covering the walls.
+
+    Args:
+        ax: the axes to draw on (world metres on both axes).
+        scenario: the scenario whose world and people are drawn.
+        names: also write each person's ``name`` next to them.
+        margin: free space around the outer walls in the view, metres.
+
+    Returns:
+        Artists by kind: "walls", "obstacles", "people", "arrows", "names".
+        The first wall is labelled "wall / obstacle" and the first person
+        "person (arrow: facing)" for legends.
+    """
+    w = scenario.world
+    x0, y0, x1, y1 = w.bounds
+    t = w.wall_thickness
+    out: dict[str, list] = {"walls": [], "obstacles": [], "people": [], "arrows": [], "names": []}
+    # Boundary walls stand outside the bounds (see World.wall_thickness).
+    for x, y, dx, dy in (
+        (x0 - t, y0 - t, x1 - x0 + 2 * t, t),
+        (x0 - t, y1, x1 - x0 + 2 * t, t),
+        (x0 - t, y0, t, y1 - y0),
+        (x1, y0, t, y1 - y0),
+    ):
+        patch = Rectangle((x, y), dx, dy, facecolor=OBSTACLE_COLOR, edgecolor="none", zorder=2)
+        out["walls"].append(ax.add_patch(patch))
+    out["walls"][0].set_label("wall / obstacle")
+    for box in w.obstacles:
+        patch = Polygon(box_corners(box), closed=True, facecolor=OBSTACLE_COLOR, edgecolor="#2b2b2b",
+                        linewidth=0.6, zorder=2)
+        out["obstacles"].append(ax.add_patch(patch))
+    for i, p in enumerate(scenario.people):
+        body = Circle((p.x, p.y), p.radius, facecolor=PERSON_COLOR, edgecolor="black", linewidth=1.0, zorder=4,
+                      label="person (arrow: facing)" if i == 0 else None)
+        out["people"].append(ax.add_patch(body))
+        # The arrow starts at the body's edge so that it reads as a nose.
+        length = max(0.45, 1.6 * p.radius)
+        c, s = math.cos(p.theta), math.sin(p.theta)
+        arrow = FancyArrow(p.x + p.radius * c, p.y + p.radius * s, length * c, length * s, width=0.06,
+                           head_width=0.26, head_length=0.22, length_includes_head=True, color="black", zorder=4)
+        out["arrows"].append(ax.add_patch(arrow))
+        if names and p.name:
+            # Label on the side opposite to the facing arrow, to keep it readable.
+            off = p.radius + 0.2
+            out["names"].append(ax.text(p.x - off * c, p.y - off * s, p.name, fontsize=7,
+                                        ha="left" if c < -0.3 else ("right" if c > 0.3 else "center"),
+                                        va="bottom" if s < -0.3 else ("top" if s > 0.3 else "center"),
+                                        zorder=6, color="#202020"))
+    ax.set_xlim(x0 - t - margin, x1 + t + margin)
+    ax.set_ylim(y0 - t - margin, y1 + t + margin)
+    ax.set_aspect("equal")
+    ax.set_xlabel("x [m]")
+    ax.set_ylabel("y [m]")
+    return out
+
+
+def field_grid(bounds: Sequence[float], resolution: float) -> tuple[np.ndarray, np.ndarray]:
+    """Cell-centre coordinates of a grid over ``bounds`` with cells of about
+    ``resolution`` metres: returns (xs (nx,), ys (ny,))."""
+    x0, y0, x1, y1 = (float(v) for v in bounds)
+    if not resolution > 0:
+        raise ValueError(f"resolution must be > 0 metres, got {resolution}")
+    nx = max(1, math.ceil((x1 - x0) / resolution - 1e-9))
+    ny = max(1, math.ceil((y1 - y0) / resolution - 1e-9))
+    xs = x0 + (np.arange(nx) + 0.5) * (x1 - x0) / nx
+    ys = y0 + (np.arange(ny) + 0.5) * (y1 - y0) / ny
+    return xs, ys
+
+
+def draw_social_field(
+    ax: Axes,
+    cost: SocialCost,
+    bounds: Sequence[float],
+    resolution: float = 0.05,
+    *,
+    colorbar: bool = True,
+    vmax: float | None = None,
+    cmap: str = FIELD_CMAP,
+) -> AxesImage:
+    """Draws the heat map of ``G(x, y) = sum_i AGF_i(x, y)`` under everything else.
+
+    Args:
+        ax: the axes to draw on.
+        cost: gives :meth:`SocialCost.field` (people, variances, threshold).
+        bounds: [x_min, y_min, x_max, y_max] of the map, metres.
+        resolution: size of a heat-map cell, metres.
+        colorbar: add a colour bar labelled "social cost" beside the axes.
+        vmax: top of the colour scale; None = the field's maximum (1 when the
+            field is zero everywhere, e.g. in an empty room).
+        cmap: a matplotlib colour-map name.
+
+    Returns:
+        The image; ``image.get_array()[j, i]`` is G at ``(xs[i], ys[j])`` of
+        :func:`field_grid`.
+    """
+    xs, ys = field_grid(bounds, resolution)
+    values = cost.field(xs[None, :], ys[:, None])
+    top = float(values.max()) if vmax is None else float(vmax)
+    if not top > 0:
+        top = 1.0
+    image = ax.imshow(values, origin="lower", extent=(bounds[0], bounds[2], bounds[1], bounds[3]),
+                      cmap=cmap, vmin=0.0, vmax=top, interpolation="nearest", zorder=0)
+    if colorbar:
+        # An inset keeps the bar exactly as tall as the (equal-aspect) map.
+        cax = ax.inset_axes((1.015, 0.0, 0.025, 1.0))
+        ax.figure.colorbar(image, cax=cax, label="social cost")
+    return image

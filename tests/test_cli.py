@@ -1,0 +1,162 @@
+"""The drake-social command line: help, show on every scenario, error messages."""
+
+from __future__ import annotations
+
+import struct
+from pathlib import Path
+
+import matplotlib.image
+import pytest
+
+from drake_social.cli import load_with_overrides, main
+from drake_social.scenario import ScenarioError
+
+SCENARIO_DIR = Path(__file__).resolve().parent.parent / "scenarios"
+SCENARIO_FILES = sorted(SCENARIO_DIR.glob("*.yaml"))
+
+
+def _png_size(path: Path) -> tuple[int, int]:
+    """(width, height) from the PNG header, read independently of matplotlib."""
+    data = path.read_bytes()
+    assert data[:8] == b"\x89PNG\r\n\x1a\n", f"{path} is not a PNG"
+    assert data[12:16] == b"IHDR"
+    return struct.unpack(">II", data[16:24])
+
+
+def test_help_lists_the_show_command(capsys):
+    assert main(["--help"]) == 0
+    out = capsys.readouterr().out
+    assert "usage: drake-social" in out and "show" in out
+
+
+def test_show_help_documents_its_options(capsys):
+    assert main(["show", "--help"]) == 0
+    out = capsys.readouterr().out
+    assert "--out DIR" in out and "--set YAML" in out and "scenario" in out
+
+
+def test_no_command_prints_usage_and_fails(capsys):
+    assert main([]) == 2
+    assert "usage: drake-social" in capsys.readouterr().err
+
+
+def test_unknown_option_is_a_usage_error(capsys):
+    assert main(["show", str(SCENARIO_DIR / "tiny.yaml"), "--bogus"]) == 2
+    assert "unrecognized arguments: --bogus" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("scenario", SCENARIO_FILES, ids=[p.stem for p in SCENARIO_FILES])
+def test_show_writes_a_png_of_every_scenario(scenario, tmp_path, capsys):
+    assert main(["show", str(scenario), "--out", str(tmp_path)]) == 0
+    dut = tmp_path / "scene.png"
+    assert capsys.readouterr().out.strip() == f"wrote {dut}"
+    assert dut.stat().st_size > 30_000
+    width, height = _png_size(dut)
+    assert 1000 <= width <= 2500 and 600 <= height <= 2000
+    pixels = matplotlib.image.imread(dut)
+    assert pixels.shape[:2] == (height, width)
+    # Not a blank canvas: the heat map's reds and the white floor both occur.
+    rgb = pixels[..., :3]
+    reddish = (rgb[..., 0] > 0.5) & (rgb[..., 1] < 0.3) & (rgb[..., 2] < 0.3)
+    assert reddish.mean() > 0.01
+    assert (rgb.min(-1) > 0.95).mean() > 0.1
+
+
+def test_show_writes_to_out_slash_scenario_name_by_default(tmp_path, monkeypatch, capsys):
+    monkeypatch.chdir(tmp_path)
+    assert main(["show", str(SCENARIO_DIR / "tiny.yaml")]) == 0
+    assert (tmp_path / "out" / "tiny" / "scene.png").is_file()
+    assert capsys.readouterr().out.strip() == f"wrote {Path('out') / 'tiny' / 'scene.png'}"
+
+
+def test_overrides_apply_over_the_file_and_keep_the_rest():
+    dut = load_with_overrides(SCENARIO_DIR / "tiny.yaml", ["social: {sigma_h: 1.5, threshold: 0.1}", "random_seed: 7"])
+    assert dut.social.sigma_h == 1.5 and dut.social.threshold == 0.1
+    assert dut.social.side_ratio == pytest.approx(2 / 3)  # untouched default
+    assert dut.random_seed == 7
+    assert dut.planner.iterations == 300  # from the file
+    assert load_with_overrides(SCENARIO_DIR / "tiny.yaml", None).random_seed == 1
+
+
+def _error(capsys, argv: list[str]) -> str:
+    """Runs a failing command; returns its stderr after checking the exit code."""
+    assert main(argv) == 2
+    captured = capsys.readouterr()
+    assert captured.out == ""
+    return captured.err
+
+
+def test_missing_file_names_the_file(tmp_path, capsys):
+    missing = tmp_path / "nowhere.yaml"
+    err = _error(capsys, ["show", str(missing), "--out", str(tmp_path)])
+    assert err.startswith("drake-social: error: ") and str(missing) in err and "no such scenario file" in err
+    assert not (tmp_path / "scene.png").exists()
+
+
+def test_invalid_override_value_names_the_file_and_field(tmp_path, capsys):
+    tiny = SCENARIO_DIR / "tiny.yaml"
+    err = _error(capsys, ["show", str(tiny), "--set", "robot: {base_radius: -0.2}", "--out", str(tmp_path)])
+    assert str(tiny) in err and "robot.base_radius" in err and "> 0" in err
+    err = _error(capsys, ["show", str(tiny), "--set", "planner: {algorithm: dijkstra}", "--out", str(tmp_path)])
+    assert "planner.algorithm" in err and "dijkstra" in err and "social_rrt_star" in err
+
+
+def test_unknown_key_in_an_override_names_the_key(tmp_path, capsys):
+    tiny = SCENARIO_DIR / "tiny.yaml"
+    err = _error(capsys, ["show", str(tiny), "--set", "social: {sigmah: 2}", "--out", str(tmp_path)])
+    assert str(tiny) in err and "overrides" in err and "sigmah" in err
+
+
+def test_unknown_key_in_a_file_names_the_file_and_key(tmp_path, capsys):
+    bad = tmp_path / "bad.yaml"
+    text = (SCENARIO_DIR / "tiny.yaml").read_text()
+    bad.write_text(text.replace("  link_width: 0.08\n", "  link_width: 0.08\n  wheels: 4\n"))
+    assert "wheels" in bad.read_text()
+    err = _error(capsys, ["show", str(bad), "--out", str(tmp_path)])
+    assert str(bad) in err and "wheels" in err
+
+
+def test_value_error_in_a_file_names_the_file_and_field(tmp_path, capsys):
+    bad = tmp_path / "outside.yaml"
+    text = (SCENARIO_DIR / "tiny.yaml").read_text()
+    bad.write_text(text.replace("start: [1.0, 2.5, 0.0, 1.5708]", "start: [11.0, 2.5, 0.0, 1.5708]"))
+    err = _error(capsys, ["show", str(bad), "--out", str(tmp_path)])
+    assert str(bad) in err and "start" in err and "outside world.bounds" in err
+
+
+def test_malformed_override_yaml_is_reported(tmp_path, capsys):
+    tiny = SCENARIO_DIR / "tiny.yaml"
+    err = _error(capsys, ["show", str(tiny), "--set", "social: {sigma_h: [", "--out", str(tmp_path)])
+    assert "--set" in err and "not valid YAML" in err
+    err = _error(capsys, ["show", str(tiny), "--set", "just text", "--out", str(tmp_path)])
+    assert "must be a YAML mapping" in err
+
+
+def test_the_same_key_in_two_overrides_is_refused(capsys, tmp_path):
+    """YAML would silently keep only the last 'social'; the CLI refuses."""
+    tiny = SCENARIO_DIR / "tiny.yaml"
+    err = _error(capsys, ["show", str(tiny), "--set", "social: {sigma_h: 1}", "--set", "social: {threshold: 0.1}",
+                          "--out", str(tmp_path)])
+    assert "key 'social'" in err and "one --set" in err
+    with pytest.raises(ScenarioError, match="random_seed"):
+        load_with_overrides(tiny, ["random_seed: 1", "random_seed: 2"])
+
+
+def test_unwritable_output_exits_1(tmp_path, capsys):
+    blocker = tmp_path / "file"
+    blocker.write_text("not a directory")
+    assert main(["show", str(SCENARIO_DIR / "tiny.yaml"), "--out", str(blocker)]) == 1
+    assert "drake-social: error:" in capsys.readouterr().err
+
+
+def test_overrides_reach_the_picture(tmp_path):
+    """Removing the people through --set leaves no red on the map (the left
+    three quarters of the picture; the colour bar is on the right)."""
+    tiny = str(SCENARIO_DIR / "tiny.yaml")
+    reds = []
+    for i, extra in enumerate([[], ["--set", "people: []"]]):
+        assert main(["show", tiny, *extra, "--out", str(tmp_path / str(i))]) == 0
+        rgb = matplotlib.image.imread(tmp_path / str(i) / "scene.png")[..., :3]
+        rgb = rgb[:, : 3 * rgb.shape[1] // 4]
+        reds.append(((rgb[..., 0] > 0.5) & (rgb[..., 1] < 0.3) & (rgb[..., 2] < 0.3)).mean())
+    assert reds[0] > 0.05 and reds[1] == 0.0

@@ -1,0 +1,87 @@
+"""drake_social.viz.show: the scene picture and its PNG."""
+
+from __future__ import annotations
+
+import dataclasses as dc
+
+import matplotlib.image
+import numpy as np
+import pytest
+from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+from drake_social.cost import PersonalSpace, SocialCost, agf_algorithm1
+from drake_social.viz import show_figure, write_show
+
+
+def pixel_of(fig, x: float, y: float) -> tuple[int, int]:
+    """(row, column) of the world point (x, y) in the figure rendered at its dpi."""
+    canvas = FigureCanvasAgg(fig)
+    canvas.draw()
+    _, height = canvas.get_width_height()
+    px, py = fig.axes[0].transData.transform((x, y))
+    return int(height - py), int(px)
+
+
+def test_show_figure_has_the_scene_elements(tiny_scenario):
+    dut = show_figure(tiny_scenario)
+    ax = dut.axes[0]
+    assert dut.get_suptitle() == tiny_scenario.description
+    assert ax.get_aspect() == 1.0
+    assert len(ax.images) == 1 and ax.images[0].colorbar.ax.get_ylabel() == "social cost"
+    labels = {t.get_text() for t in dut.legends[0].get_texts()}
+    assert {"start", "goal", "robot base", "link 1", "link 2", "object", "person (arrow: facing)"} <= labels
+    # The robot is drawn at the start and at the goal: two base discs there.
+    centres = sorted(p.center for p in ax.patches if getattr(p, "radius", None) == tiny_scenario.robot.base_radius)
+    assert centres == sorted([tuple(tiny_scenario.start[:2]), tuple(tiny_scenario.goal[:2])])
+    # The subtitle reports S at start and goal (0.43 and 0 here: a swap would show).
+    cost = SocialCost.from_scenario(tiny_scenario)
+    s_start, s_goal = cost(np.array(tiny_scenario.start)), cost(np.array(tiny_scenario.goal))
+    assert s_start > 0.1 and s_goal == 0.0
+    assert f"S(start) = {s_start:.2f}, S(goal) = {s_goal:.2f}" in ax.get_title()
+    assert show_figure(tiny_scenario, title="custom").get_suptitle() == "custom"
+
+
+def test_png_colours_follow_the_social_field(tiny_scenario, tmp_path):
+    """Pixels of the written PNG over free floor show the colour of G(x, y),
+    computed with the paper's Algorithm 1 at the heat-map cell centre: dark
+    red in front of the person, the zero colour far away."""
+    path = write_show(tiny_scenario, tmp_path, dpi=100)
+    assert path == tmp_path / "scene.png"
+    png = matplotlib.image.imread(path)
+    fig = show_figure(tiny_scenario)
+    fig.set_dpi(100)
+    image = fig.axes[0].images[0]
+    space = PersonalSpace.from_options(tiny_scenario.social)
+    person = tiny_scenario.people[0]
+    colours = {}
+    # Cell centres of the 0.05 m heat map, clear of the robot, desk and labels.
+    for x, y in [(4.025, 2.525), (3.025, 3.025), (5.175, 4.375), (6.525, 1.525), (0.525, 0.525)]:
+        row, col = pixel_of(fig, x, y)
+        value = agf_algorithm1(x, y, (person.x, person.y, person.theta), space)
+        expected = np.array(image.cmap(image.norm(value))[:3])
+        np.testing.assert_allclose(png[row, col, :3], expected, atol=3 / 255, err_msg=f"at ({x}, {y})")
+        colours[(x, y)] = png[row, col, :3]
+    near, far = colours[(4.025, 2.525)], colours[(6.525, 1.525)]
+    assert np.abs(near - far).max() > 0.3
+
+
+def test_png_follows_the_scenario_not_a_fixed_picture(tiny_scenario, tmp_path):
+    """A quarter of sigma_h (reach 0.9 m) empties the floor 1.3 m in front of the person."""
+    point = (4.025, 2.525)
+    small = dc.replace(tiny_scenario, social=dc.replace(tiny_scenario.social, sigma_h=0.5))
+    pngs = [matplotlib.image.imread(write_show(s, tmp_path / str(i), dpi=100)) for i, s in enumerate([tiny_scenario, small])]
+    fig = show_figure(small)
+    fig.set_dpi(100)
+    row, col = pixel_of(fig, *point)
+    zero_colour = np.array(fig.axes[0].images[0].cmap(0.0)[:3])
+    np.testing.assert_allclose(pngs[1][row, col, :3], zero_colour, atol=3 / 255)
+    assert np.abs(pngs[0][row, col, :3] - zero_colour).max() > 0.3
+
+
+def test_write_show_creates_the_directory_and_names_the_file(tiny_scenario, tmp_path):
+    dut = write_show(tiny_scenario, tmp_path / "a" / "b", name="x.png", dpi=50)
+    assert dut == tmp_path / "a" / "b" / "x.png"
+    assert dut.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    h, w = matplotlib.image.imread(dut).shape[:2]
+    fig = show_figure(tiny_scenario)
+    assert (w, h) == pytest.approx(tuple(50 * fig.get_size_inches()), abs=1)

@@ -1,0 +1,123 @@
+"""drake_social.viz.world: boxes, the grid, the heat map and the people."""
+
+from __future__ import annotations
+
+import dataclasses as dc
+import math
+
+import numpy as np
+import pytest
+from matplotlib.figure import Figure
+
+from drake_social.cost import PersonalSpace, SocialCost, agf_algorithm1
+from drake_social.scenario import Box, Person
+from drake_social.viz import box_corners, draw_social_field, draw_world, field_grid
+
+
+def test_box_corners_of_a_rotated_box_match_hand_values():
+    dut = box_corners(Box(center=[1.0, 2.0], size=[2.0, 1.0], yaw=math.pi / 2))
+    # Rotated a quarter turn: the 2 m side now runs along y.
+    expected = np.array([[1.5, 1.0], [1.5, 3.0], [0.5, 3.0], [0.5, 1.0]])
+    np.testing.assert_allclose(dut, expected, atol=1e-12)
+
+
+def test_box_corners_at_pi_over_4_keep_the_diagonal_on_the_axes():
+    dut = box_corners(Box(center=[0.0, 0.0], size=[2.0, 2.0], yaw=math.pi / 4))
+    r = math.sqrt(2.0)
+    np.testing.assert_allclose(dut, [[0.0, -r], [r, 0.0], [0.0, r], [-r, 0.0]], atol=1e-12)
+
+
+def test_field_grid_cells_cover_the_bounds_evenly():
+    # 1.0 m does not divide by 0.3 m: 4 cells of 0.25 m.
+    xs, ys = field_grid([0.0, -1.0, 1.0, 1.0], 0.3)
+    np.testing.assert_allclose(xs, [0.125, 0.375, 0.625, 0.875])
+    np.testing.assert_allclose(ys, np.linspace(-1 + 2 / 14, 1 - 2 / 14, 7))
+    with pytest.raises(ValueError, match="resolution"):
+        field_grid([0, 0, 1, 1], 0.0)
+
+
+def _axes() -> tuple[Figure, object]:
+    fig = Figure()
+    return fig, fig.add_subplot()
+
+
+def test_heat_map_pixels_equal_algorithm1_at_cell_centres(tiny_scenario):
+    """The image data is G(x, y) at the cell centres, checked against the
+    paper's Algorithm 1 line by line, with a person rotated by pi/4 and one
+    facing -x so that both branches and the cross term matter."""
+    people = [Person(x=3.0, y=2.0, theta=math.pi / 4), Person(x=6.0, y=3.5, theta=math.pi)]
+    scenario = dc.replace(tiny_scenario, people=people)
+    cost = SocialCost.from_scenario(scenario)
+    fig, ax = _axes()
+    bounds = scenario.world.bounds
+    dut = draw_social_field(ax, cost, bounds, resolution=0.1)
+    data = np.asarray(dut.get_array())
+    assert data.shape == (50, 80)  # 5 m x 8 m at 0.1 m, rows along y
+    assert dut.get_extent() == pytest.approx([bounds[0], bounds[2], bounds[1], bounds[3]])
+    space = PersonalSpace.from_options(scenario.social)
+    rng = np.random.default_rng(7)
+    checked_nonzero = 0
+    for j, i in zip(rng.integers(0, 50, 200), rng.integers(0, 80, 200)):
+        x, y = 0.05 + 0.1 * i, 0.05 + 0.1 * j
+        expected = sum(agf_algorithm1(x, y, (p.x, p.y, p.theta), space) for p in people)
+        assert data[j, i] == pytest.approx(expected, abs=1e-12)
+        checked_nonzero += expected > 0
+    assert checked_nonzero > 20  # the sample really reached into the personal spaces
+    assert dut.norm.vmin == 0.0 and dut.norm.vmax == pytest.approx(data.max())
+
+
+def test_heat_map_has_a_colour_bar_labelled_social_cost(tiny_scenario):
+    fig, ax = _axes()
+    dut = draw_social_field(ax, SocialCost.from_scenario(tiny_scenario), tiny_scenario.world.bounds)
+    assert dut.colorbar is not None
+    assert dut.colorbar.ax.get_ylabel() == "social cost"
+    fig2, ax2 = _axes()
+    assert draw_social_field(ax2, SocialCost.from_scenario(tiny_scenario), [0, 0, 1, 1], colorbar=False).colorbar is None
+
+
+def test_heat_map_of_an_empty_room_is_zero_with_a_unit_scale(tiny_scenario):
+    fig, ax = _axes()
+    dut = draw_social_field(ax, SocialCost.from_scenario(dc.replace(tiny_scenario, people=[])), [0, 0, 2, 1], 0.5)
+    assert np.asarray(dut.get_array()).shape == (2, 4)
+    assert np.all(np.asarray(dut.get_array()) == 0.0)
+    assert dut.norm.vmax == 1.0
+
+
+@pytest.mark.parametrize("theta", [0.0, math.pi / 4, -3 * math.pi / 4, math.pi])
+def test_person_arrow_points_along_theta(tiny_scenario, theta):
+    person = Person(x=2.0, y=2.5, theta=theta, radius=0.3, name="p")
+    scenario = dc.replace(tiny_scenario, people=[person])
+    fig, ax = _axes()
+    dut = draw_world(ax, scenario)
+    (body,) = dut["people"]
+    assert body.center == pytest.approx((2.0, 2.5)) and body.radius == pytest.approx(0.3)
+    (arrow,) = dut["arrows"]
+    xy = arrow.get_xy()
+    d = np.hypot(xy[:, 0] - 2.0, xy[:, 1] - 2.5)
+    tip = xy[np.argmax(d)]
+    # The tip is the farthest vertex, on the facing ray, past the body's edge.
+    angle = math.atan2(tip[1] - 2.5, tip[0] - 2.0)
+    assert math.remainder(angle - theta, 2 * math.pi) == pytest.approx(0.0, abs=1e-9)
+    assert d.max() > 0.3 + 0.4
+    # The name is written behind the person (opposite the arrow).
+    (label,) = dut["names"]
+    lx, ly = label.get_position()
+    assert (lx - 2.0) * math.cos(theta) + (ly - 2.5) * math.sin(theta) < 0
+
+
+def test_draw_world_draws_every_obstacle_and_the_four_walls(tiny_scenario):
+    boxes = [Box(center=[2.0, 2.0], size=[1.0, 0.5], yaw=0.3), Box(center=[6.0, 1.0], size=[0.4, 0.4])]
+    scenario = dc.replace(tiny_scenario, world=dc.replace(tiny_scenario.world, obstacles=boxes))
+    fig, ax = _axes()
+    dut = draw_world(ax, scenario, names=False)
+    assert len(dut["walls"]) == 4 and len(dut["names"]) == 0
+    assert len(dut["obstacles"]) == 2
+    np.testing.assert_allclose(dut["obstacles"][0].get_xy()[:4], box_corners(boxes[0]), atol=1e-12)
+    # The walls enclose the bounds exactly: their union's inner edges are the bounds.
+    t = scenario.world.wall_thickness
+    south = dut["walls"][0]
+    assert south.get_y() + south.get_height() == pytest.approx(scenario.world.bounds[1])
+    assert south.get_width() == pytest.approx(8.0 + 2 * t)
+    assert ax.get_aspect() == 1.0
+    x_lo, x_hi = ax.get_xlim()
+    assert x_lo < -t and x_hi > 8.0 + t
