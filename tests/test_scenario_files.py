@@ -209,3 +209,35 @@ def test_start_and_goal_hold_the_object_folded_over_the_base(name):
     for q in (scenario.start, scenario.goal):
         base, _, gripper = (p for p in geo.joints(np.asarray(q, float)))
         assert np.linalg.norm(gripper - base) < 0.3
+
+
+# ---- the README's annotated example ----------------------------------------------
+
+
+def _readme_block(language: str) -> str:
+    """The first fenced code block of the given language in README.md."""
+    text = (SCENARIO_DIR.parent / "README.md").read_text()
+    start = text.index(f"```{language}\n") + len(language) + 4
+    return text[start : text.index("```", start)]
+
+
+def test_readme_example_scenario_loads_and_is_collision_free(tmp_path):
+    """The annotated example in the README is a valid scenario (every section,
+    a !Bar object), with free start and goal."""
+    path = tmp_path / "example.yaml"
+    path.write_text(_readme_block("yaml"))
+    dut = load_scenario(path)
+    assert len(dut.world.obstacles) == 2 and dut.world.obstacles[1].yaw == pytest.approx(0.3)
+    assert [p.name for p in dut.people] == ["faces south", "at desk"]
+    assert isinstance(dut.object, Bar) and dut.planner.algorithm == "social_rrt_star"
+    assert len(dut.social.weights) == ArmGeometry.from_scenario(dut).num_interest_points
+    clearance = GeometricChecker(dut).clearances(np.array([dut.start, dut.goal], float))
+    assert np.all(clearance > 0.05)
+
+
+@pytest.mark.parametrize("tag", ["!Bar {length: 1.5}", "!LShape {lengths: [3.0, 2.0]}",
+                                 "!Polyline {points: [[0, -0.5], [0, 0.5], [0.4, 0.5]]}"])
+def test_readme_object_kinds_load(tag):
+    """The three object tags listed in the README comment are accepted."""
+    dut = load_scenario(SCENARIO_DIR / "tiny.yaml", f"object: {tag}")
+    assert type(dut.object).__name__ == tag.split()[0][1:]

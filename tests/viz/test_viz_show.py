@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import dataclasses as dc
+from pathlib import Path
 
 import matplotlib.image
 import numpy as np
@@ -85,3 +86,17 @@ def test_write_show_creates_the_directory_and_names_the_file(tiny_scenario, tmp_
     h, w = matplotlib.image.imread(dut).shape[:2]
     fig = show_figure(tiny_scenario)
     assert (w, h) == pytest.approx(tuple(50 * fig.get_size_inches()), abs=1)
+
+
+def test_readme_drawing_snippet_runs(tmp_path, monkeypatch):
+    """The README's composition example runs as printed and writes its PNG."""
+    readme = (Path(__file__).resolve().parents[2] / "README.md").read_text()
+    start = readme.index("```python\n") + len("```python\n")
+    code = readme[start : readme.index("```", start)]
+    monkeypatch.chdir(Path(__file__).resolve().parents[2])
+    code = code.replace('fig.savefig("generic.png"', f'fig.savefig(r"{tmp_path / "generic.png"}"')
+    namespace: dict = {}
+    exec(compile(code, "README.md", "exec"), namespace)
+    assert (tmp_path / "generic.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    ax = namespace["ax"]
+    assert len(ax.images) == 1 and len(ax.patches) > 10
