@@ -70,7 +70,8 @@ def agf(points: np.ndarray, people: np.ndarray, space: PersonalSpace) -> np.ndar
         space: variances and threshold.
 
     Returns:
-        (..., H) values in [0, 1]; values <= threshold are 0.
+        (..., H) values in [0, 1]; values <= threshold are 0; NaN where a
+        point or person is NaN.
     """
     points = np.asarray(points, dtype=float)
     people = np.asarray(people, dtype=float).reshape(-1, 3)
@@ -87,7 +88,8 @@ def agf(points: np.ndarray, people: np.ndarray, space: PersonalSpace) -> np.ndar
         u = c * dx + s * dy
         v = c * dy - s * dx
         value = np.exp(-(u * u * np.where(u > 0, inv_front, inv_rear) + v * v * inv_side))
-    return np.where(value > space.threshold, value, 0.0)
+    # Written so that NaN input stays NaN instead of passing as "no discomfort".
+    return np.where(value <= space.threshold, 0.0, value)
 
 
 def agf_algorithm1(x: float, y: float, person: Sequence[float], space: PersonalSpace) -> float:

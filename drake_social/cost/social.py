@@ -12,8 +12,15 @@ __all__ = ["SocialCost", "interpolation_segments"]
 
 def interpolation_segments(max_displacement: np.ndarray, resolution: float) -> np.ndarray:
     """Number of equal steps (>= 1) so that no tracked point moves more than
-    ``resolution`` metres per step, given a bound on its total displacement."""
-    return np.maximum(1, np.ceil(np.asarray(max_displacement) / resolution - 1e-9)).astype(np.int64)
+    ``resolution`` metres per step, given a bound on its total displacement.
+
+    Raises:
+        ValueError: a bound is NaN or infinite (a non-finite configuration).
+    """
+    bound = np.asarray(max_displacement, dtype=float)
+    if not np.all(np.isfinite(bound)):
+        raise ValueError(f"motions need finite configurations; displacement bounds: {bound[~np.isfinite(bound)]}")
+    return np.maximum(1, np.ceil(bound / resolution - 1e-9)).astype(np.int64)
 
 
 class SocialCost:

@@ -252,3 +252,12 @@ def test_property_values_are_zero_or_above_threshold(x, y, px, py, theta):
     assert dut.shape == (1,)
     assert np.isfinite(dut[0])
     assert dut[0] == 0.0 or 0.2 < dut[0] <= 1.0
+
+
+def test_nan_input_stays_nan():
+    """A NaN point or person is an error upstream; it must not read as "no discomfort"."""
+    people = np.array([[0.0, 0.0, 0.5], [1.0, 1.0, 0.0]])
+    dut = agf(np.array([[np.nan, 0.0], [0.5, 0.5]]), people, PAPER)
+    assert np.all(np.isnan(dut[0]))
+    assert np.all(dut[1] > 0.2)
+    assert np.isnan(agf(np.array([0.5, 0.5]), [np.nan, 0.0, 0.0], PAPER)[0])

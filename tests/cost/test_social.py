@@ -445,3 +445,12 @@ def test_property_msc_is_finite_and_non_negative(q_a, q_b, people):
     assert np.isfinite(m) and m >= 0.0
     # Bounded by the largest possible S times the edge length.
     assert m <= dut.weights.sum() * len(people) * math.dist(q_a, q_b) * (1 + 1e-12) + 1e-12
+
+
+def test_non_finite_configurations_are_not_hidden(bar_cost):
+    q = np.array([4.0, 3.0, 0.0, np.nan])
+    assert np.isnan(bar_cost(q))
+    good = np.array([4.0, 3.0, 0.0, 0.0])
+    for bad in (q, np.array([np.inf, 3.0, 0.0, 0.0])):
+        with pytest.raises(ValueError, match="finite configurations"):
+            bar_cost.motion_cost(good, bad)
