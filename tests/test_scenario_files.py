@@ -28,11 +28,12 @@ SCENARIO_FILES = sorted(SCENARIO_DIR.glob("*.yaml"))
 
 def _scenario_params(known_bad: dict[str, str]) -> list:
     """The scenario files as pytest params; ``known_bad`` maps a file name to
-    the reason of a strict xfail (it fails today; fixing it turns the xfail
-    into an error that asks to remove the mark)."""
+    the reason of an xfail (it fails today; once the file is fixed the test
+    shows as XPASS in the summary and the entry should go). Not strict, so
+    that the fix, made elsewhere, does not break this file's tests."""
     params = []
     for path in SCENARIO_FILES:
-        marks = [pytest.mark.xfail(strict=True, reason=known_bad[path.name])] if path.name in known_bad else []
+        marks = [pytest.mark.xfail(strict=False, reason=known_bad[path.name])] if path.name in known_bad else []
         params.append(pytest.param(path, id=path.stem, marks=marks))
     return params
 

@@ -70,7 +70,10 @@ def test_png_follows_the_scenario_not_a_fixed_picture(tiny_scenario, tmp_path):
     """A quarter of sigma_h (reach 0.9 m) empties the floor 1.3 m in front of the person."""
     point = (4.025, 2.525)
     small = dc.replace(tiny_scenario, social=dc.replace(tiny_scenario.social, sigma_h=0.5))
-    pngs = [matplotlib.image.imread(write_show(s, tmp_path / str(i), dpi=100)) for i, s in enumerate([tiny_scenario, small])]
+    pngs = [
+        matplotlib.image.imread(write_show(s, tmp_path / str(i), dpi=100))
+        for i, s in enumerate([tiny_scenario, small])
+    ]
     fig = show_figure(small)
     fig.set_dpi(100)
     row, col = pixel_of(fig, *point)

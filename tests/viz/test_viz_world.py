@@ -72,7 +72,8 @@ def test_heat_map_has_a_colour_bar_labelled_social_cost(tiny_scenario):
     assert dut.colorbar is not None
     assert dut.colorbar.ax.get_ylabel() == "social cost"
     fig2, ax2 = _axes()
-    assert draw_social_field(ax2, SocialCost.from_scenario(tiny_scenario), [0, 0, 1, 1], colorbar=False).colorbar is None
+    no_bar = draw_social_field(ax2, SocialCost.from_scenario(tiny_scenario), [0, 0, 1, 1], colorbar=False)
+    assert no_bar.colorbar is None
 
 
 def test_heat_map_of_an_empty_room_is_zero_with_a_unit_scale(tiny_scenario):
