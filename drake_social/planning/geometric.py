@@ -39,11 +39,39 @@ from drake_social.scenario import Scenario
 __all__ = ["GeometricChecker"]
 
 
-def _box_sdf(p: np.ndarray, half: np.ndarray) -> np.ndarray:
-    """Signed distance (...,) of points p (..., 2), in box frames, to boxes of half sizes (..., 2)."""
-    u = np.abs(p) - half
-    outside = np.sqrt(np.square(np.maximum(u, 0.0)).sum(-1))
-    return outside + np.minimum(np.maximum(u[..., 0], u[..., 1]), 0.0)
+def _box_sdf_xy(px: np.ndarray, py: np.ndarray, hx: np.ndarray, hy: np.ndarray) -> np.ndarray:
+    """Signed distance of points (px, py), in box frames, to boxes of half sizes (hx, hy)."""
+    ux = np.abs(px) - hx
+    uy = np.abs(py) - hy
+    mx, my = np.maximum(ux, 0.0), np.maximum(uy, 0.0)
+    return np.sqrt(mx * mx + my * my) + np.minimum(np.maximum(ux, uy), 0.0)
+
+
+def _clip01(t: np.ndarray) -> np.ndarray:
+    """t clipped to [0, 1], NaN (from 0 / 0) mapped to 0."""
+    return np.fmin(np.fmax(t, 0.0), 1.0)
+
+
+# Candidate lines n . p = k c of the box signed distance's kinks, c = hx - hy:
+# x = 0, y = 0, x - y = -c, x - y = c, x + y = -c, x + y = c.
+_LINE_NX = np.array([1.0, 0.0, 1.0, 1.0, 1.0, 1.0])
+_LINE_NY = np.array([0.0, 1.0, -1.0, -1.0, 1.0, 1.0])
+_LINE_K = np.array([0.0, 0.0, -1.0, 1.0, -1.0, 1.0])
+_CORNER_SX = np.array([-1.0, -1.0, 1.0, 1.0])
+_CORNER_SY = np.array([-1.0, 1.0, -1.0, 1.0])
+
+
+def _segment_box_sdf_xy(ax, ay, bx, by, hx, hy) -> np.ndarray:
+    """Minimum over segments [a, b] of the box signed distance (all arrays (...))."""
+    ax, ay, hx, hy = ax[..., None], ay[..., None], hx[..., None], hy[..., None]
+    dx, dy = bx[..., None] - ax, by[..., None] - ay
+    with np.errstate(divide="ignore", invalid="ignore"):
+        # Projections of the four corners (stationary points of the corner regions) ...
+        t_corner = ((_CORNER_SX * hx - ax) * dx + (_CORNER_SY * hy - ay) * dy) / (dx * dx + dy * dy)
+        # ... and crossings of the kink lines.
+        t_line = ((hx - hy) * _LINE_K - ax * _LINE_NX - ay * _LINE_NY) / (dx * _LINE_NX + dy * _LINE_NY)
+    t = np.concatenate([_clip01(t_corner), _clip01(t_line), np.zeros_like(ax), np.ones_like(ax)], -1)
+    return _box_sdf_xy(ax + t * dx, ay + t * dy, hx, hy).min(-1)
 
 
 def _segment_box_sdf(a: np.ndarray, b: np.ndarray, half: np.ndarray) -> np.ndarray:
@@ -54,40 +82,11 @@ def _segment_box_sdf(a: np.ndarray, b: np.ndarray, half: np.ndarray) -> np.ndarr
         half: box half sizes (..., 2), broadcastable.
 
     Returns:
-        (...,) the minimum of ``_box_sdf`` along each segment (negative when
-        the segment enters the box).
+        (...,) the minimum of the box's signed distance along each segment
+        (negative when the segment enters the box).
     """
-    d = b - a
-    hx, hy = half[..., 0], half[..., 1]
-    c = hx - hy
-    ax, ay, dx, dy = a[..., 0], a[..., 1], d[..., 0], d[..., 1]
-    with np.errstate(divide="ignore", invalid="ignore"):
-        dd = dx * dx + dy * dy
-        cand = [
-            # corner projections (the stationary points of the corner regions)
-            ((sx * hx - ax) * dx + (sy * hy - ay) * dy) / dd
-            for sx in (-1.0, 1.0)
-            for sy in (-1.0, 1.0)
-        ]
-        cand += [-ax / dx, -ay / dy]  # x = 0, y = 0
-        cand += [(s * c - (ax - ay)) / (dx - dy) for s in (-1.0, 1.0)]  # x - y = +-c
-        cand += [(s * c - (ax + ay)) / (dx + dy) for s in (-1.0, 1.0)]  # x + y = +-c
-        t = np.stack(cand, -1)
-    t = np.clip(np.nan_to_num(t, nan=0.0, posinf=0.0, neginf=0.0), 0.0, 1.0)
-    t = np.concatenate([t, np.zeros_like(t[..., :1]), np.ones_like(t[..., :1])], -1)
-    p = a[..., None, :] + t[..., None] * d[..., None, :]
-    return _box_sdf(p, half[..., None, :]).min(-1)
-
-
-def _point_segment_distance(p: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """Distance (...,) from points p to segments [a, b], all (..., 2) broadcastable."""
-    d = b - a
-    dd = np.einsum("...i,...i->...", d, d)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        t = np.einsum("...i,...i->...", p - a, d) / dd
-    t = np.clip(np.nan_to_num(t, nan=0.0), 0.0, 1.0)
-    closest = a + t[..., None] * d
-    return np.sqrt(np.square(p - closest).sum(-1))
+    a, b, half = np.broadcast_arrays(np.asarray(a, float), np.asarray(b, float), np.asarray(half, float))
+    return _segment_box_sdf_xy(a[..., 0], a[..., 1], b[..., 0], b[..., 1], half[..., 0], half[..., 1])
 
 
 class GeometricChecker:
@@ -107,7 +106,7 @@ class GeometricChecker:
         resolution: see above.
     """
 
-    def __init__(self, scenario: Scenario, resolution: float | None = None, chunk: int = 4096):
+    def __init__(self, scenario: Scenario, resolution: float | None = None, chunk: int = 1024):
         self.geometry = ArmGeometry.from_scenario(scenario)
         self.resolution = float(scenario.planner.collision_resolution if resolution is None else resolution)
         if not self.resolution > 0:
@@ -121,8 +120,7 @@ class GeometricChecker:
         self._box_center = np.array([b.center for b in boxes], float).reshape(-1, 2)
         self._box_half = np.array([b.size for b in boxes], float).reshape(-1, 2) / 2
         yaw = np.array([b.yaw for b in boxes], float)
-        # R_BW: rows are the box axes in world coordinates, (K, 2, 2).
-        self._box_R = np.stack([np.stack([np.cos(yaw), np.sin(yaw)], -1), np.stack([-np.sin(yaw), np.cos(yaw)], -1)], -2)
+        self._box_cos, self._box_sin = np.cos(yaw), np.sin(yaw)
         self._people = np.array([[p.x, p.y] for p in scenario.people], float).reshape(-1, 2)
         self._people_r = np.array([p.radius for p in scenario.people], float)
         g = self.geometry
@@ -130,14 +128,17 @@ class GeometricChecker:
         # Segment s runs from vertex _seg[s, 0] to vertex _seg[s, 1] of _vertices().
         m = len(g.object_points)
         self._seg = np.array([[0, 1], [1, 2]] + [[3 + k, 4 + k] for k in range(m - 1)])
+        self._joint_points = np.arange(3)  # base centre, elbow, gripper among the interest points
+        # No body point is further than this from the base centre, metres.
+        self._reach = max(float(g.reach(include_body=True)[2]), g.base_radius)
 
     # ---- geometry -------------------------------------------------------------
 
-    def _vertices(self, q: np.ndarray) -> np.ndarray:
-        """(N, 3 + M, 2): base centre, elbow, gripper, object vertices."""
-        p_WB, p_WE, p_WG = self.geometry.joints(q)
+    def _vertices(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """World x and y (N, 3 + M): base centre, elbow, gripper, object vertices."""
+        x, y = self.geometry.interest_xy(q, self._joint_points)
         obj = self.geometry.gripper_to_world(q, self.geometry.object_points)
-        return np.concatenate([np.stack([p_WB, p_WE, p_WG], -2), obj], -2)
+        return np.concatenate([x, obj[..., 0]], -1), np.concatenate([y, obj[..., 1]], -1)
 
     def in_limits(self, qs: np.ndarray) -> np.ndarray:
         """Whether configurations (..., 4) lie within :attr:`lower`, :attr:`upper`."""
@@ -145,28 +146,66 @@ class GeometricChecker:
         return np.all((qs >= self.lower) & (qs <= self.upper), axis=-1)
 
     def _clearances(self, q: np.ndarray) -> np.ndarray:
-        v = self._vertices(q)  # (N, V, 2)
-        a, b = v[:, self._seg[:, 0]], v[:, self._seg[:, 1]]  # (N, S, 2)
-        rb = self.geometry.base_radius
+        x, y = self._vertices(q)  # (N, V)
+        i0, i1 = self._seg[:, 0], self._seg[:, 1]
+        rb, r = self.geometry.base_radius, self._radii
         x0, y0, x1, y1 = self.bounds
-        margin = np.minimum(np.minimum(v[..., 0] - x0, x1 - v[..., 0]), np.minimum(v[..., 1] - y0, y1 - v[..., 1]))
-        terms = [
-            margin[:, 0] - rb,
-            (np.minimum(margin[:, self._seg[:, 0]], margin[:, self._seg[:, 1]]) - self._radii).min(-1),
-        ]
-        if len(self._box_center):
-            # Vertices in every box frame: (N, V, K, 2).
-            v_B = np.einsum("kij,nvkj->nvki", self._box_R, v[:, :, None, :] - self._box_center)
-            terms.append(_box_sdf(v_B[:, 0], self._box_half).min(-1) - rb)
-            seg_sd = _segment_box_sdf(v_B[:, self._seg[:, 0]], v_B[:, self._seg[:, 1]], self._box_half)
-            terms.append((seg_sd.min(-1) - self._radii).min(-1))
-        if len(self._people):
-            c = self._people  # (P, 2)
-            base_d = np.sqrt(np.square(v[:, 0, None, :] - c).sum(-1)) - self._people_r - rb
-            terms.append(base_d.min(-1))
-            seg_d = _point_segment_distance(c, a[:, :, None, :], b[:, :, None, :])  # (N, S, P)
-            terms.append((seg_d - self._people_r - self._radii[:, None]).min(-1).min(-1))
-        return np.min(np.stack(terms, -1), -1)
+        margin = np.minimum(np.minimum(x - x0, x1 - x), np.minimum(y - y0, y1 - y))  # walls
+        best = np.minimum(margin[:, 0] - rb, (np.minimum(margin[:, i0], margin[:, i1]) - r).min(-1))
+        if len(self._people_r):
+            px, py, pr = self._people[:, 0], self._people[:, 1], self._people_r
+            best = np.minimum(best, (np.hypot(x[:, :1] - px, y[:, :1] - py) - pr).min(-1) - rb)
+            ax, ay = x[:, i0, None], y[:, i0, None]  # (N, S, 1) against (P,)
+            dx, dy = x[:, i1, None] - ax, y[:, i1, None] - ay
+            wx, wy = px - ax, py - ay
+            with np.errstate(divide="ignore", invalid="ignore"):
+                t = _clip01((wx * dx + wy * dy) / (dx * dx + dy * dy))
+            d = np.hypot(wx - t * dx, wy - t * dy) - pr - r[:, None]
+            best = np.minimum(best, d.min(-1).min(-1))
+        if len(self._box_half):
+            best = self._box_terms(x, y, best)
+        return best
+
+    def _box_terms(self, x: np.ndarray, y: np.ndarray, best: np.ndarray) -> np.ndarray:
+        """The clearances (N,) after the boxes, given ``best`` (N,) from the rest.
+
+        Work is spent only where it can change the result, without losing
+        exactness. Broad phase: every body point lies within ``_reach`` of the
+        base centre and signed distances are 1-Lipschitz, so a box further
+        than the best clearance known so far plus that reach cannot be the
+        nearest. Narrow phase: a capsule-box minimum is at most its value at
+        either end of the axis and at least its value at the midpoint minus
+        half the length; only pairs whose lower bound beats the best value
+        known get the exact twelve-candidate minimum.
+        """
+        hx, hy = self._box_half[:, 0], self._box_half[:, 1]
+        c, s = self._box_cos, self._box_sin
+        dx = x[:, :1] - self._box_center[:, 0]  # the base centre in every box frame: (N, K)
+        dy = y[:, :1] - self._box_center[:, 1]
+        d0 = _box_sdf_xy(c * dx + s * dy, c * dy - s * dx, hx, hy)
+        best = np.minimum(best, d0.min(-1) - self.geometry.base_radius)
+        n, k = np.nonzero(d0 - self._reach < best[:, None])  # (configuration, box) pairs kept
+        if len(n) == 0:
+            return best
+        # Every vertex of the kept pairs in the box frame: (M, V).
+        dx = x[n] - self._box_center[k, :1]
+        dy = y[n] - self._box_center[k, 1:]
+        ck, sk, hxk, hyk = c[k, None], s[k, None], hx[k, None], hy[k, None]
+        bx, by = ck * dx + sk * dy, ck * dy - sk * dx
+        i0, i1 = self._seg[:, 0], self._seg[:, 1]
+        r = self._radii
+        v_sd = _box_sdf_xy(bx, by, hxk, hyk)
+        upper = np.minimum(v_sd[:, i0], v_sd[:, i1]) - r  # (M, S)
+        np.minimum.at(best, n, upper.min(-1))
+        half_len = np.hypot(bx[:, i1] - bx[:, i0], by[:, i1] - by[:, i0]) / 2
+        lower = _box_sdf_xy((bx[:, i0] + bx[:, i1]) / 2, (by[:, i0] + by[:, i1]) / 2, hxk, hyk) - half_len - r
+        m, j = np.nonzero(lower < best[n, None])
+        if len(m):
+            exact = _segment_box_sdf_xy(
+                bx[m, i0[j]], by[m, i0[j]], bx[m, i1[j]], by[m, i1[j]], hx[k[m]], hy[k[m]]
+            ) - r[j]
+            np.minimum.at(best, n[m], exact)
+        return best
 
     def clearances(self, qs: np.ndarray) -> np.ndarray:
         """Signed distances (N,) from the robot and object to the environment.
@@ -213,7 +252,7 @@ class GeometricChecker:
         disp = self.geometry.max_displacement(q_a, q_b, include_body=True)
         n = np.maximum(1, np.ceil(disp / self.resolution)).astype(np.int64)
         counts = n + 1
-        starts = np.concatenate([[0], np.cumsum(counts)[:-1]])
+        starts = np.cumsum(counts) - counts
         edge = np.repeat(np.arange(len(n)), counts)
         t = (np.arange(counts.sum()) - starts[edge]) / n[edge]
         qs = q_a[edge] + t[:, None] * (q_b - q_a)[edge]
@@ -222,6 +261,8 @@ class GeometricChecker:
     def are_motions_valid(self, q_a: np.ndarray, q_b: np.ndarray) -> np.ndarray:
         """(E,) bool: every sampled configuration of each motion is valid."""
         qs, starts = self.motion_samples(q_a, q_b)
+        if len(starts) == 0:
+            return np.zeros(0, bool)
         return np.logical_and.reduceat(self.are_valid(qs), starts)
 
     def is_motion_valid(self, q_a: np.ndarray, q_b: np.ndarray) -> bool:

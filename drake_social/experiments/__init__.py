@@ -1,0 +1,1 @@
+"""Experiments: metrics, batch runs, benchmarks and the paper's studies."""
