@@ -28,8 +28,8 @@ import numpy as np
 from pydrake.common import Parallelism
 from pydrake.planning import LinearDistanceAndInterpolationProvider, SceneGraphCollisionChecker
 
-from drake_social.kinematics import ArmGeometry
 from drake_social.model.plant import ScenarioDiagram, build_robot_diagram
+from drake_social.planning.geometric import CheckerBase
 from drake_social.scenario import Scenario, ScenarioError
 
 __all__ = ["Contact", "SceneGraphChecker", "check_start_goal"]
@@ -54,21 +54,15 @@ class Contact:
         return f"{self.robot_body} with {self.other} ({self.distance:+.3f} m)"
 
 
-class SceneGraphChecker:
+class SceneGraphChecker(CheckerBase):
     """Configuration and motion validity from SceneGraph collision queries.
 
     Args:
-        scenario: the room, people, robot and object.
-        resolution: largest displacement of any body point between two
-            checked configurations of a motion, metres; None =
-            ``scenario.planner.collision_resolution``.
+        scenario, resolution: see :class:`CheckerBase` (geometry, limits).
         parallelism: threads of the batched calls (:meth:`are_valid`,
             :meth:`are_motions_valid`): True = all cores, False = 1, or a count.
 
     Attributes:
-        geometry: the robot's :class:`ArmGeometry`.
-        lower, upper: (4,) limits of ``q`` (room bounds, joint limits).
-        resolution: see above.
         edge_step_size: Drake's step in its weighted configuration distance,
             ``resolution / sqrt(3)``.
         model: the :class:`ScenarioDiagram` checked.
@@ -76,14 +70,9 @@ class SceneGraphChecker:
     """
 
     def __init__(self, scenario: Scenario, resolution: float | None = None, parallelism: bool | int = True):
-        self.geometry = ArmGeometry.from_scenario(scenario)
-        self.resolution = float(scenario.planner.collision_resolution if resolution is None else resolution)
-        if not self.resolution > 0:
-            raise ValueError(f"resolution must be > 0 metres, got {resolution}")
+        super().__init__(scenario, resolution)
         self.parallelism = Parallelism(parallelism)
-        b, r = scenario.world.bounds, scenario.robot
-        self.lower = np.array([b[0], b[1], *r.joint_lower], float)
-        self.upper = np.array([b[2], b[3], *r.joint_upper], float)
+        b = scenario.world.bounds
         self.model: ScenarioDiagram = build_robot_diagram(scenario)
         plant = self.model.diagram.plant()
         provider = LinearDistanceAndInterpolationProvider(plant, self.geometry.reach(include_body=True))
@@ -97,13 +86,8 @@ class SceneGraphChecker:
             self_collision_padding=0.0,
         )
         self._report_context = self.drake.MakeStandaloneModelContext()
-        # With every room dimension, no pair can be further apart than this.
+        # The robot (when valid) and every shape lie in the walled room: no clearance exceeds this.
         self._influence = float(np.hypot(b[2] - b[0], b[3] - b[1])) + 2 * scenario.world.wall_thickness
-
-    def in_limits(self, qs: np.ndarray) -> np.ndarray:
-        """Whether configurations (..., 4) lie within :attr:`lower`, :attr:`upper`."""
-        qs = np.asarray(qs, float)
-        return np.all((qs >= self.lower) & (qs <= self.upper), axis=-1)
 
     # ---- ValidityChecker ------------------------------------------------------
 

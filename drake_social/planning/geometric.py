@@ -36,7 +36,7 @@ import numpy as np
 from drake_social.kinematics import ArmGeometry
 from drake_social.scenario import Scenario
 
-__all__ = ["GeometricChecker"]
+__all__ = ["CheckerBase", "GeometricChecker"]
 
 
 def _box_sdf_xy(px: np.ndarray, py: np.ndarray, hx: np.ndarray, hy: np.ndarray) -> np.ndarray:
@@ -89,34 +89,50 @@ def _segment_box_sdf(a: np.ndarray, b: np.ndarray, half: np.ndarray) -> np.ndarr
     return _segment_box_sdf_xy(a[..., 0], a[..., 1], b[..., 0], b[..., 1], half[..., 0], half[..., 1])
 
 
-class GeometricChecker:
-    """The Drake-free :class:`ValidityChecker` of a scenario.
+class CheckerBase:
+    """What every validity checker of a scenario shares: geometry, limits, resolution.
 
     Args:
         scenario: the room, people, robot and object.
         resolution: largest displacement of any body point between two
             checked configurations of a motion, metres; None =
             ``scenario.planner.collision_resolution``.
-        chunk: configurations evaluated per numpy batch (bounds memory).
 
     Attributes:
         geometry: the robot's :class:`ArmGeometry`.
-        lower, upper: (4,) limits of ``q``: the room bounds for ``(x, y)``,
-            the joint limits for ``(psi1, psi2)``.
+        lower, upper: (4,) limits of a valid ``q``: the room bounds for
+            ``(x, y)``, the joint limits for ``(psi1, psi2)``.
         resolution: see above.
     """
 
-    def __init__(self, scenario: Scenario, resolution: float | None = None, chunk: int = 1024):
+    def __init__(self, scenario: Scenario, resolution: float | None = None):
         self.geometry = ArmGeometry.from_scenario(scenario)
         self.resolution = float(scenario.planner.collision_resolution if resolution is None else resolution)
         if not self.resolution > 0:
             raise ValueError(f"resolution must be > 0 metres, got {resolution}")
+        b, r = scenario.world.bounds, scenario.robot
+        self.lower = np.array([b[0], b[1], *r.joint_lower], float)
+        self.upper = np.array([b[2], b[3], *r.joint_upper], float)
+
+    def in_limits(self, qs: np.ndarray) -> np.ndarray:
+        """Whether configurations (..., 4) lie within :attr:`lower`, :attr:`upper`."""
+        qs = np.asarray(qs, float)
+        return np.all((qs >= self.lower) & (qs <= self.upper), axis=-1)
+
+
+class GeometricChecker(CheckerBase):
+    """The Drake-free :class:`ValidityChecker` of a scenario.
+
+    Args:
+        scenario, resolution: see :class:`CheckerBase`.
+        chunk: configurations evaluated per numpy batch (bounds memory).
+    """
+
+    def __init__(self, scenario: Scenario, resolution: float | None = None, chunk: int = 1024):
+        super().__init__(scenario, resolution)
         self.chunk = int(chunk)
-        w, r = scenario.world, scenario.robot
-        self.bounds = np.asarray(w.bounds, float)
-        self.lower = np.array([self.bounds[0], self.bounds[1], *r.joint_lower], float)
-        self.upper = np.array([self.bounds[2], self.bounds[3], *r.joint_upper], float)
-        boxes = w.obstacles
+        self.bounds = np.asarray(scenario.world.bounds, float)
+        boxes = scenario.world.obstacles
         self._box_center = np.array([b.center for b in boxes], float).reshape(-1, 2)
         self._box_half = np.array([b.size for b in boxes], float).reshape(-1, 2) / 2
         yaw = np.array([b.yaw for b in boxes], float)
@@ -139,11 +155,6 @@ class GeometricChecker:
         x, y = self.geometry.interest_xy(q, self._joint_points)
         obj = self.geometry.gripper_to_world(q, self.geometry.object_points)
         return np.concatenate([x, obj[..., 0]], -1), np.concatenate([y, obj[..., 1]], -1)
-
-    def in_limits(self, qs: np.ndarray) -> np.ndarray:
-        """Whether configurations (..., 4) lie within :attr:`lower`, :attr:`upper`."""
-        qs = np.asarray(qs, float)
-        return np.all((qs >= self.lower) & (qs <= self.upper), axis=-1)
 
     def _clearances(self, q: np.ndarray) -> np.ndarray:
         x, y = self._vertices(q)  # (N, V)

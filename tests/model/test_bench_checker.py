@@ -14,7 +14,9 @@ def test_bench_report_on_tiny(tiny_scenario_path):
     assert dut["machine"]["cpu_count"] >= 1
     report = dut["scenarios"]["tiny.yaml"]
     for kind in ("configs_per_s", "edges_per_s"):
-        assert set(report[kind]) == {"drake_single", "drake_parallel", "drake_per_call", "numpy_batched", "numpy_per_call"}
+        assert set(report[kind]) == {
+            "drake_single", "drake_parallel", "drake_per_call", "numpy_batched", "numpy_per_call",
+        }
         assert all(v > 0 and np.isfinite(v) for v in report[kind].values())
     # Items / seconds: the rates are the counts over the wall times.
     s = report["seconds"]

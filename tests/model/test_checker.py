@@ -236,7 +236,8 @@ def test_numpy_and_scenegraph_motions_agree(path, rng):
 def _start_goal_params():
     out = []
     for p in SCENARIOS:
-        marks = [pytest.mark.xfail(strict=True, reason=KNOWN_INVALID[p.name])] if p.name in KNOWN_INVALID else []
+        # Not strict: whoever fixes the file need not touch this test (then drop the entry).
+        marks = [pytest.mark.xfail(strict=False, reason=KNOWN_INVALID[p.name])] if p.name in KNOWN_INVALID else []
         out.append(pytest.param(p, marks=marks, id=p.name))
     return out
 

@@ -74,7 +74,8 @@ def _robot_shapes(scenario: Scenario, q: np.ndarray):
     plant = diagram.plant()
     context = diagram.CreateDefaultContext()
     plant.SetPositions(plant.GetMyMutableContextFromRoot(context), q)
-    query: QueryObject = diagram.scene_graph().get_query_output_port().Eval(diagram.scene_graph().GetMyContextFromRoot(context))
+    scene_graph = diagram.scene_graph()
+    query: QueryObject = scene_graph.get_query_output_port().Eval(scene_graph.GetMyContextFromRoot(context))
     inspector = query.inspector()
     out = []
     for gid in inspector.GetAllGeometryIds(Role.kProximity):

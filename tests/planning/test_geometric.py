@@ -177,7 +177,9 @@ def test_segment_box_hand_values(a, b, half, expected):
 
 def test_clearance_hand_values_rotated_box_person_and_walls():
     scenario = Scenario(
-        world=World(bounds=[0.0, 0.0, 10.0, 10.0], obstacles=[Box(center=[5.0, 5.0], size=[1.0, 1.0], yaw=math.pi / 4)]),
+        world=World(
+            bounds=[0.0, 0.0, 10.0, 10.0], obstacles=[Box(center=[5.0, 5.0], size=[1.0, 1.0], yaw=math.pi / 4)]
+        ),
         people=[Person(x=2.0, y=8.0, theta=math.pi / 4, radius=0.25)],
         object=Bar(length=0.4, thickness=0.04),
     )
