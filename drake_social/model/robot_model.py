@@ -126,10 +126,11 @@ def _stadium(tag: str, name: str, points: np.ndarray, radius: float, z0: float, 
 
 
 def _inertial(mass: float, points: np.ndarray, radius: float) -> str:
-    """A point-mass-like inertia: the mass at the polyline's vertex centroid.
+    """A solid upright cylinder's inertia, centred on the footprint's vertices.
 
-    Uses a solid disc of the footprint's extent so the inertia is valid; only
-    the simulation reads it.
+    Its radius is the footprint's extent from the vertex centroid and its
+    height the collision slab's: a plausible, valid inertia for the
+    simulation (collision checking ignores it).
     """
     c = points.mean(axis=0)
     extent = float(np.max(np.hypot(*(points - c).T))) + radius
