@@ -54,11 +54,6 @@ def object_interest_points(obj: Bar | LShape | Polyline) -> np.ndarray:
     return pts
 
 
-def _rot(c: np.ndarray, s: np.ndarray) -> np.ndarray:
-    """Rotation matrices (..., 2, 2) from the cosines and sines (...) of their angles."""
-    return np.stack([np.stack([c, -s], -1), np.stack([s, c], -1)], -2)
-
-
 def _gripper_cos_sin(q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """cos and sin of the gripper's world angle psi1 + psi2, shape (...).
 
@@ -131,26 +126,52 @@ class ArmGeometry:
     def joints(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Shoulder (base centre), elbow and gripper origin, each (..., 2)."""
         q = np.asarray(q, dtype=float)
-        l1, l2 = self.link_lengths
-        a1 = q[..., 2]
-        c12, s12 = _gripper_cos_sin(q)
-        p_WB = q[..., :2]
-        p_WE = p_WB + l1 * np.stack([np.cos(a1), np.sin(a1)], -1)
-        p_WG = p_WE + l2 * np.stack([c12, s12], -1)
-        return p_WB, p_WE, p_WG
+        x, y = self.interest_xy(q, np.arange(3))
+        p = np.stack([x, y], -1)
+        return p[..., 0, :], p[..., 1, :], p[..., 2, :]
 
     def gripper_to_world(self, q: np.ndarray, p_G: np.ndarray) -> np.ndarray:
         """Maps gripper-frame points (K, 2) to world points (..., K, 2)."""
+        x, y = self._to_world_xy(np.asarray(q, dtype=float), np.asarray(p_G, float).reshape(-1, 2))
+        return np.stack([x, y], -1)
+
+    def _to_world_xy(self, q: np.ndarray, p_G: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """World x and y (..., K) of gripper-frame points p_G (K, 2)."""
+        l1, l2 = self.link_lengths
+        c1, s1 = np.cos(q[..., 2]), np.sin(q[..., 2])
+        c12, s12 = _gripper_cos_sin(q)
+        gx = (q[..., 0] + l1 * c1 + l2 * c12)[..., None]
+        gy = (q[..., 1] + l1 * s1 + l2 * s12)[..., None]
+        c12, s12 = c12[..., None], s12[..., None]
+        return gx + c12 * p_G[:, 0] - s12 * p_G[:, 1], gy + s12 * p_G[:, 0] + c12 * p_G[:, 1]
+
+    def interest_xy(self, q: np.ndarray, active: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+        """World x and y (..., K) of the interest points ``active`` (None = all).
+
+        The batched fast path of :meth:`interest_points` (no rotation
+        matrices, no (..., 2) stacking), used by the social cost.
+        """
         q = np.asarray(q, dtype=float)
-        _, _, p_WG = self.joints(q)
-        R_WG = _rot(*_gripper_cos_sin(q))  # (..., 2, 2)
-        return p_WG[..., None, :] + np.einsum("...ij,kj->...ki", R_WG, np.asarray(p_G, float))
+        l1, l2 = self.link_lengths
+        c1, s1 = np.cos(q[..., 2]), np.sin(q[..., 2])
+        c12, s12 = _gripper_cos_sin(q)
+        ex, ey = q[..., 0] + l1 * c1, q[..., 1] + l1 * s1
+        gx, gy = ex + l2 * c12, ey + l2 * s12
+        xs = [q[..., 0], ex, gx]
+        ys = [q[..., 1], ey, gy]
+        if len(self.object_interest):
+            p = self.object_interest
+            xs.append(gx[..., None] + c12[..., None] * p[:, 0] - s12[..., None] * p[:, 1])
+            ys.append(gy[..., None] + s12[..., None] * p[:, 0] + c12[..., None] * p[:, 1])
+        x = np.concatenate([np.stack(xs[:3], -1), *xs[3:]], -1)
+        y = np.concatenate([np.stack(ys[:3], -1), *ys[3:]], -1)
+        if active is not None:
+            x, y = x[..., active], y[..., active]
+        return x, y
 
     def interest_points(self, q: np.ndarray) -> np.ndarray:
         """World interest points (..., 3 + P, 2), in :attr:`interest_names` order."""
-        p_WB, p_WE, p_WG = self.joints(q)
-        obj = self.gripper_to_world(q, self.object_interest)
-        return np.concatenate([np.stack([p_WB, p_WE, p_WG], -2), obj], -2)
+        return np.stack(self.interest_xy(q), -1)
 
     def segments(self, q: np.ndarray) -> np.ndarray:
         """Capsule axes (..., S, 2, 2): link 1, link 2, object segments.

@@ -26,24 +26,12 @@ SCENARIO_DIR = Path(__file__).resolve().parent.parent / "scenarios"
 SCENARIO_FILES = sorted(SCENARIO_DIR.glob("*.yaml"))
 
 
-def _scenario_params(known_bad: dict[str, str]) -> list:
-    """The scenario files as pytest params; ``known_bad`` maps a file name to
-    the reason of an xfail (it fails today; once the file is fixed the test
-    shows as XPASS in the summary and the entry should go). Not strict, so
-    that the fix, made elsewhere, does not break this file's tests."""
-    params = []
-    for path in SCENARIO_FILES:
-        marks = [pytest.mark.xfail(strict=False, reason=known_bad[path.name])] if path.name in known_bad else []
-        params.append(pytest.param(path, id=path.stem, marks=marks))
-    return params
-
-
 def test_the_three_scenarios_are_shipped():
     names = {p.name for p in SCENARIO_FILES}
     assert {"office_bar.yaml", "generic_L.yaml", "tiny.yaml"} <= names
 
 
-@pytest.mark.parametrize("path", _scenario_params({}))
+@pytest.mark.parametrize("path", SCENARIO_FILES, ids=lambda p: p.stem)
 def test_every_scenario_file_loads_and_validates(path):
     dut = load_scenario(path)
     assert dut.description, f"{path.name}: give the scenario a description (shown in figures)"
@@ -65,7 +53,7 @@ def _box_signed_distance(points: np.ndarray, box) -> np.ndarray:
     return np.where(inside, -depth, outside)
 
 
-@pytest.mark.parametrize("path", _scenario_params({}))
+@pytest.mark.parametrize("path", SCENARIO_FILES, ids=lambda p: p.stem)
 def test_people_stand_in_free_space(path):
     """No person's body overlaps an obstacle, a wall or another person."""
     dut = load_scenario(path)
@@ -79,12 +67,7 @@ def test_people_stand_in_free_space(path):
             assert math.hypot(p.x - other.x, p.y - other.y) > p.radius + other.radius, f"people {j}, {i} overlap"
 
 
-# tiny.yaml (not owned here): at its goal [7, 2.5, 0, pi/2] the bar lies along
-# +x from x = 6.85 to 8.35, 0.35 m through the east wall at x = 8.
-_TINY_GOAL = "tiny.yaml goal puts the bar 0.35 m through the east wall (x = 8.35 > 8); fix tiny.yaml"
-
-
-@pytest.mark.parametrize("path", _scenario_params({"tiny.yaml": _TINY_GOAL}))
+@pytest.mark.parametrize("path", SCENARIO_FILES, ids=lambda p: p.stem)
 def test_start_and_goal_are_collision_free(path):
     scenario = load_scenario(path)
     dut = GeometricChecker(scenario)

@@ -8,7 +8,7 @@ from typing import Sequence
 
 import numpy as np
 
-__all__ = ["PersonalSpace", "agf", "agf_algorithm1", "people_array"]
+__all__ = ["PersonalSpace", "agf", "agf_algorithm1", "agf_xy", "people_array"]
 
 
 @dc.dataclass(frozen=True)
@@ -35,6 +35,13 @@ class PersonalSpace:
             sigma_s=options.side_ratio * options.sigma_h,
             sigma_r=options.rear_ratio * options.sigma_h,
             threshold=options.threshold,
+        )
+
+    @property
+    def max_reach(self) -> float:
+        """Euclidean distance beyond which the AGF is <= threshold in every direction."""
+        return self.reach("front") if self.sigma_h >= max(self.sigma_s, self.sigma_r) else max(
+            self.reach("side"), self.reach("rear")
         )
 
     def reach(self, direction: str = "front") -> float:
@@ -74,9 +81,21 @@ def agf(points: np.ndarray, people: np.ndarray, space: PersonalSpace) -> np.ndar
         point or person is NaN.
     """
     points = np.asarray(points, dtype=float)
+    return agf_xy(points[..., 0], points[..., 1], people, space)
+
+
+def agf_xy(
+    x: np.ndarray, y: np.ndarray, people: np.ndarray, space: PersonalSpace, thresholded: bool = True
+) -> np.ndarray:
+    """:func:`agf` for world coordinates given as two arrays x, y (...,) -> (..., H).
+
+    Args:
+        thresholded: False returns the raw Gaussian, without zeroing values
+            <= threshold (the motion integral locates threshold crossings).
+    """
     people = np.asarray(people, dtype=float).reshape(-1, 3)
-    dx = points[..., 0:1] - people[:, 0]
-    dy = points[..., 1:2] - people[:, 1]
+    dx = np.asarray(x, dtype=float)[..., None] - people[:, 0]
+    dy = np.asarray(y, dtype=float)[..., None] - people[:, 1]
     c, s = np.cos(people[:, 2]), np.sin(people[:, 2])
     inv_front = 1.0 / (2.0 * space.sigma_h**2)
     inv_rear = 1.0 / (2.0 * space.sigma_r**2)

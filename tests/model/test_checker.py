@@ -18,10 +18,6 @@ from drake_social.scenario import Box, Polyline, Scenario, ScenarioError, World,
 
 SCENARIO_DIR = Path(__file__).resolve().parents[2] / "scenarios"
 SCENARIOS = sorted(SCENARIO_DIR.glob("*.yaml"))
-# Scenario files whose start or goal is known to collide (reported upstream).
-KNOWN_INVALID = {
-    "tiny.yaml": "goal [7, 2.5, 0, pi/2] holds the 1.5 m bar across x in [6.85, 8.35], through the east wall at x = 8",
-}
 
 
 @functools.lru_cache(maxsize=None)
@@ -233,16 +229,7 @@ def test_numpy_and_scenegraph_motions_agree(path, rng):
     assert (drake_valid != numpy_valid).mean() < 0.02
 
 
-def _start_goal_params():
-    out = []
-    for p in SCENARIOS:
-        # Not strict: whoever fixes the file need not touch this test (then drop the entry).
-        marks = [pytest.mark.xfail(strict=False, reason=KNOWN_INVALID[p.name])] if p.name in KNOWN_INVALID else []
-        out.append(pytest.param(p, marks=marks, id=p.name))
-    return out
-
-
-@pytest.mark.parametrize("path", _start_goal_params())
+@pytest.mark.parametrize("path", SCENARIOS, ids=lambda p: p.name)
 def test_start_and_goal_of_every_scenario_are_valid(path):
     scenario, dut, numpy_ = _checkers(path)
     check_start_goal(scenario, dut, source=str(path))

@@ -1,0 +1,80 @@
+"""Optimisation objectives: path length (RRT*) and the social integral (Social Risk-RRT*).
+
+Following OMPL's split, an objective gives a *state cost* (cached at tree
+nodes) and a *motion cost* for straight motions, batched over motions. Variants
+of the paper's planners are configurations of these two classes, not copies:
+
+* ``rrt_star``: :class:`PathLengthObjective`;
+* ``social_rrt_star``: :class:`SocialObjective` with the scenario's weights;
+* ``base_rrt_star``: :class:`SocialObjective` with weight 1 on the base, 0 elsewhere.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from drake_social.cost.social import SocialCost
+from drake_social.kinematics import config_distance
+
+__all__ = ["Objective", "PathLengthObjective", "SocialObjective"]
+
+
+class Objective:
+    """Base class: motion cost ``social(a, b) + length_weight * ||W (b - a)||``."""
+
+    #: Weight of the configuration-space length in the motion cost.
+    length_weight: float = 1.0
+    #: Per-coordinate scale of the configuration distance.
+    distance_weights: np.ndarray = np.ones(4)
+
+    def state_cost(self, q: np.ndarray) -> np.ndarray:
+        """The cost rate at configurations (..., 4) (S for social objectives)."""
+        return np.zeros(np.shape(q)[:-1])
+
+    def motion_cost(self, q_a: np.ndarray, q_b: np.ndarray) -> np.ndarray:
+        """Costs (E,) of straight motions q_a -> q_b, (E, 4) each (or (4,))."""
+        return self.length_weight * config_distance(np.atleast_2d(q_a), np.atleast_2d(q_b), self.distance_weights)
+
+    def xy_length_bound(self, cost: float) -> float:
+        """An upper bound on the base's XY path length of any path of this cost,
+        or inf when the objective does not bound it (length_weight = 0)."""
+        scale = self.length_weight * float(min(self.distance_weights[0], self.distance_weights[1]))
+        return cost / scale if scale > 0 else np.inf
+
+
+class PathLengthObjective(Objective):
+    """Configuration-space path length, the RRT* baseline of the paper."""
+
+    name = "path_length"
+
+    def __init__(self, distance_weights: np.ndarray | None = None):
+        self.length_weight = 1.0
+        self.distance_weights = np.ones(4) if distance_weights is None else np.asarray(distance_weights, float)
+
+
+class SocialObjective(Objective):
+    """The motion social cost Msc plus an optional length term (lambda).
+
+    Args:
+        social: the social cost S (its weights decide multi-point vs base-only).
+        length_weight: lambda >= 0 (0 = the paper's pure social integral).
+    """
+
+    name = "social"
+
+    def __init__(self, social: SocialCost, length_weight: float = 0.0):
+        if not length_weight >= 0:
+            raise ValueError(f"length_weight must be >= 0, got {length_weight}")
+        self.social = social
+        self.length_weight = float(length_weight)
+        dw = social.distance_weights
+        self.distance_weights = np.ones(4) if dw is None else np.asarray(dw, float)
+
+    def state_cost(self, q: np.ndarray) -> np.ndarray:
+        return self.social(q)
+
+    def motion_cost(self, q_a, q_b) -> np.ndarray:
+        cost = self.social.motion_cost(np.atleast_2d(q_a), np.atleast_2d(q_b))
+        if self.length_weight > 0:
+            cost = cost + super().motion_cost(q_a, q_b)
+        return cost
