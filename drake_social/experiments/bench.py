@@ -1,0 +1,344 @@
+"""``drake-social bench``: the planners over seeds, against OMPL's RRTstar.
+
+:func:`run_bench` plans every (scenario, algorithm) with seeds
+``0 .. seeds - 1`` and reports per run and as medians with spread. When
+``ompl`` is importable it also runs OMPL's RRTstar in the same run on the
+same problem (:mod:`drake_social.experiments.ompl_baseline`), once per
+objective: ``rrt_star`` (path length), ``social_rrt_star`` (multi-point)
+and ``base_rrt_star`` (base-only); the informed variants are compared with
+OMPL on their objective (OMPL's RRTstar does not sample informed).
+
+Every run gets a fresh checker (built outside the timing), so no run profits
+from another's caches. Every path, ours and OMPL's, is measured by the same
+code afterwards: :func:`evaluate_path` gives its objective, social cost with
+the scenario's full weights and lengths, and the checker verifies every
+waypoint and motion (``path_valid``). ``wall_time`` is the planner's search
+only (``RrtStar.solve``, OMPL's ``solve``).
+
+Ratios are ours / OMPL of the medians: ``time`` (wall time), ``social_cost``
+(full weights) and ``objective``.
+"""
+
+from __future__ import annotations
+
+import importlib.metadata
+import json
+import logging
+import os
+import platform
+from pathlib import Path
+from typing import Callable, Sequence
+
+import numpy as np
+
+from drake_social.planning.space import ConfigurationSpace
+from drake_social.planning.validity import ValidityChecker
+from drake_social.planning.variants import evaluate_path, make_objective, plan
+from drake_social.scenario import ALGORITHMS, Scenario, load_scenario
+
+__all__ = ["CHECKERS", "ompl_available", "run_bench", "summarize"]
+
+_log = logging.getLogger(__name__)
+
+#: Checkers the bench can use.
+CHECKERS = ("drake", "numpy")
+
+#: Per-run fields summarised with median and spread.
+_STAT_FIELDS = ("wall_time", "social_cost_full", "objective", "base_length", "path_length")
+#: Per-run fields summarised with their median only.
+_MEDIAN_FIELDS = ("first_solution_iteration", "tree_size", "num_config_checks", "num_motion_checks",
+                  "num_cost_evaluations")
+
+
+def ompl_available() -> bool:
+    """Whether the ``ompl`` package (the ``bench`` extra) is importable."""
+    try:
+        import ompl.base  # noqa: F401
+        import ompl.geometric  # noqa: F401
+    except ImportError:
+        return False
+    return True
+
+
+def _make_checker(scenario: Scenario, checker: str) -> ValidityChecker:
+    if checker == "drake":
+        from drake_social.model.checker import SceneGraphChecker
+
+        return SceneGraphChecker(scenario)
+    from drake_social.planning.geometric import GeometricChecker
+
+    return GeometricChecker(scenario)
+
+
+def _objective_key(algorithm: str) -> str:
+    """The non-informed algorithm with the same objective."""
+    return algorithm.removeprefix("informed_")
+
+
+def _record(scenario: Scenario, result, objective, checker: ValidityChecker) -> dict:
+    """One run's numbers, its path re-measured and re-checked by our code."""
+    run = {
+        "seed": result.seed,
+        "success": bool(result.success),
+        "wall_time": float(result.wall_time),
+        "reported_cost": float(result.cost) if result.success else None,
+        "first_solution_iteration": result.first_solution_iteration,
+        "tree_size": int(result.tree_size),
+        "num_config_checks": int(result.num_config_checks),
+        "num_motion_checks": int(result.num_motion_checks),
+        "num_cost_evaluations": int(result.num_cost_evaluations),
+        "num_waypoints": int(len(result.waypoints)),
+    }
+    if result.success:
+        wp = np.asarray(result.waypoints, float)
+        run.update(evaluate_path(scenario, wp, objective))
+        run["path_valid"] = bool(np.all(checker.are_valid(wp)) and np.all(checker.are_motions_valid(wp[:-1], wp[1:])))
+        run["waypoints"] = wp.tolist()
+    else:
+        run.update({k: None for k in ("social_cost_full", "social_cost_planner", "objective", "path_length",
+                                      "base_length", "path_valid")})
+        run["waypoints"] = []
+    return run
+
+
+def _stats(values: Sequence[float]) -> dict:
+    """Median, quartiles, IQR, min and max (None when there are no values)."""
+    v = np.asarray([x for x in values if x is not None], float)
+    if len(v) == 0:
+        return {"n": 0, "median": None, "q25": None, "q75": None, "iqr": None, "min": None, "max": None}
+    q25, med, q75 = np.percentile(v, [25, 50, 75])
+    return {"n": int(len(v)), "median": float(med), "q25": float(q25), "q75": float(q75),
+            "iqr": float(q75 - q25), "min": float(v.min()), "max": float(v.max())}
+
+
+def summarize(runs: Sequence[dict]) -> dict:
+    """Summary of one (scenario, planner)'s runs.
+
+    Wall time is over all runs; costs, lengths and the other medians over the
+    successful ones.
+    """
+    ok = [r for r in runs if r["success"]]
+    out = {"runs": len(runs), "successes": len(ok), "success_rate": len(ok) / len(runs) if runs else None,
+           "paths_valid": all(r["path_valid"] for r in ok)}
+    for f in _STAT_FIELDS:
+        out[f] = _stats([r[f] for r in (runs if f == "wall_time" else ok)])
+    for f in _MEDIAN_FIELDS:
+        out[f"median_{f}"] = _stats([r[f] for r in ok])["median"]
+    return out
+
+
+def _ratio(a: dict, b: dict, field: str) -> float | None:
+    x, y = a[field]["median"], b[field]["median"]
+    return None if x is None or y is None or y == 0 else x / y
+
+
+def _plan_ompl_runs(scenario: Scenario, key: str, iterations: int, seeds: int, checker: str, tick) -> dict:
+    from drake_social.experiments.ompl_baseline import plan_ompl
+
+    objective = make_objective(scenario, key)
+    p = scenario.planner
+    runs, settings = [], None
+    for seed in range(seeds):
+        chk = _make_checker(scenario, checker)
+        result, settings = plan_ompl(
+            ConfigurationSpace.from_scenario(scenario), chk, objective, np.asarray(scenario.start, float),
+            np.asarray(scenario.goal, float), iterations=iterations, planning_range=p.planning_range,
+            near_radius=p.near_radius, goal_bias=p.goal_bias, seed=seed, name=f"ompl_rrt_star[{key}]",
+        )
+        runs.append(_record(scenario, result, objective, chk))
+        tick(f"ompl_rrt_star[{key}] seed {seed}")
+    return {"objective_of": key, "settings": settings.to_json_dict(), "runs": runs, "summary": summarize(runs)}
+
+
+def _machine() -> dict:
+    def version(name: str) -> str | None:
+        try:
+            return importlib.metadata.version(name)
+        except importlib.metadata.PackageNotFoundError:
+            return None
+
+    return {"platform": platform.platform(), "machine": platform.machine(), "processor": platform.processor(),
+            "python": platform.python_version(), "cpu_count": os.cpu_count(),
+            "numpy": version("numpy"), "drake": version("drake"), "ompl": version("ompl")}
+
+
+def run_bench(
+    *,
+    scenario_paths: Sequence[str | Path],
+    algorithms: Sequence[str] | None = None,
+    iterations: int = 2000,
+    seeds: int = 10,
+    checker: str = "drake",
+    include_ompl: bool = True,
+    include_checker: bool = True,
+    out_dir: str | Path,
+    progress: Callable[[int, int, str], None] | None = None,
+) -> dict:
+    """Benchmarks the planners and writes ``bench.json`` and ``bench.md``.
+
+    Args:
+        scenario_paths: scenario YAML files.
+        algorithms: planners to run (default: all of ``scenario.ALGORITHMS``).
+        iterations: samples per run, K.
+        seeds: runs per (scenario, algorithm), seeds ``0 .. seeds - 1``.
+        checker: ``"drake"`` (SceneGraph) or ``"numpy"`` (geometric).
+        include_ompl: also run OMPL's RRTstar when ``ompl`` is importable.
+        include_checker: also measure the checkers
+            (:func:`run_checker_bench` on 2000 configurations and 200 motions).
+        out_dir: where the two files go (created).
+        progress: optional ``progress(done, total, label)`` after each run.
+
+    Returns:
+        ``{"settings", "machine", "ompl", "scenarios", "checker_bench"}``;
+        ``scenarios[file name]`` has ``algorithms[name] = {"runs": [...],
+        "summary": {...}, "vs_ompl": {...}}`` and ``ompl[objective] =
+        {"settings", "runs", "summary"}``. Per run: seed, success, wall_time
+        (s), objective, social_cost_full, social_cost_planner, path_length,
+        base_length (m), reported_cost (the planner's own), path_valid,
+        first_solution_iteration, tree_size, check and cost counts, waypoints.
+        Summaries give ``{n, median, q25, q75, iqr, min, max}`` of wall time
+        (all runs) and of the costs and lengths (successful runs).
+    """
+    algorithms = list(ALGORITHMS if algorithms is None else algorithms)
+    unknown = [a for a in algorithms if a not in ALGORITHMS]
+    if unknown or not algorithms:
+        raise ValueError(f"algorithms {unknown or '[]'} not allowed; allowed: {', '.join(ALGORITHMS)}")
+    if checker not in CHECKERS:
+        raise ValueError(f"checker {checker!r} not allowed; allowed: {', '.join(CHECKERS)}")
+    if iterations < 1 or seeds < 1:
+        raise ValueError(f"iterations and seeds must be >= 1, got {iterations}, {seeds}")
+    paths = [Path(p) for p in scenario_paths]
+    if not paths:
+        raise ValueError("scenario_paths is empty")
+    use_ompl = include_ompl and ompl_available()
+    if include_ompl and not use_ompl:
+        _log.info("ompl is not importable (pip install 'drake-social[bench]'); skipping the OMPL baseline")
+    keys = list(dict.fromkeys(_objective_key(a) for a in algorithms)) if use_ompl else []
+    total = len(paths) * seeds * (len(algorithms) + len(keys)) + (1 if include_checker else 0)
+    done = 0
+
+    def tick(label: str) -> None:
+        nonlocal done
+        done += 1
+        _log.debug("bench %d/%d %s", done, total, label)
+        if progress:
+            progress(done, total, label)
+
+    scenarios = {}
+    for path in paths:
+        scenario = load_scenario(path)
+        entry = {"algorithms": {}, "ompl": {}}
+        for algorithm in algorithms:
+            objective = make_objective(scenario, algorithm)
+            runs = []
+            for seed in range(seeds):
+                chk = _make_checker(scenario, checker)
+                result = plan(scenario, chk, algorithm=algorithm, iterations=iterations, seed=seed)
+                runs.append(_record(scenario, result, objective, chk))
+                tick(f"{path.stem} {algorithm} seed {seed}")
+            entry["algorithms"][algorithm] = {"runs": runs, "summary": summarize(runs)}
+        for key in keys:
+            entry["ompl"][key] = _plan_ompl_runs(scenario, key, iterations, seeds, checker,
+                                                 lambda label: tick(f"{path.stem} {label}"))
+        for algorithm, data in entry["algorithms"].items():
+            base = entry["ompl"].get(_objective_key(algorithm))
+            data["vs_ompl"] = None if base is None else {
+                "ompl": f"ompl_rrt_star[{_objective_key(algorithm)}]",
+                **{f: _ratio(data["summary"], base["summary"], g)
+                   for f, g in (("time", "wall_time"), ("social_cost", "social_cost_full"), ("objective", "objective"))},
+            }
+        scenarios[path.name] = entry
+
+    checker_bench = None
+    if include_checker:
+        from drake_social.experiments.bench_checker import run_checker_bench
+
+        checker_bench = run_checker_bench(scenario_paths=paths, num_configs=2000, num_edges=200, repeats=1)
+        tick("checker bench")
+
+    out = {
+        "settings": {"scenario_paths": [str(p) for p in paths], "algorithms": algorithms, "iterations": iterations,
+                     "seeds": list(range(seeds)), "checker": checker},
+        "machine": _machine(),
+        "ompl": {"requested": include_ompl, "available": ompl_available(), "objectives": keys},
+        "scenarios": scenarios,
+        "checker_bench": checker_bench,
+    }
+    out_dir = Path(out_dir)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    (out_dir / "bench.json").write_text(json.dumps(_finite(out), indent=1, allow_nan=False))
+    (out_dir / "bench.md").write_text(_markdown(out))
+    _log.info("bench written to %s", out_dir)
+    return out
+
+
+def _finite(x):
+    """Non-finite floats become None (strict JSON)."""
+    if isinstance(x, dict):
+        return {k: _finite(v) for k, v in x.items()}
+    if isinstance(x, (list, tuple)):
+        return [_finite(v) for v in x]
+    if isinstance(x, float) and not np.isfinite(x):
+        return None
+    return x
+
+
+def _fmt(s: dict, digits: int = 3) -> str:
+    if s["median"] is None:
+        return "n/a"
+    return f"{s['median']:.{digits}g} [{s['q25']:.{digits}g}, {s['q75']:.{digits}g}]"
+
+
+def _num(x, fmt: str = ".3g") -> str:
+    return "n/a" if x is None else format(x, fmt)
+
+
+def _markdown(out: dict) -> str:
+    s, m = out["settings"], out["machine"]
+    lines = [
+        "# drake-social bench",
+        "",
+        f"K = {s['iterations']} iterations, seeds 0..{len(s['seeds']) - 1}, checker `{s['checker']}`; "
+        f"{m['platform']}, {m['cpu_count']} CPUs, numpy {m['numpy']}, drake {m['drake']}, ompl {m['ompl']}.",
+        "",
+        "Wall time (s) over all runs and social cost (the scenario's full weights) over successful runs: "
+        "median [25th, 75th percentile]. Ratios: ours / OMPL RRTstar with the same objective, of the medians "
+        "(objective: each planner's own, recomputed from its path).",
+        "",
+        "| scenario | algorithm | runs | success | wall time s | social cost | first solution it. "
+        "| time ratio vs OMPL | social cost ratio vs OMPL | objective ratio vs OMPL |",
+        "|---|---|---:|---:|---|---|---:|---:|---:|---:|",
+    ]
+    for name, entry in out["scenarios"].items():
+        rows = [(a, d["summary"], d.get("vs_ompl")) for a, d in entry["algorithms"].items()]
+        rows += [(f"ompl_rrt_star[{k}]", d["summary"], None) for k, d in entry["ompl"].items()]
+        for label, sm, vs in rows:
+            lines.append(
+                f"| {Path(name).stem} | {label} | {sm['runs']} | {sm['success_rate']:.0%} | {_fmt(sm['wall_time'])} "
+                f"| {_fmt(sm['social_cost_full'])} | {_num(sm['median_first_solution_iteration'], '.0f')} "
+                f"| {_num(vs and vs['time'])} | {_num(vs and vs['social_cost'])} | {_num(vs and vs['objective'])} |"
+            )
+    ompl_rows = [(name, k, d["settings"]) for name, e in out["scenarios"].items() for k, d in e["ompl"].items()]
+    if ompl_rows:
+        lines += ["", "OMPL settings (range, radius = min(range, our near radius), rewire factor):", ""]
+        seen = set()
+        for name, _, st in ompl_rows:
+            if name not in seen:
+                seen.add(name)
+                lines.append(
+                    f"- {Path(name).stem}: range {st['planning_range']:g}, radius {st['radius']:.4g} "
+                    f"(ours {st['our_near_radius']:g}), rewire factor {st['rewire_factor']:.4g}, "
+                    f"goal bias {st['goal_bias']:g}, goal threshold {st['goal_threshold']:.3g}"
+                )
+    elif out["ompl"]["requested"]:
+        lines += ["", "OMPL was not importable: no baseline (install the `bench` extra)."]
+    cb = out.get("checker_bench")
+    if cb:
+        lines += ["", "## Checkers (per second)", "",
+                  "| scenario | drake configs (per call) | numpy configs (per call) | drake motions (per call) "
+                  "| numpy motions (per call) |", "|---|---:|---:|---:|---:|"]
+        for name, r in cb["scenarios"].items():
+            c, e = r["configs_per_s"], r["edges_per_s"]
+            lines.append(f"| {Path(name).stem} | {c['drake_per_call']:.0f} | {c['numpy_per_call']:.0f} "
+                         f"| {e['drake_per_call']:.0f} | {e['numpy_per_call']:.0f} |")
+    return "\n".join(lines) + "\n"

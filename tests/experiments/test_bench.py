@@ -1,0 +1,221 @@
+"""The planner benchmark and its OMPL baseline: numbers consistent with the runs, deterministic, same cost code."""
+
+from __future__ import annotations
+
+import json
+import math
+
+import numpy as np
+import pytest
+
+from drake_social.cost.social import SocialCost
+from drake_social.experiments.bench import run_bench
+from drake_social.planning.geometric import GeometricChecker
+from drake_social.planning.space import ConfigurationSpace
+from drake_social.planning.variants import evaluate_path, make_objective
+from drake_social.scenario import load_scenario
+
+ALGOS = ["rrt_star", "social_rrt_star"]
+
+
+def _small(path, out_dir, **kw):
+    args = dict(scenario_paths=[path], algorithms=ALGOS, iterations=200, seeds=2, checker="numpy",
+                include_ompl=False, include_checker=False, out_dir=out_dir)
+    args.update(kw)
+    return run_bench(**args)
+
+
+def test_small_bench_reports_its_runs(tiny_scenario_path, tiny_scenario, tmp_path):
+    calls = []
+    dut = _small(tiny_scenario_path, tmp_path / "a", include_checker=True,
+                 progress=lambda done, total, label: calls.append((done, total, label)))
+    # Progress: one call per run plus the checker bench, counting up to the total.
+    assert [c[0] for c in calls] == list(range(1, 6)) and {c[1] for c in calls} == {5}
+    assert calls[-1][2] == "checker bench"
+
+    on_disk = json.loads((tmp_path / "a" / "bench.json").read_text())
+    assert on_disk["settings"] == {"scenario_paths": [str(tiny_scenario_path)], "algorithms": ALGOS,
+                                   "iterations": 200, "seeds": [0, 1], "checker": "numpy"}
+    assert on_disk["machine"]["cpu_count"] >= 1 and on_disk["machine"]["numpy"] == np.__version__
+    assert on_disk["checker_bench"]["scenarios"]["tiny.yaml"]["configs_per_s"]["numpy_batched"] > 0
+    md = (tmp_path / "a" / "bench.md").read_text()
+    assert "## Checkers" in md
+
+    full = SocialCost.from_scenario(tiny_scenario)
+    checker = GeometricChecker(tiny_scenario)
+    for algorithm in ALGOS:
+        data = dut["scenarios"]["tiny.yaml"]["algorithms"][algorithm]
+        runs, summary = data["runs"], data["summary"]
+        assert [r["seed"] for r in runs] == [0, 1] and all(r["success"] for r in runs)
+        assert data["vs_ompl"] is None
+        walls = [r["wall_time"] for r in runs]
+        social = [r["social_cost_full"] for r in runs]
+        assert summary["wall_time"]["median"] == pytest.approx(np.median(walls), rel=1e-12)
+        assert summary["social_cost_full"]["median"] == pytest.approx(np.median(social), rel=1e-12)
+        assert summary["social_cost_full"]["iqr"] == pytest.approx(
+            np.percentile(social, 75) - np.percentile(social, 25), rel=1e-12, abs=1e-12)
+        assert summary["social_cost_full"]["min"] == min(social) and summary["social_cost_full"]["max"] == max(social)
+        assert summary["median_first_solution_iteration"] == np.median([r["first_solution_iteration"] for r in runs])
+        assert summary["success_rate"] == 1.0 and summary["paths_valid"]
+        for run in runs:
+            wp = np.array(run["waypoints"])
+            np.testing.assert_array_equal(wp[0], tiny_scenario.start)
+            np.testing.assert_array_equal(wp[-1], tiny_scenario.goal)
+            # Independent recomputation: the social integral edge by edge, the base length by hand.
+            by_edge = sum(float(full.motion_cost(wp[i:i + 1], wp[i + 1:i + 2])[0]) for i in range(len(wp) - 1))
+            assert run["social_cost_full"] == pytest.approx(by_edge, rel=1e-9)
+            assert run["base_length"] == pytest.approx(sum(math.dist(a[:2], b[:2]) for a, b in zip(wp, wp[1:])))
+            # The planner's own cost is the objective recomputed from the path.
+            assert run["reported_cost"] == pytest.approx(run["objective"], rel=1e-9)
+            assert checker.are_valid(wp).all() and checker.are_motions_valid(wp[:-1], wp[1:]).all()
+            assert run["path_valid"]
+            assert run["tree_size"] <= 201 and run["num_config_checks"] == 200
+        # The Markdown row carries the same medians.
+        row = next(line for line in md.splitlines() if line.startswith(f"| tiny | {algorithm} |"))
+        assert f"{summary['social_cost_full']['median']:.3g}" in row and "| 2 | 100% |" in row
+
+    # Same seeds, same paths and costs (times may differ).
+    again = _small(tiny_scenario_path, tmp_path / "b")
+    for algorithm in ALGOS:
+        first = dut["scenarios"]["tiny.yaml"]["algorithms"][algorithm]["runs"]
+        second = again["scenarios"]["tiny.yaml"]["algorithms"][algorithm]["runs"]
+        assert [r["social_cost_full"] for r in first] == [r["social_cost_full"] for r in second]
+        assert [r["waypoints"] for r in first] == [r["waypoints"] for r in second]
+    # Different seeds gave different paths.
+    runs = dut["scenarios"]["tiny.yaml"]["algorithms"]["social_rrt_star"]["runs"]
+    assert runs[0]["waypoints"] != runs[1]["waypoints"]
+
+
+def test_bench_rejects_bad_arguments(tiny_scenario_path, tmp_path):
+    with pytest.raises(ValueError, match="allowed: rrt_star, social_rrt_star"):
+        _small(tiny_scenario_path, tmp_path, algorithms=["rrt"])
+    with pytest.raises(ValueError, match="checker 'fcl' not allowed; allowed: drake, numpy"):
+        _small(tiny_scenario_path, tmp_path, checker="fcl")
+    with pytest.raises(ValueError, match="iterations and seeds must be >= 1"):
+        _small(tiny_scenario_path, tmp_path, seeds=0)
+    assert not (tmp_path / "bench.json").exists()
+
+
+# ---- OMPL -------------------------------------------------------------------
+
+
+def test_radius_formula_by_hand():
+    ompl_baseline = pytest.importorskip("drake_social.experiments.ompl_baseline", exc_type=ImportError)
+    assert ompl_baseline.unit_ball_measure(2) == pytest.approx(math.pi)
+    assert ompl_baseline.unit_ball_measure(3) == pytest.approx(4 * math.pi / 3)
+    assert ompl_baseline.unit_ball_measure(4) == pytest.approx(math.pi**2 / 2)
+    # d = 4, measure 10, factor 1: r_rrt = (2.5 * 10 / (pi^2 / 2))^(1/4); n = 100.
+    r_rrt = (25 / (math.pi**2 / 2)) ** 0.25
+    assert ompl_baseline.ompl_radius(1.0, 10.0, 4, 100, 99.0) == pytest.approx(r_rrt * (math.log(100) / 100) ** 0.25)
+    assert ompl_baseline.ompl_radius(1.0, 10.0, 4, 100, 0.3) == 0.3  # clipped at the range
+    # The chosen factor reaches the radius at every tree size up to max_n, exactly at the binding end.
+    dut = ompl_baseline.rewire_factor_for_radius(1.5, 1239.2, 4, 2002)
+    radii = [ompl_baseline.ompl_radius(dut, 1239.2, 4, n, np.inf) for n in range(2, 2003)]
+    assert min(radii) == pytest.approx(1.5, rel=1e-12) and radii[-1] == pytest.approx(1.5, rel=1e-12)
+    small = ompl_baseline.rewire_factor_for_radius(1.0, 5.0, 4, 3)  # ln 2 / 2 < ln 3 / 3: n = 2 binds
+    assert ompl_baseline.ompl_radius(small, 5.0, 4, 2, np.inf) == pytest.approx(1.0, rel=1e-12)
+
+
+def test_ompl_path_is_valid_and_costed_by_our_code(tiny_scenario):
+    ompl_baseline = pytest.importorskip("drake_social.experiments.ompl_baseline", exc_type=ImportError)
+    objective = make_objective(tiny_scenario, "social_rrt_star")
+    p = tiny_scenario.planner
+
+    def run(seed):
+        return ompl_baseline.plan_ompl(
+            ConfigurationSpace.from_scenario(tiny_scenario), GeometricChecker(tiny_scenario), objective,
+            np.asarray(tiny_scenario.start), np.asarray(tiny_scenario.goal), iterations=200,
+            planning_range=p.planning_range, near_radius=p.near_radius, goal_bias=p.goal_bias, seed=seed,
+        )
+
+    dut, settings = run(3)
+    assert dut.success and dut.first_solution_iteration is not None
+    wp = dut.waypoints
+    np.testing.assert_allclose(wp[0], tiny_scenario.start, atol=1e-12)
+    np.testing.assert_allclose(wp[-1], tiny_scenario.goal, atol=1e-12)
+    checker = GeometricChecker(tiny_scenario)
+    assert checker.are_valid(wp).all() and checker.are_motions_valid(wp[:-1], wp[1:]).all()
+    # No edge longer than OMPL's range (Steer).
+    assert np.all(np.linalg.norm(np.diff(wp, axis=0), axis=1) <= p.planning_range + 1e-9)
+    parts = evaluate_path(tiny_scenario, wp, objective)
+    assert np.isfinite(parts["social_cost_full"]) and parts["objective"] == pytest.approx(dut.cost, rel=1e-9)
+    # Anytime curve: never increases, ends at the returned cost, infinite before the first solution.
+    h = dut.cost_history
+    assert len(h) == 200 and np.all(np.diff(h[np.isfinite(h)]) <= 1e-12) and h[-1] == pytest.approx(dut.cost)
+    assert np.isinf(h[dut.first_solution_iteration - 2]) and np.isfinite(h[dut.first_solution_iteration - 1])
+    assert dut.num_config_checks == 1 and dut.num_motion_checks >= dut.tree_size - 1
+    assert settings.radius == pytest.approx(min(p.planning_range, p.near_radius))
+    # Deterministic per seed; another seed explores differently.
+    again, _ = run(3)
+    np.testing.assert_array_equal(again.waypoints, wp)
+    assert again.cost == dut.cost
+    other, _ = run(4)
+    assert other.tree_size != dut.tree_size or not np.array_equal(other.waypoints, wp)
+
+
+def test_objective_adapter_equals_our_motion_cost(tiny_scenario_path, rng):
+    ompl_baseline = pytest.importorskip("drake_social.experiments.ompl_baseline", exc_type=ImportError)
+    from ompl import base as ob
+    from ompl import geometric as og
+
+    # Non-unit distance weights and a length term: OMPL states are W q.
+    scenario = load_scenario(tiny_scenario_path, "planner: {distance_weights: [1.0, 2.0, 0.5, 0.8]}\n"
+                                                 "social: {length_weight: 0.3}")
+    objective = make_objective(scenario, "social_rrt_star")
+    space = ConfigurationSpace.from_scenario(scenario)
+    w = space.weights
+    state_space = ob.RealVectorStateSpace(4)
+    bounds = ob.RealVectorBounds(4)
+    for i in range(4):
+        bounds.setLow(i, float(space.lower[i] * w[i]))
+        bounds.setHigh(i, float(space.upper[i] * w[i]))
+    state_space.setBounds(bounds)
+    si = ob.SpaceInformation(state_space)
+    si.setStateValidityChecker(lambda s: True)
+    si.setup()
+    dut = ompl_baseline.ObjectiveAdapter(si, objective, w)
+
+    q_a = space.sample_uniform(rng, 20)
+    q_b = q_a + rng.normal(scale=0.5, size=(20, 4))
+    expected = objective.motion_cost(q_a, q_b)
+    assert np.all(expected > 0)
+    for a, b, e in zip(q_a, q_b, expected):
+        path = og.PathGeometric(si)
+        for q in (a, b):
+            s = si.allocState()
+            for i in range(4):
+                s[i] = float(q[i] * w[i])
+            path.append(s)
+        # path.cost goes through OMPL's C++ (initial + motion + terminal cost).
+        assert path.cost(dut).value() == pytest.approx(e, rel=1e-12)
+    assert dut.num_motion_costs == 20
+
+
+def test_bench_with_ompl_reports_ratios(tiny_scenario_path, tmp_path):
+    pytest.importorskip("ompl")
+    dut = _small(tiny_scenario_path, tmp_path, algorithms=["informed_social_rrt_star"], iterations=150, include_ompl=True)
+    entry = dut["scenarios"]["tiny.yaml"]
+    assert list(entry["ompl"]) == ["social_rrt_star"]  # the informed variant's objective
+    ours = entry["algorithms"]["informed_social_rrt_star"]["summary"]
+    ompl = entry["ompl"]["social_rrt_star"]
+    assert ompl["summary"]["runs"] == 2 and ompl["summary"]["paths_valid"]
+    for run in ompl["runs"]:
+        assert run["reported_cost"] == pytest.approx(run["objective"], rel=1e-9)
+    vs = entry["algorithms"]["informed_social_rrt_star"]["vs_ompl"]
+    assert vs["time"] == pytest.approx(ours["wall_time"]["median"] / ompl["summary"]["wall_time"]["median"])
+    assert vs["social_cost"] == pytest.approx(
+        ours["social_cost_full"]["median"] / ompl["summary"]["social_cost_full"]["median"])
+    md = (tmp_path / "bench.md").read_text()
+    assert "| tiny | ompl_rrt_star[social_rrt_star] | 2 |" in md and "rewire factor" in md
+
+
+def test_bench_without_ompl_says_so(tiny_scenario_path, tmp_path, monkeypatch):
+    import drake_social.experiments.bench as bench
+
+    monkeypatch.setattr(bench, "ompl_available", lambda: False)
+    dut = _small(tiny_scenario_path, tmp_path, algorithms=["rrt_star"], seeds=1, iterations=50, include_ompl=True)
+    assert dut["ompl"] == {"requested": True, "available": False, "objectives": []}
+    assert dut["scenarios"]["tiny.yaml"]["ompl"] == {}
+    assert dut["scenarios"]["tiny.yaml"]["algorithms"]["rrt_star"]["vs_ompl"] is None
+    md = (tmp_path / "bench.md").read_text()
+    assert "OMPL was not importable" in md and "| tiny | rrt_star | 1 |" in md
