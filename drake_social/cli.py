@@ -9,25 +9,36 @@ Usage::
 
     drake-social show scenarios/office_bar.yaml --out out/office_bar
     drake-social show scenarios/tiny.yaml --set "social: {sigma_h: 1.5}"
+    drake-social plan scenarios/office_bar.yaml --algorithm social_rrt_star --out out/office_bar
+    drake-social bench --seeds 10 --out out/bench
 
 Exit codes: 0 success, 1 an output could not be written, 2 bad command line
-or invalid scenario (the message names the file and the field).
+or invalid input (the message names the file and the field, or the start or
+goal in collision), 3 ``plan`` found no path (its outputs are still written).
 """
 
 from __future__ import annotations
 
 import argparse
+import json
 import logging
 import sys
+import time
 from pathlib import Path
-from typing import Callable, Sequence
+from typing import Callable, Sequence, TextIO
 
 import matplotlib
 
 from drake_social import __version__
-from drake_social.scenario import Scenario, ScenarioError, load_scenario
+from drake_social.planning.result import PlanningInputError
+from drake_social.scenario import ALGORITHMS, Scenario, ScenarioError, load_scenario
 
-__all__ = ["main", "build_parser", "load_with_overrides"]
+__all__ = ["EXIT_NO_PATH", "ProgressBar", "main", "build_parser", "load_with_overrides"]
+
+#: Exit code of ``plan`` when no path reaches the goal.
+EXIT_NO_PATH = 3
+#: Validity checkers selectable with ``--checker``.
+CHECKERS = ("drake", "numpy")
 
 _log = logging.getLogger("drake_social")
 
@@ -104,9 +115,216 @@ def _run_show(args: argparse.Namespace) -> int:
     return 0
 
 
+# ---- plan --------------------------------------------------------------------
+
+
+class ProgressBar:
+    """A one-line textual progress bar, redrawn in place with a carriage return.
+
+    Called as ``bar(iteration, best_cost)`` (the planners' progress callback);
+    redraws at most every ``interval`` seconds and at the last iteration, so
+    the callback stays cheap. :meth:`close` ends the line.
+
+    Args:
+        total: the last iteration, K.
+        stream: where to draw (standard error).
+        label: text before the bar.
+        width: characters of the bar.
+        interval: least time between redraws, seconds.
+    """
+
+    def __init__(self, total: int, stream: TextIO, label: str = "planning", width: int = 30,
+                 interval: float = 0.1):
+        self.total = max(1, int(total))
+        self.stream = stream
+        self.label = label
+        self.width = width
+        self.interval = interval
+        self._t0 = time.perf_counter()
+        self._last = -float("inf")
+        self._drawn = False
+
+    def __call__(self, iteration: int, best_cost: float) -> None:
+        now = time.perf_counter()
+        if now - self._last < self.interval and iteration < self.total:
+            return
+        self._last = now
+        done = min(self.width, self.width * iteration // self.total)
+        best = f"best {best_cost:.4g}" if best_cost < float("inf") else "no path yet"
+        self.stream.write(f"\r{self.label} [{'#' * done}{'.' * (self.width - done)}] "
+                          f"{iteration}/{self.total}  {best}  {now - self._t0:.1f} s ")
+        self.stream.flush()
+        self._drawn = True
+
+    def close(self) -> None:
+        if self._drawn:
+            self.stream.write("\n")
+            self.stream.flush()
+            self._drawn = False
+
+
+def _positive_int(text: str) -> int:
+    value = int(text)
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"must be an integer >= 1, got {text}")
+    return value
+
+
+def _add_checker_argument(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--checker", choices=CHECKERS, default="drake",
+                        help="validity checker: drake (SceneGraph, the default) or numpy (the pure-numpy one)")
+
+
+def _make_checker(scenario: Scenario, kind: str, source: str):
+    """The validity checker of ``kind``; the Drake one first explains a start
+    or goal in collision by naming the touching bodies (ScenarioError)."""
+    if kind == "numpy":
+        from drake_social.planning.geometric import GeometricChecker
+
+        return GeometricChecker(scenario)
+    from drake_social.model.checker import SceneGraphChecker, check_start_goal
+
+    if not _log.isEnabledFor(logging.INFO):
+        # pydrake sets its "drake" logger to INFO on import; keep its chatter for --verbose.
+        logging.getLogger("drake").setLevel(logging.WARNING)
+    checker = SceneGraphChecker(scenario)
+    check_start_goal(scenario, checker, source)
+    return checker
+
+
+def _show_progress(args: argparse.Namespace) -> bool:
+    return bool(args.progress) or sys.stderr.isatty()
+
+
+def _add_plan(subparsers) -> None:
+    p = subparsers.add_parser(
+        "plan",
+        help="plan a path from start to goal; write path.csv, result.json and figures",
+        description="Plans the scenario with one of the RRT* family, prints a one-line summary and writes "
+        "DIR/path.csv (waypoints x,y,psi1,psi2), DIR/result.json (costs, counters, the anytime curve), "
+        "DIR/path.png (the path over the social heat map with the robot along it), DIR/cost_profile.png "
+        "(social cost versus cumulative configuration distance) and DIR/convergence.png (best cost per "
+        "iteration). Exit code 3 when no path was found (the files are still written).",
+    )
+    _add_scenario_arguments(p)
+    p.add_argument("--algorithm", choices=ALGORITHMS, help="planner (default: the scenario's planner.algorithm)")
+    p.add_argument("--iterations", type=_positive_int, metavar="K",
+                   help="samples drawn (default: the scenario's planner.iterations)")
+    p.add_argument("--seed", type=int, metavar="S", help="random seed (default: the scenario's random_seed)")
+    _add_checker_argument(p)
+    p.add_argument("--out", type=Path, metavar="DIR", help="output directory (default: out/<scenario name>)")
+    p.add_argument("--progress", action="store_true",
+                   help="draw the progress bar on stderr even when it is not a terminal")
+    p.set_defaults(run=_run_plan)
+
+
+def write_path_csv(path: Path, waypoints) -> None:
+    """Writes waypoints (N, 4) as CSV with header ``x,y,psi1,psi2`` (17 digits: exact round trip)."""
+    import numpy as np
+
+    np.savetxt(path, np.asarray(waypoints, float).reshape(-1, 4), delimiter=",", header="x,y,psi1,psi2",
+               comments="", fmt="%.17g")
+
+
+def _json_lines(record: dict) -> str:
+    """JSON with one top-level key per line (arrays such as the waypoints stay on their line)."""
+    body = ",\n".join(f"  {json.dumps(k)}: {json.dumps(v, allow_nan=False)}" for k, v in record.items())
+    return "{\n" + body + "\n}\n"
+
+
+def _run_plan(args: argparse.Namespace) -> int:
+    from drake_social.planning.variants import plan
+    from drake_social.viz.path import write_plan_figures  # matplotlib figures: only when drawing
+
+    scenario = load_with_overrides(args.scenario, args.set)
+    out = args.out if args.out is not None else _default_out(args.scenario)
+    out.mkdir(parents=True, exist_ok=True)  # fail early (exit 1), before planning
+    checker = _make_checker(scenario, args.checker, str(args.scenario))
+    iterations = args.iterations or scenario.planner.iterations
+    bar = ProgressBar(iterations, sys.stderr) if _show_progress(args) else None
+    try:
+        result = plan(scenario, checker, algorithm=args.algorithm, iterations=iterations, seed=args.seed,
+                      progress=bar)
+    except PlanningInputError as e:
+        raise PlanningInputError(f"{args.scenario}: {e}") from e
+    finally:
+        if bar is not None:
+            bar.close()
+    print(result.summary())
+
+    write_path_csv(out / "path.csv", result.waypoints)
+    record = {
+        "scenario": str(args.scenario),
+        "overrides": list(args.set or []),
+        "checker": args.checker,
+        "iterations": iterations,
+        **result.to_json_dict(),
+    }
+    (out / "result.json").write_text(_json_lines(record))
+    figures = write_plan_figures(scenario, result, out, title=scenario.description or args.scenario.name)
+    names = ["path.csv", "result.json"] + [p.name for p in figures.values()]
+    print(f"wrote {out}/: {', '.join(names)}")
+    if not result.success:
+        print(f"drake-social: no path from start to goal in {iterations} iterations "
+              f"(closest tree node {result.closest_distance_to_goal:.3g} from the goal); "
+              f"{out / 'result.json'} has success: false", file=sys.stderr)
+        return EXIT_NO_PATH
+    return 0
+
+
+# ---- bench -------------------------------------------------------------------
+
+#: Scenarios of ``drake-social bench`` (relative to the working directory: the repository).
+BENCH_SCENARIOS = ("scenarios/office_bar.yaml", "scenarios/generic_L.yaml")
+
+
+def _add_bench(subparsers) -> None:
+    p = subparsers.add_parser(
+        "bench",
+        help="benchmark the planners over seeds: wall time and social cost (JSON and Markdown)",
+        description="Runs every algorithm on every scenario for N seeds and reports the median and spread "
+        "of wall time and final social cost; with the ompl package importable, also OMPL's RRTstar on "
+        "the same problem (same checks, same cost). Writes JSON and a Markdown table into DIR.",
+    )
+    p.add_argument("--scenarios", nargs="+", type=Path, metavar="YAML", default=[Path(s) for s in BENCH_SCENARIOS],
+                   help=f"scenario files (default: {' '.join(BENCH_SCENARIOS)})")
+    p.add_argument("--algorithms", nargs="+", choices=ALGORITHMS, default=list(ALGORITHMS), metavar="A",
+                   help=f"planners (default: all of {', '.join(ALGORITHMS)})")
+    p.add_argument("--iterations", type=_positive_int, default=2000, metavar="K", help="samples per run (default 2000)")
+    p.add_argument("--seeds", type=_positive_int, default=10, metavar="N", help="seeds 0..N-1 per planner (default 10)")
+    _add_checker_argument(p)
+    p.add_argument("--no-ompl", action="store_true", help="leave out OMPL's RRTstar even when ompl is importable")
+    p.add_argument("--out", type=Path, default=Path("out/bench"), metavar="DIR",
+                   help="output directory (default: out/bench)")
+    p.add_argument("--progress", action="store_true",
+                   help="report progress on stderr even when it is not a terminal")
+    p.set_defaults(run=_run_bench)
+
+
+def _run_bench(args: argparse.Namespace) -> int:
+    from drake_social.experiments.bench import run_bench
+
+    for path in args.scenarios:
+        if not path.is_file():
+            raise ScenarioError(f"{path}: no such scenario file (--scenarios)")
+    result = run_bench(
+        scenario_paths=list(args.scenarios),
+        algorithms=list(args.algorithms),
+        iterations=args.iterations,
+        seeds=args.seeds,
+        checker=args.checker,
+        include_ompl=not args.no_ompl,
+        out_dir=args.out,
+        progress=_show_progress(args),
+    )
+    if result is not None:
+        print(result if isinstance(result, str) else getattr(result, "summary", lambda: result)())
+    return 0
+
+
 # ---- parser and entry point ----------------------------------------------------
 
-_SUBCOMMANDS: list[Callable] = [_add_show]
+_SUBCOMMANDS: list[Callable] = [_add_show, _add_plan, _add_bench]
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -141,7 +359,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     logging.basicConfig(level=logging.INFO if args.verbose else logging.WARNING, format="%(name)s: %(message)s")
     try:
         return args.run(args)
-    except ScenarioError as e:
+    except (ScenarioError, PlanningInputError) as e:
         print(f"drake-social: error: {e}", file=sys.stderr)
         return 2
     except OSError as e:  # e.g. --out names a file, or a directory without write access

@@ -1,0 +1,175 @@
+"""drake-social plan and bench: outputs, exit codes, progress bar, argument wiring."""
+
+from __future__ import annotations
+
+import io
+import json
+import sys
+import types
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from drake_social.cli import EXIT_NO_PATH, ProgressBar, build_parser, main
+from drake_social.planning.geometric import GeometricChecker
+from drake_social.planning.variants import evaluate_path, make_objective, plan
+from drake_social.scenario import ALGORITHMS, load_scenario
+
+SCENARIO_DIR = Path(__file__).resolve().parent.parent / "scenarios"
+TINY = SCENARIO_DIR / "tiny.yaml"
+OUTPUTS = ("path.csv", "result.json", "path.png", "cost_profile.png", "convergence.png")
+
+# tiny.yaml with a full-height wall at x = 5.2 between the start (x = 1) and the goal (x = 6.5).
+WALLED = """\
+description: "tiny with the goal walled off"
+world:
+  bounds: [0.0, 0.0, 8.0, 5.0]
+  obstacles:
+    - {center: [4.0, 0.6], size: [1.6, 0.8]}
+    - {center: [5.2, 2.5], size: [0.2, 5.0]}
+people:
+  - {x: 4.0, y: 3.8, theta: -1.5708, radius: 0.25}
+object: !Bar {length: 1.5, thickness: 0.05}
+start: [1.0, 2.5, 0.0, 1.5708]
+goal: [6.5, 2.5, 0.0, 1.5708]
+random_seed: 1
+"""
+
+
+def _read_csv(path: Path) -> np.ndarray:
+    lines = path.read_text().splitlines()
+    assert lines[0] == "x,y,psi1,psi2"
+    return np.array([[float(v) for v in line.split(",")] for line in lines[1:]]).reshape(-1, 4)
+
+
+def test_plan_tiny_writes_a_path_from_start_to_goal(tmp_path, capsys):
+    out = tmp_path / "tiny"
+    assert main(["plan", str(TINY), "--iterations", "300", "--checker", "numpy", "--out", str(out)]) == 0
+    stdout = capsys.readouterr().out.splitlines()
+    scenario = load_scenario(TINY)
+    expected = plan(scenario, GeometricChecker(scenario), iterations=300)  # the file's algorithm and seed
+    assert stdout[0].startswith("social_rrt_star: ") and "waypoints" in stdout[0]
+    assert stdout[0][: stdout[0].rindex(",")] == expected.summary()[: expected.summary().rindex(",")]  # wall time differs
+    assert stdout[1] == f"wrote {out}/: " + ", ".join(OUTPUTS)
+    for name in OUTPUTS:
+        assert (out / name).stat().st_size > 0
+
+    dut = _read_csv(out / "path.csv")
+    assert np.array_equal(dut[0], scenario.start) and np.array_equal(dut[-1], scenario.goal)
+    assert np.array_equal(dut, expected.waypoints)  # 17 significant digits: an exact round trip
+    record = json.loads((out / "result.json").read_text())
+    assert record["success"] is True
+    assert record["scenario"] == str(TINY) and record["algorithm"] == "social_rrt_star"
+    assert record["seed"] == 1 and record["iterations"] == 300 and record["checker"] == "numpy"
+    assert np.array_equal(np.array(record["waypoints"]), dut)
+    assert len(record["cost_history"]) == 300 and record["cost_history"][-1] == pytest.approx(record["cost"])
+    # The costs in the file are those of the written waypoints, recomputed independently.
+    parts = evaluate_path(scenario, dut, make_objective(scenario, "social_rrt_star"))
+    assert record["social_cost_full"] == pytest.approx(parts["social_cost_full"], rel=1e-12)
+    assert record["cost"] == pytest.approx(parts["objective"], rel=1e-9)
+    assert record["base_length"] == pytest.approx(parts["base_length"], rel=1e-12)
+
+
+def test_algorithm_and_seed_options_reach_the_planner(tmp_path, capsys):
+    assert main(["plan", str(TINY), "--algorithm", "rrt_star", "--seed", "5", "--iterations", "120",
+                 "--checker", "numpy", "--out", str(tmp_path)]) == 0
+    capsys.readouterr()
+    record = json.loads((tmp_path / "result.json").read_text())
+    scenario = load_scenario(TINY)
+    expected = plan(scenario, GeometricChecker(scenario), algorithm="rrt_star", iterations=120, seed=5)
+    assert record["algorithm"] == "rrt_star" and record["seed"] == 5
+    assert np.array_equal(_read_csv(tmp_path / "path.csv"), expected.waypoints)
+    # rrt_star minimises length: its cost is the configuration path length.
+    assert record["cost"] == pytest.approx(record["path_length"], rel=1e-9)
+
+
+def test_walled_off_goal_exits_3_and_still_writes_the_result(tmp_path, capsys):
+    scenario = tmp_path / "walled.yaml"
+    scenario.write_text(WALLED)
+    out = tmp_path / "out"
+    assert main(["plan", str(scenario), "--iterations", "300", "--checker", "numpy", "--out", str(out)]) == EXIT_NO_PATH
+    captured = capsys.readouterr()
+    assert captured.out.startswith("social_rrt_star: no path")
+    assert "no path from start to goal in 300 iterations" in captured.err and "success: false" in captured.err
+    record = json.loads((out / "result.json").read_text())
+    assert record["success"] is False and record["cost"] is None and record["waypoints"] == []
+    assert record["closest_distance_to_goal"] > 0.5  # the tree stays on the start side
+    assert _read_csv(out / "path.csv").shape == (0, 4)
+    for name in OUTPUTS:
+        assert (out / name).stat().st_size > 0
+
+
+@pytest.mark.parametrize("checker", ["numpy", "drake"])
+def test_start_in_collision_exits_2_naming_start(tmp_path, capsys, checker):
+    argv = ["plan", str(TINY), "--set", "start: [4.0, 0.6, 0.0, 1.5708]", "--iterations", "20",
+            "--checker", checker, "--out", str(tmp_path)]
+    assert main(argv) == 2
+    captured = capsys.readouterr()
+    assert captured.out == ""
+    assert captured.err.startswith("drake-social: error: ") and str(TINY) in captured.err
+    assert "start" in captured.err and "[4.0, 0.6, 0.0, 1.5708]" in captured.err and "collision" in captured.err
+    if checker == "drake":  # the Drake checker names the touching bodies (the base sits in the desk)
+        assert "base with obstacle[0]" in captured.err
+    assert not (tmp_path / "result.json").exists()
+
+
+def test_goal_in_collision_exits_2_naming_goal(tmp_path, capsys):
+    argv = ["plan", str(TINY), "--set", "goal: [4.0, 3.8, 0.0, 1.5708]", "--checker", "numpy", "--out", str(tmp_path)]
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert "goal" in err and "collision" in err
+
+
+def test_bad_options_are_usage_errors(tmp_path, capsys):
+    assert main(["plan", str(TINY), "--iterations", "0", "--out", str(tmp_path)]) == 2
+    assert "--iterations: must be an integer >= 1, got 0" in capsys.readouterr().err
+    assert main(["plan", str(TINY), "--algorithm", "dijkstra"]) == 2
+    assert "invalid choice: 'dijkstra'" in capsys.readouterr().err
+    assert main(["plan", str(TINY), "--checker", "fcl"]) == 2
+    assert "invalid choice: 'fcl'" in capsys.readouterr().err
+
+
+def test_progress_bar_only_when_asked_or_on_a_terminal(tmp_path, capsys):
+    base = ["plan", str(TINY), "--iterations", "40", "--checker", "numpy"]
+    assert main(base + ["--out", str(tmp_path / "a")]) == 0
+    assert "\r" not in capsys.readouterr().err  # captured stderr is not a TTY
+    assert main(base + ["--out", str(tmp_path / "b"), "--progress"]) == 0
+    err = capsys.readouterr().err
+    assert err.startswith("\rplanning [") and err.endswith("\n")
+    assert err.rstrip().split("\r")[-1].startswith("planning [" + "#" * 30 + "] 40/40  best ")
+
+
+def test_progress_bar_draws_fraction_and_best_cost():
+    stream = io.StringIO()
+    dut = ProgressBar(300, stream, width=10, interval=0.0)
+    dut(1, float("inf"))
+    dut(150, 12.345)
+    dut.close()
+    frames = stream.getvalue().split("\r")[1:]
+    assert frames[0].startswith("planning [..........] 1/300  no path yet")
+    assert frames[1].startswith("planning [#####.....] 150/300  best 12.35")
+    assert stream.getvalue().endswith("\n")
+    quiet = io.StringIO()
+    slow = ProgressBar(10, quiet, interval=3600.0)
+    for k in range(1, 11):
+        slow(k, 1.0)
+    assert quiet.getvalue().count("\r") == 2  # the first call and the last iteration only
+
+
+def test_bench_parses_and_calls_run_bench_with_keywords(tmp_path, monkeypatch, capsys):
+    calls = []
+    fake = types.ModuleType("drake_social.experiments.bench")
+    fake.run_bench = lambda **kwargs: calls.append(kwargs)
+    monkeypatch.setitem(sys.modules, "drake_social.experiments.bench", fake)
+    argv = ["bench", "--scenarios", str(TINY), "--algorithms", "rrt_star", "social_rrt_star", "--iterations", "50",
+            "--seeds", "3", "--checker", "numpy", "--no-ompl", "--out", str(tmp_path)]
+    assert main(argv) == 0
+    assert calls == [dict(scenario_paths=[TINY], algorithms=["rrt_star", "social_rrt_star"], iterations=50, seeds=3,
+                          checker="numpy", include_ompl=False, out_dir=tmp_path, progress=False)]
+    defaults = build_parser().parse_args(["bench"])
+    assert [str(p) for p in defaults.scenarios] == ["scenarios/office_bar.yaml", "scenarios/generic_L.yaml"]
+    assert defaults.algorithms == list(ALGORITHMS) and defaults.iterations == 2000 and defaults.seeds == 10
+    assert defaults.checker == "drake" and defaults.no_ompl is False and defaults.out == Path("out/bench")
+    assert main(["bench", "--scenarios", str(tmp_path / "none.yaml")]) == 2
+    assert "none.yaml: no such scenario file" in capsys.readouterr().err
