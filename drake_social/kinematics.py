@@ -24,6 +24,7 @@ from drake_social.scenario import Bar, LShape, Polyline, Scenario
 __all__ = [
     "ArmGeometry",
     "config_distance",
+    "displacement_bound",
     "object_polyline",
     "object_interest_points",
 ]
@@ -226,9 +227,13 @@ class ArmGeometry:
         joint turns, and the base translation moves every point by the same
         vector, so ``hypot(dx, dy) + c1 |dpsi1| + c2 |dpsi2|`` bounds the arc.
         """
-        d = np.asarray(q_b, float) - np.asarray(q_a, float)
-        c = self.reach(include_body, active)
-        return np.hypot(d[..., 0], d[..., 1]) + c[2] * np.abs(d[..., 2]) + c[3] * np.abs(d[..., 3])
+        return displacement_bound(np.asarray(q_b, float) - np.asarray(q_a, float), self.reach(include_body, active))
+
+
+def displacement_bound(dq: np.ndarray, lever: np.ndarray) -> np.ndarray:
+    """``hypot(dx, dy) + c1 |dpsi1| + c2 |dpsi2|`` for motions dq (..., 4) and
+    lever arms ``(1, 1, c1, c2)`` from :meth:`ArmGeometry.reach`."""
+    return np.hypot(dq[..., 0], dq[..., 1]) + lever[2] * np.abs(dq[..., 2]) + lever[3] * np.abs(dq[..., 3])
 
 
 def config_distance(q_a: np.ndarray, q_b: np.ndarray, weights: np.ndarray | None = None) -> np.ndarray:

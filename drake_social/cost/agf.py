@@ -96,7 +96,13 @@ def agf_xy(
     people = np.asarray(people, dtype=float).reshape(-1, 3)
     dx = np.asarray(x, dtype=float)[..., None] - people[:, 0]
     dy = np.asarray(y, dtype=float)[..., None] - people[:, 1]
-    c, s = np.cos(people[:, 2]), np.sin(people[:, 2])
+    value = gaussian(dx, dy, np.cos(people[:, 2]), np.sin(people[:, 2]), space)
+    return apply_threshold(value, space) if thresholded else value
+
+
+def gaussian(dx: np.ndarray, dy: np.ndarray, cos_theta, sin_theta, space: PersonalSpace) -> np.ndarray:
+    """The raw asymmetric Gaussian at offsets (dx, dy) from people facing
+    (cos_theta, sin_theta); all arguments broadcast together."""
     inv_front = 1.0 / (2.0 * space.sigma_h**2)
     inv_rear = 1.0 / (2.0 * space.sigma_r**2)
     inv_side = 1.0 / (2.0 * space.sigma_s**2)
@@ -104,10 +110,13 @@ def agf_xy(
     # to NaN: each is a sum of same-signed overflows); exp(-inf) = 0 is exactly
     # the right value there, so the overflow is not worth a warning.
     with np.errstate(over="ignore"):
-        u = c * dx + s * dy
-        v = c * dy - s * dx
-        value = np.exp(-(u * u * np.where(u > 0, inv_front, inv_rear) + v * v * inv_side))
-    # Written so that NaN input stays NaN instead of passing as "no discomfort".
+        u = cos_theta * dx + sin_theta * dy
+        v = cos_theta * dy - sin_theta * dx
+        return np.exp(-(u * u * np.where(u > 0, inv_front, inv_rear) + v * v * inv_side))
+
+
+def apply_threshold(value: np.ndarray, space: PersonalSpace) -> np.ndarray:
+    """Values <= threshold count as 0 (NaN stays NaN, never "no discomfort")."""
     return np.where(value <= space.threshold, 0.0, value)
 
 

@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from drake_social.cost.agf import PersonalSpace, agf, agf_xy, people_array
-from drake_social.kinematics import ArmGeometry, config_distance
+from drake_social.cost.agf import PersonalSpace, agf, agf_xy, gaussian, people_array
+from drake_social.kinematics import ArmGeometry, config_distance, displacement_bound
 
 __all__ = ["SocialCost", "interpolation_segments"]
 
@@ -44,7 +44,7 @@ class SocialCost:
         people: np.ndarray,
         space: PersonalSpace = PersonalSpace(),
         weights: np.ndarray | None = None,
-        resolution: float = 0.05,
+        resolution: float = 0.1,
         distance_weights: np.ndarray | None = None,
     ):
         n = geometry.num_interest_points
@@ -64,6 +64,8 @@ class SocialCost:
         # Only points with a non-zero weight are evaluated (base-only: one point).
         self._active = np.flatnonzero(w > 0)
         self._active_weights = w[self._active]
+        # Lever arms of the weighted points: their displacement bound per motion.
+        self._lever = geometry.reach(active=self._active)
 
     @classmethod
     def from_scenario(cls, scenario, weights: np.ndarray | None = None) -> "SocialCost":
@@ -100,27 +102,28 @@ class SocialCost:
 
     def segments(self, q_a: np.ndarray, q_b: np.ndarray) -> np.ndarray:
         """Trapezoid steps per motion: no weighted point moves > resolution per step."""
-        bound = self.geometry.max_displacement(q_a, q_b, active=self._active)
-        return interpolation_segments(bound, self.resolution)
+        dq = np.asarray(q_b, float) - np.asarray(q_a, float)
+        return interpolation_segments(displacement_bound(dq, self._lever), self.resolution)
 
-    def may_cost(self, q_a: np.ndarray, q_b: np.ndarray) -> np.ndarray:
-        """False for motions (E,) whose cost is exactly 0 by a distance bound.
+    def relevant_people(self, q_a: np.ndarray, q_b: np.ndarray) -> np.ndarray:
+        """(E, H) bool: False where person i contributes exactly 0 to motion e.
 
-        A weighted point moves at most D (:meth:`ArmGeometry.max_displacement`)
-        along the motion, so at every instant it is at least ``(A + B - D) / 2``
+        A weighted point moves at most D (:func:`displacement_bound`) along
+        the motion, so at every instant it is at least ``(A + B - D) / 2``
         from a person it starts A and ends B away. Beyond the AGF's reach
         (where it is <= threshold in every direction) its term is 0 throughout.
         """
+        q_a, q_b = np.atleast_2d(q_a), np.atleast_2d(q_b)
+        return self._relevant(q_a, q_b, displacement_bound(q_b - q_a, self._lever))
+
+    def _relevant(self, q_a: np.ndarray, q_b: np.ndarray, span: np.ndarray) -> np.ndarray:
         reach = self.space.max_reach
         if not np.isfinite(reach):
-            return np.ones(len(q_a), dtype=bool)
-        xa, ya = self.geometry.interest_xy(q_a, self._active)
-        xb, yb = self.geometry.interest_xy(q_b, self._active)
-        px, py = self.people[:, 0], self.people[:, 1]
-        dist_a = np.hypot(xa[..., None] - px, ya[..., None] - py)
-        dist_b = np.hypot(xb[..., None] - px, yb[..., None] - py)
-        slack = self.geometry.max_displacement(q_a, q_b, active=self._active)[:, None, None]
-        return np.any(dist_a + dist_b - slack <= 2.0 * reach, axis=(1, 2))
+            return np.ones((len(q_a), len(self.people)), dtype=bool)
+        x, y = self.geometry.interest_xy(np.concatenate([q_a, q_b]), self._active)  # (2E, K)
+        dist = np.hypot(x[..., None] - self.people[:, 0], y[..., None] - self.people[:, 1])
+        e = len(q_a)
+        return np.any(dist[:e] + dist[e:] - span[:, None, None] <= 2.0 * reach, axis=1)
 
     def motion_cost(self, q_a: np.ndarray, q_b: np.ndarray) -> np.ndarray:
         """Msc: the integral of S along straight motions, by the trapezoid rule.
@@ -133,38 +136,60 @@ class SocialCost:
         and only the part above the threshold is integrated. Without crossings
         this is exactly the paper's ``h/2 sum [S(q_k) + S(q_k+1)]``; with them
         the error stays second order instead of a first-order jump error.
-        Motions that :meth:`may_cost` rules out are not sampled at all.
+        People that :meth:`relevant_people` rules out for a motion are not
+        evaluated along it (their terms are exactly 0).
 
         Args:
             q_a, q_b: motion ends (E, 4) or (4,), broadcastable.
 
         Returns:
             (E,) costs (a 0-d value for a single motion).
+
+        Raises:
+            ValueError: a configuration is not finite.
         """
         q_a = np.asarray(q_a, dtype=float)
         q_b = np.asarray(q_b, dtype=float)
         single = q_a.ndim == 1 and q_b.ndim == 1
         q_a, q_b = np.broadcast_arrays(np.atleast_2d(q_a), np.atleast_2d(q_b))
+        if not (np.all(np.isfinite(q_a)) and np.all(np.isfinite(q_b))):
+            raise ValueError("motion_cost needs finite configurations")
         out = np.zeros(len(q_a))
         if len(self.people) == 0 or len(self._active) == 0 or len(q_a) == 0:
             return out[0] if single else out
+        dq = q_b - q_a
         length = config_distance(q_a, q_b, self.distance_weights)
-        live = np.flatnonzero((length > 0) & self.may_cost(q_a, q_b))
+        span = displacement_bound(dq, self._lever)
+        relevant = self._relevant(q_a, q_b, span) & (length > 0)[:, None]
+        live = np.flatnonzero(relevant.any(axis=1))
         if live.size:
-            out[live] = self._integrate(q_a[live], q_b[live], length[live])
+            n = interpolation_segments(span[live], self.resolution)
+            out[live] = self._integrate(q_a[live], dq[live], n, relevant[live]) * (length[live] / n)
         return out[0] if single else out
 
-    def _integrate(self, q_a: np.ndarray, q_b: np.ndarray, length: np.ndarray) -> np.ndarray:
-        """The threshold-aware trapezoid rule for motions (E, 4) in one batch."""
-        n = self.segments(q_a, q_b)
+    def _integrate(self, q_a: np.ndarray, dq: np.ndarray, n: np.ndarray, relevant: np.ndarray) -> np.ndarray:
+        """Sums over steps of the threshold-aware trapezoid areas (E,), in one
+        batch over the (motion, relevant person) pairs; times h gives Msc."""
         count = n + 1  # samples per motion, ends included
+        first = np.cumsum(count) - count
         edge = np.repeat(np.arange(len(q_a)), count)
-        k = np.arange(int(count.sum())) - np.repeat(np.cumsum(count) - count, count)
-        t = (k / n[edge])[:, None]
-        q = q_a[edge] + t * (q_b[edge] - q_a[edge])
-        x, y = self.geometry.interest_xy(q, self._active)
-        g = agf_xy(x, y, self.people, self.space, thresholded=False)  # (samples, K, H)
-        step = np.flatnonzero(k[:-1] < n[edge[:-1]])  # sample pairs inside one motion
+        t = (np.arange(int(count.sum())) - first[edge]) / n[edge]
+        x, y = self.geometry.interest_xy(q_a[edge] + t[:, None] * dq[edge], self._active)
+        # Every (motion, person) pair walks its motion's samples.
+        pair_edge, pair_person = np.nonzero(relevant)
+        pair_count = count[pair_edge]
+        pair = np.repeat(np.arange(len(pair_edge)), pair_count)
+        local = np.arange(int(pair_count.sum())) - np.repeat(np.cumsum(pair_count) - pair_count, pair_count)
+        sample = first[pair_edge][pair] + local
+        person = self.people[pair_person[pair]]
+        g = gaussian(
+            x[sample] - person[:, 0:1],
+            y[sample] - person[:, 1:2],
+            np.cos(person[:, 2:3]),
+            np.sin(person[:, 2:3]),
+            self.space,
+        )  # (samples of all pairs, K)
+        step = np.flatnonzero(local[:-1] < pair_count[pair[:-1]] - 1)  # consecutive samples of one pair
         g0, g1 = g[step], g[step + 1]
         tau = self.space.threshold
         up0, up1 = g0 > tau, g1 > tau
@@ -172,8 +197,7 @@ class SocialCost:
         with np.errstate(divide="ignore", invalid="ignore"):
             crossing = 0.5 * (hi + tau) * (hi - tau) / (hi - lo)
         area = np.where(up0 & up1, 0.5 * (g0 + g1), np.where(up0 ^ up1, crossing, 0.0))
-        per_step = area.sum(-1) @ self._active_weights
-        return np.bincount(edge[step], weights=per_step, minlength=len(q_a)) * (length / n)
+        return np.bincount(pair_edge[pair[step]], weights=area @ self._active_weights, minlength=len(q_a))
 
     # ---- for figures ----------------------------------------------------------
 

@@ -56,10 +56,12 @@ def test_drake_forward_kinematics_equals_numpy(tiny_scenario, kind, rng):
 
 
 def _environment(scenario):
+    """(query, keep_alive): the QueryObject refers into the diagram and its
+    context without owning them, so callers must hold ``keep_alive``."""
     diagram = build_robot_diagram(scenario).diagram
     context = diagram.CreateDefaultContext()
     query = diagram.scene_graph().get_query_output_port().Eval(diagram.scene_graph().GetMyContextFromRoot(context))
-    return query
+    return query, (diagram, context)
 
 
 def _distance_to(query, name: str, p) -> float:
@@ -81,7 +83,7 @@ def test_environment_shapes_at_hand_computed_distances(tiny_scenario):
         ),
         people=[Person(x=2.0, y=3.0, theta=math.pi / 4, radius=0.3, name="ana"), Person(x=5.0, y=4.0)],
     )
-    dut = _environment(scenario)
+    dut, _keep_alive = _environment(scenario)
     assert environment_names(scenario) == [
         "obstacle[0]", "person[0] 'ana'", "person[1]", "wall_south", "wall_north", "wall_west", "wall_east",
     ]
@@ -107,7 +109,7 @@ def test_environment_shapes_at_hand_computed_distances(tiny_scenario):
 
 def test_empty_room_has_only_walls(tiny_scenario):
     scenario = dc.replace(tiny_scenario, world=dc.replace(tiny_scenario.world, obstacles=[]), people=[])
-    query = _environment(scenario)
+    query, _keep_alive = _environment(scenario)
     inspector = query.inspector()
     names = {inspector.GetName(g) for g in inspector.GetAllGeometryIds(Role.kProximity)}
     assert {n for n in names if not n.startswith("mobile_manipulator")} == {

@@ -68,14 +68,20 @@ def test_mass_matrix_is_positive_definite_despite_the_massless_carriage(tiny_sce
     assert M[1, 1] == pytest.approx(22.5, abs=1e-9)
 
 
+# QueryObjects refer into their diagram and context without owning them: keep
+# those alive for the whole session (a dangling query crashed at random).
+_KEEP_ALIVE: list = []
+
+
 def _robot_shapes(scenario: Scenario, q: np.ndarray):
-    """(body name, shape, X_WG) of every robot collision geometry at q."""
+    """(body name, shape, X_WG, query, id) of every robot collision geometry at q."""
     diagram = build_robot_diagram(scenario).diagram
     plant = diagram.plant()
     context = diagram.CreateDefaultContext()
     plant.SetPositions(plant.GetMyMutableContextFromRoot(context), q)
     scene_graph = diagram.scene_graph()
     query: QueryObject = scene_graph.get_query_output_port().Eval(scene_graph.GetMyContextFromRoot(context))
+    _KEEP_ALIVE.append((diagram, context))
     inspector = query.inspector()
     out = []
     for gid in inspector.GetAllGeometryIds(Role.kProximity):
