@@ -14,9 +14,12 @@ $(VENV)/.installed: pyproject.toml
 
 install: $(VENV)/.installed
 
-# The main job: plan the office scenario and write its figures to $(OUT)/.
+# The main job: draw the office scenario, plan it with Social Risk-RRT* and write
+# the path, its figures and the result to $(OUT)/office_bar/.
 demo: install
 	$(VENV)/bin/drake-social show scenarios/office_bar.yaml --out $(OUT)/office_bar
+	$(VENV)/bin/drake-social plan scenarios/office_bar.yaml --algorithm social_rrt_star --out $(OUT)/office_bar
+	@echo "outputs in $(OUT)/office_bar/: scene.png path.png cost_profile.png convergence.png path.csv result.json"
 
 # The whole test suite. pytest exits 5 when it collected no test: that is a failure here.
 test: install

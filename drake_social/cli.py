@@ -28,6 +28,7 @@ from pathlib import Path
 from typing import Callable, Sequence, TextIO
 
 import matplotlib
+import numpy as np
 
 from drake_social import __version__
 from drake_social.planning.result import PlanningInputError
@@ -121,12 +122,13 @@ def _run_show(args: argparse.Namespace) -> int:
 class ProgressBar:
     """A one-line textual progress bar, redrawn in place with a carriage return.
 
-    Called as ``bar(iteration, best_cost)`` (the planners' progress callback);
-    redraws at most every ``interval`` seconds and at the last iteration, so
-    the callback stays cheap. :meth:`close` ends the line.
+    Called as ``bar(iteration, best_cost)`` (the planners' progress callback)
+    or :meth:`update` with any status text; redraws at most every
+    ``interval`` seconds and at the last step, so the callback stays cheap.
+    :meth:`close` ends the line.
 
     Args:
-        total: the last iteration, K.
+        total: the last step, e.g. K iterations.
         stream: where to draw (standard error).
         label: text before the bar.
         width: characters of the bar.
@@ -145,14 +147,17 @@ class ProgressBar:
         self._drawn = False
 
     def __call__(self, iteration: int, best_cost: float) -> None:
+        self.update(iteration, f"best {best_cost:.4g}" if best_cost < float("inf") else "no path yet")
+
+    def update(self, done: int, status: str) -> None:
+        """Redraws the bar at ``done`` of :attr:`total` steps with ``status`` after it."""
         now = time.perf_counter()
-        if now - self._last < self.interval and iteration < self.total:
+        if now - self._last < self.interval and done < self.total:
             return
         self._last = now
-        done = min(self.width, self.width * iteration // self.total)
-        best = f"best {best_cost:.4g}" if best_cost < float("inf") else "no path yet"
-        self.stream.write(f"\r{self.label} [{'#' * done}{'.' * (self.width - done)}] "
-                          f"{iteration}/{self.total}  {best}  {now - self._t0:.1f} s ")
+        filled = min(self.width, self.width * done // self.total)
+        self.stream.write(f"\r{self.label} [{'#' * filled}{'.' * (self.width - filled)}] "
+                          f"{done}/{self.total}  {status}  {now - self._t0:.1f} s ")
         self.stream.flush()
         self._drawn = True
 
@@ -164,7 +169,10 @@ class ProgressBar:
 
 
 def _positive_int(text: str) -> int:
-    value = int(text)
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"must be an integer >= 1, got {text!r}") from None
     if value < 1:
         raise argparse.ArgumentTypeError(f"must be an integer >= 1, got {text}")
     return value
@@ -218,10 +226,8 @@ def _add_plan(subparsers) -> None:
     p.set_defaults(run=_run_plan)
 
 
-def write_path_csv(path: Path, waypoints) -> None:
+def _write_path_csv(path: Path, waypoints) -> None:
     """Writes waypoints (N, 4) as CSV with header ``x,y,psi1,psi2`` (17 digits: exact round trip)."""
-    import numpy as np
-
     np.savetxt(path, np.asarray(waypoints, float).reshape(-1, 4), delimiter=",", header="x,y,psi1,psi2",
                comments="", fmt="%.17g")
 
@@ -252,7 +258,7 @@ def _run_plan(args: argparse.Namespace) -> int:
             bar.close()
     print(result.summary())
 
-    write_path_csv(out / "path.csv", result.waypoints)
+    _write_path_csv(out / "path.csv", result.waypoints)
     record = {
         "scenario": str(args.scenario),
         "overrides": list(args.set or []),
@@ -294,10 +300,12 @@ def _add_bench(subparsers) -> None:
     p.add_argument("--seeds", type=_positive_int, default=10, metavar="N", help="seeds 0..N-1 per planner (default 10)")
     _add_checker_argument(p)
     p.add_argument("--no-ompl", action="store_true", help="leave out OMPL's RRTstar even when ompl is importable")
+    p.add_argument("--no-checker-bench", action="store_true",
+                   help="leave out the validity-checker throughput measurement")
     p.add_argument("--out", type=Path, default=Path("out/bench"), metavar="DIR",
                    help="output directory (default: out/bench)")
     p.add_argument("--progress", action="store_true",
-                   help="report progress on stderr even when it is not a terminal")
+                   help="draw the progress bar on stderr even when it is not a terminal")
     p.set_defaults(run=_run_bench)
 
 
@@ -307,18 +315,31 @@ def _run_bench(args: argparse.Namespace) -> int:
     for path in args.scenarios:
         if not path.is_file():
             raise ScenarioError(f"{path}: no such scenario file (--scenarios)")
-    result = run_bench(
-        scenario_paths=list(args.scenarios),
-        algorithms=list(args.algorithms),
-        iterations=args.iterations,
-        seeds=args.seeds,
-        checker=args.checker,
-        include_ompl=not args.no_ompl,
-        out_dir=args.out,
-        progress=_show_progress(args),
-    )
-    if result is not None:
-        print(result if isinstance(result, str) else getattr(result, "summary", lambda: result)())
+    bar = ProgressBar(1, sys.stderr, label="bench", interval=0.0) if _show_progress(args) else None
+
+    def progress(done: int, total: int, label: str) -> None:
+        bar.total = total
+        bar.update(done, label)
+
+    try:
+        run_bench(
+            scenario_paths=list(args.scenarios),
+            algorithms=list(args.algorithms),
+            iterations=args.iterations,
+            seeds=args.seeds,
+            checker=args.checker,
+            include_ompl=not args.no_ompl,
+            include_checker=not args.no_checker_bench,
+            out_dir=args.out,
+            progress=progress if bar is not None else None,
+        )
+    finally:
+        if bar is not None:
+            bar.close()
+    table = args.out / "bench.md"
+    if table.is_file():
+        print(table.read_text().rstrip())
+    print(f"wrote {args.out}/: bench.json, bench.md")
     return 0
 
 

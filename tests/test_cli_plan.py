@@ -124,6 +124,8 @@ def test_goal_in_collision_exits_2_naming_goal(tmp_path, capsys):
 def test_bad_options_are_usage_errors(tmp_path, capsys):
     assert main(["plan", str(TINY), "--iterations", "0", "--out", str(tmp_path)]) == 2
     assert "--iterations: must be an integer >= 1, got 0" in capsys.readouterr().err
+    assert main(["plan", str(TINY), "--iterations", "many"]) == 2
+    assert "--iterations: must be an integer >= 1, got 'many'" in capsys.readouterr().err
     assert main(["plan", str(TINY), "--algorithm", "dijkstra"]) == 2
     assert "invalid choice: 'dijkstra'" in capsys.readouterr().err
     assert main(["plan", str(TINY), "--checker", "fcl"]) == 2
@@ -166,10 +168,28 @@ def test_bench_parses_and_calls_run_bench_with_keywords(tmp_path, monkeypatch, c
             "--seeds", "3", "--checker", "numpy", "--no-ompl", "--out", str(tmp_path)]
     assert main(argv) == 0
     assert calls == [dict(scenario_paths=[TINY], algorithms=["rrt_star", "social_rrt_star"], iterations=50, seeds=3,
-                          checker="numpy", include_ompl=False, out_dir=tmp_path, progress=False)]
+                          checker="numpy", include_ompl=False, include_checker=True, out_dir=tmp_path,
+                          progress=None)]
     defaults = build_parser().parse_args(["bench"])
     assert [str(p) for p in defaults.scenarios] == ["scenarios/office_bar.yaml", "scenarios/generic_L.yaml"]
     assert defaults.algorithms == list(ALGORITHMS) and defaults.iterations == 2000 and defaults.seeds == 10
     assert defaults.checker == "drake" and defaults.no_ompl is False and defaults.out == Path("out/bench")
     assert main(["bench", "--scenarios", str(tmp_path / "none.yaml")]) == 2
     assert "none.yaml: no such scenario file" in capsys.readouterr().err
+
+
+def test_bench_runs_on_tiny_and_prints_its_table(tmp_path, capsys):
+    argv = ["bench", "--scenarios", str(TINY), "--algorithms", "social_rrt_star", "rrt_star", "--iterations", "40",
+            "--seeds", "2", "--checker", "numpy", "--no-ompl", "--no-checker-bench", "--out", str(tmp_path),
+            "--progress"]
+    assert main(argv) == 0
+    captured = capsys.readouterr()
+    assert captured.out.rstrip().endswith(f"wrote {tmp_path}/: bench.json, bench.md")
+    assert "| tiny | social_rrt_star | 2 |" in captured.out and "| tiny | rrt_star | 2 |" in captured.out
+    assert captured.err.rstrip().split("\r")[-1].startswith("bench [" + "#" * 30 + "] 4/4  tiny rrt_star seed 1")
+    record = json.loads((tmp_path / "bench.json").read_text())
+    runs = record["scenarios"]["tiny.yaml"]["algorithms"]["social_rrt_star"]["runs"]
+    scenario = load_scenario(TINY)
+    for seed, run in enumerate(runs):  # the bench's runs are the planner's, seed by seed
+        expected = plan(scenario, GeometricChecker(scenario), algorithm="social_rrt_star", iterations=40, seed=seed)
+        assert run["seed"] == seed and run["social_cost_full"] == pytest.approx(expected.social_cost_full, rel=1e-12)

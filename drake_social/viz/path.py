@@ -160,6 +160,7 @@ def draw_path(
     style: RobotStyle = RobotStyle(),
     distance_weights=None,
     object_traces: bool = False,
+    numbers: bool = True,
     labels: bool = True,
 ) -> dict[str, list]:
     """Draws a path: the base's track, the object ends' tracks and the robot along it.
@@ -179,13 +180,15 @@ def draw_path(
         style: colours of the robot's parts.
         distance_weights: the configuration norm's per-coordinate scale.
         object_traces: also draw the tracks of the object's interest points.
+        numbers: write the pose's number (1 = start) on each intermediate base.
         labels: legend labels for the tracks and the robot's parts.
 
     Returns:
-        Artists: "base_track", "object_tracks", "robots" (one dict per pose).
+        Artists: "base_track", "object_tracks", "robots" (one dict per pose),
+        "numbers".
     """
     wp = _waypoints(waypoints)
-    out: dict[str, list] = {"base_track": [], "object_tracks": [], "robots": []}
+    out: dict[str, list] = {"base_track": [], "object_tracks": [], "robots": [], "numbers": []}
     if object_traces and len(wp) > 1:
         # Object points move on curves (the arm rotates): 24 samples per segment, waypoints included.
         t = np.linspace(0.0, 1.0, 24, endpoint=False)
@@ -209,6 +212,9 @@ def draw_path(
         out["robots"].append(draw_robot(ax, geometry, q, style=style, alpha=1.0 if end else pose_alpha,
                                         interest_points=end, labels=labels and k == 0,
                                         zorder=5.0 if end else 3.7))
+        if numbers and not end:  # the ends are marked by their rings
+            out["numbers"].append(ax.text(q[0], q[1], str(k + 1), ha="center", va="center", fontsize=7,
+                                          color="white", fontweight="bold", zorder=4.95))
     return out
 
 

@@ -177,3 +177,13 @@ def test_path_figure_without_a_path_says_so_and_draws_the_tree(tiny_scenario, pl
     ok = path_figure(tiny_scenario, planned)
     assert "social cost" in ok.axes[0].get_title()
     assert isinstance(planned, PlannerResult)
+
+
+def test_intermediate_poses_are_numbered_in_order_along_the_path(tiny_scenario, planned):
+    from matplotlib.figure import Figure
+
+    ax = Figure().add_subplot()
+    dut = draw_path(ax, ArmGeometry.from_scenario(tiny_scenario), planned.waypoints, poses=5)
+    assert [t.get_text() for t in dut["numbers"]] == ["2", "3", "4"]
+    expected = poses_along(planned.waypoints, 5)[1:-1, :2]
+    np.testing.assert_allclose([t.get_position() for t in dut["numbers"]], expected, atol=1e-12)
