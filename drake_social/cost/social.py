@@ -194,7 +194,9 @@ class SocialCost:
         tau = self.space.threshold
         up0, up1 = g0 > tau, g1 > tau
         hi, lo = np.maximum(g0, g1), np.minimum(g0, g1)
-        with np.errstate(divide="ignore", invalid="ignore"):
+        # Only entries with lo <= tau < hi are used, where the ratio is in
+        # [0, hi + tau]; the others may divide by 0 or overflow (subnormal hi - lo).
+        with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
             crossing = 0.5 * (hi + tau) * (hi - tau) / (hi - lo)
         area = np.where(up0 & up1, 0.5 * (g0 + g1), np.where(up0 ^ up1, crossing, 0.0))
         return np.bincount(pair_edge[pair[step]], weights=area @ self._active_weights, minlength=len(q_a))

@@ -311,6 +311,15 @@ def test_msc_error_at_the_paper_threshold_is_explained_by_the_jumps(cost, rng):
 
 
 def test_msc_within_1pct_of_reference_at_the_paper_threshold(bar_cost, rng):
+    """The issue's check, on this fixed sample of 150 edges.
+
+    Not universal: on 1000-edge samples (bar and L, two seeds, resolution
+    0.1 m) 0 to 0.5% of the non-zero edges miss 1% (worst 7.7% relative, on
+    edges that graze a threshold contour and cost ~3e-3; absolute error
+    < 1.5e-3 against typical edge costs of 1 to 2), partly the 2000-step
+    reference's own jump error. Every edge is covered by
+    test_msc_error_at_the_paper_threshold_is_explained_by_the_jumps.
+    """
     q_a, q_b = random_edges(bar_cost, rng, 150)
     got = bar_cost.motion_cost(q_a, q_b)
     ref = np.array([reference_integral(bar_cost, a, b) for a, b in zip(q_a, q_b)])
@@ -497,3 +506,15 @@ def test_non_finite_configurations_are_not_hidden(bar_cost):
     for bad in (q, np.array([np.inf, 3.0, 0.0, 0.0])):
         with pytest.raises(ValueError, match="finite configurations"):
             bar_cost.motion_cost(good, bad)
+
+
+def test_long_edge_with_subnormal_far_samples(bar_cost):
+    """120 m past a person: the far samples' Gaussians are subnormal (~1e-310),
+    which must neither warn (pytest turns RuntimeWarning into errors) nor matter."""
+    dut = SocialCost(bar_cost.geometry, np.array([[0.0, 0.0, 0.0]]), bar_cost.space, bar_cost.weights)
+    a, b = np.array([-60.0, 0.3, 0.0, 0.0]), np.array([60.0, 0.3, 0.0, 0.0])
+    got = dut.motion_cost(a, b)
+    ref = reference_integral(dut, a, b, steps=24000)  # 5 mm steps
+    assert got > 1.0
+    assert got == pytest.approx(ref, rel=0.01)
+    assert dut.motion_cost(b, a) == pytest.approx(got, rel=1e-9)
