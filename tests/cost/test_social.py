@@ -518,3 +518,23 @@ def test_long_edge_with_subnormal_far_samples(bar_cost):
     assert got > 1.0
     assert got == pytest.approx(ref, rel=0.01)
     assert dut.motion_cost(b, a) == pytest.approx(got, rel=1e-9)
+
+
+def test_culling_keeps_a_person_swept_by_the_object_between_far_ends():
+    """Every interest point starts and ends > 5 m from the person (beyond the
+    3.59 m reach), but the L's far corner sweeps through the zone on the way."""
+    base = l_shape_cost()
+    dut = SocialCost(base.geometry, np.array([[0.0, 0.0, 0.0]]), base.space, base.weights)
+    a = np.array([6.75, 0.0, 3 * PI / 4, -PI / 2])
+    b = np.array([6.75, 0.0, 3 * PI / 4, PI / 2])
+    for q in (a, b):
+        assert np.hypot(*dut.geometry.interest_points(q).T).min() > 5.0
+    assert dut(a) == 0.0 and dut(b) == 0.0
+    assert dut.relevant_people(a, b).tolist() == [[True]]
+    got = dut.motion_cost(a, b)
+    ref = reference_integral(dut, a, b)
+    assert ref > 0.1
+    assert abs(got - ref) <= 0.01 * ref + crossing_budget(dut, a, b)
+    # Far ends and a short motion: culled, and exactly 0.
+    assert dut.relevant_people(a, a + [0, 0, 0, 0.05]).tolist() == [[False]]
+    assert dut.motion_cost(a, a + [0, 0, 0, 0.05]) == 0.0
