@@ -64,7 +64,9 @@ def _make_checker(scenario: Scenario, checker: str) -> ValidityChecker:
     if checker == "drake":
         from drake_social.model.checker import SceneGraphChecker
 
-        return SceneGraphChecker(scenario)
+        # The planners check one configuration or motion at a time; one thread
+        # keeps the runs from competing with Drake's worker threads.
+        return SceneGraphChecker(scenario, parallelism=1)
     from drake_social.planning.geometric import GeometricChecker
 
     return GeometricChecker(scenario)
