@@ -193,8 +193,11 @@ class ArmGeometry:
         """Lever arms (1, 1, c1, c2) bounding point displacement per coordinate.
 
         ``c2`` is the largest distance of a tracked point from the elbow and
-        ``c1`` bounds its distance from the shoulder (``l1 + c2``); see
-        :meth:`max_displacement`.
+        ``c1`` bounds its distance from the shoulder (``l1 + c2``), so a
+        point moves at most ``hypot(dx, dy) + c1 |dpsi1| + c2 |dpsi2|``: the
+        per-coordinate form Drake's weighted distance needs
+        (:mod:`drake_social.model.checker`). :meth:`lever` gives a tighter
+        bound in the coordinates (psi1, psi1 + psi2).
 
         Args:
             include_body: False tracks interest points (for the social
@@ -218,22 +221,48 @@ class ArmGeometry:
         c1 = l1 + c2 if from_elbow else (l1 if 1 in idx else 0.0)
         return np.array([1.0, 1.0, c1, c2])
 
+    def lever(self, include_body: bool = False, active: np.ndarray | None = None) -> np.ndarray:
+        """Lever arms ``(c_shoulder, c_gripper)`` of :func:`displacement_bound`.
+
+        A point rigid with link 1 within ``c_shoulder`` of the shoulder, or a
+        point ``p = p_elbow + R(psi1 + psi2) g`` with ``|g| <= c_gripper``
+        moves at most ``hypot(dx, dy) + c_shoulder |dpsi1| + c_gripper
+        |dpsi1 + dpsi2|`` along a straight motion: the elbow turns with psi1
+        alone, everything beyond it with the sum. Tighter than
+        :meth:`reach` when the joints counter-rotate.
+
+        Args:
+            include_body: as in :meth:`reach` (capsule radii included).
+            active: as in :meth:`reach`.
+        """
+        l1, l2 = self.link_lengths
+        if include_body:
+            r = max(self.object_radius, self.link_radius)
+            g = max(l2, *np.hypot(l2 + self.object_points[:, 0], self.object_points[:, 1]))
+            return np.array([l1 + r, g + r])
+        idx = set(range(self.num_interest_points) if active is None else np.asarray(active).tolist())
+        g = [l2] if 2 in idx else []
+        g += [float(np.hypot(l2 + p[0], p[1])) for k, p in enumerate(self.object_interest) if 3 + k in idx]
+        return np.array([l1 if (g or 1 in idx) else 0.0, max(g, default=0.0)])
+
     def max_displacement(
         self, q_a: np.ndarray, q_b: np.ndarray, include_body: bool = False, active: np.ndarray | None = None
     ) -> np.ndarray:
         """An upper bound (...,) on how far any tracked point moves from q_a to q_b.
 
-        A point at distance c from a joint moves at most c * |d angle| when the
-        joint turns, and the base translation moves every point by the same
-        vector, so ``hypot(dx, dy) + c1 |dpsi1| + c2 |dpsi2|`` bounds the arc.
+        See :meth:`lever` and :func:`displacement_bound`.
         """
-        return displacement_bound(np.asarray(q_b, float) - np.asarray(q_a, float), self.reach(include_body, active))
+        return displacement_bound(np.asarray(q_b, float) - np.asarray(q_a, float), self.lever(include_body, active))
 
 
 def displacement_bound(dq: np.ndarray, lever: np.ndarray) -> np.ndarray:
-    """``hypot(dx, dy) + c1 |dpsi1| + c2 |dpsi2|`` for motions dq (..., 4) and
-    lever arms ``(1, 1, c1, c2)`` from :meth:`ArmGeometry.reach`."""
-    return np.hypot(dq[..., 0], dq[..., 1]) + lever[2] * np.abs(dq[..., 2]) + lever[3] * np.abs(dq[..., 3])
+    """``hypot(dx, dy) + c_s |dpsi1| + c_g |dpsi1 + dpsi2|`` for motions dq
+    (..., 4) and lever arms ``(c_s, c_g)`` from :meth:`ArmGeometry.lever`."""
+    return (
+        np.hypot(dq[..., 0], dq[..., 1])
+        + lever[0] * np.abs(dq[..., 2])
+        + lever[1] * np.abs(dq[..., 2] + dq[..., 3])
+    )
 
 
 def config_distance(q_a: np.ndarray, q_b: np.ndarray, weights: np.ndarray | None = None) -> np.ndarray:

@@ -65,7 +65,7 @@ class SocialCost:
         self._active = np.flatnonzero(w > 0)
         self._active_weights = w[self._active]
         # Lever arms of the weighted points: their displacement bound per motion.
-        self._lever = geometry.reach(active=self._active)
+        self._lever = geometry.lever(active=self._active)
 
     @classmethod
     def from_scenario(cls, scenario, weights: np.ndarray | None = None) -> "SocialCost":

@@ -43,7 +43,11 @@ class PlannerResult:
         seed: the seed the random generator came from, when known.
         closest_distance_to_goal: configuration distance of the tree's closest
             node to the goal (useful on failure).
-        tree_nodes: (n, 4) tree configurations; tree_parents: (n,) parent index (-1: root).
+        tree_nodes: (n, 4) tree configurations; tree_parents: (n,) parent index
+            (-1: root); tree_costs: (n,) cost from the start F of every node.
+        informed_diameters: (K,) the informed ellipse's transverse diameter in
+            force after each iteration (inf: uniform sampling); empty when the
+            planner is not informed.
     """
 
     algorithm: str
@@ -66,6 +70,8 @@ class PlannerResult:
     closest_distance_to_goal: float = float("nan")
     tree_nodes: np.ndarray = dc.field(default_factory=lambda: np.zeros((0, 4)))
     tree_parents: np.ndarray = dc.field(default_factory=lambda: np.zeros(0, dtype=int))
+    tree_costs: np.ndarray = dc.field(default_factory=lambda: np.zeros(0))
+    informed_diameters: np.ndarray = dc.field(default_factory=lambda: np.zeros(0))
 
     def raise_if_failed(self) -> "PlannerResult":
         if not self.success:

@@ -98,6 +98,13 @@ class _Tree:
         return path[::-1]
 
 
+@dc.dataclass
+class _Counts:
+    config: int = 0  # configurations checked
+    motion: int = 0  # motions checked
+    cost: int = 0  # motions costed
+
+
 class RrtStar:
     """RRT* over a configuration space with a pluggable objective and checker.
 
@@ -170,7 +177,6 @@ class RrtStar:
         goal = np.asarray(goal, dtype=float)
         self._check_endpoints(start, goal)
         space, checker, objective = self.space, self.checker, self.objective
-        w = space.weights
 
         tree = _Tree(opt.iterations + 1)
         tree.add(start, -1, 0.0)
@@ -178,12 +184,12 @@ class RrtStar:
         goal_nodes: list[int] = []  # nodes with a valid, costed motion to the goal
         goal_edge_costs: list[float] = []
         history = np.full(opt.iterations, np.inf)
+        diameters = np.full(opt.iterations if opt.informed else 0, np.inf)
         best_cost, best_node, first_iteration = np.inf, -1, None
         ellipse_c = np.inf
-        n_config = n_motion = n_cost = 0
+        counts = _Counts()
 
         def connect_to_goal(i: int) -> None:
-            nonlocal n_cost, n_motion
             d = float(space.distance(tree.q[i], goal))
             if d > opt.near_radius:
                 return
@@ -191,104 +197,101 @@ class RrtStar:
                 goal_nodes.append(i)
                 goal_edge_costs.append(0.0)
                 return
-            n_cost += 1
+            counts.cost += 1
             c = float(objective.motion_cost(tree.q[i], goal)[0])
-            n_motion += 1
+            counts.motion += 1
             if checker.is_motion_valid(tree.q[i], goal):
                 goal_nodes.append(i)
                 goal_edge_costs.append(c)
 
         connect_to_goal(0)
         for k in range(opt.iterations):
-            # --- sample and steer -------------------------------------------
             if rng.random() < opt.goal_bias:
                 q_rand = goal
             elif sampler is not None and np.isfinite(ellipse_c):
                 q_rand = sampler.sample(rng, ellipse_c)
             else:
                 q_rand = space.sample_uniform(rng)
-            nodes = tree.q[: tree.n]
-            diff = (nodes - q_rand) * w
-            d_rand = np.sqrt(np.einsum("ij,ij->i", diff, diff))
-            i_nearest = int(np.argmin(d_rand))
-            if d_rand[i_nearest] > opt.planning_range:
-                q_new = nodes[i_nearest] + (q_rand - nodes[i_nearest]) * (opt.planning_range / d_rand[i_nearest])
-            else:
-                q_new = np.array(q_rand, dtype=float)
-            n_config += 1
-            if not checker.is_valid(q_new):
-                history[k] = best_cost
-                if progress:
-                    progress(k + 1, best_cost)
-                continue
-
-            # --- choose parent: batch costs, lazy collision checks ----------
-            diff = (nodes - q_new) * w
-            d_new = np.sqrt(np.einsum("ij,ij->i", diff, diff))
-            near = np.flatnonzero(d_new <= opt.near_radius)
-            if i_nearest not in near:  # r_near < delta: keep the tree connected
-                near = np.append(near, i_nearest)
-            phi = objective.motion_cost(nodes[near], q_new)
-            n_cost += len(near)
-            total = tree.cost[near] + phi
-            checked: dict[int, bool] = {}
-            parent_slot = -1
-            for slot in np.argsort(total, kind="stable"):
-                n_motion += 1
-                ok = checker.is_motion_valid(nodes[near[slot]], q_new)
-                checked[int(slot)] = ok
-                if ok:
-                    parent_slot = int(slot)
-                    break
-            if parent_slot < 0:
-                history[k] = best_cost
-                if progress:
-                    progress(k + 1, best_cost)
-                continue
-            i_new = tree.add(q_new, int(near[parent_slot]), float(total[parent_slot]))
-
-            # --- rewire ------------------------------------------------------
-            # Only nodes that the new node improves; costs are re-read because
-            # an earlier re-parenting may have lowered a later candidate.
-            for slot in np.flatnonzero(tree.cost[i_new] + phi < tree.cost[near]):
-                j = int(near[slot])
-                if j == tree.parent[i_new] or not tree.cost[i_new] + phi[slot] < tree.cost[j]:
-                    continue
-                ok = checked.get(int(slot))
-                if ok is None:
-                    n_motion += 1
-                    ok = checker.is_motion_valid(q_new, nodes[j])
-                if ok:
-                    tree.reparent(j, i_new, float(tree.cost[i_new] + phi[slot]))
-
-            # --- goal -----------------------------------------------------------
-            connect_to_goal(i_new)
-            if goal_nodes:
-                totals = tree.cost[goal_nodes] + np.asarray(goal_edge_costs)
-                g = int(np.argmin(totals))  # rewiring only lowers costs: never worse
-                best_cost, best_node = float(totals[g]), goal_nodes[g]
-                if first_iteration is None:
-                    first_iteration = k + 1
-                if sampler is not None:
-                    ellipse_c = transverse_diameter(
-                        opt.informed_mode, best_cost, self._xy_length(tree, best_node, goal), objective
-                    )
+            i_new = self._extend(tree, q_rand, counts)
+            if i_new >= 0:
+                connect_to_goal(i_new)
+                if goal_nodes:
+                    totals = tree.cost[goal_nodes] + np.asarray(goal_edge_costs)
+                    g = int(np.argmin(totals))  # rewiring only lowers costs: never worse
+                    best_cost, best_node = float(totals[g]), goal_nodes[g]
+                    if first_iteration is None:
+                        first_iteration = k + 1
+                    if sampler is not None:
+                        ellipse_c = transverse_diameter(
+                            opt.informed_mode, best_cost, self._xy_length(tree, best_node, goal), objective
+                        )
             history[k] = best_cost
+            if sampler is not None:
+                diameters[k] = ellipse_c
             if progress:
                 progress(k + 1, best_cost)
 
-        return self._result(
-            tree, goal, best_node, best_cost, first_iteration, history, n_config, n_motion, n_cost, t0
-        )
+        result = self._result(tree, goal, best_node, best_cost, first_iteration, history, counts, t0)
+        result.informed_diameters = diameters
+        return result
 
-    # ------------------------------------------------------------------
+    def _extend(self, tree: _Tree, q_rand: np.ndarray, counts: "_Counts") -> int:
+        """Steer towards q_rand, choose the parent, insert, rewire (Algorithm 2,
+        lines 4-25). Returns the new node's index, or -1 when nothing was added."""
+        opt, w, checker = self.options, self.space.weights, self.checker
+        nodes = tree.q[: tree.n]
+        diff = (nodes - q_rand) * w
+        d_rand = np.sqrt(np.einsum("ij,ij->i", diff, diff))
+        i_nearest = int(np.argmin(d_rand))
+        if d_rand[i_nearest] > opt.planning_range:
+            q_new = nodes[i_nearest] + (q_rand - nodes[i_nearest]) * (opt.planning_range / d_rand[i_nearest])
+        else:
+            q_new = np.array(q_rand, dtype=float)
+        counts.config += 1
+        if not checker.is_valid(q_new):
+            return -1
+
+        # Choose the parent: all near costs in one batch, motions checked lazily.
+        diff = (nodes - q_new) * w
+        near = np.flatnonzero(np.einsum("ij,ij->i", diff, diff) <= opt.near_radius**2)
+        if i_nearest not in near:  # r_near < delta: keep the tree connected
+            near = np.append(near, i_nearest)
+        phi = self.objective.motion_cost(nodes[near], q_new)
+        counts.cost += len(near)
+        total = tree.cost[near] + phi
+        checked: dict[int, bool] = {}
+        parent_slot = -1
+        for slot in np.argsort(total, kind="stable"):
+            counts.motion += 1
+            ok = checker.is_motion_valid(nodes[near[slot]], q_new)
+            checked[int(slot)] = ok
+            if ok:
+                parent_slot = int(slot)
+                break
+        if parent_slot < 0:
+            return -1
+        i_new = tree.add(q_new, int(near[parent_slot]), float(total[parent_slot]))
+
+        # Rewire the nodes the new one improves; costs are re-read because an
+        # earlier re-parenting may already have lowered a later candidate.
+        for slot in np.flatnonzero(tree.cost[i_new] + phi < tree.cost[near]):
+            j = int(near[slot])
+            if j == tree.parent[i_new] or not tree.cost[i_new] + phi[slot] < tree.cost[j]:
+                continue
+            ok = checked.get(int(slot))
+            if ok is None:
+                counts.motion += 1
+                ok = checker.is_motion_valid(q_new, nodes[j])
+            if ok:
+                tree.reparent(j, i_new, float(tree.cost[i_new] + phi[slot]))
+        return i_new
 
     @staticmethod
     def _xy_length(tree: _Tree, node: int, goal: np.ndarray) -> float:
         pts = np.vstack([tree.q[tree.path_to(node), :2], goal[:2]])
         return float(np.hypot(*np.diff(pts, axis=0).T).sum())
 
-    def _result(self, tree, goal, best_node, best_cost, first_iteration, history, n_config, n_motion, n_cost, t0):
+    def _result(self, tree, goal, best_node, best_cost, first_iteration, history, counts, t0):
         nodes = tree.q[: tree.n].copy()
         closest = float(np.min(self.space.distance(nodes, goal)))
         common = dict(
@@ -296,12 +299,13 @@ class RrtStar:
             first_solution_iteration=first_iteration,
             cost_history=history,
             tree_size=tree.n,
-            num_config_checks=n_config,
-            num_motion_checks=n_motion,
-            num_cost_evaluations=n_cost,
+            num_config_checks=counts.config,
+            num_motion_checks=counts.motion,
+            num_cost_evaluations=counts.cost,
             closest_distance_to_goal=closest,
             tree_nodes=nodes,
             tree_parents=tree.parent[: tree.n].copy(),
+            tree_costs=tree.cost[: tree.n].copy(),
         )
         if best_node < 0:
             msg = (
