@@ -109,21 +109,30 @@ class SocialCost:
         """(E, H) bool: False where person i contributes exactly 0 to motion e.
 
         A weighted point moves at most D (:func:`displacement_bound`) along
-        the motion, so at every instant it is at least ``(A + B - D) / 2``
-        from a person it starts A and ends B away. Beyond the AGF's reach
-        (where it is <= threshold in every direction) its term is 0 throughout.
+        the motion, so at parameter t it is at least ``A - D t`` and
+        ``B - D (1 - t)`` from a person it starts A and ends B away. Beyond the
+        AGF's reach R (where it is <= threshold in every direction) its term
+        is 0, so a person matters only where both bounds are <= R.
         """
         q_a, q_b = np.atleast_2d(q_a), np.atleast_2d(q_b)
-        return self._relevant(q_a, q_b, displacement_bound(q_b - q_a, self._lever))
+        relevant, _, _ = self._window(q_a, q_b, displacement_bound(q_b - q_a, self._lever))
+        return relevant
 
-    def _relevant(self, q_a: np.ndarray, q_b: np.ndarray, span: np.ndarray) -> np.ndarray:
+    def _window(self, q_a: np.ndarray, q_b: np.ndarray, span: np.ndarray):
+        """For every (motion, person): whether the person may matter, and the
+        parameter interval [t0, t1] outside which every term is 0."""
+        e, h = len(q_a), len(self.people)
         reach = self.space.max_reach
         if not np.isfinite(reach):
-            return np.ones((len(q_a), len(self.people)), dtype=bool)
+            return np.ones((e, h), dtype=bool), np.zeros((e, h)), np.ones((e, h))
         x, y = self.geometry.interest_xy(np.concatenate([q_a, q_b]), self._active)  # (2E, K)
-        dist = np.hypot(x[..., None] - self.people[:, 0], y[..., None] - self.people[:, 1])
-        e = len(q_a)
-        return np.any(dist[:e] + dist[e:] - span[:, None, None] <= 2.0 * reach, axis=1)
+        dist = np.hypot(x[..., None] - self.people[:, 0], y[..., None] - self.people[:, 1]) - reach
+        near_a, near_b = dist[:e], dist[e:]  # (E, K, H): distance beyond the reach at each end
+        relevant = np.any(near_a + near_b <= span[:, None, None], axis=1)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            t0 = np.where(span[:, None] > 0, near_a.min(axis=1) / span[:, None], 0.0)
+            t1 = np.where(span[:, None] > 0, 1.0 - near_b.min(axis=1) / span[:, None], 1.0)
+        return relevant, np.clip(t0, 0.0, 1.0), np.clip(t1, 0.0, 1.0)
 
     def motion_cost(self, q_a: np.ndarray, q_b: np.ndarray) -> np.ndarray:
         """Msc: the integral of S along straight motions, by the trapezoid rule.
@@ -136,8 +145,9 @@ class SocialCost:
         and only the part above the threshold is integrated. Without crossings
         this is exactly the paper's ``h/2 sum [S(q_k) + S(q_k+1)]``; with them
         the error stays second order instead of a first-order jump error.
-        People that :meth:`relevant_people` rules out for a motion are not
-        evaluated along it (their terms are exactly 0).
+        A person is evaluated only on the samples of a motion where a
+        distance bound (:meth:`relevant_people`) says their terms can be
+        non-zero; elsewhere they are exactly 0.
 
         Args:
             q_a, q_b: motion ends (E, 4) or (4,), broadcastable.
@@ -160,46 +170,45 @@ class SocialCost:
         dq = q_b - q_a
         length = config_distance(q_a, q_b, self.distance_weights)
         span = displacement_bound(dq, self._lever)
-        relevant = self._relevant(q_a, q_b, span) & (length > 0)[:, None]
-        live = np.flatnonzero(relevant.any(axis=1))
-        if live.size:
-            n = interpolation_segments(span[live], self.resolution)
-            out[live] = self._integrate(q_a[live], dq[live], n, relevant[live]) * (length[live] / n)
+        relevant, t0, t1 = self._window(q_a, q_b, span)
+        relevant &= (length > 0)[:, None]
+        if relevant.any():
+            n = interpolation_segments(span, self.resolution)
+            out += self._integrate(q_a, dq, n, relevant, t0, t1) * (length / n)
         return out[0] if single else out
 
-    def _integrate(self, q_a: np.ndarray, dq: np.ndarray, n: np.ndarray, relevant: np.ndarray) -> np.ndarray:
+    def _integrate(self, q_a, dq, n, relevant, t0, t1) -> np.ndarray:
         """Sums over steps of the threshold-aware trapezoid areas (E,), in one
-        batch over the (motion, relevant person) pairs; times h gives Msc."""
-        count = n + 1  # samples per motion, ends included
-        first = np.cumsum(count) - count
-        edge = np.repeat(np.arange(len(q_a)), count)
-        t = (np.arange(int(count.sum())) - first[edge]) / n[edge]
-        x, y = self.geometry.interest_xy(q_a[edge] + t[:, None] * dq[edge], self._active)
-        # Every (motion, person) pair walks its motion's samples.
+        batch over the (motion, relevant person) pairs; times h gives Msc.
+
+        Pair (e, i) walks the samples k0 .. k1 of motion e that bracket its
+        window [t0, t1]; the steps outside have both ends beyond the reach.
+        """
         pair_edge, pair_person = np.nonzero(relevant)
-        pair_count = count[pair_edge]
-        pair = np.repeat(np.arange(len(pair_edge)), pair_count)
-        local = np.arange(int(pair_count.sum())) - np.repeat(np.cumsum(pair_count) - pair_count, pair_count)
-        sample = first[pair_edge][pair] + local
+        n_pair = n[pair_edge]
+        k0 = np.floor(t0[pair_edge, pair_person] * n_pair).astype(np.int64)
+        k1 = np.minimum(np.ceil(t1[pair_edge, pair_person] * n_pair).astype(np.int64), n_pair)
+        k1 = np.maximum(k1, k0 + 1)  # at least one step (k0 <= n - 1 unless t0 = 1)
+        k0 = np.minimum(k0, k1 - 1)
+        count = k1 - k0 + 1
+        pair = np.repeat(np.arange(len(pair_edge)), count)
+        local = np.arange(int(count.sum())) - np.repeat(np.cumsum(count) - count, count)
+        edge = pair_edge[pair]
+        t = (k0[pair] + local) / n[edge]
+        x, y = self.geometry.interest_xy(q_a[edge] + t[:, None] * dq[edge], self._active)
         person = self.people[pair_person[pair]]
         g = gaussian(
-            x[sample] - person[:, 0:1],
-            y[sample] - person[:, 1:2],
-            np.cos(person[:, 2:3]),
-            np.sin(person[:, 2:3]),
-            self.space,
+            x - person[:, 0:1], y - person[:, 1:2], np.cos(person[:, 2:3]), np.sin(person[:, 2:3]), self.space
         )  # (samples of all pairs, K)
-        step = np.flatnonzero(local[:-1] < pair_count[pair[:-1]] - 1)  # consecutive samples of one pair
+        step = np.flatnonzero(local[:-1] < count[pair[:-1]] - 1)  # consecutive samples of one pair
         g0, g1 = g[step], g[step + 1]
         tau = self.space.threshold
         up0, up1 = g0 > tau, g1 > tau
         hi, lo = np.maximum(g0, g1), np.minimum(g0, g1)
-        # Only entries with lo <= tau < hi are used, where the ratio is in
-        # [0, hi + tau]; the others may divide by 0 or overflow (subnormal hi - lo).
         with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
             crossing = 0.5 * (hi + tau) * (hi - tau) / (hi - lo)
         area = np.where(up0 & up1, 0.5 * (g0 + g1), np.where(up0 ^ up1, crossing, 0.0))
-        return np.bincount(pair_edge[pair[step]], weights=area @ self._active_weights, minlength=len(q_a))
+        return np.bincount(edge[step], weights=area @ self._active_weights, minlength=len(q_a))
 
     # ---- for figures ----------------------------------------------------------
 
