@@ -61,33 +61,48 @@ class RrtStarOptions:
 
 
 class _Tree:
-    """Nodes in preallocated arrays; children as lists for cost propagation."""
+    """Nodes in preallocated arrays; children as lists for cost propagation.
+
+    Every node keeps the cost of the motion from its parent, and a node's
+    cost is always recomputed as ``cost[parent] + edge`` (as OMPL does)
+    rather than shifted by a difference: with non-negative edges a
+    descendant is then never cheaper than its ancestor, not even by one ulp,
+    so the strict rewiring test can never pick an ancestor of the new node.
+    """
 
     def __init__(self, capacity: int):
         self.q = np.empty((capacity, 4))
         self.parent = np.full(capacity, -1, dtype=np.int64)
         self.cost = np.empty(capacity)  # F: cost from the start
+        self.edge = np.empty(capacity)  # cost of the motion from the parent
         self.children: list[list[int]] = [[] for _ in range(capacity)]
         self.n = 0
 
-    def add(self, q: np.ndarray, parent: int, cost: float) -> int:
+    def add(self, q: np.ndarray, parent: int, edge: float) -> int:
         i = self.n
-        self.q[i], self.parent[i], self.cost[i] = q, parent, cost
+        self.q[i], self.parent[i], self.edge[i] = q, parent, edge
+        self.cost[i] = self.cost[parent] + edge if parent >= 0 else edge
         if parent >= 0:
             self.children[parent].append(i)
         self.n += 1
         return i
 
-    def reparent(self, i: int, new_parent: int, new_cost: float) -> None:
-        """Moves node i under new_parent and shifts its whole subtree's cost."""
+    def reparent(self, i: int, new_parent: int, edge: float) -> None:
+        """Moves node i under new_parent and updates its whole subtree's cost.
+
+        Raises:
+            RuntimeError: new_parent lies in i's subtree (a cycle); the
+                planner's strict improvement test rules this out.
+        """
         self.children[self.parent[i]].remove(i)
         self.children[new_parent].append(i)
-        self.parent[i] = new_parent
-        delta = new_cost - self.cost[i]
+        self.parent[i], self.edge[i] = new_parent, edge
         stack = [i]
         while stack:
             j = stack.pop()
-            self.cost[j] += delta
+            if j == new_parent:
+                raise RuntimeError(f"rewiring node {i} under its descendant {new_parent}")
+            self.cost[j] = self.cost[self.parent[j]] + self.edge[j]
             stack.extend(self.children[j])
 
     def path_to(self, i: int) -> list[int]:
@@ -270,7 +285,7 @@ class RrtStar:
                 break
         if parent_slot < 0:
             return -1
-        i_new = tree.add(q_new, int(near[parent_slot]), float(total[parent_slot]))
+        i_new = tree.add(q_new, int(near[parent_slot]), float(phi[parent_slot]))
 
         # Rewire the nodes the new one improves; costs are re-read because an
         # earlier re-parenting may already have lowered a later candidate.
@@ -283,7 +298,7 @@ class RrtStar:
                 counts.motion += 1
                 ok = checker.is_motion_valid(q_new, nodes[j])
             if ok:
-                tree.reparent(j, i_new, float(tree.cost[i_new] + phi[slot]))
+                tree.reparent(j, i_new, float(phi[slot]))
         return i_new
 
     @staticmethod

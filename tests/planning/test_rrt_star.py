@@ -376,3 +376,37 @@ def test_bad_options_are_refused(tiny, tiny_checker):
         RrtStar(space, tiny_checker, objective, RrtStarOptions(goal_bias=1.0))
     with pytest.raises(ValueError, match="informed mode"):
         RrtStar(space, tiny_checker, objective, RrtStarOptions(informed=True, informed_mode="wild"))
+
+
+# ---- the tree's bookkeeping -------------------------------------------------------------------
+
+
+def test_tree_costs_are_recomputed_so_descendants_never_undercut_ancestors():
+    """Shifting a subtree by a cost difference can leave a child one ulp below
+    its ancestor; with zero-cost motions the strict rewiring test then picked
+    that ancestor and the tree grew a cycle. Costs are recomputed instead."""
+    from drake_social.planning.rrt_star import _Tree
+
+    dut = _Tree(8)
+    dut.add(np.zeros(4), -1, 0.0)
+    a = dut.add(np.ones(4), 0, 0.1)
+    b = dut.add(np.ones(4), a, 0.2)
+    c = dut.add(np.ones(4), b, 0.0)  # a free motion, as far from people
+    d = dut.add(np.ones(4), 0, 6.8478872835105875 - 0.1)
+    dut.reparent(b, d, 0.7)
+    assert dut.cost[c] == dut.cost[b] == dut.cost[d] + 0.7
+    for node in (a, b, c, d):
+        assert dut.cost[node] >= dut.cost[dut.parent[node]]
+    with pytest.raises(RuntimeError, match="descendant"):
+        dut.reparent(d, c, 0.0)
+
+
+def test_zero_cost_motions_never_rewire_into_a_cycle():
+    """A social objective with nobody around: every motion costs exactly 0, the
+    situation in which the shifted costs used to loop forever."""
+    scenario = empty_room(length_weight=0.0)
+    scenario.people = []
+    checker = GeometricChecker(scenario)
+    dut = plan(scenario, checker, algorithm="social_rrt_star", iterations=400, seed=0)
+    assert dut.success and dut.cost == 0.0
+    assert np.all(dut.tree_costs == 0.0)
