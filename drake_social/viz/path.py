@@ -30,8 +30,7 @@ from drake_social.kinematics import ArmGeometry, config_distance
 from drake_social.planning.result import PlannerResult
 from drake_social.scenario import Scenario
 from drake_social.viz.robot import RobotStyle, draw_robot
-from drake_social.viz.show import draw_start_goal, scene_figure
-from drake_social.viz.world import draw_social_field, draw_world
+from drake_social.viz.show import scene_with_field
 
 __all__ = [
     "PATH_COLOR",
@@ -238,12 +237,7 @@ def path_figure(
         tree: draw the tree's base edges; None = only when there is no path.
         resolution: heat-map cell size, metres.
     """
-    fig, ax = scene_figure(scenario)
-    full = SocialCost.from_scenario(scenario)
-    draw_social_field(ax, full, scenario.world.bounds, resolution)
-    draw_world(ax, scenario)
-    draw_start_goal(ax, scenario)
-    geometry = ArmGeometry.from_scenario(scenario)
+    fig, ax, full, geometry = scene_with_field(scenario, resolution)
     if tree if tree is not None else not result.success:
         draw_tree(ax, result.tree_nodes, result.tree_parents)
     if result.success:

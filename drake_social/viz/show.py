@@ -63,6 +63,17 @@ def draw_start_goal(ax: Axes, scenario: Scenario, *, labels: bool = True) -> lis
     return artists
 
 
+def scene_with_field(scenario: Scenario, resolution: float = 0.05) -> tuple[Figure, Axes, SocialCost, ArmGeometry]:
+    """The scene figure with the social heat map, the room, the people and the
+    start and goal rings drawn; returns the cost and geometry it used too."""
+    fig, ax = scene_figure(scenario)
+    cost = SocialCost.from_scenario(scenario)
+    draw_social_field(ax, cost, scenario.world.bounds, resolution)
+    draw_world(ax, scenario)
+    draw_start_goal(ax, scenario)
+    return fig, ax, cost, ArmGeometry.from_scenario(scenario)
+
+
 def show_figure(scenario: Scenario, *, title: str | None = None, resolution: float = 0.05) -> Figure:
     """The scene picture of a scenario.
 
@@ -78,12 +89,7 @@ def show_figure(scenario: Scenario, *, title: str | None = None, resolution: flo
     Returns:
         A matplotlib figure (not attached to pyplot; save it with ``savefig``).
     """
-    fig, ax = scene_figure(scenario)
-    cost = SocialCost.from_scenario(scenario)
-    draw_social_field(ax, cost, scenario.world.bounds, resolution)
-    draw_world(ax, scenario)
-    draw_start_goal(ax, scenario)
-    geometry = ArmGeometry.from_scenario(scenario)
+    fig, ax, cost, geometry = scene_with_field(scenario, resolution)
     draw_robot(ax, geometry, np.asarray(scenario.start, float), labels=True)
     draw_robot(ax, geometry, np.asarray(scenario.goal, float))
     s_start, s_goal = cost(np.array([scenario.start, scenario.goal], float))
