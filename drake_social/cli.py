@@ -192,9 +192,6 @@ def _make_checker(scenario: Scenario, kind: str, source: str):
         return GeometricChecker(scenario)
     from drake_social.model.checker import SceneGraphChecker, check_start_goal
 
-    if not _log.isEnabledFor(logging.INFO):
-        # pydrake sets its "drake" logger to INFO on import; keep its chatter for --verbose.
-        logging.getLogger("drake").setLevel(logging.WARNING)
     checker = SceneGraphChecker(scenario)
     check_start_goal(scenario, checker, source)
     return checker
@@ -378,6 +375,11 @@ def main(argv: Sequence[str] | None = None) -> int:
         parser.print_help(sys.stderr)
         return 2
     logging.basicConfig(level=logging.INFO if args.verbose else logging.WARNING, format="%(name)s: %(message)s")
+    if not args.verbose:
+        # pydrake sets its "drake" logger to INFO on import; keep its chatter for --verbose.
+        import pydrake.common  # noqa: F401  (so that our level is not overwritten later)
+
+        logging.getLogger("drake").setLevel(logging.WARNING)
     try:
         return args.run(args)
     except (ScenarioError, PlanningInputError) as e:
