@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from drake_social.cost import kernel
 from drake_social.cost.agf import PersonalSpace, agf, agf_xy, gaussian, people_array
 from drake_social.kinematics import ArmGeometry, config_distance, displacement_bound
 
@@ -66,6 +67,10 @@ class SocialCost:
         self._active_weights = w[self._active]
         # Lever arms of the weighted points: their displacement bound per motion.
         self._lever = geometry.lever(active=self._active)
+        self._inverse_variances = tuple(1.0 / (2.0 * v**2) for v in (space.sigma_h, space.sigma_r, space.sigma_s))
+        #: "numba": motion costs by the compiled kernel (drake_social.cost.kernel);
+        #: "numpy": by the batched numpy code, the reference the kernel is tested against.
+        self.backend = "numba" if kernel.AVAILABLE else "numpy"
 
     @classmethod
     def from_scenario(cls, scenario, weights: np.ndarray | None = None) -> "SocialCost":
@@ -170,6 +175,14 @@ class SocialCost:
         dq = q_b - q_a
         length = config_distance(q_a, q_b, self.distance_weights)
         span = displacement_bound(dq, self._lever)
+        if self.backend == "numba":
+            sums, n = kernel.msc_sums(
+                np.ascontiguousarray(q_a), np.ascontiguousarray(q_b), self.people,
+                *self.geometry.link_lengths, self.geometry.object_interest, self._active, self._active_weights,
+                self._lever, self.resolution, self.space.max_reach, *self._inverse_variances, self.space.threshold,
+            )  # fmt: skip
+            out += sums * (length / n)
+            return out[0] if single else out
         relevant, t0, t1 = self._window(q_a, q_b, span)
         relevant &= (length > 0)[:, None]
         if relevant.any():

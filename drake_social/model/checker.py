@@ -28,6 +28,7 @@ import numpy as np
 from pydrake.common import Parallelism
 from pydrake.planning import LinearDistanceAndInterpolationProvider, SceneGraphCollisionChecker
 
+from drake_social.kinematics import displacement_bound
 from drake_social.model.plant import ScenarioDiagram, build_robot_diagram
 from drake_social.planning.geometric import CheckerBase
 from drake_social.scenario import Scenario, ScenarioError
@@ -96,6 +97,7 @@ class SceneGraphChecker(CheckerBase):
         )
         self._report_context = self.drake.MakeStandaloneModelContext()
         self._clearance_cache: dict[bytes, float] = {}
+        self._body_lever = self.geometry.lever(include_body=True)
         # The robot (when valid) and every shape lie in the walled room: no clearance exceeds this.
         self._influence = float(np.hypot(b[2] - b[0], b[3] - b[1])) + 2 * scenario.world.wall_thickness
 
@@ -156,13 +158,17 @@ class SceneGraphChecker(CheckerBase):
         fallback to discrete checking in tight spots measured slower.
         """
         q_a, q_b = np.asarray(q_a, float), np.asarray(q_b, float)
-        if not (self.in_limits(q_a) and self.in_limits(q_b)):
+        cached = self._clearance_cache
+        # Only configurations within the limits are cached (by is_valid).
+        if not (q_a.tobytes() in cached and q_b.tobytes() in cached) and not (
+            self.in_limits(q_a) and self.in_limits(q_b)
+        ):
             return False
         c_a = self._capped_clearance(q_a)
         c_b = self._capped_clearance(q_b)
         if c_a <= 0.0 or c_b <= 0.0:
             return False
-        span = float(self.geometry.max_displacement(q_a, q_b, include_body=True))
+        span = float(displacement_bound(q_b - q_a, self._body_lever))
         if span == 0.0:
             return True
         dq = q_b - q_a

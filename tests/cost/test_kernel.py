@@ -1,0 +1,80 @@
+"""The compiled Msc kernel equals the batched numpy reference."""
+
+from __future__ import annotations
+
+import dataclasses as dc
+import math
+
+import numpy as np
+import pytest
+
+from drake_social.cost import PersonalSpace, SocialCost, kernel
+from drake_social.kinematics import ArmGeometry
+from drake_social.scenario import Bar, LShape, Polyline, Robot, Scenario
+
+pytestmark = pytest.mark.skipif(not kernel.AVAILABLE, reason="numba is not importable")
+
+OBJECTS = {
+    "bar": Bar(length=1.5),
+    "L": LShape(lengths=[3.0, 2.0]),
+    "polyline": Polyline(points=[[0.0, -0.5], [0.0, 0.5], [0.4, 0.9]], interest_points=[[0.4, 0.9], [0.0, 0.0]]),
+}
+PEOPLE = np.array([[0.0, 0.0, math.pi / 4], [3.0, 1.0, math.pi - 1e-9], [1.0, -3.0, 2 * math.pi + 2.0]])
+
+
+def both(dut: SocialCost, q_a, q_b) -> tuple[np.ndarray, np.ndarray]:
+    dut.backend = "numba"
+    fast = dut.motion_cost(q_a, q_b)
+    dut.backend = "numpy"
+    reference = dut.motion_cost(q_a, q_b)
+    return fast, reference
+
+
+def edges(rng, n: int, spread: float = 4.0, length: float = 2.5):
+    q_a = np.column_stack([rng.uniform(-spread, spread, (n, 2)), rng.uniform(-math.pi, math.pi, (n, 2))])
+    d = rng.normal(size=(n, 4))
+    d *= rng.uniform(0.0, length, (n, 1)) / np.linalg.norm(d, axis=1, keepdims=True)
+    return q_a, q_a + d
+
+
+@pytest.mark.parametrize("kind", list(OBJECTS))
+@pytest.mark.parametrize(
+    "weights", ["ones", "base_only", "object_only", "random"], ids=["ones", "base", "object", "random"]
+)
+def test_kernel_equals_numpy_reference(kind, weights, rng):
+    geometry = ArmGeometry.from_scenario(Scenario(robot=Robot(), object=OBJECTS[kind]))
+    k = geometry.num_interest_points
+    w = {
+        "ones": np.ones(k),
+        "base_only": np.r_[1.0, np.zeros(k - 1)],
+        "object_only": np.r_[np.zeros(3), np.ones(k - 3)],
+        "random": rng.uniform(0, 2, k) * (rng.random(k) < 0.7),
+    }[weights]
+    dut = SocialCost(geometry, PEOPLE, weights=w)
+    q_a, q_b = edges(rng, 400)
+    fast, reference = both(dut, q_a, q_b)
+    assert (reference > 0).sum() > (50 if w.any() else -1)
+    np.testing.assert_allclose(fast, reference, rtol=1e-12, atol=1e-13)
+
+
+def test_kernel_without_threshold_and_with_another_resolution(rng):
+    geometry = ArmGeometry.from_scenario(Scenario())
+    space = dc.replace(PersonalSpace(), threshold=0.0)
+    dut = SocialCost(geometry, PEOPLE, space=space, resolution=0.37, distance_weights=[1, 2, 0.5, 1])
+    q_a, q_b = edges(rng, 200)
+    fast, reference = both(dut, q_a, q_b)
+    assert np.all(reference > 0)  # no threshold: every motion costs something
+    np.testing.assert_allclose(fast, reference, rtol=1e-12)
+
+
+def test_kernel_edge_cases(rng):
+    geometry = ArmGeometry.from_scenario(Scenario())
+    dut = SocialCost(geometry, PEOPLE)
+    q = edges(rng, 5)[0]
+    fast, reference = both(dut, q, q)  # zero-length motions
+    assert np.all(fast == 0) and np.all(reference == 0)
+    far = q + [100.0, 100.0, 0.0, 0.0]
+    fast, reference = both(dut, far, far + [1.0, 0.0, 0.3, 0.0])  # nobody near
+    assert np.all(fast == 0) and np.all(reference == 0)
+    single = both(dut, q[0], q[1])
+    assert np.ndim(single[0]) == 0 and single[0] == pytest.approx(single[1], rel=1e-12)
