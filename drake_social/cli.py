@@ -39,7 +39,7 @@ __all__ = ["EXIT_NO_PATH", "ProgressBar", "main", "build_parser", "load_with_ove
 #: Exit code of ``plan`` when no path reaches the goal.
 EXIT_NO_PATH = 3
 #: Validity checkers selectable with ``--checker``.
-CHECKERS = ("drake", "numpy")
+CHECKERS = ("drake", "numpy")  # = drake_social.model.checker.CHECKERS; here so that --help needs no Drake
 
 _log = logging.getLogger("drake_social")
 
@@ -168,14 +168,21 @@ class ProgressBar:
             self._drawn = False
 
 
-def _positive_int(text: str) -> int:
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"must be an integer >= 1, got {text!r}") from None
-    if value < 1:
-        raise argparse.ArgumentTypeError(f"must be an integer >= 1, got {text}")
-    return value
+def _int_at_least(minimum: int) -> Callable[[str], int]:
+    def parse(text: str) -> int:
+        try:
+            value = int(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"must be an integer >= {minimum}, got {text!r}") from None
+        if value < minimum:
+            raise argparse.ArgumentTypeError(f"must be an integer >= {minimum}, got {text}")
+        return value
+
+    return parse
+
+
+_positive_int = _int_at_least(1)
+_nonnegative_int = _int_at_least(0)
 
 
 def _add_checker_argument(parser: argparse.ArgumentParser) -> None:
@@ -186,15 +193,9 @@ def _add_checker_argument(parser: argparse.ArgumentParser) -> None:
 def _make_checker(scenario: Scenario, kind: str, source: str):
     """The validity checker of ``kind``; the Drake one first explains a start
     or goal in collision by naming the touching bodies (ScenarioError)."""
-    if kind == "numpy":
-        from drake_social.planning.geometric import GeometricChecker
+    from drake_social.model.checker import make_checker  # imports Drake: only when planning
 
-        return GeometricChecker(scenario)
-    from drake_social.model.checker import SceneGraphChecker, check_start_goal
-
-    checker = SceneGraphChecker(scenario)
-    check_start_goal(scenario, checker, source)
-    return checker
+    return make_checker(scenario, kind, source=source)
 
 
 def _show_progress(args: argparse.Namespace) -> bool:
@@ -215,7 +216,8 @@ def _add_plan(subparsers) -> None:
     p.add_argument("--algorithm", choices=ALGORITHMS, help="planner (default: the scenario's planner.algorithm)")
     p.add_argument("--iterations", type=_positive_int, metavar="K",
                    help="samples drawn (default: the scenario's planner.iterations)")
-    p.add_argument("--seed", type=int, metavar="S", help="random seed (default: the scenario's random_seed)")
+    p.add_argument("--seed", type=_nonnegative_int, metavar="S",
+                   help="random seed >= 0 (default: the scenario's random_seed)")
     _add_checker_argument(p)
     p.add_argument("--out", type=Path, metavar="DIR", help="output directory (default: out/<scenario name>)")
     p.add_argument("--progress", action="store_true",

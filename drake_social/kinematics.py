@@ -24,6 +24,7 @@ from drake_social.scenario import Bar, LShape, Polyline, Scenario
 __all__ = [
     "ArmGeometry",
     "config_distance",
+    "cumulative_distance",
     "displacement_bound",
     "object_polyline",
     "object_interest_points",
@@ -279,3 +280,12 @@ def config_distance(q_a: np.ndarray, q_b: np.ndarray, weights: np.ndarray | None
     if weights is not None:
         d = d * np.asarray(weights, float)
     return np.sqrt(np.einsum("...i,...i->...", d, d))
+
+
+def cumulative_distance(waypoints: np.ndarray, weights: np.ndarray | None = None) -> np.ndarray:
+    """Cumulative configuration distance (N,) at each of N waypoints (N, 4),
+    starting at 0: the path parameter of the paper's Fig. 6/8."""
+    wp = np.asarray(waypoints, float).reshape(-1, 4)
+    if len(wp) == 0:
+        return np.zeros(0)
+    return np.concatenate([[0.0], np.cumsum(config_distance(wp[:-1], wp[1:], weights))])

@@ -202,7 +202,7 @@ class PlannerOptions:
     # Informed variants: "paper" (ellipse from the best path's XY length) or
     # "admissible" (from best cost / length_weight; needs length_weight > 0).
     informed_mode: str = "paper"
-    # Per-coordinate weights (>= 0, 4 values) of the configuration distance.
+    # Per-coordinate weights (> 0, 4 values) of the configuration distance.
     distance_weights: list[float] = dc.field(default_factory=lambda: [1.0, 1.0, 1.0, 1.0])
     # Largest displacement of any robot or object point between two checked
     # configurations of a motion, metres (> 0).
@@ -409,9 +409,7 @@ def validate_scenario(scenario: Scenario, source: str = "<scenario>") -> None:
     if p.informed_mode == "admissible" and p.algorithm.startswith("informed") and s.length_weight <= 0:
         c.fail("planner.informed_mode", "'admissible' needs social.length_weight > 0")
     c.length("planner.distance_weights", p.distance_weights, 4)
-    c.nonnegative("planner.distance_weights", p.distance_weights)
-    if not all(v > 0 for v in p.distance_weights):
-        c.fail("planner.distance_weights", f"must all be > 0, got {p.distance_weights}")
+    c.positive("planner.distance_weights", p.distance_weights)
     c.positive("planner.collision_resolution", p.collision_resolution)
     if scenario.random_seed < 0:
         c.fail("random_seed", f"must be >= 0, got {scenario.random_seed}")

@@ -193,3 +193,10 @@ def test_bench_runs_on_tiny_and_prints_its_table(tmp_path, capsys):
     for seed, run in enumerate(runs):  # the bench's runs are the planner's, seed by seed
         expected = plan(scenario, GeometricChecker(scenario), algorithm="social_rrt_star", iterations=40, seed=seed)
         assert run["seed"] == seed and run["social_cost_full"] == pytest.approx(expected.social_cost_full, rel=1e-12)
+
+
+def test_cli_offers_exactly_the_library_checkers():
+    from drake_social import cli
+    from drake_social.model.checker import CHECKERS
+
+    assert cli.CHECKERS == CHECKERS

@@ -30,7 +30,7 @@ from pydrake.common.value import AbstractValue
 from pydrake.systems.framework import Context, LeafSystem, State
 from pydrake.trajectories import PiecewisePolynomial
 
-from drake_social.kinematics import config_distance
+from drake_social.kinematics import cumulative_distance
 from drake_social.planning.result import PlannerResult
 from drake_social.planning.validity import ValidityChecker
 from drake_social.planning.variants import plan
@@ -48,11 +48,7 @@ def path_parameter(waypoints: np.ndarray, distance_weights=None) -> np.ndarray:
         waypoints: (N, 4) configurations.
         distance_weights: per-coordinate scale of the norm (None = plain).
     """
-    wp = np.asarray(waypoints, float).reshape(-1, 4)
-    if len(wp) == 0:
-        return np.zeros(0)
-    steps = config_distance(wp[:-1], wp[1:], distance_weights) if len(wp) > 1 else np.zeros(0)
-    return np.concatenate([[0.0], np.cumsum(steps)])
+    return cumulative_distance(waypoints, distance_weights)
 
 
 def waypoint_trajectory(waypoints: np.ndarray, distance_weights=None) -> PiecewisePolynomial:

@@ -31,6 +31,7 @@ from typing import Callable, Sequence
 
 import numpy as np
 
+from drake_social.model.checker import CHECKERS, make_checker
 from drake_social.planning.space import ConfigurationSpace
 from drake_social.planning.validity import ValidityChecker
 from drake_social.planning.variants import evaluate_path, make_objective, plan
@@ -39,9 +40,6 @@ from drake_social.scenario import ALGORITHMS, Scenario, load_scenario
 __all__ = ["CHECKERS", "ompl_available", "run_bench", "summarize"]
 
 _log = logging.getLogger(__name__)
-
-#: Checkers the bench can use.
-CHECKERS = ("drake", "numpy")
 
 #: Per-run fields summarised with median and spread.
 _STAT_FIELDS = ("wall_time", "social_cost_full", "objective", "base_length", "path_length")
@@ -60,16 +58,10 @@ def ompl_available() -> bool:
     return True
 
 
-def _make_checker(scenario: Scenario, checker: str) -> ValidityChecker:
-    if checker == "drake":
-        from drake_social.model.checker import SceneGraphChecker
-
-        # The planners check one configuration or motion at a time; one thread
-        # keeps the runs from competing with Drake's worker threads.
-        return SceneGraphChecker(scenario, parallelism=1)
-    from drake_social.planning.geometric import GeometricChecker
-
-    return GeometricChecker(scenario)
+def _make_checker(scenario: Scenario, checker: str, path: Path | None = None) -> ValidityChecker:
+    # The planners check one configuration or motion at a time; one thread
+    # keeps the runs from competing with Drake's worker threads.
+    return make_checker(scenario, checker, parallelism=1, source=None if path is None else str(path))
 
 
 def _objective_key(algorithm: str) -> str:
@@ -121,7 +113,7 @@ def summarize(runs: Sequence[dict]) -> dict:
     """
     ok = [r for r in runs if r["success"]]
     out = {"runs": len(runs), "successes": len(ok), "success_rate": len(ok) / len(runs) if runs else None,
-           "paths_valid": all(r["path_valid"] for r in ok)}
+           "paths_valid": all(r["path_valid"] for r in ok) if ok else None}
     for f in _STAT_FIELDS:
         out[f] = _stats([r[f] for r in (runs if f == "wall_time" else ok)])
     for f in _MEDIAN_FIELDS:
@@ -229,6 +221,9 @@ def run_bench(
     scenarios = {}
     for path in paths:
         scenario = load_scenario(path)
+        _make_checker(scenario, checker, path)  # a start or goal in collision: a clear error naming the file
+        # Warm-up, untimed: loads (or compiles) the motion-cost kernel.
+        make_objective(scenario, "social_rrt_star").motion_cost(np.array(scenario.start), np.array(scenario.goal))
         entry = {"algorithms": {}, "ompl": {}}
         for algorithm in algorithms:
             objective = make_objective(scenario, algorithm)

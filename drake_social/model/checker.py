@@ -33,7 +33,10 @@ from drake_social.model.plant import ScenarioDiagram, build_robot_diagram
 from drake_social.planning.geometric import CheckerBase
 from drake_social.scenario import Scenario, ScenarioError
 
-__all__ = ["Contact", "SceneGraphChecker", "check_start_goal"]
+__all__ = ["CHECKERS", "Contact", "SceneGraphChecker", "check_start_goal", "make_checker"]
+
+#: Names of the validity checkers :func:`make_checker` builds.
+CHECKERS = ("drake", "numpy")
 
 
 @dc.dataclass(frozen=True)
@@ -269,3 +272,29 @@ def check_start_goal(
                 f"{source}: {field}: configuration {q.tolist()} is in collision: "
                 + "; ".join(str(c) for c in contacts)
             )
+
+
+def make_checker(
+    scenario: Scenario, kind: str = "drake", *, parallelism: bool | int = True, source: str | None = None
+):
+    """A validity checker of ``scenario``: ``"drake"`` (SceneGraph) or ``"numpy"``.
+
+    Args:
+        parallelism: threads of the Drake checker's batched calls.
+        source: the scenario's file name; when given, the Drake checker first
+            rejects a start or goal in collision with a :class:`ScenarioError`
+            naming the file and the touching bodies (:func:`check_start_goal`).
+
+    Raises:
+        ValueError: an unknown ``kind``.
+    """
+    if kind == "numpy":
+        from drake_social.planning.geometric import GeometricChecker
+
+        return GeometricChecker(scenario)
+    if kind != "drake":
+        raise ValueError(f"unknown checker {kind!r}; allowed: {', '.join(CHECKERS)}")
+    checker = SceneGraphChecker(scenario, parallelism=parallelism)
+    if source is not None:
+        check_start_goal(scenario, checker, source)
+    return checker

@@ -1,7 +1,8 @@
 """Optimisation objectives: path length (RRT*) and the social integral (Social Risk-RRT*).
 
-Following OMPL's split, an objective gives a *state cost* (cached at tree
-nodes) and a *motion cost* for straight motions, batched over motions. Variants
+Following OMPL's split, an objective gives a *state cost* (S for the social
+objectives; the planner does not need it, the OMPL baseline and reports do)
+and a *motion cost* for straight motions, batched over motions. Variants
 of the paper's planners are configurations of these two classes, not copies:
 
 * ``rrt_star``: :class:`PathLengthObjective`;

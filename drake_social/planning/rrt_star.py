@@ -147,6 +147,11 @@ class RrtStar:
             raise ValueError(f"goal_bias must be in [0, 1), got {options.goal_bias}")
         if options.informed:
             transverse_diameter(options.informed_mode, 1.0, 1.0, objective)  # validates the mode
+            if options.informed_mode == "admissible" and not np.isfinite(objective.xy_length_bound(1.0)):
+                raise PlanningInputError(
+                    "informed_mode 'admissible' needs an objective that bounds the path length "
+                    "(social.length_weight > 0); without it the ellipse would never shrink"
+                )
         self.space = space
         self.checker = checker
         self.objective = objective
@@ -258,10 +263,9 @@ class RrtStar:
         diff = (nodes - q_rand) * w
         d_rand = np.sqrt(np.einsum("ij,ij->i", diff, diff))
         i_nearest = int(np.argmin(d_rand))
-        if d_rand[i_nearest] > opt.planning_range:
-            q_new = nodes[i_nearest] + (q_rand - nodes[i_nearest]) * (opt.planning_range / d_rand[i_nearest])
-        else:
-            q_new = np.array(q_rand, dtype=float)
+        if d_rand[i_nearest] == 0.0:
+            return -1  # already a node (the goal, drawn again by the goal bias)
+        q_new = self.space.steer(nodes[i_nearest], q_rand, opt.planning_range, float(d_rand[i_nearest]))
         counts.config += 1
         if not checker.is_valid(q_new):
             return -1

@@ -56,10 +56,14 @@ class ConfigurationSpace:
         """``||W (q_b - q_a)||``, broadcast over leading dimensions."""
         return config_distance(q_a, q_b, self.weights)
 
-    def steer(self, q_from: np.ndarray, q_to: np.ndarray, step: float) -> np.ndarray:
+    def steer(self, q_from: np.ndarray, q_to: np.ndarray, step: float, distance: float | None = None) -> np.ndarray:
         """The paper's Steer: q_to if within ``step`` of q_from, else the point
-        at distance ``step`` from q_from towards q_to."""
-        d = float(self.distance(q_from, q_to))
+        at distance ``step`` from q_from towards q_to.
+
+        Args:
+            distance: ``self.distance(q_from, q_to)`` when already known.
+        """
+        d = float(self.distance(q_from, q_to)) if distance is None else distance
         if d <= step:
             return np.array(q_to, dtype=float)
         return q_from + (q_to - q_from) * (step / d)

@@ -26,7 +26,7 @@ from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 
 from drake_social.cost import SocialCost
-from drake_social.kinematics import ArmGeometry, config_distance
+from drake_social.kinematics import ArmGeometry, config_distance, cumulative_distance
 from drake_social.planning.result import PlannerResult
 from drake_social.scenario import Scenario
 from drake_social.viz.robot import RobotStyle, draw_robot
@@ -91,8 +91,8 @@ def sample_path(waypoints: np.ndarray, cost: SocialCost, refine: int = 4) -> tup
     seg = np.repeat(np.arange(len(a)), steps)
     t = (np.arange(int(steps.sum())) - np.repeat(np.cumsum(steps) - steps, steps)) / steps[seg]
     q = np.vstack([a[seg] + t[:, None] * (b[seg] - a[seg]), wp[-1:]])
-    length = config_distance(a, b, cost.distance_weights)
-    s0 = np.concatenate([[0.0], np.cumsum(length)])
+    s0 = cumulative_distance(wp, cost.distance_weights)
+    length = np.diff(s0)
     s = np.append(s0[seg] + t * length[seg], s0[-1])
     return s, q
 
@@ -115,9 +115,9 @@ def poses_along(waypoints: np.ndarray, count: int, distance_weights=None) -> np.
     wp = _waypoints(waypoints)
     if count < 2:
         raise ValueError(f"count must be >= 2 (start and goal), got {count}")
-    length = config_distance(wp[:-1], wp[1:], distance_weights) if len(wp) > 1 else np.zeros(0)
-    keep = np.concatenate([[True], length > 0])
-    wp, s = wp[keep], np.concatenate([[0.0], np.cumsum(length[length > 0])])
+    s = cumulative_distance(wp, distance_weights)
+    keep = np.concatenate([[True], np.diff(s) > 0])
+    wp, s = wp[keep], s[keep]
     if len(wp) == 1:
         return np.repeat(wp, count, axis=0)
     targets = np.linspace(0.0, s[-1], count)

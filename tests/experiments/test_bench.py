@@ -69,7 +69,8 @@ def test_small_bench_reports_its_runs(tiny_scenario_path, tiny_scenario, tmp_pat
             assert run["reported_cost"] == pytest.approx(run["objective"], rel=1e-9)
             assert checker.are_valid(wp).all() and checker.are_motions_valid(wp[:-1], wp[1:]).all()
             assert run["path_valid"]
-            assert run["tree_size"] <= 201 and run["num_config_checks"] == 200
+            # One configuration check per sample, but for goal samples once the goal is a node.
+            assert run["tree_size"] <= 201 and 150 <= run["num_config_checks"] <= 200
         # The Markdown row carries the same medians.
         row = next(line for line in md.splitlines() if line.startswith(f"| tiny | {algorithm} |"))
         assert f"{summary['social_cost_full']['median']:.3g}" in row and "| 2 | 100% |" in row

@@ -107,7 +107,9 @@ def test_tree_costs_are_parent_cost_plus_edge_cost(solved):
 def test_result_reports_its_counts_and_parts(solved):
     scenario, planner, dut = solved
     assert dut.tree_size == len(dut.tree_nodes) <= 401
-    assert dut.num_config_checks == 400  # one sample, one configuration check per iteration
+    # One configuration check per sample, except goal samples once the goal is a node.
+    assert 400 * (1 - 2 * planner.options.goal_bias) <= dut.num_config_checks <= 400
+    assert np.sum(np.all(dut.tree_nodes == scenario.goal, axis=1)) <= 1  # the goal enters the tree once
     assert dut.num_motion_checks >= dut.tree_size - 1  # every inserted node checked its parent motion
     assert dut.num_cost_evaluations >= dut.tree_size - 1
     assert dut.wall_time > 0
@@ -410,3 +412,32 @@ def test_zero_cost_motions_never_rewire_into_a_cycle():
     dut = plan(scenario, checker, algorithm="social_rrt_star", iterations=400, seed=0)
     assert dut.success and dut.cost == 0.0
     assert np.all(dut.tree_costs == 0.0)
+
+
+# ---- every scenario file, with Drake's checker ---------------------------------------------------
+
+
+@pytest.mark.parametrize("name", ["office_bar", "generic_L", "tiny"])
+def test_every_scenario_plans_a_valid_path_with_drake(name, repo_root):
+    """A short run per shipped scenario with the SceneGraph checker (clearance
+    advancement for motions); its path is re-checked by Drake's discrete
+    edge check and by the independent numpy checker."""
+    from drake_social.model.checker import SceneGraphChecker
+    from drake_social.scenario import load_scenario
+
+    scenario = load_scenario(repo_root / "scenarios" / f"{name}.yaml")
+    dut = plan(scenario, SceneGraphChecker(scenario, parallelism=1), iterations=800, seed=0)
+    assert dut.success, dut.message
+    wp = dut.waypoints
+    np.testing.assert_array_equal(wp[[0, -1]], [scenario.start, scenario.goal])
+    drake = SceneGraphChecker(scenario, parallelism=1)
+    assert drake.are_valid(wp).all() and drake.are_motions_valid(wp[:-1], wp[1:]).all()
+    numpy_ = GeometricChecker(scenario)
+    assert numpy_.are_valid(wp).all() and numpy_.are_motions_valid(wp[:-1], wp[1:]).all()
+
+
+def test_admissible_mode_without_a_length_weight_is_refused(tiny, tiny_checker):
+    bad = with_planner(tiny, informed_mode="admissible")  # the file's algorithm is not informed: passes validation
+    validate_scenario(bad)
+    with pytest.raises(PlanningInputError, match="admissible.*length_weight"):
+        make_planner(bad, tiny_checker, "informed_social_rrt_star")
