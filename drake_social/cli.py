@@ -47,33 +47,26 @@ _log = logging.getLogger("drake_social")
 def load_with_overrides(path: str | Path, sets: Sequence[str] | None) -> Scenario:
     """Loads a scenario with the ``--set`` overrides of the command line.
 
-    Each ``--set`` text is a YAML mapping applied over the file, e.g.
-    ``"random_seed: 3"`` or ``"social: {sigma_h: 1.5, threshold: 0.1}"``.
-    Several are joined into one mapping; giving the same top-level key twice
-    is an error, since YAML would silently keep only the last one.
+    Each ``--set`` text is a YAML mapping applied over the file in turn, e.g.
+    ``"random_seed: 3"`` or ``"social: {sigma_h: 1.5}"``; a later one merges
+    into what the earlier ones left (``--set "social: {sigma_h: 1.5}" --set
+    "social: {threshold: 0.1}"`` sets both).
 
     Raises:
-        ScenarioError: the file, an override or a value is invalid.
+        ScenarioError: the file, an override or a value is invalid; the
+            message names the ``--set`` at fault.
     """
-    import yaml  # the composer only: top-level keys, custom tags left alone
+    import yaml  # to name the --set at fault before Drake's loader sees it
 
     texts = list(sets or [])
-    seen: dict[str, int] = {}
-    for i, text in enumerate(texts):
+    for text in texts:
         try:
             node = yaml.compose(text)
         except yaml.YAMLError as e:
             raise ScenarioError(f"{path} (--set {text!r}): not valid YAML: {e}") from e
         if not isinstance(node, yaml.MappingNode):
             raise ScenarioError(f"{path} (--set {text!r}): must be a YAML mapping such as 'random_seed: 3'")
-        for key, _ in node.value:
-            if key.value in seen:
-                raise ScenarioError(
-                    f"{path} (--set {text!r}): key '{key.value}' is already set by --set {texts[seen[key.value]]!r}; "
-                    f"give all its fields in one --set, e.g. 'social: {{sigma_h: 1.5, threshold: 0.1}}'"
-                )
-            seen[key.value] = i
-    return load_scenario(path, "\n".join(texts) if texts else None)
+    return load_scenario(path, texts)
 
 
 def _add_scenario_arguments(parser: argparse.ArgumentParser) -> None:
@@ -83,7 +76,7 @@ def _add_scenario_arguments(parser: argparse.ArgumentParser) -> None:
         action="append",
         metavar="YAML",
         help="override scenario fields with a YAML mapping, e.g. \"social: {sigma_h: 1.5}\" "
-        "(repeatable, one top-level key per --set)",
+        "(repeatable: applied in turn, each merging into the result of the earlier ones)",
     )
 
 

@@ -19,7 +19,7 @@ pure-numpy core may use the dataclasses without importing Drake.
 import dataclasses as dc
 import math
 from pathlib import Path
-from typing import Optional, Union
+from typing import Optional, Sequence, Union
 
 import numpy as np
 
@@ -235,12 +235,13 @@ class Scenario:
     random_seed: int = 0
 
 
-def load_scenario(path: str | Path, overrides: str | None = None) -> Scenario:
+def load_scenario(path: str | Path, overrides: str | Sequence[str] | None = None) -> Scenario:
     """Loads and validates a scenario file.
 
     Args:
         path: a YAML file following the :class:`Scenario` schema.
-        overrides: optional YAML text applied on top of the file, e.g.
+        overrides: optional YAML text, or several applied in turn (a later
+            one merges into what the earlier ones left), on top of the file, e.g.
             ``"random_seed: 3\\nsocial: {weights: [1, 0, 0, 0, 0]}"``.
 
     Returns:
@@ -259,11 +260,11 @@ def load_scenario(path: str | Path, overrides: str | None = None) -> Scenario:
         scenario = yaml_load_typed(schema=Scenario, filename=str(path))
     except Exception as e:  # yaml / schema errors carry no file name: add it
         raise ScenarioError(f"{path}: {e}") from e
-    if overrides:
+    for text in [overrides] if isinstance(overrides, str) else list(overrides or []):
         try:
-            scenario = yaml_load_typed(schema=Scenario, data=overrides, defaults=scenario)
+            scenario = yaml_load_typed(schema=Scenario, data=text, defaults=scenario)
         except Exception as e:
-            raise ScenarioError(f"{path} (overrides): {e}") from e
+            raise ScenarioError(f"{path} (overrides {text!r}): {e}") from e
     validate_scenario(scenario, source=str(path))
     return scenario
 

@@ -132,14 +132,15 @@ def test_malformed_override_yaml_is_reported(tmp_path, capsys):
     assert "must be a YAML mapping" in err
 
 
-def test_the_same_key_in_two_overrides_is_refused(capsys, tmp_path):
-    """YAML would silently keep only the last 'social'; the CLI refuses."""
+def test_overrides_apply_in_turn_and_merge(capsys, tmp_path):
+    """Two --set of the same section merge; a later value wins; a bad one is named."""
     tiny = SCENARIO_DIR / "tiny.yaml"
-    err = _error(capsys, ["show", str(tiny), "--set", "social: {sigma_h: 1}", "--set", "social: {threshold: 0.1}",
+    dut = load_with_overrides(tiny, ["social: {sigma_h: 1.5}", "{random_seed: 3}", "social: {threshold: 0.1}"])
+    assert (dut.social.sigma_h, dut.social.threshold, dut.random_seed) == (1.5, 0.1, 3)
+    assert load_with_overrides(tiny, ["random_seed: 1", "random_seed: 2"]).random_seed == 2
+    err = _error(capsys, ["show", str(tiny), "--set", "random_seed: 1", "--set", "social: {sigmah: 2}",
                           "--out", str(tmp_path)])
-    assert "key 'social'" in err and "one --set" in err
-    with pytest.raises(ScenarioError, match="random_seed"):
-        load_with_overrides(tiny, ["random_seed: 1", "random_seed: 2"])
+    assert "social: {sigmah: 2}" in err and "sigmah" in err
 
 
 def test_unwritable_output_exits_1(tmp_path, capsys):

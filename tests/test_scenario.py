@@ -276,15 +276,15 @@ def test_overrides_can_replace_lists_and_the_object(tmp_path):
 @pytest.mark.parametrize(
     "overrides, fragments",
     [
-        ("random_sed: 4", ["(overrides)", "random_sed"]),
-        ("planner: {algoritm: rrt_star}", ["(overrides)", "algoritm"]),
-        ("random_seed: [1, 2", ["(overrides)"]),
-        ("random_seed: 1.5", ["(overrides)", "random_seed"]),
+        ("random_sed: 4", ["(overrides", "random_sed"]),
+        ("planner: {algoritm: rrt_star}", ["(overrides", "algoritm"]),
+        ("random_seed: [1, 2", ["(overrides"]),
+        ("random_seed: 1.5", ["(overrides", "random_seed"]),
     ],
 )
 def test_bad_override_is_named_as_such(tmp_path, overrides, fragments):
     message = expect_error(write_scenario(tmp_path), *fragments, overrides=overrides)
-    assert message.startswith(f"{tmp_path / 'case.yaml'} (overrides): ")
+    assert message.startswith(f"{tmp_path / 'case.yaml'} (overrides {overrides!r}): ")
 
 
 @pytest.mark.parametrize(
