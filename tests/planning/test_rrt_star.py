@@ -441,3 +441,28 @@ def test_admissible_mode_without_a_length_weight_is_refused(tiny, tiny_checker):
     validate_scenario(bad)
     with pytest.raises(PlanningInputError, match="admissible.*length_weight"):
         make_planner(bad, tiny_checker, "informed_social_rrt_star")
+
+
+def test_paper_ellipse_can_shut_out_a_cheaper_detour_the_admissible_one_keeps():
+    """The corridor: the straight route past the person is short and costly,
+    the north detour long and cheap. After the straight route is found, the
+    paper's ellipse (its XY length) excludes the detour; the admissible one
+    (its cost / lambda) contains the whole detour, since the detour costs less."""
+    from drake_social.planning.sampling import EllipseSampler, transverse_diameter
+
+    scenario = corridor_scenario()
+    scenario.social.length_weight = 0.5
+    objective = make_planner(scenario, None, "informed_social_rrt_star").objective
+    start, goal = np.array(scenario.start), np.array(scenario.goal)
+    straight = np.array([start, goal])
+    detour = np.array([start, [3.0, 6.4, 0.0, PI / 2], [10.5, 6.4, 0.0, PI / 2], goal])
+    cost = {name: objective.motion_cost(p[:-1], p[1:]).sum() for name, p in (("straight", straight), ("detour", detour))}
+    assert cost["detour"] < cost["straight"]
+    xy_length = float(np.hypot(*np.diff(straight[:, :2], axis=0).T).sum())
+    ellipse = EllipseSampler(ConfigurationSpace.from_scenario(scenario), start[:2], goal[:2])
+    t = np.linspace(0, 1, 50)[:, None]
+    detour_xy = np.vstack([a[:2] + t * (b[:2] - a[:2]) for a, b in zip(detour[:-1], detour[1:])])
+    paper = transverse_diameter("paper", cost["straight"], xy_length, objective)
+    admissible = transverse_diameter("admissible", cost["straight"], xy_length, objective)
+    assert not ellipse.contains(detour_xy, paper).all()
+    assert ellipse.contains(detour_xy, admissible).all()
