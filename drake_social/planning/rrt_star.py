@@ -17,7 +17,6 @@ Iteration k draws exactly one sample, valid or not, as in the paper.
 from __future__ import annotations
 
 import dataclasses as dc
-import logging
 import time
 from typing import Callable
 
@@ -30,9 +29,6 @@ from drake_social.planning.space import ConfigurationSpace
 from drake_social.planning.validity import ValidityChecker
 
 __all__ = ["RrtStar", "RrtStarOptions"]
-
-logger = logging.getLogger(__name__)
-
 
 @dc.dataclass
 class RrtStarOptions:
