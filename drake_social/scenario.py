@@ -25,9 +25,12 @@ import numpy as np
 
 __all__ = [
     "ALGORITHMS",
+    "EXECUTIONS",
     "INFORMED_MODES",
+    "SIM_MODES",
     "Bar",
     "Box",
+    "ExecutionOptions",
     "LShape",
     "Person",
     "PlannerOptions",
@@ -52,6 +55,16 @@ ALGORITHMS = (
 
 #: Modes of the informed sampler (see ``drake_social.planning.sampling``).
 INFORMED_MODES = ("paper", "admissible")
+
+#: Simulation modes (see ``drake_social.sim``): the base integrates its
+#: commanded velocity and the arm follows its reference exactly, or the
+#: MultibodyPlant is simulated with actuated joints.
+SIM_MODES = ("kinematic", "dynamic")
+
+#: How a path is executed (see ``drake_social.sim``): one phase-synchronized
+#: 4-DoF reference per segment (stays on the straight segment the planner
+#: checked), or the paper's independent base P-controller and arm trajectory.
+EXECUTIONS = ("synchronized", "paper")
 
 
 class ScenarioError(ValueError):
@@ -210,6 +223,51 @@ class PlannerOptions:
 
 
 @dc.dataclass
+class ExecutionOptions:
+    """How a planned path is executed and simulated (the paper's Section IV-C).
+
+    Defaults are the paper's values where it gives one (Kp = 1.5, four
+    mecanum wheels); the rest are those of a small indoor mobile manipulator.
+    """
+
+    # "kinematic" or "dynamic" (see SIM_MODES).
+    mode: str = "kinematic"
+    # "synchronized" or "paper" (see EXECUTIONS).
+    execution: str = "synchronized"
+    # Proportional gain Kp of the base controller, 1/s (> 0; the paper: 1.5).
+    kp: float = 1.5
+    # Largest base speed (norm of [vx, vy]), m/s (> 0).
+    max_base_speed: float = 0.5
+    # Largest base acceleration and jerk per axis of the synchronized
+    # reference, m/s^2 and m/s^3 (> 0).
+    max_base_acceleration: float = 1.0
+    max_base_jerk: float = 5.0
+    # Mecanum wheel radius r, metres (> 0).
+    wheel_radius: float = 0.05
+    # Largest wheel speed, rad/s (> 0); commands beyond it are scaled down
+    # uniformly, keeping the direction.
+    max_wheel_speed: float = 20.0
+    # Arm joint limits [psi1, psi2] of the Ruckig trajectories: velocity
+    # rad/s, acceleration rad/s^2, jerk rad/s^3 (> 0).
+    arm_max_velocity: list[float] = dc.field(default_factory=lambda: [1.0, 1.0])
+    arm_max_acceleration: list[float] = dc.field(default_factory=lambda: [2.0, 2.0])
+    arm_max_jerk: list[float] = dc.field(default_factory=lambda: [10.0, 10.0])
+    # The sequencer advances when the base is within base_tolerance (metres)
+    # and both arm joints within joint_tolerance (radians) of the target (> 0).
+    base_tolerance: float = 0.05
+    joint_tolerance: float = 0.05
+    # Period of the sequencer, controller and trajectory updates, seconds (> 0).
+    control_period: float = 0.01
+    # Time step of the discrete MultibodyPlant in "dynamic" mode, seconds (> 0).
+    plant_time_step: float = 0.002
+    # A run that has not reached the goal after this long stops and says so,
+    # seconds (> 0).
+    time_limit: float = 300.0
+    # Frames per second of the Meshcat recording (> 0).
+    replay_fps: float = 30.0
+
+
+@dc.dataclass
 class Scenario:
     """Everything needed to plan and simulate one transport task."""
 
@@ -231,6 +289,8 @@ class Scenario:
     social: SocialCostOptions = dc.field(default_factory=SocialCostOptions)
     # Planner options.
     planner: PlannerOptions = dc.field(default_factory=PlannerOptions)
+    # Execution and simulation options.
+    execution: ExecutionOptions = dc.field(default_factory=ExecutionOptions)
     # Seed of every random choice (planner sampling, studies), an integer >= 0.
     random_seed: int = 0
 
@@ -412,5 +472,20 @@ def validate_scenario(scenario: Scenario, source: str = "<scenario>") -> None:
     c.length("planner.distance_weights", p.distance_weights, 4)
     c.positive("planner.distance_weights", p.distance_weights)
     c.positive("planner.collision_resolution", p.collision_resolution)
+    e = scenario.execution
+    if e.mode not in SIM_MODES:
+        c.fail("execution.mode", f"unknown mode {e.mode!r}; allowed: {', '.join(SIM_MODES)}")
+    if e.execution not in EXECUTIONS:
+        c.fail("execution.execution", f"unknown execution {e.execution!r}; allowed: {', '.join(EXECUTIONS)}")
+    for name in ("kp", "max_base_speed", "max_base_acceleration", "max_base_jerk", "wheel_radius",
+                 "max_wheel_speed", "base_tolerance", "joint_tolerance", "control_period",
+                 "plant_time_step", "time_limit", "replay_fps"):
+        c.positive(f"execution.{name}", getattr(e, name))
+    for name in ("arm_max_velocity", "arm_max_acceleration", "arm_max_jerk"):
+        c.length(f"execution.{name}", getattr(e, name), 2)
+        c.positive(f"execution.{name}", getattr(e, name))
+    if e.plant_time_step > e.control_period:
+        c.fail("execution.plant_time_step",
+               f"must be <= execution.control_period {e.control_period}, got {e.plant_time_step}")
     if scenario.random_seed < 0:
         c.fail("random_seed", f"must be >= 0, got {scenario.random_seed}")
