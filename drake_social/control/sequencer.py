@@ -1,0 +1,200 @@
+"""The waypoint sequencer: decides *which* configuration the robot heads for.
+
+:class:`WaypointSequencer` holds the index of the current target waypoint in
+discrete state and moves on to the next one only when the measured
+configuration ``q = [x, y, psi1, psi2]`` (metres, radians) is within the
+acceptance tolerances of the current target: the base position within
+``base_tolerance`` (Euclidean distance, metres) and each arm joint within
+``joint_tolerance`` (radians), as in the paper's Section IV-C. Optionally it
+also waits for a trajectory source to report that its reference has arrived
+(``reference_done``). At the last waypoint the same condition latches
+``done = 1`` instead.
+
+The decision is taken in a periodic discrete update (also declared as a
+forced update, so ``CalcForcedDiscreteVariableUpdate`` runs it); the outputs only read
+the state (and the waypoints), so ``target``, ``done`` and ``index`` have no
+direct feedthrough from ``q``: closing the loop through a controller and a
+plant creates no algebraic loop.
+
+Ports:
+
+* inputs ``waypoints`` (abstract ``Value[object]``, an (N, 4) array, e.g.
+  :class:`~drake_social.control.PlannerSystem`'s ``waypoints``; only when no
+  fixed array is given), ``q`` (4), ``reference_done`` (1; only with
+  ``wait_for_reference=True``);
+* outputs ``target`` (4), ``done`` (1, 0.0 or 1.0), ``index`` (1).
+
+Example::
+
+    import numpy as np
+    from drake_social.control import WaypointSequencer
+
+    waypoints = np.array([[0, 0, 0, 0], [1, 0, 0.5, 0], [1, 1, 0.5, 0.2]])
+    dut = WaypointSequencer(waypoints, base_tolerance=0.05, joint_tolerance=0.05, period=0.01)
+    context = dut.CreateDefaultContext()
+    dut.GetInputPort("q").FixValue(context, [0.01, 0.0, 0.0, 0.0])
+    update = dut.AllocateDiscreteVariables()
+    dut.CalcForcedDiscreteVariableUpdate(context, update)
+    context.SetDiscreteState(update)
+    print(dut.GetOutputPort("target").Eval(context))  # [1. 0. 0.5 0.]
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from pydrake.common.value import AbstractValue
+from pydrake.systems.framework import BasicVector, Context, DiscreteValues, LeafSystem
+
+from drake_social.scenario import ExecutionOptions
+
+__all__ = ["WaypointSequencer"]
+
+# Layout of the single discrete state group.
+_INDEX, _DONE = 0, 1
+
+
+def _checked_waypoints(waypoints, who: str) -> np.ndarray:
+    """The waypoints as a finite (N, 4) float array, N >= 1, or a ValueError naming ``who``."""
+    wp = np.asarray(waypoints, dtype=float)
+    if wp.ndim != 2 or wp.shape[1] != 4:
+        raise ValueError(f"{who}: waypoints must be an (N, 4) array of [x, y, psi1, psi2], got shape {wp.shape}")
+    if len(wp) == 0:
+        raise ValueError(f"{who}: no waypoints (an empty path, e.g. the planner found none); nothing to follow")
+    if not np.all(np.isfinite(wp)):
+        rows = sorted(set(np.nonzero(~np.isfinite(wp))[0].tolist()))
+        raise ValueError(f"{who}: waypoints must be finite; rows {rows} hold NaN or inf")
+    return wp
+
+
+class WaypointSequencer(LeafSystem):
+    """Steps through waypoints when the robot is within tolerance of the current one.
+
+    Discrete state: one group of size 2, ``[index, done]`` (the target index,
+    starting at 0, and the latched done flag, 0.0 or 1.0).
+
+    Args:
+        waypoints: a fixed (N, 4) array of configurations ``[x, y, psi1,
+            psi2]`` (metres, radians), N >= 1; None declares the abstract
+            input port ``waypoints`` instead.
+        base_tolerance: largest distance |q[:2] - target[:2]| to accept,
+            metres (> 0).
+        joint_tolerance: largest |q[i] - target[i]| for i = 2, 3 to accept,
+            radians (> 0).
+        period: period of the discrete update, seconds (> 0).
+        wait_for_reference: also require ``reference_done[0] > 0.5`` (declares
+            the input port ``reference_done``).
+
+    Raises:
+        ValueError: a fixed array that is empty, not (N, 4) or not finite;
+            tolerances or period not positive.
+        RuntimeError: (from an update or output) the ``waypoints`` input
+            holds an empty or malformed array.
+    """
+
+    def __init__(
+        self,
+        waypoints: np.ndarray | None = None,
+        *,
+        base_tolerance: float,
+        joint_tolerance: float,
+        period: float,
+        wait_for_reference: bool = False,
+    ):
+        super().__init__()
+        for name, value in (("base_tolerance", base_tolerance), ("joint_tolerance", joint_tolerance),
+                            ("period", period)):
+            if not (np.isfinite(value) and value > 0):
+                raise ValueError(f"WaypointSequencer: {name} must be a finite number > 0, got {value!r}")
+        self._base_tolerance = float(base_tolerance)
+        self._joint_tolerance = float(joint_tolerance)
+        self._fixed = None if waypoints is None else _checked_waypoints(waypoints, "WaypointSequencer")
+
+        self._waypoints_port = None
+        if self._fixed is None:
+            self._waypoints_port = self.DeclareAbstractInputPort("waypoints", AbstractValue.Make(np.zeros((0, 4))))
+        self._q_port = self.DeclareVectorInputPort("q", 4)
+        self._reference_done_port = (
+            self.DeclareVectorInputPort("reference_done", 1) if wait_for_reference else None
+        )
+
+        self._state_index = self.DeclareDiscreteState(2)  # [index, done], both start at 0
+        self.DeclarePeriodicDiscreteUpdateEvent(period, 0.0, self._Advance)
+        # The same decision on demand (CalcForcedDiscreteVariableUpdate), for tests and scripts.
+        self.DeclareForcedDiscreteUpdateEvent(self._Advance)
+
+        # Outputs read the state (and the waypoints), never q: no feedthrough from q.
+        state = {self.discrete_state_ticket(self._state_index)}
+        target_prereqs = set(state)
+        if self._waypoints_port is not None:
+            target_prereqs.add(self.input_port_ticket(self._waypoints_port.get_index()))
+        self.DeclareVectorOutputPort("target", 4, self._CalcTarget, prerequisites_of_calc=target_prereqs)
+        self.DeclareVectorOutputPort("done", 1, self._CalcDone, prerequisites_of_calc=state)
+        self.DeclareVectorOutputPort("index", 1, self._CalcIndex, prerequisites_of_calc=state)
+
+    @classmethod
+    def from_options(
+        cls, execution_options: ExecutionOptions, waypoints: np.ndarray | None = None,
+        wait_for_reference: bool = False,
+    ) -> "WaypointSequencer":
+        """A sequencer with the tolerances and period of a scenario's ``execution`` section."""
+        return cls(
+            waypoints,
+            base_tolerance=execution_options.base_tolerance,
+            joint_tolerance=execution_options.joint_tolerance,
+            period=execution_options.control_period,
+            wait_for_reference=wait_for_reference,
+        )
+
+    # ---- helpers ---------------------------------------------------------------
+
+    def _Waypoints(self, context: Context) -> np.ndarray:
+        if self._fixed is not None:
+            return self._fixed
+        value = self._waypoints_port.Eval(context)
+        try:
+            return _checked_waypoints(value, f"{self.get_name() or 'WaypointSequencer'}")
+        except ValueError as error:
+            raise RuntimeError(f"{error} (read from the input port 'waypoints')") from None
+
+    def _Index(self, context: Context, n_waypoints: int) -> int:
+        # Clamped so that a shorter array on the input never indexes past its end.
+        index = int(round(context.get_discrete_state(self._state_index).GetAtIndex(_INDEX)))
+        return min(max(index, 0), n_waypoints - 1)
+
+    # ---- event -----------------------------------------------------------------
+
+    def _Advance(self, context: Context, discrete_state: DiscreteValues) -> None:
+        xd = context.get_discrete_state(self._state_index).value()
+        if xd[_DONE] > 0.5:
+            return  # latched
+        waypoints = self._Waypoints(context)
+        index = self._Index(context, len(waypoints))
+        target = waypoints[index]
+        q = np.asarray(self._q_port.Eval(context), float)
+        arrived = (
+            np.hypot(q[0] - target[0], q[1] - target[1]) <= self._base_tolerance
+            and abs(q[2] - target[2]) <= self._joint_tolerance
+            and abs(q[3] - target[3]) <= self._joint_tolerance
+        )
+        if arrived and self._reference_done_port is not None:
+            arrived = self._reference_done_port.Eval(context)[0] > 0.5
+        if not arrived:
+            return
+        out = discrete_state.get_mutable_vector(self._state_index)
+        if index + 1 < len(waypoints):
+            out.SetAtIndex(_INDEX, index + 1)  # one step per update
+        else:
+            out.SetAtIndex(_INDEX, index)
+            out.SetAtIndex(_DONE, 1.0)
+
+    # ---- outputs ---------------------------------------------------------------
+
+    def _CalcTarget(self, context: Context, output: BasicVector) -> None:
+        waypoints = self._Waypoints(context)
+        output.SetFromVector(waypoints[self._Index(context, len(waypoints))])
+
+    def _CalcDone(self, context: Context, output: BasicVector) -> None:
+        output.SetAtIndex(0, context.get_discrete_state(self._state_index).GetAtIndex(_DONE))
+
+    def _CalcIndex(self, context: Context, output: BasicVector) -> None:
+        output.SetAtIndex(0, context.get_discrete_state(self._state_index).GetAtIndex(_INDEX))
