@@ -2,9 +2,30 @@
 
 * :class:`PlannerSystem` plans once at initialization and outputs the path.
 * :class:`WaypointSequencer` decides which waypoint is the current target.
+* :class:`HolonomicPController` drives the mecanum base towards it;
+  :class:`MecanumDrive` turns wheel speeds into the base velocity.
 """
 
+from drake_social.control.holonomic import (
+    HolonomicPController,
+    MecanumDrive,
+    base_velocity,
+    mecanum_matrix,
+    saturate_norm,
+    wheel_speeds,
+)
 from drake_social.control.planner_system import PlannerSystem, path_parameter, waypoint_trajectory
 from drake_social.control.sequencer import WaypointSequencer
 
-__all__ = ["PlannerSystem", "WaypointSequencer", "path_parameter", "waypoint_trajectory"]
+__all__ = [
+    "HolonomicPController",
+    "MecanumDrive",
+    "PlannerSystem",
+    "WaypointSequencer",
+    "base_velocity",
+    "mecanum_matrix",
+    "path_parameter",
+    "saturate_norm",
+    "waypoint_trajectory",
+    "wheel_speeds",
+]
