@@ -14,7 +14,10 @@ Usage::
 
 Exit codes: 0 success, 1 an output could not be written, 2 bad command line
 or invalid input (the message names the file and the field, or the start or
-goal in collision), 3 ``plan`` found no path (its outputs are still written).
+goal in collision), 3 ``plan`` found no path (its outputs are still written),
+4 ``plan`` returned a path that Drake's independent check rejects (a bug in
+the checker that planned it; the outputs are still written, and one line on
+stderr names the segment).
 """
 
 from __future__ import annotations
@@ -38,8 +41,10 @@ __all__ = ["EXIT_NO_PATH", "ProgressBar", "main", "build_parser", "load_with_ove
 
 #: Exit code of ``plan`` when no path reaches the goal.
 EXIT_NO_PATH = 3
+#: Exit code of ``plan`` when Drake's verification rejects the returned path (a bug, not bad input).
+EXIT_UNVERIFIED = 4
 #: Validity checkers selectable with ``--checker``.
-CHECKERS = ("drake", "numpy")  # = drake_social.model.checker.CHECKERS; here so that --help needs no Drake
+CHECKERS = ("planar", "drake", "numpy")  # = drake_social.model.checker.CHECKERS; here so that --help needs no Drake
 
 _log = logging.getLogger("drake_social")
 
@@ -178,9 +183,12 @@ _positive_int = _int_at_least(1)
 _nonnegative_int = _int_at_least(0)
 
 
-def _add_checker_argument(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("--checker", choices=CHECKERS, default="drake",
-                        help="validity checker: drake (SceneGraph, the default) or numpy (the pure-numpy one)")
+def _add_checker_argument(parser: argparse.ArgumentParser, default: str = "drake") -> None:
+    parser.add_argument("--checker", choices=CHECKERS, default=default,
+                        help=f"validity checker (default: {default}): planar (exact planar distances of the "
+                        "SceneGraph's shapes, compiled; sound motion checks), drake (Drake's SceneGraph alone; "
+                        "its motion checks are approximate: they trust Drake's clearance, which overestimates "
+                        "some cylinder-box distances) or numpy (the pure-numpy reference, sound motion checks)")
 
 
 def _make_checker(scenario: Scenario, kind: str, source: str):
@@ -211,7 +219,7 @@ def _add_plan(subparsers) -> None:
                    help="samples drawn (default: the scenario's planner.iterations)")
     p.add_argument("--seed", type=_nonnegative_int, metavar="S",
                    help="random seed >= 0 (default: the scenario's random_seed)")
-    _add_checker_argument(p)
+    _add_checker_argument(p, default="planar")
     p.add_argument("--out", type=Path, metavar="DIR", help="output directory (default: out/<scenario name>)")
     p.add_argument("--progress", action="store_true",
                    help="draw the progress bar on stderr even when it is not a terminal")
@@ -262,6 +270,14 @@ def _run_plan(args: argparse.Namespace) -> int:
     figures = write_plan_figures(scenario, result, out, title=scenario.description or args.scenario.name)
     names = ["path.csv", "result.json"] + [p.name for p in figures.values()]
     print(f"wrote {out}/: {', '.join(names)}")
+    if result.success:
+        from drake_social.model.checker import verify_path  # Drake's independent second opinion
+
+        bad = verify_path(checker, result.waypoints)
+        if bad is not None:
+            print(f"drake-social: Drake's check rejects segment {bad} of the path the {args.checker} checker "
+                  f"accepted (a bug; exit code {EXIT_UNVERIFIED}); the path is in {out / 'path.csv'}", file=sys.stderr)
+            return EXIT_UNVERIFIED
     if not result.success:
         print(f"drake-social: no path from start to goal in {iterations} iterations "
               f"(closest tree node {result.closest_distance_to_goal:.3g} from the goal); "

@@ -17,6 +17,22 @@ which is <= sqrt(3) d (Cauchy-Schwarz over three terms). Hence
 ``edge_step_size = resolution / sqrt(3)`` guarantees that no point moves more
 than ``resolution`` between two checked configurations. The limits are a box,
 so a motion between two configurations within them stays within them.
+
+Which checker (:data:`CHECKERS`, :func:`make_checker`):
+
+* ``planar`` (the default): :class:`~drake_social.model.planar_checker.PlanarChecker`,
+  exact planar distances of the SceneGraph's own shapes, compiled, with
+  sound motion checks (conservative advancement);
+* ``drake``: :class:`SceneGraphChecker`, Drake alone, for comparison. Its
+  motion check is **approximate**: it advances by Drake's clearance, which
+  overestimates some cylinder-box distances (FCL's GJK; e.g. generic_L at
+  q = [10.78156014, 5.65723962, 0.02822218, -0.18334348]: 1.0786 m where the
+  exact value is 0.4043 m), and by at least ``resolution / 2`` per query;
+* ``numpy``: :class:`~drake_social.planning.geometric.GeometricChecker`,
+  the pure-numpy reference, sound by conservative advancement too.
+
+:func:`verify_path` is the independent second opinion: Drake's discrete
+edge check of every segment of a path at the checker's resolution.
 """
 
 from __future__ import annotations
@@ -33,10 +49,10 @@ from drake_social.model.plant import ScenarioDiagram, build_robot_diagram
 from drake_social.planning.geometric import CheckerBase
 from drake_social.scenario import Scenario, ScenarioError
 
-__all__ = ["CHECKERS", "Contact", "SceneGraphChecker", "check_start_goal", "make_checker"]
+__all__ = ["CHECKERS", "Contact", "SceneGraphChecker", "check_start_goal", "make_checker", "verify_path"]
 
-#: Names of the validity checkers :func:`make_checker` builds.
-CHECKERS = ("drake", "numpy")
+#: Names of the validity checkers :func:`make_checker` builds; the first is the default.
+CHECKERS = ("planar", "drake", "numpy")
 
 
 @dc.dataclass(frozen=True)
@@ -275,15 +291,17 @@ def check_start_goal(
 
 
 def make_checker(
-    scenario: Scenario, kind: str = "drake", *, parallelism: bool | int = True, source: str | None = None
+    scenario: Scenario, kind: str = "planar", *, parallelism: bool | int = True, source: str | None = None
 ):
-    """A validity checker of ``scenario``: ``"drake"`` (SceneGraph) or ``"numpy"``.
+    """A validity checker of ``scenario``: ``"planar"`` (exact, compiled, the
+    default), ``"drake"`` (SceneGraph alone) or ``"numpy"`` (see the module docstring).
 
     Args:
         parallelism: threads of the Drake checker's batched calls.
-        source: the scenario's file name; when given, the Drake checker first
-            rejects a start or goal in collision with a :class:`ScenarioError`
-            naming the file and the touching bodies (:func:`check_start_goal`).
+        source: the scenario's file name; when given, the planar and Drake
+            checkers first reject a start or goal in collision with a
+            :class:`ScenarioError` naming the file and Drake's touching
+            bodies (:func:`check_start_goal`).
 
     Raises:
         ValueError: an unknown ``kind``.
@@ -292,9 +310,55 @@ def make_checker(
         from drake_social.planning.geometric import GeometricChecker
 
         return GeometricChecker(scenario)
+    if kind == "planar":
+        from drake_social.model.planar_checker import PlanarChecker  # it imports this module
+
+        checker = PlanarChecker(scenario)
+        if source is not None:
+            check_start_goal(scenario, checker.drake_checker, source)
+        return checker
     if kind != "drake":
         raise ValueError(f"unknown checker {kind!r}; allowed: {', '.join(CHECKERS)}")
     checker = SceneGraphChecker(scenario, parallelism=parallelism)
     if source is not None:
         check_start_goal(scenario, checker, source)
     return checker
+
+
+def verify_path(scenario_or_checker, waypoints: np.ndarray) -> int | None:
+    """Drake's second opinion on a path: the first segment that fails, or None.
+
+    Every segment ``waypoints[i] -> waypoints[i + 1]`` is checked by Drake's
+    ``SceneGraphCollisionChecker`` alone (``CheckEdgesCollisionFree``: the
+    limits, then discrete collision checks at the checker's resolution, ends
+    included; see the module docstring), independently of the checker that
+    planned it.
+
+    Args:
+        scenario_or_checker: a :class:`Scenario` (checked at its
+            ``planner.collision_resolution``), a :class:`SceneGraphChecker`
+            (used as is), or any other checker of this package (its
+            scenario at its resolution; a ``PlanarChecker`` lends its own
+            ``drake_checker``).
+        waypoints: (N, 4) configurations; a single waypoint is checked as a
+            configuration (segment 0 = that configuration).
+
+    Returns:
+        The index i of the first failing segment, or None when all pass.
+    """
+    x = scenario_or_checker
+    if isinstance(x, Scenario):
+        drake = SceneGraphChecker(x)
+    elif isinstance(x, SceneGraphChecker):
+        drake = x
+    elif hasattr(x, "drake_checker"):
+        drake = x.drake_checker
+    elif isinstance(x, CheckerBase):
+        drake = SceneGraphChecker(x.scenario, x.resolution)
+    else:
+        raise TypeError(f"verify_path needs a Scenario or a checker, got {type(x).__name__}")
+    wp = np.asarray(waypoints, float).reshape(-1, 4)
+    if len(wp) == 1:
+        return None if drake.are_valid(wp)[0] else 0
+    bad = np.flatnonzero(~drake.are_motions_valid(wp[:-1], wp[1:]))
+    return int(bad[0]) if len(bad) else None

@@ -1,0 +1,271 @@
+"""The exact planar validity checker, built from the SceneGraph's collision geometry.
+
+:class:`PlanarChecker` reads every proximity shape of the scenario's
+RobotDiagram from its ``SceneGraphInspector`` (shape, frame, pose) and turns
+it into the footprints of :mod:`drake_social.planning.planar_kernel`: the
+robot's cylinders and stadia (box + end cylinders) become discs and capsules
+in their body frames, the anchored boxes and cylinders (obstacles, walls,
+people) rotated boxes and discs in the world. The SceneGraph stays the one
+model of the geometry: nothing is read again from the scenario's YAML except
+the limits and the resolution.
+
+Bodies are moved by the plant's kinematics reduced to the plane: the poses
+``X_PC`` of link 1 in the base, link 2 in link 1 and the object in link 2 are
+read from the plant at q = 0, and ``X_WC(q) = X_WP(q) X_PC R_z(q_joint)``
+(``psi1`` turns link 1, ``psi2`` link 2, the object is welded); a test checks
+these poses against ``MultibodyPlant.EvalBodyPoseInWorld``.
+
+Distances are exact in closed form (see the kernel), so configuration checks
+need no tolerance and motion checks are sound by conservative advancement
+(:func:`~drake_social.planning.planar_kernel.motion_valid`) with the lever
+arms of the displacement bound measured on the same shapes.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from pydrake.geometry import Box as DrakeBox
+from pydrake.geometry import Cylinder, Role
+
+from drake_social.model.checker import Contact, SceneGraphChecker
+from drake_social.model.plant import ScenarioDiagram, build_robot_diagram
+from drake_social.planning import planar_kernel as kernel
+from drake_social.planning.geometric import CheckerBase
+from drake_social.scenario import Scenario
+
+__all__ = ["PlanarChecker"]
+
+# The planar chain: body, parent, joint (position index, -1 = weld).
+_CHAIN = (("base", None, -1), ("link1", "base", 2), ("link2", "link1", 3), ("object", "link2", -1))
+_TOL = 1e-9  # metres: what counts as "the same" when matching shapes and checking planarity
+
+
+def _planar(X, what: str) -> tuple[float, float, float, float, float]:
+    """``(x, y, cos, sin, z)`` of a RigidTransform that only turns about z."""
+    R = X.rotation().matrix()
+    if abs(R[2, 2] - 1.0) > _TOL:
+        raise ValueError(f"{what}: not a vertical extrusion (rotation {R.tolist()})")
+    p = X.translation()
+    return float(p[0]), float(p[1]), float(R[0, 0]), float(R[1, 0]), float(p[2])
+
+
+class PlanarChecker(CheckerBase):
+    """Exact configuration and sound motion validity of a scenario (compiled).
+
+    Args:
+        scenario, resolution: see :class:`CheckerBase`; the resolution only
+            serves Drake's second opinion (:attr:`drake_checker`,
+            :func:`~drake_social.model.checker.verify_path`).
+        model: a built :func:`build_robot_diagram` of ``scenario`` (built if None).
+
+    Attributes:
+        model: the :class:`ScenarioDiagram` whose geometry is checked.
+        bodies: (B, 6) the planar chain, body names :attr:`body_names`.
+        robot: (S, 6) the robot's capsules in their body frames.
+        env: (K, 8) the environment's boxes and discs, names :attr:`env_names`.
+        lever: (2,) lever arms ``(c_shoulder, c_gripper)`` of the capsules, metres.
+        slab: ``(z_min, z_max)`` shared by every shape, metres.
+    """
+
+    def __init__(self, scenario: Scenario, resolution: float | None = None, model: ScenarioDiagram | None = None):
+        super().__init__(scenario, resolution)
+        self.scenario = scenario
+        self.model = model if model is not None else build_robot_diagram(scenario)
+        self._drake_checker: SceneGraphChecker | None = None
+        self._read_geometry()
+
+    # ---- reading the SceneGraph ---------------------------------------------
+
+    def _read_geometry(self) -> None:
+        diagram = self.model.diagram
+        plant = diagram.plant()
+        inspector = diagram.scene_graph().model_inspector()
+        context = diagram.CreateDefaultContext()
+        plant_context = plant.GetMyContextFromRoot(context)
+        plant.SetPositions(plant_context, self.model.robot, np.zeros(4))
+        world = plant.world_body().index()
+
+        self.body_names = [name for name, _, _ in _CHAIN]
+        index = {name: i for i, name in enumerate(self.body_names)}
+        X_W = {name: plant.EvalBodyPoseInWorld(plant_context, plant.GetBodyByName(name, self.model.robot))
+               for name in self.body_names}
+        bodies = []
+        for name, parent, joint in _CHAIN:
+            X = X_W[name] if parent is None else X_W[parent].inverse() @ X_W[name]
+            x, y, c, s, _ = _planar(X, f"body {name} at q = 0")
+            bodies.append([-1 if parent is None else index[parent], x, y, c, s, joint])
+        self.bodies = np.array(bodies, float)
+
+        # Shapes per body: (name, kind, x, y, c, s, a, b) with a, b = half sizes or (radius, 0).
+        shapes: dict[str, list] = {}
+        z_ranges = set()
+        for g in inspector.GetAllGeometryIds(Role.kProximity):
+            body = plant.GetBodyFromFrameId(inspector.GetFrameId(g))
+            key = "world" if body.index() == world else body.name()
+            name = inspector.GetName(g)
+            shape = inspector.GetShape(g)
+            x, y, c, s, z = _planar(inspector.GetPoseInFrame(g), name)
+            if isinstance(shape, DrakeBox):
+                entry = (name, kernel.BOX, x, y, c, s, shape.width() / 2, shape.depth() / 2)
+                height = shape.height()
+            elif isinstance(shape, Cylinder):
+                entry = (name, kernel.DISC, x, y, c, s, shape.radius(), 0.0)
+                height = shape.length()
+            else:
+                raise ValueError(f"{name}: unsupported collision shape {type(shape).__name__} (Box, Cylinder only)")
+            z_ranges.add((round(z - height / 2, 9), round(z + height / 2, 9)))
+            shapes.setdefault(key, []).append(entry)
+        if len(z_ranges) > 1:
+            raise ValueError(f"collision shapes span different z slabs {sorted(z_ranges)}: not planar")
+        self.slab = next(iter(z_ranges), (0.0, 0.0))
+
+        unknown = set(shapes) - {"world", *self.body_names}
+        if unknown:
+            raise ValueError(f"collision geometry on bodies {sorted(unknown)} outside the chain {self.body_names}")
+        robot, self.capsule_names = [], []
+        for name in self.body_names:
+            for label, row in _capsules(shapes.get(name, [])):
+                robot.append([index[name], *row])
+                self.capsule_names.append((name, label))
+        self.robot = np.array(robot, float).reshape(-1, 6)
+
+        env, self.env_names = [], []
+        for name, kind, x, y, c, s, a, b in shapes.get("world", []):
+            rho = math.hypot(a, b) if kind == kernel.BOX else a
+            env.append([kind, x, y, c, s, a, b, rho])
+            self.env_names.append(name)
+        self.env = np.array(env, float).reshape(-1, 8)
+        self.lever = self._lever()
+
+    def _lever(self) -> np.ndarray:
+        """``(c_shoulder, c_gripper)``: every link-1 point (and the elbow) lies
+        within c_shoulder of the shoulder, every link-2 and object point within
+        c_gripper of the elbow (see :meth:`ArmGeometry.lever`)."""
+        def reach(body_rows: np.ndarray, offsets: dict[int, np.ndarray]) -> float:
+            out = 0.0
+            for row in body_rows:
+                o = offsets[int(row[0])]
+                for p in (row[1:3], row[3:5]):
+                    out = max(out, float(np.hypot(*(o[:2] + _rotate(o[2:], p)))) + row[5])
+            return out
+
+        b = self.bodies
+        ident = np.array([0.0, 0.0, 1.0, 0.0])
+        link2_in_link1 = b[2, 1:5]
+        # The object's pose in link 2 (welded) and link 2's own frame (the elbow).
+        object_in_link2 = b[3, 1:5]
+        c_s = max(float(np.hypot(*link2_in_link1[:2])), reach(self.robot[self.robot[:, 0] == 1], {1: ident}))
+        rows = self.robot[np.isin(self.robot[:, 0], (2, 3))]
+        c_g = reach(rows, {2: ident, 3: object_in_link2})
+        return np.array([c_s, c_g])
+
+    # ---- kinematics -----------------------------------------------------------
+
+    def body_poses(self, q: np.ndarray) -> np.ndarray:
+        """World poses (B, 3) ``[x, y, yaw]`` of :attr:`body_names` at q (4,)."""
+        p = kernel.body_poses(np.asarray(q, float), self.bodies)
+        return np.column_stack([p[:, 0], p[:, 1], np.arctan2(p[:, 3], p[:, 2])])
+
+    def capsules(self, q: np.ndarray) -> np.ndarray:
+        """World capsules (S, 5) ``[ax, ay, bx, by, r]`` at q (4,), named by :attr:`capsule_names`."""
+        return kernel.world_capsules(np.asarray(q, float), self.bodies, self.robot)
+
+    # ---- ValidityChecker ------------------------------------------------------
+
+    def clearance(self, q: np.ndarray) -> float:
+        """Least signed distance (metres) from the robot to the environment.
+
+        Exact when positive; when negative, only its sign is meaningful.
+        Ignores the limits (see :meth:`in_limits`).
+        """
+        return float(kernel.clearance(np.asarray(q, float), self.bodies, self.robot, self.env))
+
+    def clearances(self, qs: np.ndarray) -> np.ndarray:
+        """:meth:`clearance` of configurations (N, 4) -> (N,)."""
+        qs = np.ascontiguousarray(qs, float).reshape(-1, 4)
+        return kernel.clearances(qs, self.bodies, self.robot, self.env)
+
+    def is_valid(self, q: np.ndarray) -> bool:
+        """One configuration (4,): within the limits, clearance > 0."""
+        q = np.asarray(q, float).reshape(1, 4)
+        return bool(kernel.valid(q, self.lower, self.upper, self.bodies, self.robot, self.env)[0])
+
+    def are_valid(self, qs: np.ndarray) -> np.ndarray:
+        """Many configurations (N, 4) -> (N,) bool."""
+        qs = np.ascontiguousarray(qs, float).reshape(-1, 4)
+        return kernel.valid(qs, self.lower, self.upper, self.bodies, self.robot, self.env)
+
+    def is_motion_valid(self, q_a: np.ndarray, q_b: np.ndarray) -> bool:
+        """The straight motion from q_a to q_b (4,), ends included; sound
+        (conservative advancement, :func:`planar_kernel.motion_valid`)."""
+        return bool(kernel.motion_valid(np.asarray(q_a, float), np.asarray(q_b, float), self.lower, self.upper,
+                                        self.bodies, self.robot, self.env, self.lever))
+
+    def are_motions_valid(self, q_a: np.ndarray, q_b: np.ndarray) -> np.ndarray:
+        """Many motions (E, 4), (E, 4) -> (E,) bool."""
+        q_a = np.ascontiguousarray(q_a, float).reshape(-1, 4)
+        q_b = np.ascontiguousarray(q_b, float).reshape(-1, 4)
+        return kernel.motions_valid(q_a, q_b, self.lower, self.upper, self.bodies, self.robot, self.env, self.lever)
+
+    # ---- reports and the second opinion ----------------------------------------
+
+    def contacts(self, q: np.ndarray) -> list[Contact]:
+        """The (robot body, environment shape) pairs at signed distance <= 0,
+        deepest first, from the exact planar distances (see
+        :meth:`SceneGraphChecker.contacts` for Drake's)."""
+        d = kernel.pair_distances(np.asarray(q, float), self.bodies, self.robot, self.env)
+        deepest: dict[tuple[str, str], float] = {}
+        for j, k in zip(*np.nonzero(d <= 0.0)):
+            key = (self.capsule_names[j][0], self.env_names[k])
+            deepest[key] = min(float(d[j, k]), deepest.get(key, math.inf))
+        return sorted((Contact(a, b, v) for (a, b), v in deepest.items()), key=lambda c: c.distance)
+
+    @property
+    def drake_checker(self) -> SceneGraphChecker:
+        """Drake's checker of the same scenario and resolution (built on first use)."""
+        if self._drake_checker is None:
+            self._drake_checker = SceneGraphChecker(self.scenario, self.resolution)
+        return self._drake_checker
+
+
+def _rotate(cs: np.ndarray, p: np.ndarray) -> np.ndarray:
+    c, s = cs
+    return np.array([c * p[0] - s * p[1], s * p[0] + c * p[1]])
+
+
+def _capsules(shapes: list) -> list[tuple[str, list[float]]]:
+    """A body's boxes and cylinders as capsules ``(label, [ax, ay, bx, by, r])``.
+
+    A box of width 2r with a cylinder of radius r centred on each end of its
+    long axis is a stadium: one capsule. Every other cylinder is a disc (a
+    capsule of length 0). Any other box is refused.
+    """
+    discs = [s for s in shapes if s[1] == kernel.DISC]
+    used: set[int] = set()
+    out = []
+    for name, kind, x, y, c, s, hx, hy in shapes:
+        if kind != kernel.BOX:
+            continue
+        # The long axis: along the box's x (half length hx, radius hy) or y.
+        if abs(hx) >= abs(hy):
+            half, r, ux, uy = hx, hy, c, s
+        else:
+            half, r, ux, uy = hy, hx, -s, c
+        a, b = (x - half * ux, y - half * uy), (x + half * ux, y + half * uy)
+        ends = []
+        for end in (a, b):
+            match = [i for i, d in enumerate(discs)
+                     if abs(d[6] - r) <= _TOL and math.hypot(d[2] - end[0], d[3] - end[1]) <= _TOL]
+            ends.append(match[0] if match else None)
+        if None in ends:
+            raise ValueError(f"{name}: a robot box that is not a stadium (a box with a cylinder of radius "
+                             f"half its width on each end); only discs and stadia are supported")
+        used.update(ends)
+        (_, _, ax, ay, *_), (_, _, bx, by, *_) = discs[ends[0]], discs[ends[1]]
+        out.append((name, [ax, ay, bx, by, r]))  # the discs' centres: exact, unlike the box's rotated ends
+    for i, (name, _, x, y, _, _, r, _) in enumerate(discs):
+        if i not in used:
+            out.append((name, [x, y, x, y, r]))
+    return out
