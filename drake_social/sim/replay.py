@@ -1,0 +1,351 @@
+"""Meshcat recording of a run and its standalone HTML replay.
+
+One :class:`~pydrake.geometry.Meshcat` per run, bound to localhost
+(:func:`make_meshcat`). The plant's illustration geometry (robot, obstacles,
+walls, people as cylinders) is drawn by a ``MeshcatVisualizer`` under
+:data:`VISUALIZER_PREFIX` (:func:`add_visualizer`); what the plant does not
+know is drawn by :func:`draw_overlays` under its own path
+(:data:`OVERLAY_PREFIX`, never under the visualizer's prefix, which the
+visualizer deletes at initialization):
+
+* ``<prefix>/field``: the social-cost heat map as one textured quad (an OBJ,
+  its MTL and a PNG, all in memory), emissive so that lights do not darken it;
+* ``<prefix>/people/<i>``: an arrow along each person's facing ``theta``;
+* ``<prefix>/path``: the planned base path as a flat ribbon (``SetLine``
+  ignores its width in WebGL).
+
+A run is recorded with :func:`start_recording` before
+``Simulator.Initialize()`` and :func:`finish_recording` after the last
+``AdvanceTo``; :func:`set_top_view` makes the first view a top-down map and
+:func:`write_replay_html` writes ``Meshcat.StaticHtml()``, a page that opens
+from disk and loads nothing from the network.
+"""
+
+from __future__ import annotations
+
+import io
+import logging
+import math
+import os
+import tempfile
+from pathlib import Path
+from typing import Sequence
+
+import numpy as np
+from matplotlib.image import imsave
+from pydrake.common import MemoryFile
+from pydrake.geometry import (
+    InMemoryMesh,
+    Mesh,
+    Meshcat,
+    MeshcatParams,
+    MeshcatVisualizer,
+    MeshcatVisualizerParams,
+    Rgba,
+    Role,
+    SceneGraph,
+)
+from pydrake.math import RigidTransform
+from pydrake.systems.framework import DiagramBuilder
+
+from drake_social.cost import SocialCost
+from drake_social.model.robot_model import COLLISION_HEIGHT
+from drake_social.scenario import Scenario
+from drake_social.viz.world import FIELD_CMAP, VIEW_MARGIN, field_grid
+
+__all__ = [
+    "FIELD_MAX_CELLS",
+    "OVERLAY_PREFIX",
+    "VISUALIZER_PREFIX",
+    "add_visualizer",
+    "draw_overlays",
+    "field_resolution",
+    "finish_recording",
+    "make_meshcat",
+    "ribbon_mesh",
+    "set_top_view",
+    "start_recording",
+    "write_replay_html",
+]
+
+_log = logging.getLogger(__name__)
+
+#: Meshcat path of the overlays drawn by :func:`draw_overlays`.
+OVERLAY_PREFIX = "/drake_social"
+#: Prefix of the MeshcatVisualizer (relative, so under ``/drake``): a body B of
+#: model M is drawn at ``/drake/illustration/M/B``.
+VISUALIZER_PREFIX = "illustration"
+#: Largest number of heat-map cells along either side of the map: a 1000 m
+#: world costs the same texture as a 25 m one.
+FIELD_MAX_CELLS = 512
+#: Finest heat-map cell, metres, as in the matplotlib figure (the texture is
+#: filtered linearly, so it looks smooth).
+FIELD_MIN_RESOLUTION = 0.05
+
+# Heights above the floor, metres: the heat map just above z = 0 (the floor
+# grid is hidden), the path above it, the facing arrows on top of the people's
+# cylinders (which are COLLISION_HEIGHT tall).
+_FIELD_Z = 0.002
+_PATH_Z = 0.02
+_ARROW_Z = COLLISION_HEIGHT + 0.01
+_PATH_WIDTH = 0.08
+# three.js' ClampToEdgeWrapping constant.
+_THREE_CLAMP_TO_EDGE = 1001.0
+_PATH_RGBA = Rgba(0.05, 0.45, 0.85, 1.0)
+_ARROW_RGBA = Rgba(0.05, 0.05, 0.05, 1.0)
+
+
+def make_meshcat() -> Meshcat:
+    """One Meshcat for one run, listening on localhost only (port chosen
+    automatically among Drake's defaults)."""
+    return Meshcat(MeshcatParams(host="localhost"))
+
+
+def add_visualizer(builder: DiagramBuilder, scene_graph: SceneGraph, meshcat: Meshcat, *, fps: float) -> MeshcatVisualizer:
+    """Adds a MeshcatVisualizer of the illustration geometry to ``builder``.
+
+    Args:
+        builder: the diagram builder that holds ``scene_graph``.
+        scene_graph: its query port feeds the visualizer.
+        meshcat: see :func:`make_meshcat`.
+        fps: frames per second (> 0); the publish period is ``1 / fps`` s.
+
+    Returns:
+        The visualizer, which draws under ``/drake/`` :data:`VISUALIZER_PREFIX`.
+    """
+    if not fps > 0:
+        raise ValueError(f"fps must be > 0 frames per second, got {fps}")
+    params = MeshcatVisualizerParams(role=Role.kIllustration, publish_period=1.0 / fps, prefix=VISUALIZER_PREFIX)
+    return MeshcatVisualizer.AddToBuilder(builder, scene_graph, meshcat, params)
+
+
+def start_recording(meshcat: Meshcat, fps: float) -> None:
+    """Starts recording ``fps`` frames per second; call before
+    ``Simulator.Initialize()`` so that the first frame is recorded.
+
+    The browser view is not updated while recording (the run is watched in
+    the replay), which also keeps a long run fast.
+    """
+    if not fps > 0:
+        raise ValueError(f"fps must be > 0 frames per second, got {fps}")
+    meshcat.StartRecording(frames_per_second=fps, set_visualizations_while_recording=False)
+
+
+def finish_recording(meshcat: Meshcat) -> None:
+    """Stops the recording and publishes it as the page's animation."""
+    meshcat.StopRecording()
+    meshcat.PublishRecording()
+
+
+def field_resolution(bounds: Sequence[float], max_cells: int = FIELD_MAX_CELLS) -> float:
+    """Heat-map cell size for a map, metres: :data:`FIELD_MIN_RESOLUTION` or
+    coarser, so that neither side has more than ``max_cells`` cells."""
+    x0, y0, x1, y1 = (float(v) for v in bounds)
+    return max(FIELD_MIN_RESOLUTION, max(x1 - x0, y1 - y0) / max_cells)
+
+
+def _field_png(scenario: Scenario) -> bytes:
+    """The heat map as PNG bytes, row 0 at the top = north (y_max), coloured
+    as :func:`drake_social.viz.world.draw_social_field` colours it."""
+    bounds = scenario.world.bounds
+    xs, ys = field_grid(bounds, field_resolution(bounds))
+    values = SocialCost.from_scenario(scenario).field(xs[None, :], ys[:, None])
+    top = float(values.max())
+    if not top > 0:  # an empty room: all white, as in the figure
+        top = 1.0
+    buffer = io.BytesIO()
+    imsave(buffer, values, cmap=FIELD_CMAP, vmin=0.0, vmax=top, origin="lower", format="png")
+    return buffer.getvalue()
+
+
+def _field_mesh(scenario: Scenario) -> Mesh:
+    """One quad over ``world.bounds`` at z = 0 textured with the heat map.
+
+    The material's diffuse and specular colours are black and its emissive
+    map is the heat map, so the pixels show the colour map whatever the
+    lights are.
+    """
+    x0, y0, x1, y1 = (float(v) for v in scenario.world.bounds)
+    obj = "\n".join([
+        "mtllib field.mtl",
+        f"v {x0!r} {y0!r} 0", f"v {x1!r} {y0!r} 0", f"v {x1!r} {y1!r} 0", f"v {x0!r} {y1!r} 0",
+        "vt 0 0", "vt 1 0", "vt 1 1", "vt 0 1",
+        "vn 0 0 1",
+        "usemtl field",
+        "f 1/1/1 2/2/1 3/3/1", "f 1/1/1 3/3/1 4/4/1",
+        "",
+    ])
+    mtl = "newmtl field\nKa 0 0 0\nKd 0 0 0\nKs 0 0 0\nKe 1 1 1\nmap_Ke field.png\n"
+    data = InMemoryMesh(
+        mesh_file=MemoryFile(obj, ".obj", "social_field.obj"),
+        supporting_files={
+            "field.mtl": MemoryFile(mtl, ".mtl", "field.mtl"),
+            "field.png": MemoryFile(_field_png(scenario), ".png", "field.png"),
+        },
+    )
+    return Mesh(data)
+
+
+def ribbon_mesh(points: np.ndarray, width: float, z: float) -> tuple[np.ndarray, np.ndarray]:
+    """A flat strip of ``width`` metres along a 2-D polyline, at height ``z``.
+
+    Joints are mitred (the miter is capped at 3 half-widths so that a sharp
+    turn does not spike). Repeated points are dropped.
+
+    Args:
+        points: (N, 2) polyline, metres, N >= 2 distinct points.
+        width: strip width, metres (> 0).
+        z: height of the strip, metres.
+
+    Returns:
+        vertices (3, 2N) and faces (3, 2(N-1)) int32, as
+        ``Meshcat.SetTriangleMesh`` takes them.
+    """
+    p = np.asarray(points, float)[:, :2]
+    keep = np.r_[True, np.any(np.diff(p, axis=0) != 0, axis=1)]
+    p = p[keep]
+    if len(p) < 2:
+        raise ValueError(f"a ribbon needs at least 2 distinct points, got {len(p)}")
+    seg = np.diff(p, axis=0)
+    seg /= np.linalg.norm(seg, axis=1, keepdims=True)
+    normals = np.stack([-seg[:, 1], seg[:, 0]], axis=1)
+    # Per vertex: the mean of the adjacent segment normals, scaled to keep the
+    # strip's width along both segments (1 / cos of the half turn).
+    n = np.vstack([normals[:1], normals[:-1] + normals[1:], normals[-1:]])
+    n /= np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-12)
+    adjacent = np.vstack([normals[:1], normals])
+    cos_half = np.clip(np.sum(n * adjacent, axis=1), 1.0 / 3.0, 1.0)
+    offset = n * (width / 2 / cos_half)[:, None]
+    left, right = p + offset, p - offset
+    vertices = np.empty((3, 2 * len(p)))
+    vertices[:2, 0::2], vertices[:2, 1::2] = left.T, right.T
+    vertices[2] = z
+    k = np.arange(len(p) - 1)
+    faces = np.concatenate([np.stack([2 * k, 2 * k + 1, 2 * k + 2]), np.stack([2 * k + 1, 2 * k + 3, 2 * k + 2])], axis=1)
+    return np.asfortranarray(vertices), np.asfortranarray(faces.astype(np.int32))
+
+
+def _arrow_mesh(x: float, y: float, theta: float, radius: float) -> tuple[np.ndarray, np.ndarray]:
+    """A flat arrow from a person's centre along ``theta``, its head beyond
+    the body's edge (as in the matplotlib scene figure)."""
+    length = radius + max(0.45, 1.6 * radius)
+    shaft, head_w, head_l = 0.06, 0.26, 0.22
+    local = np.array([
+        [0.0, -shaft / 2], [length - head_l, -shaft / 2], [length - head_l, shaft / 2], [0.0, shaft / 2],
+        [length - head_l, -head_w / 2], [length, 0.0], [length - head_l, head_w / 2],
+    ])
+    c, s = math.cos(theta), math.sin(theta)
+    xy = local @ np.array([[c, s], [-s, c]]) + [x, y]
+    vertices = np.vstack([xy.T, np.full(len(xy), _ARROW_Z)])
+    faces = np.array([[0, 1, 2], [0, 2, 3], [4, 5, 6]], dtype=np.int32).T
+    return np.asfortranarray(vertices), np.asfortranarray(faces)
+
+
+def draw_overlays(
+    meshcat: Meshcat,
+    scenario: Scenario,
+    waypoints: np.ndarray | None = None,
+    *,
+    prefix: str = OVERLAY_PREFIX,
+) -> None:
+    """Draws the heat map, the people's facing arrows and the planned path.
+
+    The people's bodies are the plant's illustration geometry already; this
+    adds what the plant does not know. Everything is static (not animated),
+    so it costs the same in a replay of any length.
+
+    Args:
+        meshcat: the run's Meshcat.
+        scenario: gives the bounds, the people and the social cost.
+        waypoints: (N, >= 2) planned configurations (only x, y are drawn);
+            None or fewer than 2 distinct points: no path.
+        prefix: absolute Meshcat path of the overlays; must not be the
+            visualizer's (it is cleared at initialization).
+    """
+    if not prefix.startswith("/"):
+        raise ValueError(f"prefix must be an absolute Meshcat path (start with '/'), got {prefix!r}")
+    meshcat.Delete(prefix)
+    meshcat.SetObject(f"{prefix}/field", _field_mesh(scenario), Rgba(1, 1, 1, 1))
+    meshcat.SetTransform(f"{prefix}/field", RigidTransform([0.0, 0.0, _FIELD_Z]))
+    # Meshcat tone-maps every material (ACES), which turns white into grey;
+    # the heat map shows the colour map's own colours.
+    meshcat.SetProperty(f"{prefix}/field/<object>", "material.toneMapped", False)
+    # Three.js' MTL loader repeats textures; clamped, the linear filter at
+    # the south edge does not pick up the north edge's colours.
+    for wrap in ("wrapS", "wrapT"):
+        meshcat.SetProperty(f"{prefix}/field/<object>", f"material.emissiveMap.{wrap}", _THREE_CLAMP_TO_EDGE)
+    meshcat.SetProperty(f"{prefix}/field/<object>", "material.needsUpdate", True)
+    for i, p in enumerate(scenario.people):
+        vertices, faces = _arrow_mesh(p.x, p.y, p.theta, p.radius)
+        meshcat.SetTriangleMesh(f"{prefix}/people/{i}", vertices, faces, _ARROW_RGBA)
+    if waypoints is not None:
+        xy = np.asarray(waypoints, float).reshape(len(waypoints), -1)[:, :2]
+        if len(np.unique(xy, axis=0)) >= 2:
+            vertices, faces = ribbon_mesh(xy, _PATH_WIDTH, _PATH_Z)
+            meshcat.SetTriangleMesh(f"{prefix}/path", vertices, faces, _PATH_RGBA)
+        else:
+            _log.warning("path of %d waypoint(s) has fewer than 2 distinct points: not drawn", len(xy))
+
+
+def set_top_view(meshcat: Meshcat, scenario: Scenario, *, aspect: float = 16 / 9, margin: float = VIEW_MARGIN) -> None:
+    """Makes the first view a top-down map of the whole room, north up.
+
+    An orthographic camera frames the walls plus ``margin`` metres for a
+    window of width / height ``aspect``; the viewer keeps the frame's height
+    and left edge when the window has another aspect, so a narrower window
+    crops the east side. Lights are set for a map (strong ambient, a light
+    straight above, no side lights); the floor grid and axes are hidden and
+    the background is white.
+    """
+    if not aspect > 0:
+        raise ValueError(f"aspect must be > 0 (width / height), got {aspect}")
+    x0, y0, x1, y1 = (float(v) for v in scenario.world.bounds)
+    pad = float(scenario.world.wall_thickness) + margin
+    width, height = x1 - x0 + 2 * pad, y1 - y0 + 2 * pad
+    half_h = max(height, width / aspect) / 2
+    half_w = half_h * aspect
+    camera = Meshcat.OrthographicCamera()
+    camera.left, camera.right, camera.top, camera.bottom = -half_w, half_w, half_h, -half_h
+    span = max(width, height)
+    camera.near, camera.far = 0.01, 4 * span + 20
+    camera.zoom = 1.0
+    meshcat.SetCamera(camera)
+    cx, cy = (x0 + x1) / 2, (y0 + y1) / 2
+    elevation = 2 * span + 10
+    # Straight down is degenerate for a z-up camera; a tilt of 1e-4 rad to the
+    # south puts north at the top of the screen.
+    meshcat.SetCameraPose([cx, cy - 1e-4 * elevation, elevation], [cx, cy, 0.0])
+    meshcat.SetProperty("/Grid", "visible", False)
+    meshcat.SetProperty("/Axes", "visible", False)
+    meshcat.SetProperty("/Background", "top_color", [1.0, 1.0, 1.0])
+    meshcat.SetProperty("/Background", "bottom_color", [1.0, 1.0, 1.0])
+    for light in ("PointLightNegativeX", "PointLightPositiveX"):
+        meshcat.SetProperty(f"/Lights/{light}", "visible", False)
+    meshcat.SetProperty("/Lights/AmbientLight/<object>", "intensity", 1.6)
+    meshcat.SetProperty("/Lights/FillLight/<object>", "intensity", 1.6)
+    # The fill light is directional (towards the origin): put it straight above.
+    meshcat.SetProperty("/Lights/FillLight/<object>", "position", [0.0, 0.0, elevation])
+
+
+def write_replay_html(meshcat: Meshcat, path: str | os.PathLike) -> int:
+    """Writes the standalone replay page ``meshcat.StaticHtml()`` to ``path``.
+
+    The file is written to a temporary file in the same folder and renamed
+    into place, so a reader never sees half a page.
+
+    Returns:
+        The size of the page, bytes.
+    """
+    path = Path(path)
+    data = meshcat.StaticHtml().encode("utf-8")
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    try:
+        with os.fdopen(fd, "wb") as f:
+            f.write(data)
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+    _log.info("wrote %s (%.1f kB)", path, len(data) / 1e3)
+    return len(data)
