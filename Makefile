@@ -4,7 +4,7 @@ VENV   := .venv
 PY     := $(VENV)/bin/python
 OUT    ?= out
 
-.PHONY: demo test bench install clean
+.PHONY: demo test bench install clean chromium
 
 $(VENV)/.installed: pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -21,8 +21,17 @@ demo: install
 	$(VENV)/bin/drake-social plan scenarios/office_bar.yaml --algorithm social_rrt_star --out $(OUT)/office_bar
 	@echo "outputs in $(OUT)/office_bar/: scene.png path.png cost_profile.png convergence.png path.csv result.json"
 
+# Headless Chromium for the replay tests (tests/sim/browser.py): installed from
+# Debian when missing and we are root; if that fails the browser tests skip.
+chromium:
+	@if [ ! -x /usr/bin/chromium ] && [ "$$(id -u)" = 0 ] && command -v apt-get >/dev/null; then \
+	  echo "installing chromium for the replay tests"; \
+	  { apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq chromium; } >/dev/null \
+	    || echo "warning: could not install chromium; the browser tests will skip"; \
+	fi
+
 # The whole test suite. pytest exits 5 when it collected no test: that is a failure here.
-test: install
+test: install chromium
 	$(PY) -m pytest -q -p no:cacheprovider tests; rc=$$?; \
 	if [ $$rc -eq 5 ]; then echo "error: pytest collected no tests"; exit 1; fi; exit $$rc
 
