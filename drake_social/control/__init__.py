@@ -4,6 +4,8 @@
 * :class:`WaypointSequencer` decides which waypoint is the current target.
 * :class:`HolonomicPController` drives the mecanum base towards it;
   :class:`MecanumDrive` turns wheel speeds into the base velocity.
+* :class:`RuckigTrajectorySource` gives jerk-limited references (the arm's,
+  or the synchronized whole-configuration reference).
 """
 
 from drake_social.control.holonomic import (
@@ -15,16 +17,26 @@ from drake_social.control.holonomic import (
     wheel_speeds,
 )
 from drake_social.control.planner_system import PlannerSystem, path_parameter, waypoint_trajectory
+from drake_social.control.ruckig_source import (
+    RuckigSegment,
+    RuckigTrajectorySource,
+    arm_source_from_options,
+    reference_source_from_options,
+)
 from drake_social.control.sequencer import WaypointSequencer
 
 __all__ = [
     "HolonomicPController",
     "MecanumDrive",
     "PlannerSystem",
+    "RuckigSegment",
+    "RuckigTrajectorySource",
     "WaypointSequencer",
+    "arm_source_from_options",
     "base_velocity",
     "mecanum_matrix",
     "path_parameter",
+    "reference_source_from_options",
     "saturate_norm",
     "waypoint_trajectory",
     "wheel_speeds",

@@ -1,0 +1,356 @@
+"""Jerk-limited reference trajectories from Ruckig: *when* each joint gets there.
+
+:class:`RuckigTrajectorySource` turns a piecewise-constant target (n DoFs)
+into a smooth reference that never exceeds the velocity, acceleration and
+jerk limits. Whenever its periodic update sees a target different from the
+one it is heading for, it computes a new time-optimal segment with the
+offline ``Ruckig(n).calculate`` from the reference's current position,
+velocity and acceleration, so the reference never jumps. Between updates the
+outputs only evaluate the stored segment at the context time.
+
+State: one abstract value, an immutable :class:`RuckigSegment` (start time
+t0, the ``ruckig.Trajectory`` or None when at rest, the rest position, the
+target it heads for). Outputs depend on the state and the time only (no
+direct feedthrough from ``target``).
+
+Ports: input ``target`` (n; while it has no value, the reference stays
+where it is); outputs ``position``, ``velocity``,
+``acceleration`` (n each) and ``finished`` (1: 1.0 once ``t - t0 >=
+duration``).
+
+Ruckig is only ever given a current and a target state, never intermediate
+positions: the community version would otherwise call a remote web service.
+
+Factories: :func:`arm_source_from_options` (the two arm joints) and
+:func:`reference_source_from_options` (the synchronized 4-DoF reference
+``[x, y, psi1, psi2]``, phase-synchronized so that the base moves on the
+straight segment, with the base speed limit on the *norm* of ``[vx, vy]``).
+
+Example::
+
+    import numpy as np
+    from pydrake.systems.analysis import Simulator
+    from drake_social.control import RuckigTrajectorySource
+
+    dut = RuckigTrajectorySource(initial_position=[0.0, 0.0], max_velocity=[1.0, 1.0],
+                                 max_acceleration=[2.0, 2.0], max_jerk=[10.0, 10.0], period=0.01)
+    simulator = Simulator(dut)
+    dut.GetInputPort("target").FixValue(simulator.get_mutable_context(), [1.0, -0.5])
+    simulator.AdvanceTo(3.0)
+    context = simulator.get_context()
+    print(dut.GetOutputPort("position").Eval(context))  # [ 1.  -0.5]
+    print(dut.GetOutputPort("finished").Eval(context))  # [1.]
+"""
+
+from __future__ import annotations
+
+from typing import Sequence
+
+import numpy as np
+import ruckig
+from pydrake.common.value import AbstractValue
+from pydrake.systems.framework import BasicVector, Context, LeafSystem, State
+
+from drake_social.scenario import ExecutionOptions
+
+__all__ = [
+    "RuckigSegment",
+    "RuckigTrajectorySource",
+    "arm_source_from_options",
+    "reference_source_from_options",
+]
+
+_SYNCHRONIZATIONS = {
+    "time": ruckig.Synchronization.Time,
+    "phase": ruckig.Synchronization.Phase,
+    "time_if_necessary": ruckig.Synchronization.TimeIfNecessary,
+    "none": ruckig.Synchronization.No,
+}
+
+# Smallest share of a norm-limited group's limits that a DoF gets, so that a
+# DoF that does not move still has a valid (positive) limit.
+_SHARE_FLOOR = 1e-6
+
+
+class RuckigSegment:
+    """One reference segment: immutable, so copies may share it.
+
+    ``ruckig.Trajectory`` cannot be deep-copied; Drake clones abstract state
+    (contexts, ``AbstractValue.Clone``), so ``copy``/``deepcopy`` return the
+    object itself. Nothing ever mutates a segment after construction.
+
+    Attributes:
+        t0: start time of the segment, seconds.
+        trajectory: the ``ruckig.Trajectory`` from t0, or None when at rest.
+        rest: (n,) position held when ``trajectory`` is None.
+        target: (n,) target this segment heads for, or None when no target
+            has been seen yet (any target then starts a segment).
+    """
+
+    __slots__ = ("t0", "trajectory", "rest", "target")
+
+    def __init__(self, t0: float, trajectory, rest: np.ndarray, target: np.ndarray | None):
+        object.__setattr__(self, "t0", float(t0))
+        object.__setattr__(self, "trajectory", trajectory)
+        rest = np.array(rest, float)
+        rest.flags.writeable = False
+        object.__setattr__(self, "rest", rest)
+        if target is not None:
+            target = np.array(target, float)
+            target.flags.writeable = False
+        object.__setattr__(self, "target", target)
+
+    def __setattr__(self, name, value):
+        raise AttributeError("RuckigSegment is immutable")
+
+    def __copy__(self):
+        return self
+
+    def __deepcopy__(self, memo):
+        return self
+
+    @property
+    def duration(self) -> float:
+        """Duration of the motion, seconds (0 when at rest)."""
+        return 0.0 if self.trajectory is None else float(self.trajectory.duration)
+
+    def at(self, t: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Position, velocity, acceleration at time t.
+
+        Before t0 the start state; from t0 + duration on, exactly at rest at the target.
+        """
+        if self.trajectory is None:
+            zero = np.zeros_like(self.rest)
+            return self.rest.copy(), zero, zero.copy()
+        duration = self.trajectory.duration
+        if t - self.t0 >= duration:
+            # Exactly at rest at the target (at_time(duration) leaves ~1e-16
+            # residues, which would make the next rest-to-rest segment
+            # non-collinear and Ruckig fall back from phase to time sync).
+            zero = np.zeros_like(self.target)
+            return self.target.copy(), zero, zero.copy()
+        # at_time extrapolates for t < t0: clamp.
+        p, v, a = self.trajectory.at_time(max(t - self.t0, 0.0))
+        return np.array(p, float), np.array(v, float), np.array(a, float)
+
+
+def _limit_vector(name: str, value, n: int) -> np.ndarray:
+    v = np.array(value, float).reshape(-1)
+    if v.shape != (n,) or not np.all(np.isfinite(v)) or not np.all(v > 0):
+        raise ValueError(
+            f"RuckigTrajectorySource: {name} must hold {n} finite numbers > 0 (one per DoF), got {value!r}"
+        )
+    return v
+
+
+def _direction_share(*vectors: np.ndarray) -> np.ndarray:
+    """Per-DoF share of a norm limit: the elementwise max of |u_i| / |u| over the non-zero vectors, floored."""
+    share = np.full(len(vectors[0]), _SHARE_FLOOR)
+    scale = max(1.0, *(float(np.max(np.abs(u))) for u in vectors))
+    for u in vectors:
+        norm = np.linalg.norm(u)
+        if norm > 1e-12 * scale:
+            share = np.maximum(share, np.abs(u) / norm)
+    return share
+
+
+class RuckigTrajectorySource(LeafSystem):
+    """A jerk-limited reference that heads for its ``target`` input.
+
+    Args:
+        initial_position: (n,) rest position before any target (and in a
+            default context), in the DoFs' units (metres or radians).
+        max_velocity: (n,) velocity limits, units/s (> 0).
+        max_acceleration: (n,) acceleration limits, units/s^2 (> 0).
+        max_jerk: (n,) jerk limits, units/s^3 (> 0).
+        period: period of the update that reads the target, seconds (> 0).
+        synchronization: "time", "phase", "time_if_necessary", "none" or a
+            ``ruckig.Synchronization``.
+        xy_norm_dofs: indices of DoFs (e.g. ``(0, 1)`` for the base x, y)
+            whose limits bound the *norm* of their velocity, acceleration and
+            jerk instead of each component. For each new segment their limits
+            are scaled by ``|d_i| / |d|`` (d the displacement of those DoFs),
+            which with phase synchronization and a start at rest keeps the
+            group on the straight segment with its norm within the limit. When
+            a target changes mid-motion, each share is also at least the
+            share of the current velocity and acceleration, so the current
+            state stays within the per-DoF limits (that transition is then
+            not on a straight line and its norm may exceed the limit by up
+            to sqrt(2)).
+
+    Raises:
+        ValueError: limits not positive or of the wrong length, unknown
+            synchronization, bad ``xy_norm_dofs``.
+        RuntimeError: (from an update) Ruckig cannot compute a segment.
+    """
+
+    def __init__(
+        self,
+        *,
+        initial_position: Sequence[float],
+        max_velocity: Sequence[float],
+        max_acceleration: Sequence[float],
+        max_jerk: Sequence[float],
+        period: float,
+        synchronization: str | ruckig.Synchronization = "time",
+        xy_norm_dofs: Sequence[int] | None = None,
+    ):
+        super().__init__()
+        initial = np.array(initial_position, float).reshape(-1)
+        n = len(initial)
+        if n == 0 or not np.all(np.isfinite(initial)):
+            raise ValueError(f"RuckigTrajectorySource: initial_position must be finite, n >= 1; got {initial_position!r}")
+        self._n = n
+        self._initial = initial
+        self._max_velocity = _limit_vector("max_velocity", max_velocity, n)
+        self._max_acceleration = _limit_vector("max_acceleration", max_acceleration, n)
+        self._max_jerk = _limit_vector("max_jerk", max_jerk, n)
+        if not (np.isfinite(period) and period > 0):
+            raise ValueError(f"RuckigTrajectorySource: period must be a finite number > 0, got {period!r}")
+        if isinstance(synchronization, str):
+            if synchronization not in _SYNCHRONIZATIONS:
+                raise ValueError(
+                    f"RuckigTrajectorySource: synchronization must be one of {sorted(_SYNCHRONIZATIONS)}, "
+                    f"got {synchronization!r}"
+                )
+            synchronization = _SYNCHRONIZATIONS[synchronization]
+        self._synchronization = synchronization
+        self._norm_dofs = None
+        if xy_norm_dofs is not None:
+            dofs = [int(i) for i in xy_norm_dofs]
+            if len(dofs) < 2 or len(set(dofs)) != len(dofs) or not all(0 <= i < n for i in dofs):
+                raise ValueError(
+                    f"RuckigTrajectorySource: xy_norm_dofs must be >= 2 distinct DoF indices in [0, {n}), "
+                    f"got {xy_norm_dofs!r}"
+                )
+            self._norm_dofs = np.array(dofs)
+
+        self._target_port = self.DeclareVectorInputPort("target", n)
+        self._segment_index = self.DeclareAbstractState(AbstractValue.Make(self._RestSegment(0.0, initial)))
+        self.DeclarePeriodicUnrestrictedUpdateEvent(period, 0.0, self._Retarget)
+        # The same update on demand (CalcForcedUnrestrictedUpdate), for tests and scripts.
+        self.DeclareForcedUnrestrictedUpdateEvent(self._Retarget)
+
+        prereqs = {self.abstract_state_ticket(self._segment_index), self.time_ticket()}
+        self.DeclareVectorOutputPort("position", n, self._CalcPosition, prerequisites_of_calc=prereqs)
+        self.DeclareVectorOutputPort("velocity", n, self._CalcVelocity, prerequisites_of_calc=prereqs)
+        self.DeclareVectorOutputPort("acceleration", n, self._CalcAcceleration, prerequisites_of_calc=prereqs)
+        self.DeclareVectorOutputPort("finished", 1, self._CalcFinished, prerequisites_of_calc=prereqs)
+
+    @staticmethod
+    def _RestSegment(t0: float, position) -> RuckigSegment:
+        return RuckigSegment(t0, None, position, None)
+
+    def SetInitialPosition(self, context: Context, q: Sequence[float]) -> None:
+        """Puts the reference at rest at ``q`` (n,) in ``context``; the next update heads for the target."""
+        q = np.array(q, float).reshape(-1)
+        if q.shape != (self._n,) or not np.all(np.isfinite(q)):
+            raise ValueError(f"{self.get_name()}: SetInitialPosition needs {self._n} finite numbers, got {q!r}")
+        context.get_mutable_abstract_state(self._segment_index).set_value(self._RestSegment(context.get_time(), q))
+
+    # ---- event -----------------------------------------------------------------
+
+    def _Segment(self, context: Context) -> RuckigSegment:
+        return context.get_abstract_state(self._segment_index).get_value()
+
+    def _Limits(self, d: np.ndarray, v: np.ndarray, a: np.ndarray):
+        vmax, amax, jmax = self._max_velocity.copy(), self._max_acceleration.copy(), self._max_jerk.copy()
+        if self._norm_dofs is not None:
+            g = self._norm_dofs
+            share = _direction_share(d[g], v[g], a[g])
+            vmax[g] *= share
+            amax[g] *= share
+            jmax[g] *= share
+        return vmax, amax, jmax
+
+    def _Retarget(self, context: Context, state: State) -> None:
+        if not self._target_port.HasValue(context):
+            return  # no target yet (unconnected, unfixed): stay as is
+        segment = self._Segment(context)
+        target = np.asarray(self._target_port.Eval(context), float)
+        if segment.target is not None and np.array_equal(target, segment.target):
+            return
+        if not np.all(np.isfinite(target)):
+            raise RuntimeError(f"{self.get_name()}: the target input must be finite, got {target}")
+        t = context.get_time()
+        p, v, a = segment.at(t)
+        vmax, amax, jmax = self._Limits(target - p, v, a)
+
+        inp = ruckig.InputParameter(self._n)
+        inp.current_position = p.tolist()
+        inp.current_velocity = v.tolist()
+        inp.current_acceleration = a.tolist()
+        inp.target_position = target.tolist()
+        inp.target_velocity = [0.0] * self._n
+        inp.target_acceleration = [0.0] * self._n
+        inp.max_velocity = vmax.tolist()
+        inp.max_acceleration = amax.tolist()
+        inp.max_jerk = jmax.tolist()
+        inp.synchronization = self._synchronization
+        # Never set inp.intermediate_positions (see the module docstring).
+        trajectory = ruckig.Trajectory(self._n)
+        try:
+            # A fresh calculator each time: offline calculate() only, nothing kept on self.
+            result = ruckig.Ruckig(self._n).calculate(inp, trajectory)
+        except ruckig.RuckigError as error:
+            raise RuntimeError(f"{self.get_name()}: Ruckig failed at t = {t} s: {error}") from error
+        if result != ruckig.Result.Working:
+            raise RuntimeError(f"{self.get_name()}: Ruckig failed at t = {t} s with {result}; input:\n{inp}")
+        state.get_mutable_abstract_state(self._segment_index).set_value(RuckigSegment(t, trajectory, p, target))
+
+    # ---- outputs ---------------------------------------------------------------
+
+    def _CalcPosition(self, context: Context, output: BasicVector) -> None:
+        output.SetFromVector(self._Segment(context).at(context.get_time())[0])
+
+    def _CalcVelocity(self, context: Context, output: BasicVector) -> None:
+        output.SetFromVector(self._Segment(context).at(context.get_time())[1])
+
+    def _CalcAcceleration(self, context: Context, output: BasicVector) -> None:
+        output.SetFromVector(self._Segment(context).at(context.get_time())[2])
+
+    def _CalcFinished(self, context: Context, output: BasicVector) -> None:
+        segment = self._Segment(context)
+        output.SetAtIndex(0, 1.0 if context.get_time() - segment.t0 >= segment.duration else 0.0)
+
+
+def arm_source_from_options(execution_options: ExecutionOptions, initial_arm: Sequence[float]) -> RuckigTrajectorySource:
+    """The arm's reference (2 DoFs ``[psi1, psi2]``, radians) with the scenario's arm limits.
+
+    Args:
+        execution_options: a scenario's ``execution`` section.
+        initial_arm: (2,) initial joint angles, radians.
+    """
+    return RuckigTrajectorySource(
+        initial_position=initial_arm,
+        max_velocity=execution_options.arm_max_velocity,
+        max_acceleration=execution_options.arm_max_acceleration,
+        max_jerk=execution_options.arm_max_jerk,
+        period=execution_options.control_period,
+    )
+
+
+def reference_source_from_options(
+    execution_options: ExecutionOptions, initial_q: Sequence[float]
+) -> RuckigTrajectorySource:
+    """The synchronized reference of the whole configuration ``[x, y, psi1, psi2]``.
+
+    Phase-synchronized, so base and arm start and arrive together and (from
+    rest) move proportionally: the base on the straight segment. The base
+    limits bound the norm of ``[vx, vy]`` (and of the acceleration and jerk)
+    through ``xy_norm_dofs=(0, 1)``.
+
+    Args:
+        execution_options: a scenario's ``execution`` section.
+        initial_q: (4,) initial configuration (metres, radians).
+    """
+    e = execution_options
+    return RuckigTrajectorySource(
+        initial_position=initial_q,
+        max_velocity=[e.max_base_speed, e.max_base_speed, *e.arm_max_velocity],
+        max_acceleration=[e.max_base_acceleration, e.max_base_acceleration, *e.arm_max_acceleration],
+        max_jerk=[e.max_base_jerk, e.max_base_jerk, *e.arm_max_jerk],
+        period=e.control_period,
+        synchronization="phase",
+        xy_norm_dofs=(0, 1),
+    )
