@@ -57,7 +57,10 @@ class RrtStarOptions:
 
 
 class _Tree:
-    """Nodes in preallocated arrays; children as lists for cost propagation.
+    """Nodes in arrays that grow geometrically; children as lists for cost propagation.
+
+    The arrays start at ``capacity`` rows and double when full, so memory
+    follows the nodes actually added, not the iteration budget K.
 
     Every node keeps the cost of the motion from its parent, and a node's
     cost is always recomputed as ``cost[parent] + edge`` (as OMPL does)
@@ -66,18 +69,33 @@ class _Tree:
     so the strict rewiring test can never pick an ancestor of the new node.
     """
 
-    def __init__(self, capacity: int):
+    def __init__(self, capacity: int = 256):
+        capacity = max(int(capacity), 1)
         self.q = np.empty((capacity, 4))
         self.parent = np.full(capacity, -1, dtype=np.int64)
         self.cost = np.empty(capacity)  # F: cost from the start
         self.edge = np.empty(capacity)  # cost of the motion from the parent
-        self.children: list[list[int]] = [[] for _ in range(capacity)]
+        self.children: list[list[int]] = []
         self.n = 0
+
+    @property
+    def capacity(self) -> int:
+        return len(self.q)
+
+    def _grow(self) -> None:
+        size = 2 * self.capacity
+        self.q = np.concatenate([self.q, np.empty((size - len(self.q), 4))])
+        self.parent = np.concatenate([self.parent, np.full(size - len(self.parent), -1, dtype=np.int64)])
+        self.cost = np.concatenate([self.cost, np.empty(size - len(self.cost))])
+        self.edge = np.concatenate([self.edge, np.empty(size - len(self.edge))])
 
     def add(self, q: np.ndarray, parent: int, edge: float) -> int:
         i = self.n
+        if i == self.capacity:
+            self._grow()
         self.q[i], self.parent[i], self.edge[i] = q, parent, edge
         self.cost[i] = self.cost[parent] + edge if parent >= 0 else edge
+        self.children.append([])
         if parent >= 0:
             self.children[parent].append(i)
         self.n += 1
@@ -194,7 +212,7 @@ class RrtStar:
         self._check_endpoints(start, goal)
         space, checker, objective = self.space, self.checker, self.objective
 
-        tree = _Tree(opt.iterations + 1)
+        tree = _Tree()
         tree.add(start, -1, 0.0)
         sampler = EllipseSampler(space, start[:2], goal[:2]) if opt.informed else None
         goal_nodes: list[int] = []  # nodes with a valid, costed motion to the goal
@@ -267,10 +285,7 @@ class RrtStar:
             return -1
 
         # Choose the parent: all near costs in one batch, motions checked lazily.
-        diff = (nodes - q_new) * w
-        near = np.flatnonzero(np.einsum("ij,ij->i", diff, diff) <= opt.near_radius**2)
-        if i_nearest not in near:  # r_near < delta: keep the tree connected
-            near = np.append(near, i_nearest)
+        near = self._near(tree, q_new, i_nearest)
         phi = self.objective.motion_cost(nodes[near], q_new)
         counts.cost += len(near)
         total = tree.cost[near] + phi
@@ -300,6 +315,16 @@ class RrtStar:
             if ok:
                 tree.reparent(j, i_new, float(phi[slot]))
         return i_new
+
+    def _near(self, tree: _Tree, q_new: np.ndarray, i_nearest: int) -> np.ndarray:
+        """Indices of the nodes within ``near_radius`` of q_new (ascending),
+        then ``i_nearest`` when it is not among them (r_near < delta), so the
+        tree stays connected."""
+        diff = (tree.q[: tree.n] - q_new) * self.space.weights
+        near = np.flatnonzero(np.einsum("ij,ij->i", diff, diff) <= self.options.near_radius**2)
+        if i_nearest not in near:
+            near = np.append(near, i_nearest)
+        return near
 
     @staticmethod
     def _xy_length(tree: _Tree, node: int, goal: np.ndarray) -> float:

@@ -83,6 +83,8 @@ def test_best_cost_never_increases(solved):
     assert np.all(finite[first:])  # once found, a solution is never lost
     assert np.all(np.diff(h[first:]) <= 1e-12)
     assert h[-1] == pytest.approx(dut.cost, rel=1e-12)
+    # And it does improve: a planner that keeps its first solution fails here.
+    assert h[-1] < 0.95 * h[first], (h[first], h[-1])
 
 
 def test_tree_costs_are_parent_cost_plus_edge_cost(solved):
@@ -94,6 +96,9 @@ def test_tree_costs_are_parent_cost_plus_edge_cost(solved):
     assert np.all(parent[child] >= 0) and np.all(parent[child] < len(q))
     edge = planner.objective.motion_cost(q[parent[child]], q[child])
     np.testing.assert_allclose(cost[child], cost[parent[child]] + edge, rtol=1e-9, atol=1e-9)
+    # Rewiring happened: only a re-parented node can have a parent inserted
+    # after it (a planner that never rewires fails here).
+    assert np.sum(parent[child] > child) >= 5
     # No cycles: following parents from any node reaches the root.
     depth = np.zeros(len(q), int)
     for i in child:
