@@ -152,6 +152,7 @@ class HolonomicPController(LeafSystem):
         )
 
     def _LimitedWheelSpeeds(self, context: Context) -> np.ndarray:
+        # target - position, not the paper's current - next: only this sign converges.
         error = np.asarray(self._target_port.Eval(context), float) - self._position_port.Eval(context)
         v = self._kp * error
         if self._ff_port is not None:

@@ -130,7 +130,7 @@ def test_rest_to_rest_duration_by_hand():
 def test_seeded_random_targets_respect_limits_and_end_at_rest_at_the_target():
     rng = np.random.default_rng(20240607)
     dut = _source()
-    for _ in range(3):
+    for _ in range(2):
         # Targets changed at random times on the update grid, often mid-motion.
         times = np.sort(rng.choice(np.arange(0, 300), size=4, replace=False)) * PERIOD
         targets = rng.uniform(-2.0, 2.0, size=(4, 2))

@@ -188,3 +188,37 @@ def test_from_options_takes_tolerances_and_period_and_runs_periodically():
     context = dut.GetMyContextFromRoot(simulator.get_context())
     assert dut.GetOutputPort("index").Eval(context)[0] == 1.0
     np.testing.assert_array_equal(dut.GetOutputPort("target").Eval(context), WAYPOINTS[1])
+
+
+def test_closes_a_loop_with_the_controller_and_the_drive_without_an_algebraic_loop():
+    # Sequencer -> P controller -> mecanum drive -> integrator -> q (arm held at the
+    # waypoints' joint values). Kp = 1.5 and 0.5 m/s: 1 m then 2 m take a few seconds.
+    from pydrake.systems.primitives import Demultiplexer, Integrator, Multiplexer
+
+    from drake_social.control import HolonomicPController, MecanumDrive
+
+    waypoints = np.array([[0.0, 0.0, 0.0, 0.0], [1.0, 0.0, 0.0, 0.0], [1.0, 2.0, 0.0, 0.0]])
+    builder = DiagramBuilder()
+    dut = builder.AddNamedSystem("sequencer", _make(waypoints))
+    controller = builder.AddSystem(
+        HolonomicPController(kp=1.5, max_base_speed=0.5, wheel_radius=0.05, max_wheel_speed=20.0))
+    drive = builder.AddSystem(MecanumDrive(0.05))
+    base = builder.AddSystem(Integrator(2))
+    split = builder.AddSystem(Demultiplexer([2, 2]))
+    arm = builder.AddSystem(ConstantVectorSource([0.0, 0.0]))
+    q = builder.AddSystem(Multiplexer([2, 2]))
+    builder.Connect(dut.GetOutputPort("target"), split.get_input_port())
+    builder.Connect(split.get_output_port(0), controller.GetInputPort("base_target"))
+    builder.Connect(base.get_output_port(), controller.GetInputPort("base_position"))
+    builder.Connect(controller.GetOutputPort("wheel_speeds"), drive.GetInputPort("wheel_speeds"))
+    builder.Connect(drive.GetOutputPort("base_velocity"), base.get_input_port())
+    builder.Connect(base.get_output_port(), q.get_input_port(0))
+    builder.Connect(arm.get_output_port(), q.get_input_port(1))
+    builder.Connect(q.get_output_port(), dut.GetInputPort("q"))
+    simulator = Simulator(builder.Build())
+    simulator.AdvanceTo(15.0)
+    context = dut.GetMyContextFromRoot(simulator.get_context())
+    assert dut.GetOutputPort("done").Eval(context)[0] == 1.0
+    position = base.get_output_port().Eval(base.GetMyContextFromRoot(simulator.get_context()))
+    # Within the tolerance of the goal when done was latched, closer still since.
+    assert np.linalg.norm(position - [1.0, 2.0]) <= BASE_TOL
