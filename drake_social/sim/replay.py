@@ -65,6 +65,7 @@ __all__ = [
     "ribbon_mesh",
     "set_top_view",
     "start_recording",
+    "top_view_frame",
     "write_replay_html",
 ]
 
@@ -281,44 +282,58 @@ def draw_overlays(
     if waypoints is not None:
         xy = np.asarray(waypoints, float).reshape(len(waypoints), -1)[:, :2]
         if len(np.unique(xy, axis=0)) >= 2:
-            vertices, faces = ribbon_mesh(xy, _PATH_WIDTH, _PATH_Z)
+            x0, y0, x1, y1 = (float(v) for v in scenario.world.bounds)
+            width = max(_PATH_WIDTH, max(x1 - x0, y1 - y0) / 250)  # a few pixels wide in the top view
+            vertices, faces = ribbon_mesh(xy, width, _PATH_Z)
             meshcat.SetTriangleMesh(f"{prefix}/path", vertices, faces, _PATH_RGBA)
         else:
             _log.warning("path of %d waypoint(s) has fewer than 2 distinct points: not drawn", len(xy))
 
 
-def set_top_view(meshcat: Meshcat, scenario: Scenario, *, aspect: float = 16 / 9, margin: float = VIEW_MARGIN) -> None:
-    """Makes the first view a top-down map of the whole room, north up.
+def top_view_frame(scenario: Scenario, *, aspect: float = 16 / 9, margin: float | None = None) -> tuple[float, float, float, float]:
+    """The region the top view shows: centre x, y and half width, half height, metres.
 
-    An orthographic camera frames the walls plus ``margin`` metres for a
-    window of width / height ``aspect``; the viewer keeps the frame's height
-    and left edge when the window has another aspect, so a narrower window
-    crops the east side. Lights are set for a map (strong ambient, a light
-    straight above, no side lights); the floor grid and axes are hidden and
-    the background is white.
+    It holds the walls plus ``margin`` metres (None: the larger of
+    :data:`~drake_social.viz.world.VIEW_MARGIN` and 3 % of the map's longer
+    side, which keeps the viewer's controls bar off the north wall) with the
+    width / height ``aspect`` of the window.
     """
     if not aspect > 0:
         raise ValueError(f"aspect must be > 0 (width / height), got {aspect}")
     x0, y0, x1, y1 = (float(v) for v in scenario.world.bounds)
+    if margin is None:
+        margin = max(VIEW_MARGIN, 0.03 * max(x1 - x0, y1 - y0))
     pad = float(scenario.world.wall_thickness) + margin
     width, height = x1 - x0 + 2 * pad, y1 - y0 + 2 * pad
     half_h = max(height, width / aspect) / 2
-    half_w = half_h * aspect
+    return (x0 + x1) / 2, (y0 + y1) / 2, half_h * aspect, half_h
+
+
+def set_top_view(meshcat: Meshcat, scenario: Scenario, *, aspect: float = 16 / 9, margin: float | None = None) -> None:
+    """Makes the first view a top-down map of the whole room, north up.
+
+    An orthographic camera frames :func:`top_view_frame` for a window of
+    width / height ``aspect``; the viewer keeps the frame's height and west
+    edge when the window has another aspect, so a narrower window crops the
+    east side. Lights are set for a map (ambient plus a light straight above,
+    no side lights); the floor grid and axes are hidden and the background
+    is white.
+    """
+    cx, cy, half_w, half_h = top_view_frame(scenario, aspect=aspect, margin=margin)
     camera = Meshcat.OrthographicCamera()
     camera.left, camera.right, camera.top, camera.bottom = -half_w, half_w, half_h, -half_h
-    span = max(width, height)
+    span = 2 * max(half_w, half_h)
     camera.near, camera.far = 0.01, 4 * span + 20
     camera.zoom = 1.0
     meshcat.SetCamera(camera)
-    cx, cy = (x0 + x1) / 2, (y0 + y1) / 2
     elevation = 2 * span + 10
     # Straight down is degenerate for a z-up camera; a tilt of 1e-4 rad to the
     # south puts north at the top of the screen.
     meshcat.SetCameraPose([cx, cy - 1e-4 * elevation, elevation], [cx, cy, 0.0])
     meshcat.SetProperty("/Grid", "visible", False)
     meshcat.SetProperty("/Axes", "visible", False)
-    meshcat.SetProperty("/Background", "top_color", [1.0, 1.0, 1.0])
-    meshcat.SetProperty("/Background", "bottom_color", [1.0, 1.0, 1.0])
+    meshcat.SetProperty("/Background/<object>", "top_color", [1.0, 1.0, 1.0])
+    meshcat.SetProperty("/Background/<object>", "bottom_color", [1.0, 1.0, 1.0])
     for light in ("PointLightNegativeX", "PointLightPositiveX"):
         meshcat.SetProperty(f"/Lights/{light}", "visible", False)
     meshcat.SetProperty("/Lights/AmbientLight/<object>", "intensity", 1.6)

@@ -32,7 +32,7 @@ from drake_social.cost import SocialCost
 from drake_social.model.plant import add_environment, add_robot
 from drake_social.scenario import load_scenario
 from drake_social.sim import replay
-from drake_social.viz.world import FIELD_CMAP, VIEW_MARGIN, field_grid
+from drake_social.viz.world import FIELD_CMAP, field_grid
 
 # Knots of the recorded trajectory: times (s) and q = [x, y, psi1, psi2].
 TIMES = [0.0, 1.5, 3.0, 4.0]
@@ -219,16 +219,24 @@ def test_seek_positions_returns_xyz_by_time(tiny_replay):
 
 
 def _to_pixel(scenario, x: float, y: float) -> tuple[int, int]:
-    """The screenshot pixel (column, row) of a world point, from the camera
-    that set_top_view frames for a 16:9 window."""
-    x0, y0, x1, y1 = scenario.world.bounds
-    pad = scenario.world.wall_thickness + VIEW_MARGIN
-    w, h = x1 - x0 + 2 * pad, y1 - y0 + 2 * pad
-    aspect = SHOT_SIZE[0] / SHOT_SIZE[1]
-    metres_per_pixel = max(h, w / aspect) / SHOT_SIZE[1]
-    col = SHOT_SIZE[0] / 2 + (x - (x0 + x1) / 2) / metres_per_pixel
-    row = SHOT_SIZE[1] / 2 - (y - (y0 + y1) / 2) / metres_per_pixel
-    return int(round(col)), int(round(row))
+    """The screenshot pixel (column, row) of a world point (the window has
+    the aspect that set_top_view framed)."""
+    cx, cy, half_w, half_h = replay.top_view_frame(scenario)
+    metres_per_pixel = 2 * half_h / SHOT_SIZE[1]
+    assert 2 * half_w / SHOT_SIZE[0] == pytest.approx(metres_per_pixel)
+    return int(round(SHOT_SIZE[0] / 2 + (x - cx) / metres_per_pixel)), int(round(SHOT_SIZE[1] / 2 - (y - cy) / metres_per_pixel))
+
+
+def test_top_view_frame_holds_the_walls_and_a_margin():
+    scenario = load_scenario(Path(__file__).parents[2] / "scenarios" / "office_bar.yaml")
+    cx, cy, half_w, half_h = replay.top_view_frame(scenario, aspect=16 / 9)
+    # 20 x 12 m, walls 0.1 m, margin 3 % of 20 m: the height decides.
+    assert (cx, cy) == (10.0, 6.0)
+    assert half_h == pytest.approx((12 + 2 * 0.1 + 2 * 0.6) / 2)
+    assert half_w == pytest.approx(half_h * 16 / 9)
+    scenario.world.bounds = [0.0, 0.0, 1000.0, 10.0]  # a corridor: the width decides
+    cx, cy, half_w, half_h = replay.top_view_frame(scenario, aspect=2.0, margin=1.0)
+    assert half_w == pytest.approx(1000 / 2 + 1.1) and half_h == pytest.approx(half_w / 2)
 
 
 def test_first_view_is_a_top_down_map(tiny_replay, tmp_path):
@@ -270,3 +278,15 @@ def test_first_view_is_a_top_down_map(tiny_replay, tmp_path):
     assert ribbon[2] > ribbon[0] + 80, f"no path ribbon: {ribbon}"
     base = at(*KNOTS[0, :2] + [0.0, -0.2])
     assert base[2] > base[0] + 40 and base.mean() < 100, f"no robot base: {base}"
+
+
+def test_office_replay_of_a_minute_stays_under_5_mb(tmp_path):
+    scenario = load_scenario(Path(__file__).parents[2] / "scenarios" / "office_bar.yaml")
+    assert scenario.execution.replay_fps == 30.0
+    xy = np.array([[1.5, 4.8], [6.0, 4.8], [9.0, 5.6], [12.0, 5.2], [16.0, 4.8], [18.5, 4.8]])
+    q = np.c_[xy, np.full(len(xy), scenario.start[2]), np.full(len(xy), scenario.start[3])]
+    q[:, 2] += 0.3 * np.sin(np.arange(len(xy)))  # the arm moves too
+    times = np.linspace(0.0, 60.0, len(xy))
+    size = record(scenario, PiecewisePolynomial.FirstOrderHold(times, q.T), tmp_path / "replay.html", q)
+    # meshcat.js ~2.2 MB + the office's geometry and heat map + ~16 kB per second.
+    assert size < 5e6
