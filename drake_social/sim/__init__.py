@@ -2,28 +2,36 @@
 
 * :mod:`drake_social.sim.replay` Meshcat recording, overlays (heat map,
   facing arrows, path ribbon), the top view and the standalone HTML replay.
+
+Exports are resolved lazily (PEP 562), so importing one submodule does not
+import the others (nor matplotlib, which the replay's heat map uses). Add a
+module's public names to ``_EXPORTS``.
 """
 
-from drake_social.sim.replay import (
-    OVERLAY_PREFIX,
-    VISUALIZER_PREFIX,
-    add_visualizer,
-    draw_overlays,
-    finish_recording,
-    make_meshcat,
-    set_top_view,
-    start_recording,
-    write_replay_html,
-)
+from importlib import import_module
 
-__all__ = [
-    "OVERLAY_PREFIX",
-    "VISUALIZER_PREFIX",
-    "add_visualizer",
-    "draw_overlays",
-    "finish_recording",
-    "make_meshcat",
-    "set_top_view",
-    "start_recording",
-    "write_replay_html",
-]
+_EXPORTS = {
+    name: "drake_social.sim.replay"
+    for name in (
+        "OVERLAY_PREFIX",
+        "VISUALIZER_PREFIX",
+        "add_visualizer",
+        "draw_overlays",
+        "finish_recording",
+        "make_meshcat",
+        "set_top_view",
+        "start_recording",
+        "top_view_frame",
+        "write_replay_html",
+    )
+}
+
+__all__ = sorted(_EXPORTS)
+
+
+def __getattr__(name: str):
+    try:
+        module = _EXPORTS[name]
+    except KeyError:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}") from None
+    return getattr(import_module(module), name)
