@@ -10,6 +10,8 @@ Usage::
     drake-social show scenarios/office_bar.yaml --out out/office_bar
     drake-social show scenarios/tiny.yaml --set "social: {sigma_h: 1.5}"
     drake-social plan scenarios/office_bar.yaml --algorithm social_rrt_star --out out/office_bar
+    drake-social simulate scenarios/office_bar.yaml --out out/office_bar
+    drake-social simulate scenarios/tiny.yaml --mode dynamic --execution paper --path out/tiny/path.csv
     drake-social bench --seeds 10 --out out/bench
 
 Exit codes: 0 success, 1 an output could not be written, 2 bad command line
@@ -17,7 +19,11 @@ or invalid input (the message names the file and the field, or the start or
 goal in collision), 3 ``plan`` found no path (its outputs are still written),
 4 ``plan`` returned a path that Drake's independent check rejects (a bug in
 the checker that planned it; the outputs are still written, and one line on
-stderr names the segment).
+stderr names the segment), 5 ``simulate`` did not reach the goal within
+``execution.time_limit``, 6 ``simulate``'s executed trajectory collides
+(``simulate`` writes its files in every case), 130 interrupted (Ctrl-C): one
+line says what, and no file of the interrupted run is left (outputs are
+written as one set, see :mod:`drake_social.outputs`).
 """
 
 from __future__ import annotations
@@ -286,6 +292,174 @@ def _run_plan(args: argparse.Namespace) -> int:
     return 0
 
 
+# ---- simulate ------------------------------------------------------------------
+
+#: Exit code of ``simulate`` when the robot did not reach the goal within the time limit.
+EXIT_NOT_REACHED = 5
+#: Exit code of ``simulate`` when the executed trajectory collides.
+EXIT_COLLISION = 6
+
+
+def _add_simulate(subparsers) -> None:
+    from drake_social.scenario import EXECUTIONS, SIM_MODES
+
+    p = subparsers.add_parser(
+        "simulate",
+        help="plan (or load a path), execute it in a Drake diagram, write a Meshcat replay",
+        description="Plans the scenario (or loads --path), executes the path with the waypoint sequencer, the "
+        "holonomic P-controller on four mecanum wheels and Ruckig trajectories in Drake's Simulator, checks "
+        "the executed trajectory for collisions, integrates its social cost and measures its deviation from "
+        "the plan. Writes DIR/replay.html (a standalone Meshcat replay: open it in a browser, no server), "
+        "DIR/executed.csv (t,x,y,psi1,psi2 and velocities), DIR/tracking.png (references against actual "
+        f"over time) and DIR/sim.json. Exit code {EXIT_NO_PATH} no path, {EXIT_NOT_REACHED} goal not reached "
+        f"within execution.time_limit, {EXIT_COLLISION} the executed trajectory collides (files are written "
+        "in every case).",
+    )
+    _add_scenario_arguments(p)
+    p.add_argument("--mode", choices=SIM_MODES,
+                   help="kinematic (the base integrates its velocity, fast) or dynamic (the MultibodyPlant "
+                        "with PD-actuated joints); default: the scenario's execution.mode")
+    p.add_argument("--execution", choices=EXECUTIONS,
+                   help="synchronized (one phase-synchronized reference per segment, stays on the planned "
+                        "segment) or paper (independent base P-control and arm trajectory, the paper's); "
+                        "default: the scenario's execution.execution")
+    p.add_argument("--path", type=Path, metavar="CSV",
+                   help="follow this path (a path.csv of 'drake-social plan': header x,y,psi1,psi2) "
+                        "instead of planning")
+    p.add_argument("--algorithm", choices=ALGORITHMS, help="planner (default: the scenario's planner.algorithm)")
+    p.add_argument("--iterations", type=_positive_int, metavar="K",
+                   help="samples drawn (default: the scenario's planner.iterations)")
+    p.add_argument("--seed", type=_nonnegative_int, metavar="S",
+                   help="random seed >= 0 (default: the scenario's random_seed)")
+    _add_checker_argument(p)
+    p.add_argument("--no-replay", action="store_true", help="do not record nor write replay.html (faster)")
+    p.add_argument("--out", type=Path, metavar="DIR", help="output directory (default: out/<scenario name>)")
+    p.add_argument("--progress", action="store_true",
+                   help="draw the progress bar on stderr even when it is not a terminal")
+    p.set_defaults(run=_run_simulate)
+
+
+def read_path_csv(path: Path, scenario: Scenario) -> np.ndarray:
+    """Reads a ``path.csv`` (header ``x,y,psi1,psi2``) for ``scenario``.
+
+    Raises:
+        ScenarioError: the file is missing or malformed, a value is not
+            finite, or its first and last rows are not the scenario's start
+            and goal (to 1e-9); the message names the file and the row.
+    """
+    if path.is_dir():
+        raise ScenarioError(f"{path}: is a directory, not a path file (--path)")
+    try:
+        lines = path.read_text().splitlines()
+    except FileNotFoundError:
+        raise ScenarioError(f"{path}: no such path file (--path)") from None
+    except UnicodeDecodeError as e:
+        raise ScenarioError(f"{path}: not a text file ({e})") from None
+    if not lines or lines[0].replace(" ", "") != "x,y,psi1,psi2":
+        raise ScenarioError(f"{path}: line 1: the header must be 'x,y,psi1,psi2', got {lines[0] if lines else ''!r}")
+    rows = []
+    for i, line in enumerate(lines[1:], start=2):
+        if not line.strip():
+            continue
+        cells = line.split(",")
+        try:
+            values = [float(c) for c in cells]
+        except ValueError:
+            raise ScenarioError(f"{path}: line {i}: needs 4 numbers x,y,psi1,psi2, got {line!r}") from None
+        if len(values) != 4 or not all(np.isfinite(values)):
+            raise ScenarioError(f"{path}: line {i}: needs 4 finite numbers x,y,psi1,psi2, got {line!r}")
+        rows.append(values)
+    if len(rows) < 2:
+        raise ScenarioError(f"{path}: needs at least 2 waypoints (start and goal), got {len(rows)}")
+    waypoints = np.array(rows)
+    for name, row, q in (("start", 0, scenario.start), ("goal", -1, scenario.goal)):
+        if not np.allclose(waypoints[row], q, rtol=0, atol=1e-9):
+            raise ScenarioError(f"{path}: the {'first' if row == 0 else 'last'} waypoint "
+                                f"{waypoints[row].tolist()} is not the scenario's {name} {list(q)}")
+    return waypoints
+
+
+def _write_executed_csv(path: Path, run) -> None:
+    """t, configuration and its velocity per logged sample (17 digits)."""
+    table = np.column_stack([run.times, run.q, run.v]) if len(run.times) else np.zeros((0, 9))
+    np.savetxt(path, table, delimiter=",", header="t,x,y,psi1,psi2,vx,vy,dpsi1,dpsi2", comments="", fmt="%.17g")
+
+
+def _run_simulate(args: argparse.Namespace) -> int:
+    from drake_social.outputs import OutputSet
+    from drake_social.sim.simulate import simulate
+    from drake_social.viz.tracking import tracking_figure
+
+    scenario = load_with_overrides(args.scenario, args.set)
+    if args.iterations is not None or args.algorithm is not None or args.seed is not None:
+        import copy
+
+        scenario = copy.deepcopy(scenario)
+        scenario.planner.iterations = args.iterations or scenario.planner.iterations
+        scenario.planner.algorithm = args.algorithm or scenario.planner.algorithm
+        scenario.random_seed = scenario.random_seed if args.seed is None else args.seed
+    waypoints = read_path_csv(args.path, scenario) if args.path is not None else None
+    out = args.out if args.out is not None else _default_out(args.scenario)
+    checker = _make_checker(scenario, args.checker, str(args.scenario))
+    meshcat = None
+    if not args.no_replay:
+        from drake_social.sim.replay import make_meshcat
+
+        meshcat = make_meshcat()
+    limit = scenario.execution.time_limit
+    bar = ProgressBar(int(round(limit * 10)), sys.stderr, label="simulating") if _show_progress(args) else None
+
+    def progress(t: float) -> None:
+        bar.update(int(t * 10), f"t = {t:.1f} s")
+
+    with OutputSet(out, "simulate") as outputs:
+        try:
+            run = simulate(scenario, mode=args.mode, execution=args.execution, waypoints=waypoints,
+                           checker=checker, meshcat=meshcat, progress=progress if bar is not None else None)
+        except PlanningInputError as e:
+            raise PlanningInputError(f"{args.scenario}: {e}") from e
+        finally:
+            if bar is not None:
+                bar.close()
+        if run.planner is not None:
+            print(run.planner.summary())
+        print(run.summary())
+        names = []
+        if meshcat is not None:
+            from drake_social.sim.replay import draw_overlays, set_top_view, write_replay_html
+
+            draw_overlays(meshcat, scenario, run.waypoints if len(run.waypoints) else None)
+            set_top_view(meshcat, scenario)
+            size = write_replay_html(meshcat, outputs.path("replay.html"))
+            names.append(f"replay.html ({size / 1e6:.2f} MB)")
+        _write_executed_csv(outputs.path("executed.csv"), run)
+        e = scenario.execution
+        fig = tracking_figure(run, max_base_speed=e.max_base_speed, max_wheel_speed=e.max_wheel_speed,
+                              title=f"{scenario.description or args.scenario.name}\n{run.mode} / {run.execution}: "
+                                    f"{run.message}")
+        fig.savefig(outputs.path("tracking.png"), dpi=130)
+        record = {"scenario": str(args.scenario), "overrides": list(args.set or []),
+                  "path": None if args.path is None else str(args.path), "checker": args.checker,
+                  **run.to_json_dict(), "waypoints": np.asarray(run.waypoints).tolist()}
+        outputs.write_text("sim.json", _json_lines(record))
+        names += ["executed.csv", "tracking.png", "sim.json"]
+    print(f"wrote {out}/: {', '.join(names)}")
+    if meshcat is not None:
+        print(f"open {(out / 'replay.html').resolve().as_uri()} in a browser to watch the replay")
+    if run.planner is not None and not run.planner.success:
+        print(f"drake-social: no path from start to goal ({run.planner.message}); nothing was executed",
+              file=sys.stderr)
+        return EXIT_NO_PATH
+    if not run.reached:
+        print(f"drake-social: {run.message}", file=sys.stderr)
+        return EXIT_NOT_REACHED
+    if run.report is not None and not run.report.collision_free:
+        print(f"drake-social: the executed trajectory collides (first at t = {run.report.first_collision_time:.2f} s)",
+              file=sys.stderr)
+        return EXIT_COLLISION
+    return 0
+
+
 # ---- bench -------------------------------------------------------------------
 
 #: Scenarios of ``drake-social bench`` (relative to the working directory: the repository).
@@ -353,7 +527,7 @@ def _run_bench(args: argparse.Namespace) -> int:
 
 # ---- parser and entry point ----------------------------------------------------
 
-_SUBCOMMANDS: list[Callable] = [_add_show, _add_plan, _add_bench]
+_SUBCOMMANDS: list[Callable] = [_add_show, _add_plan, _add_simulate, _add_bench]
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -399,6 +573,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     except OSError as e:  # e.g. --out names a file, or a directory without write access
         print(f"drake-social: error: {e}", file=sys.stderr)
         return 1
+    except KeyboardInterrupt:
+        print(f"drake-social: {args.command} interrupted; no output of this run was written", file=sys.stderr)
+        return 130
 
 
 if __name__ == "__main__":

@@ -1,5 +1,10 @@
 """Simulation of a scenario: the diagram, the Simulator run, Meshcat replays.
 
+* :mod:`drake_social.sim.diagram` :func:`build_diagram`: planner, sequencer,
+  controller, Ruckig sources and the robot, every subsystem named.
+* :mod:`drake_social.sim.simulate` :func:`simulate`: runs it and measures the
+  executed trajectory (:class:`SimulationResult`, :class:`ExecutionReport`).
+* :mod:`drake_social.sim.analysis` deviation and densification (no Drake).
 * :mod:`drake_social.sim.replay` Meshcat recording, overlays (heat map,
   facing arrows, path ribbon), the top view and the standalone HTML replay.
 
@@ -25,6 +30,12 @@ _EXPORTS = {
         "write_replay_html",
     )
 }
+
+_EXPORTS.update({name: "drake_social.sim.diagram" for name in ("TransportDiagram", "build_diagram", "dynamic_gains")})
+_EXPORTS.update({
+    name: "drake_social.sim.simulate"
+    for name in ("ExecutionReport", "SimulationResult", "analyze_execution", "simulate")
+})
 
 __all__ = sorted(_EXPORTS)
 

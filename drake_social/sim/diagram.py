@@ -1,0 +1,313 @@
+"""The execution diagram: planner, sequencer, controller, trajectory sources, robot.
+
+:func:`build_diagram` wires the systems of :mod:`drake_social.control` into
+one Drake diagram and names every subsystem, so that a script can fetch any of
+them (``diagram.GetSubsystemByName("controller")``) or replace one (pass fixed
+``waypoints`` instead of planning). Running it is :func:`drake_social.sim.simulate`.
+
+Blocks (all named; ``[p]`` only with ``execution="paper"``, ``[s]`` only with
+``"synchronized"``, ``[k]`` only in ``mode="kinematic"``, ``[d]`` only in
+``"dynamic"``)::
+
+    planner ─waypoints─▶ sequencer ─target─▶ [s] reference (4-DoF Ruckig, phase sync)
+                          ▲  │                    │ position, velocity
+                          q  └─target─▶ [p] target_split ─xy─▶ controller
+                          │            [p] arm (2-DoF Ruckig) ◀─psi─┘
+                          │  controller ─wheel_speeds─▶ drive (mecanum forward kinematics)
+    [k] base (Integrator of the drive's velocity) + arm position ─▶ configuration ─▶ to_pose ─▶ scene_graph
+    [d] drive velocity + arm references ─▶ desired_state ─▶ hold (ZOH) ─▶ plant (PD actuators)
+
+The planner is left out when ``waypoints`` are given. In ``synchronized``
+execution each segment's reference is one phase-synchronized Ruckig
+trajectory of all four coordinates, so it runs on the straight
+configuration-space segment the planner checked and costed; the base tracks
+it with feed-forward plus the P term, the arm follows it, and the sequencer
+advances when the robot is within tolerance *and* the reference has arrived.
+In ``paper`` execution (the paper's Section IV-C) the P-controller drives the
+base to the target's (x, y) and a Ruckig trajectory the arm to its
+(psi1, psi2), independently.
+
+``kinematic`` mode: the base integrates the velocity its wheels produce (a
+continuous ``Integrator``) and the arm follows its reference exactly; the
+plant is not simulated (it stays outside the diagram and only turns
+positions into SceneGraph poses, :attr:`TransportDiagram.plant`).
+``dynamic`` mode: the ``MultibodyPlant`` is a discrete system
+(``execution.plant_time_step``) whose joints are actuated by Drake's built-in
+PD controllers: the base joints as velocity servos on the drive's velocity,
+the arm joints on the reference's position and velocity; the Python
+controllers' outputs reach it through a zero-order hold at
+``execution.control_period``.
+
+Loggers (``VectorLogSink``, period ``execution.control_period``), in
+:attr:`TransportDiagram.loggers`: ``q`` (configuration), ``v`` (its
+velocity), ``wheel_speeds``, ``target`` (the sequencer's), ``reference``
+(what is being tracked: the reference position, or the target's xy with the
+arm trajectory), ``index`` (the target index).
+"""
+
+from __future__ import annotations
+
+import dataclasses as dc
+
+import numpy as np
+from pydrake.geometry import Meshcat, SceneGraph
+from pydrake.multibody.plant import AddMultibodyPlantSceneGraph, DiscreteContactApproximation, MultibodyPlant
+from pydrake.multibody.tree import ModelInstanceIndex
+from pydrake.systems.framework import Diagram, DiagramBuilder, OutputPort
+from pydrake.systems.primitives import (
+    Demultiplexer,
+    Integrator,
+    LogVectorOutput,
+    Multiplexer,
+    VectorLogSink,
+    ZeroOrderHold,
+)
+from pydrake.systems.rendering import MultibodyPositionToGeometryPose
+
+from drake_social.control import (
+    HolonomicPController,
+    MecanumDrive,
+    PlannerSystem,
+    WaypointSequencer,
+    arm_source_from_options,
+    reference_source_from_options,
+)
+from drake_social.model.plant import add_actuators, add_environment, add_robot
+from drake_social.planning.validity import ValidityChecker
+from drake_social.scenario import EXECUTIONS, SIM_MODES, Scenario
+
+__all__ = ["TransportDiagram", "build_diagram", "dynamic_gains"]
+
+
+@dc.dataclass
+class TransportDiagram:
+    """A built execution diagram and the handles a run needs.
+
+    Attributes:
+        diagram: the Drake diagram (every subsystem named).
+        plant: the scenario's MultibodyPlant (inside the diagram as ``plant``
+            in dynamic mode; outside it, for poses only, in kinematic mode).
+        scene_graph: the SceneGraph (``scene_graph``).
+        robot: the robot's model instance.
+        scenario: the scenario it was built from.
+        mode, execution: see :data:`drake_social.scenario.SIM_MODES` and ``EXECUTIONS``.
+        waypoints: the fixed waypoints, or None when ``planner`` plans them.
+        meshcat: the Meshcat the visualizer draws to, or None.
+        visualizer: the ``MeshcatVisualizer``, or None.
+        loggers: name -> VectorLogSink (see the module docstring).
+    """
+
+    diagram: Diagram
+    plant: MultibodyPlant
+    scene_graph: SceneGraph
+    robot: ModelInstanceIndex
+    scenario: Scenario
+    mode: str
+    execution: str
+    waypoints: np.ndarray | None
+    meshcat: Meshcat | None
+    visualizer: object | None
+    loggers: dict[str, VectorLogSink]
+
+    def subsystem(self, name: str):
+        """The subsystem called ``name`` (e.g. ``"sequencer"``)."""
+        return self.diagram.GetSubsystemByName(name)
+
+
+def dynamic_gains(scenario: Scenario) -> dict[str, tuple[float, float]]:
+    """PD gains (proportional, derivative) of the dynamic mode's joint actuators.
+
+    The base joints are velocity servos (proportional gain 0): the derivative
+    gain is the robot's mass over a 50 ms time constant, N s/m. The arm
+    joints track their reference with a 20 rad/s, critically damped loop on
+    a bound of the inertia about the shoulder (links as rods, the object as
+    a point mass at the gripper, plus its own extent), N m/rad and N m s/rad.
+    """
+    from drake_social.model.robot_model import _MASSES  # the masses the model uses
+
+    mass = sum(_MASSES.values())
+    l1, l2 = scenario.robot.link_lengths
+    extent = float(np.max(np.linalg.norm(_object_points(scenario), axis=1)))
+    inertia = (_MASSES["link1"] * l1**2 / 3 + _MASSES["link2"] * (l1 + l2) ** 2
+               + _MASSES["object"] * (l1 + l2 + extent) ** 2)
+    omega = 20.0
+    arm = (inertia * omega**2, 2.0 * omega * inertia)
+    base = (0.0, mass / 0.05)
+    return {"base_x": base, "base_y": base, "psi1": arm, "psi2": arm}
+
+
+def _object_points(scenario: Scenario) -> np.ndarray:
+    from drake_social.kinematics import object_polyline
+
+    return object_polyline(scenario.object)
+
+
+def _populate(plant: MultibodyPlant, scenario: Scenario, gains=None) -> ModelInstanceIndex:
+    robot = add_robot(plant, scenario)
+    add_environment(plant, scenario)
+    if gains is not None:
+        add_actuators(plant, robot, gains)
+    plant.Finalize()
+    return robot
+
+
+def _check_choice(name: str, value: str, allowed) -> None:
+    if value not in allowed:
+        raise ValueError(f"unknown {name} {value!r}; allowed: {', '.join(allowed)}")
+
+
+def build_diagram(
+    scenario: Scenario,
+    *,
+    mode: str | None = None,
+    execution: str | None = None,
+    waypoints: np.ndarray | None = None,
+    checker: ValidityChecker | None = None,
+    meshcat: Meshcat | None = None,
+) -> TransportDiagram:
+    """Builds the diagram that plans (or takes) a path and executes it.
+
+    Args:
+        scenario: a validated scenario (its ``execution`` section sets gains,
+            limits, tolerances and periods).
+        mode: ``"kinematic"`` or ``"dynamic"``; None = ``scenario.execution.mode``.
+        execution: ``"synchronized"`` or ``"paper"``; None = ``scenario.execution.execution``.
+        waypoints: (N, 4) configurations to follow, from the start; None =
+            plan them with a ``planner`` (:class:`PlannerSystem`) at
+            initialization.
+        checker: the planner's validity checker (None = its default).
+        meshcat: when given, a ``MeshcatVisualizer`` draws the scene to it at
+            ``execution.replay_fps``.
+
+    Returns:
+        The :class:`TransportDiagram`.
+    """
+    opts = scenario.execution
+    mode = mode or opts.mode
+    execution = execution or opts.execution
+    _check_choice("mode", mode, SIM_MODES)
+    _check_choice("execution", execution, EXECUTIONS)
+    start = np.asarray(scenario.start, float)
+    if waypoints is not None:
+        waypoints = np.asarray(waypoints, float).reshape(-1, 4)
+        if len(waypoints) == 0:
+            raise ValueError("waypoints: empty; give at least one configuration (N, 4)")
+        start = waypoints[0].copy()
+    synchronized = execution == "synchronized"
+    period = float(opts.control_period)
+
+    builder = DiagramBuilder()
+    if mode == "dynamic":
+        plant, scene_graph = AddMultibodyPlantSceneGraph(builder, time_step=float(opts.plant_time_step))
+        # Drake's joint-actuator PD controllers are implicit in SAP-family solvers.
+        plant.set_discrete_contact_approximation(DiscreteContactApproximation.kLagged)
+        robot = _populate(plant, scenario, dynamic_gains(scenario))
+        plant.SetDefaultPositions(robot, start)
+    else:
+        scene_graph = builder.AddNamedSystem("scene_graph", SceneGraph())
+        plant = MultibodyPlant(time_step=0.0)
+        plant.RegisterAsSourceForSceneGraph(scene_graph)
+        robot = _populate(plant, scenario)
+
+    # ---- which target ---------------------------------------------------------
+    if waypoints is None:
+        planner = builder.AddNamedSystem("planner", PlannerSystem(scenario, checker))
+        sequencer = builder.AddNamedSystem(
+            "sequencer", WaypointSequencer.from_options(opts, wait_for_reference=synchronized))
+        builder.Connect(planner.GetOutputPort("waypoints"), sequencer.GetInputPort("waypoints"))
+    else:
+        sequencer = builder.AddNamedSystem(
+            "sequencer", WaypointSequencer.from_options(opts, waypoints=waypoints, wait_for_reference=synchronized))
+
+    # ---- how to get there -----------------------------------------------------
+    controller = builder.AddNamedSystem("controller", HolonomicPController.from_options(opts, feedforward=synchronized))
+    drive = builder.AddNamedSystem("drive", MecanumDrive(float(opts.wheel_radius)))
+    builder.Connect(controller.GetOutputPort("wheel_speeds"), drive.GetInputPort("wheel_speeds"))
+    if synchronized:
+        reference = builder.AddNamedSystem("reference", reference_source_from_options(opts, start))
+        builder.Connect(sequencer.GetOutputPort("target"), reference.GetInputPort("target"))
+        builder.Connect(reference.GetOutputPort("finished"), sequencer.GetInputPort("reference_done"))
+        ref_pos = builder.AddNamedSystem("reference_position_split", Demultiplexer([2, 2]))
+        ref_vel = builder.AddNamedSystem("reference_velocity_split", Demultiplexer([2, 2]))
+        builder.Connect(reference.GetOutputPort("position"), ref_pos.get_input_port())
+        builder.Connect(reference.GetOutputPort("velocity"), ref_vel.get_input_port())
+        builder.Connect(ref_pos.get_output_port(0), controller.GetInputPort("base_target"))
+        builder.Connect(ref_vel.get_output_port(0), controller.GetInputPort("base_velocity_ff"))
+        arm_position: OutputPort = ref_pos.get_output_port(1)
+        arm_velocity: OutputPort = ref_vel.get_output_port(1)
+        reference_out: OutputPort = reference.GetOutputPort("position")
+    else:
+        split = builder.AddNamedSystem("target_split", Demultiplexer([2, 2]))
+        builder.Connect(sequencer.GetOutputPort("target"), split.get_input_port())
+        arm = builder.AddNamedSystem("arm", arm_source_from_options(opts, start[2:]))
+        builder.Connect(split.get_output_port(1), arm.GetInputPort("target"))
+        builder.Connect(split.get_output_port(0), controller.GetInputPort("base_target"))
+        arm_position = arm.GetOutputPort("position")
+        arm_velocity = arm.GetOutputPort("velocity")
+        tracked = builder.AddNamedSystem("reference_config", Multiplexer([2, 2]))
+        builder.Connect(split.get_output_port(0), tracked.get_input_port(0))
+        builder.Connect(arm_position, tracked.get_input_port(1))
+        reference_out = tracked.get_output_port(0)
+
+    # ---- the robot ------------------------------------------------------------
+    if mode == "dynamic":
+        state = builder.AddNamedSystem("state_split", Demultiplexer([4, 4]))
+        builder.Connect(plant.get_state_output_port(robot), state.get_input_port())
+        q_port, v_port = state.get_output_port(0), state.get_output_port(1)
+        q_split = builder.AddNamedSystem("q_split", Demultiplexer([2, 2]))
+        builder.Connect(q_port, q_split.get_input_port())
+        # Desired state [q_d, v_d] in joint order; the base's q_d is unused (velocity servo, gain 0).
+        desired = builder.AddNamedSystem("desired_state", Multiplexer([2, 2, 2, 2]))
+        builder.Connect(q_split.get_output_port(0), desired.get_input_port(0))
+        builder.Connect(arm_position, desired.get_input_port(1))
+        builder.Connect(drive.GetOutputPort("base_velocity"), desired.get_input_port(2))
+        builder.Connect(arm_velocity, desired.get_input_port(3))
+        hold = builder.AddNamedSystem("hold", ZeroOrderHold(period, 8))
+        builder.Connect(desired.get_output_port(0), hold.get_input_port())
+        builder.Connect(hold.get_output_port(), plant.get_desired_state_input_port(robot))
+    else:
+        base = builder.AddNamedSystem("base", Integrator(2))
+        base.set_default_integral_value(start[:2])
+        builder.Connect(drive.GetOutputPort("base_velocity"), base.get_input_port())
+        configuration = builder.AddNamedSystem("configuration", Multiplexer([2, 2]))
+        builder.Connect(base.get_output_port(), configuration.get_input_port(0))
+        builder.Connect(arm_position, configuration.get_input_port(1))
+        velocity = builder.AddNamedSystem("velocity", Multiplexer([2, 2]))
+        builder.Connect(drive.GetOutputPort("base_velocity"), velocity.get_input_port(0))
+        builder.Connect(arm_velocity, velocity.get_input_port(1))
+        to_pose = builder.AddNamedSystem("to_pose", MultibodyPositionToGeometryPose(plant))
+        builder.Connect(configuration.get_output_port(), to_pose.get_input_port())
+        builder.Connect(to_pose.get_output_port(), scene_graph.get_source_pose_port(plant.get_source_id()))
+        q_port, v_port = configuration.get_output_port(), velocity.get_output_port()
+        q_split = builder.AddNamedSystem("q_split", Demultiplexer([2, 2]))
+        builder.Connect(q_port, q_split.get_input_port())
+    builder.Connect(q_port, sequencer.GetInputPort("q"))
+    builder.Connect(q_split.get_output_port(0), controller.GetInputPort("base_position"))
+
+    # ---- records --------------------------------------------------------------
+    ports = {
+        "q": q_port,
+        "v": v_port,
+        "wheel_speeds": controller.GetOutputPort("wheel_speeds"),
+        "target": sequencer.GetOutputPort("target"),
+        "reference": reference_out,
+        "index": sequencer.GetOutputPort("index"),
+    }
+    loggers = {}
+    for name, port in ports.items():
+        logger = LogVectorOutput(port, builder, publish_period=period)
+        logger.set_name(f"{name}_log")
+        loggers[name] = logger
+
+    visualizer = None
+    if meshcat is not None:
+        from drake_social.sim.replay import add_visualizer
+
+        visualizer = add_visualizer(builder, scene_graph, meshcat, fps=float(opts.replay_fps))
+
+    diagram = builder.Build()
+    diagram.set_name(f"transport_{mode}_{execution}")
+    return TransportDiagram(
+        diagram=diagram, plant=plant, scene_graph=scene_graph, robot=robot, scenario=scenario, mode=mode,
+        execution=execution, waypoints=waypoints, meshcat=meshcat, visualizer=visualizer, loggers=loggers,
+    )

@@ -1,0 +1,321 @@
+"""Runs an execution diagram with Drake's Simulator and measures what it did.
+
+:func:`simulate` builds the diagram (:func:`~drake_social.sim.diagram.build_diagram`),
+plans at initialization (or takes the given waypoints), advances until the
+sequencer reports the goal reached or ``execution.time_limit`` passes, and
+returns a :class:`SimulationResult`: the logged trajectory and, after every
+run, what the *executed* trajectory did: checked for collisions at the
+checker's resolution, its social cost integrated with the same cost code as
+the planner's, the deviation of every body point from the planned path, the
+minimum clearance and the time to goal.
+
+Example::
+
+    from drake_social.scenario import load_scenario
+    from drake_social.sim import simulate
+
+    scenario = load_scenario("scenarios/tiny.yaml")
+    run = simulate(scenario, mode="kinematic", execution="synchronized")
+    print(run.summary())
+"""
+
+from __future__ import annotations
+
+import dataclasses as dc
+import logging
+import math
+import time
+from typing import Any, Callable
+
+import numpy as np
+from pydrake.geometry import Meshcat
+from pydrake.systems.analysis import InitializeParams, Simulator
+from pydrake.systems.framework import EventStatus
+
+from drake_social.cost.social import SocialCost
+from drake_social.kinematics import ArmGeometry
+from drake_social.planning.result import PlannerResult
+from drake_social.planning.validity import ValidityChecker
+from drake_social.scenario import Scenario
+from drake_social.sim.analysis import config_deviation, densify, point_deviation
+from drake_social.sim.diagram import TransportDiagram, build_diagram
+
+__all__ = ["ExecutionReport", "SimulationResult", "analyze_execution", "simulate"]
+
+_log = logging.getLogger(__name__)
+
+
+@dc.dataclass
+class ExecutionReport:
+    """What the executed trajectory did, beside what was planned.
+
+    Attributes:
+        planned_social_cost: Msc summed along the planned waypoints (the
+            scenario's full multi-point weights).
+        executed_social_cost: the same integral along the executed trajectory.
+        max_point_deviation: body point name -> largest distance (metres) of
+            its executed position from its planned curve, and ``"max"``.
+        max_config_deviation: largest configuration-space distance of an
+            executed configuration from the planned waypoint polyline.
+        min_clearance: smallest signed distance (metres) of the robot to the
+            environment along the executed trajectory (checked configurations).
+        collision_free: no checked configuration collides.
+        first_collision_time: time (s) of the first colliding configuration, or None.
+        checked_configurations: how many configurations were checked (the
+            executed samples, densified to the collision resolution).
+        collision_resolution: largest body-point motion between checked
+            configurations, metres.
+    """
+
+    planned_social_cost: float
+    executed_social_cost: float
+    max_point_deviation: dict[str, float]
+    max_config_deviation: float
+    min_clearance: float
+    collision_free: bool
+    first_collision_time: float | None
+    checked_configurations: int
+    collision_resolution: float
+
+
+@dc.dataclass
+class SimulationResult:
+    """A simulated execution.
+
+    Attributes:
+        mode, execution: how it ran.
+        reached: the sequencer reported the goal reached before the time limit.
+        message: one line on the outcome.
+        time_to_goal: simulated seconds until the goal was reached (None if not).
+        sim_time: simulated seconds.
+        wall_time: seconds spent in ``Simulator.AdvanceTo`` (planning excluded).
+        realtime_factor: ``sim_time / wall_time``.
+        waypoints: (N, 4) the path followed.
+        times: (T,) log times, seconds.
+        q: (T, 4) configurations; v: (T, 4) their velocities (m/s, rad/s).
+        wheel_speeds: (T, 4) commanded wheel speeds, rad/s.
+        target: (T, 4) the sequencer's target; reference: (T, 4) what was tracked.
+        target_index: (T,) the sequencer's index.
+        planner: the PlannerResult when the diagram planned, else None.
+        report: the :class:`ExecutionReport`, or None when not analysed or no path.
+    """
+
+    mode: str
+    execution: str
+    reached: bool
+    message: str
+    time_to_goal: float | None
+    sim_time: float
+    wall_time: float
+    realtime_factor: float
+    waypoints: np.ndarray
+    times: np.ndarray
+    q: np.ndarray
+    v: np.ndarray
+    wheel_speeds: np.ndarray
+    target: np.ndarray
+    reference: np.ndarray
+    target_index: np.ndarray
+    planner: PlannerResult | None = None
+    report: ExecutionReport | None = None
+
+    def summary(self) -> str:
+        """One line for the terminal."""
+        line = f"{self.mode}/{self.execution}: {self.message}"
+        if self.report is not None:
+            r = self.report
+            line += (f"; social cost planned {r.planned_social_cost:.4g}, executed {r.executed_social_cost:.4g}; "
+                     f"max point deviation {r.max_point_deviation['max']:.3g} m; "
+                     f"min clearance {r.min_clearance:.3g} m; "
+                     f"{'collision-free' if r.collision_free else 'COLLIDES'}")
+        return line + f"; {self.realtime_factor:.0f}x realtime"
+
+    def to_json_dict(self) -> dict[str, Any]:
+        """JSON-ready summary (the logged arrays are left out)."""
+
+        def num(x):
+            return None if x is None or not np.isfinite(x) else float(x)
+
+        out: dict[str, Any] = {
+            "mode": self.mode,
+            "execution": self.execution,
+            "reached": self.reached,
+            "message": self.message,
+            "time_to_goal": num(self.time_to_goal),
+            "sim_time": self.sim_time,
+            "wall_time": self.wall_time,
+            "realtime_factor": num(self.realtime_factor),
+            "num_waypoints": int(len(self.waypoints)),
+            "num_samples": int(len(self.times)),
+        }
+        if self.report is not None:
+            r = dc.asdict(self.report)
+            r["first_collision_time"] = num(r["first_collision_time"])
+            r["min_clearance"] = num(r["min_clearance"])
+            out.update(r)
+        if self.planner is not None:
+            out["planner"] = {k: v for k, v in self.planner.to_json_dict().items() if k != "cost_history"}
+        return out
+
+
+def analyze_execution(
+    scenario: Scenario,
+    waypoints: np.ndarray,
+    times: np.ndarray,
+    q: np.ndarray,
+    checker: ValidityChecker | None = None,
+) -> ExecutionReport:
+    """Checks and measures an executed trajectory against its planned path.
+
+    Args:
+        scenario: the scenario.
+        waypoints: (N, 4) planned path.
+        times, q: (T,), (T, 4) executed configurations over time.
+        checker: the collision checker of the executed configurations;
+            None = Drake's (:class:`~drake_social.model.checker.SceneGraphChecker`).
+    """
+    if checker is None:
+        from drake_social.model.checker import make_checker
+
+        checker = make_checker(scenario, "drake")
+    geometry = ArmGeometry.from_scenario(scenario)
+    social = SocialCost.from_scenario(scenario)
+    wp = np.asarray(waypoints, float).reshape(-1, 4)
+    q = np.asarray(q, float).reshape(-1, 4)
+    planned = float(social.motion_cost(wp[:-1], wp[1:]).sum()) if len(wp) > 1 else 0.0
+    executed = float(social.motion_cost(q[:-1], q[1:]).sum()) if len(q) > 1 else 0.0
+
+    resolution = float(scenario.planner.collision_resolution)
+    # Which executed sample each densified configuration follows (for the collision time).
+    dense = densify(geometry, q, resolution)
+    span = geometry.max_displacement(q[:-1], q[1:], include_body=True) if len(q) > 1 else np.zeros(0)
+    counts = np.concatenate([[1], np.maximum(1, np.ceil(span / resolution).astype(int))])
+    owner = np.repeat(np.arange(len(q)), counts)
+    valid = np.asarray(checker.are_valid(dense), bool)
+    clearance = min((checker.clearance(c) for c in dense), default=math.inf)
+    first = None if valid.all() else float(times[owner[int(np.argmin(valid))]])
+    return ExecutionReport(
+        planned_social_cost=planned,
+        executed_social_cost=executed,
+        max_point_deviation=point_deviation(geometry, wp, q),
+        max_config_deviation=config_deviation(wp, q),
+        min_clearance=float(clearance),
+        collision_free=bool(valid.all()),
+        first_collision_time=first,
+        checked_configurations=int(len(dense)),
+        collision_resolution=resolution,
+    )
+
+
+def simulate(
+    scenario: Scenario,
+    *,
+    mode: str | None = None,
+    execution: str | None = None,
+    waypoints: np.ndarray | None = None,
+    checker: ValidityChecker | None = None,
+    meshcat: Meshcat | None = None,
+    time_limit: float | None = None,
+    analyze: bool = True,
+    analysis_checker: ValidityChecker | None = None,
+    progress: Callable[[float], None] | None = None,
+) -> SimulationResult:
+    """Plans (unless ``waypoints`` are given), executes and measures a transport.
+
+    Args:
+        scenario: a validated scenario.
+        mode, execution, waypoints, checker, meshcat: see
+            :func:`~drake_social.sim.diagram.build_diagram`. With ``meshcat``
+            the run is recorded (``execution.replay_fps``); publish or export
+            it afterwards (:mod:`drake_social.sim.replay`).
+        time_limit: simulated seconds before giving up; None =
+            ``scenario.execution.time_limit``.
+        analyze: check and measure the executed trajectory (:func:`analyze_execution`).
+        analysis_checker: the checker of that analysis (None = Drake's).
+        progress: optional ``progress(t)`` callback with the simulated time,
+            called after every simulator step.
+
+    Returns:
+        The :class:`SimulationResult`; ``reached`` is False when no path was
+        found or the goal was not reached in time (``message`` says which).
+
+    Raises:
+        PlanningInputError: the start or goal is unusable (from the planner).
+    """
+    built = build_diagram(scenario, mode=mode, execution=execution, waypoints=waypoints, checker=checker,
+                          meshcat=meshcat)
+    limit = float(scenario.execution.time_limit if time_limit is None else time_limit)
+    if not limit > 0:
+        raise ValueError(f"time_limit must be > 0 seconds, got {time_limit}")
+    root = built.diagram.CreateDefaultContext()
+    if built.visualizer is not None:
+        from drake_social.sim.replay import start_recording
+
+        start_recording(built.meshcat, float(scenario.execution.replay_fps))
+    # The initialization events (the planner plans) run first on their own, so
+    # that a failed plan is reported before anything evaluates the sequencer;
+    # Initialize() below then does not repeat them.
+    built.diagram.ExecuteInitializationEvents(root)
+    planner_result = None
+    path = built.waypoints
+    if path is None:
+        planner = built.subsystem("planner")
+        planner_result = planner.GetOutputPort("result").Eval(planner.GetMyContextFromRoot(root))
+        path = np.asarray(planner_result.waypoints, float).reshape(-1, 4)
+        if not planner_result.success:
+            return _empty_result(built, path, planner_result, f"no path to execute ({planner_result.message})")
+    simulator = Simulator(built.diagram, root)
+    simulator.get_mutable_integrator().set_maximum_step_size(float(scenario.execution.control_period))
+    simulator.Initialize(InitializeParams(suppress_initialization_events=True))
+
+    sequencer = built.subsystem("sequencer")
+    sequencer_context = sequencer.GetMyContextFromRoot(root)
+    done_port = sequencer.GetOutputPort("done")
+    reached_at: list[float] = []
+
+    def monitor(context) -> EventStatus:
+        if progress is not None:
+            progress(context.get_time())
+        if done_port.Eval(sequencer_context)[0] > 0.5:
+            reached_at.append(context.get_time())
+            return EventStatus.ReachedTermination(built.diagram, "goal reached")
+        return EventStatus.Succeeded()
+
+    simulator.set_monitor(monitor)
+    t0 = time.perf_counter()
+    simulator.AdvanceTo(limit)
+    wall = time.perf_counter() - t0
+    if built.visualizer is not None:
+        from drake_social.sim.replay import finish_recording
+
+        finish_recording(built.meshcat)
+
+    logs = {name: logger.FindLog(root) for name, logger in built.loggers.items()}
+    times = logs["q"].sample_times().copy()
+    data = {name: log.data().T.copy() for name, log in logs.items()}
+    sim_time = root.get_time()
+    reached = bool(reached_at)
+    message = (f"goal reached at t = {reached_at[0]:.2f} s" if reached
+               else f"goal not reached within the time limit of {limit:g} s "
+                    f"(at waypoint {int(data['index'][-1, 0]) if len(times) else 0} of {len(path) - 1})")
+    result = SimulationResult(
+        mode=built.mode, execution=built.execution, reached=reached, message=message,
+        time_to_goal=reached_at[0] if reached else None, sim_time=sim_time, wall_time=wall,
+        realtime_factor=sim_time / wall if wall > 0 else math.inf, waypoints=path, times=times,
+        q=data["q"], v=data["v"], wheel_speeds=data["wheel_speeds"], target=data["target"],
+        reference=data["reference"], target_index=data["index"][:, 0].astype(int), planner=planner_result,
+    )
+    _log.info("%s", result.summary())
+    if analyze:
+        result.report = analyze_execution(scenario, path, times, result.q, analysis_checker)
+    return result
+
+
+def _empty_result(built: TransportDiagram, path: np.ndarray, planner: PlannerResult, message: str) -> SimulationResult:
+    empty = np.zeros((0, 4))
+    return SimulationResult(
+        mode=built.mode, execution=built.execution, reached=False, message=message, time_to_goal=None,
+        sim_time=0.0, wall_time=0.0, realtime_factor=math.nan, waypoints=path, times=np.zeros(0), q=empty,
+        v=empty, wheel_speeds=empty, target=empty, reference=empty, target_index=np.zeros(0, int),
+        planner=planner,
+    )

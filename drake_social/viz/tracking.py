@@ -1,0 +1,68 @@
+"""The figure of a simulated execution: references against what the robot did.
+
+:func:`tracking_figure` stacks four panels over time: the base's x and y
+(tracked reference dashed, actual solid), the arm joints psi1 and psi2 (the
+same), the commanded wheel speeds with their limit, and the base speed with
+its limit. Vertical ticks mark where the sequencer advanced.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from matplotlib.figure import Figure
+
+__all__ = ["tracking_figure"]
+
+_COLORS = ("#1f77b4", "#d62728", "#2ca02c", "#9467bd")
+
+
+def tracking_figure(run, *, max_base_speed: float | None = None, max_wheel_speed: float | None = None,
+                    title: str | None = None) -> Figure:
+    """Reference against actual over time for a :class:`~drake_social.sim.simulate.SimulationResult`.
+
+    Args:
+        run: the simulation result (its ``times``, ``q``, ``reference``,
+            ``v``, ``wheel_speeds``, ``target_index``).
+        max_base_speed: drawn as a limit line on the speed panel (m/s).
+        max_wheel_speed: drawn as +- limit lines on the wheel panel (rad/s).
+        title: the figure title (default: mode, execution and outcome).
+    """
+    t = np.asarray(run.times, float)
+    fig = Figure(figsize=(9.0, 8.5))
+    fig.subplots_adjust(left=0.1, right=0.97, bottom=0.06, top=0.93, hspace=0.32)
+    axes = fig.subplots(4, 1, sharex=True)
+    fig.suptitle(title if title is not None else f"{run.mode} / {run.execution}: {run.message}", fontsize=10)
+    if len(t) == 0:
+        axes[0].text(0.5, 0.5, "nothing was executed", transform=axes[0].transAxes, ha="center")
+        return fig
+    advances = t[1:][np.diff(run.target_index) != 0]
+    panels = [
+        (axes[0], (0, 1), ("x", "y"), "base position (m)"),
+        (axes[1], (2, 3), ("psi1", "psi2"), "arm joints (rad)"),
+    ]
+    for ax, idx, names, ylabel in panels:
+        for k, (i, name) in enumerate(zip(idx, names)):
+            ax.plot(t, run.reference[:, i], "--", color=_COLORS[k], linewidth=1.0, label=f"{name} reference")
+            ax.plot(t, run.q[:, i], "-", color=_COLORS[k], linewidth=1.6, alpha=0.7, label=f"{name} actual")
+        ax.set_ylabel(ylabel)
+        ax.legend(fontsize=7, ncol=4, loc="best")
+    ax = axes[2]
+    for k in range(4):
+        ax.plot(t, run.wheel_speeds[:, k], color=_COLORS[k], linewidth=1.0, label=f"wheel {k + 1}")
+    if max_wheel_speed is not None:
+        for sign in (1, -1):
+            ax.axhline(sign * max_wheel_speed, color="k", linestyle=":", linewidth=1.0)
+    ax.set_ylabel("wheel speed (rad/s)")
+    ax.legend(fontsize=7, ncol=4, loc="best")
+    ax = axes[3]
+    ax.plot(t, np.hypot(run.v[:, 0], run.v[:, 1]), color="#1f3b73", linewidth=1.4, label="base speed")
+    if max_base_speed is not None:
+        ax.axhline(max_base_speed, color="k", linestyle=":", linewidth=1.0, label="limit")
+    ax.set_ylabel("base speed (m/s)")
+    ax.set_xlabel("time (s)")
+    ax.legend(fontsize=7, loc="best")
+    for ax in axes:
+        ax.grid(True, alpha=0.3)
+        for a in advances:
+            ax.axvline(a, color="#999999", linewidth=0.5, alpha=0.5)
+    return fig

@@ -1,0 +1,188 @@
+"""Whole runs of the execution diagram on tiny_scenario.yaml, in both modes and both executions.
+
+Each run is checked against independent facts: the executed trajectory is
+re-checked for collisions, its end is the goal, speeds respect the limits,
+and in synchronized kinematic mode every body point stays on the planned path.
+"""
+
+from __future__ import annotations
+
+import copy
+
+import numpy as np
+import pytest
+
+from drake_social.kinematics import ArmGeometry
+from drake_social.model.checker import make_checker
+from drake_social.planning.variants import plan
+from drake_social.sim.analysis import body_points, config_deviation, densify, point_deviation
+from drake_social.sim.diagram import build_diagram
+from drake_social.sim.simulate import simulate
+
+
+@pytest.fixture(scope="module")
+def tiny_path(tiny_scenario):
+    result = plan(tiny_scenario, make_checker(tiny_scenario, "numpy"))
+    assert result.success
+    return result.waypoints
+
+
+@pytest.fixture(scope="module")
+def runs(tiny_scenario, tiny_path):
+    return {
+        (mode, ex): simulate(tiny_scenario, mode=mode, execution=ex, waypoints=tiny_path)
+        for mode in ("kinematic", "dynamic")
+        for ex in ("synchronized", "paper")
+    }
+
+
+@pytest.mark.parametrize("mode", ["kinematic", "dynamic"])
+@pytest.mark.parametrize("execution", ["synchronized", "paper"])
+def test_run_reaches_the_goal_collision_free(runs, tiny_scenario, tiny_path, mode, execution):
+    dut = runs[(mode, execution)]
+    assert dut.reached, dut.message
+    e = tiny_scenario.execution
+    # The sequencer's rule held at its last update, one control period before
+    # the run stopped: base and joints within tolerance of the goal, up to
+    # what the robot can move in that period.
+    q_end = dut.q[-1]
+    slack = e.control_period * np.array([e.max_base_speed, *e.arm_max_velocity])
+    assert np.hypot(*(q_end[:2] - tiny_scenario.goal[:2])) <= e.base_tolerance + slack[0]
+    assert np.all(np.abs(q_end[2:] - np.asarray(tiny_scenario.goal[2:])) <= e.joint_tolerance + slack[1:])
+    assert dut.report.collision_free
+    assert dut.report.min_clearance > 0
+    assert dut.target_index[-1] == len(tiny_path) - 1
+    # Time to goal: no faster than the base can cover the path at its top speed.
+    base_length = np.hypot(*np.diff(tiny_path[:, :2], axis=0).T).sum()
+    assert dut.time_to_goal >= base_length / e.max_base_speed - 2 * e.base_tolerance / e.max_base_speed
+    assert dut.time_to_goal <= e.time_limit
+
+
+@pytest.mark.parametrize("execution", ["synchronized", "paper"])
+def test_kinematic_speeds_respect_the_limits(runs, tiny_scenario, execution):
+    dut = runs[("kinematic", execution)]
+    e = tiny_scenario.execution
+    assert np.max(np.hypot(dut.v[:, 0], dut.v[:, 1])) <= e.max_base_speed * (1 + 1e-9)
+    assert np.max(np.abs(dut.wheel_speeds)) <= e.max_wheel_speed * (1 + 1e-9)
+    # The arm's velocity is the Ruckig reference's, within its limits.
+    assert np.all(np.max(np.abs(dut.v[:, 2:]), axis=0) <= np.asarray(e.arm_max_velocity) * (1 + 1e-6))
+    # The logged base velocity is what moved the base: finite differences agree
+    # (everywhere for the smooth synchronized reference; the paper's P-law
+    # jumps when the target switches, so there only away from the switches).
+    dt = np.diff(dut.times)
+    fd = np.diff(dut.q[:, :2], axis=0) / dt[:, None]
+    mid = 0.5 * (dut.v[1:, :2] + dut.v[:-1, :2])
+    error = np.max(np.abs(fd - mid), axis=1)
+    if execution == "synchronized":
+        assert error.max() < 1e-3
+    else:
+        assert np.quantile(error, 0.95) < 1e-3
+
+
+def test_synchronized_kinematic_stays_on_the_planned_path(runs):
+    dut = runs[("kinematic", "synchronized")]
+    assert dut.report.max_point_deviation["max"] < 0.01
+    assert dut.report.max_config_deviation < 1e-3
+    # Same segments, same cost: the executed integral matches the planned one.
+    r = dut.report
+    assert r.executed_social_cost == pytest.approx(r.planned_social_cost, rel=0.01, abs=1e-6)
+
+
+def test_paper_execution_deviation_is_reported(runs):
+    sync, paper = runs[("kinematic", "synchronized")], runs[("kinematic", "paper")]
+    # Independent base and arm leave the straight segments; the report shows it.
+    assert paper.report.max_config_deviation > 10 * sync.report.max_config_deviation
+    assert paper.report.max_point_deviation["max"] > 0.05
+
+
+def test_dynamic_synchronized_tracks_within_a_few_centimetres(runs):
+    dut = runs[("dynamic", "synchronized")]
+    assert dut.report.max_point_deviation["max"] < 0.05
+
+
+def test_runs_are_deterministic(tiny_scenario, tiny_path):
+    a = simulate(tiny_scenario, mode="kinematic", execution="paper", waypoints=tiny_path, analyze=False)
+    b = simulate(tiny_scenario, mode="kinematic", execution="paper", waypoints=tiny_path, analyze=False)
+    np.testing.assert_array_equal(a.q, b.q)
+    assert a.time_to_goal == b.time_to_goal
+
+
+def test_time_limit_stops_and_says_so(tiny_scenario, tiny_path):
+    dut = simulate(tiny_scenario, waypoints=tiny_path, time_limit=2.0, analyze=False)
+    assert not dut.reached
+    assert dut.time_to_goal is None
+    assert dut.sim_time == pytest.approx(2.0)
+    assert "not reached within the time limit of 2 s" in dut.message
+
+
+def test_planner_in_the_diagram_plans_the_same_path(tiny_scenario):
+    checker = make_checker(tiny_scenario, "numpy")
+    dut = simulate(tiny_scenario, checker=checker, analyze=False)
+    expected = plan(tiny_scenario, make_checker(tiny_scenario, "numpy"))
+    np.testing.assert_array_equal(dut.waypoints, expected.waypoints)
+    assert dut.planner is not None and dut.planner.success
+    assert dut.reached
+
+
+def test_no_path_is_reported_without_executing(tiny_scenario):
+    scenario = copy.deepcopy(tiny_scenario)
+    scenario.planner.iterations = 1
+    scenario.planner.goal_bias = 0.0
+    dut = simulate(scenario, checker=make_checker(scenario, "numpy"))
+    assert not dut.reached and not dut.planner.success
+    assert dut.message.startswith("no path to execute")
+    assert len(dut.times) == 0
+
+
+@pytest.mark.parametrize("mode, execution, names", [
+    ("kinematic", "synchronized", {"planner", "sequencer", "reference", "controller", "drive", "base", "to_pose"}),
+    ("kinematic", "paper", {"planner", "sequencer", "arm", "controller", "drive", "base", "to_pose"}),
+    ("dynamic", "paper", {"planner", "sequencer", "arm", "controller", "drive", "plant", "hold"}),
+])
+def test_subsystems_are_named(tiny_scenario, mode, execution, names):
+    dut = build_diagram(tiny_scenario, mode=mode, execution=execution, checker=make_checker(tiny_scenario, "numpy"))
+    have = {s.get_name() for s in dut.diagram.GetSystems()}
+    assert names <= have
+    assert {"q_log", "v_log", "wheel_speeds_log", "target_log", "reference_log", "index_log"} <= have
+
+
+def test_bad_choices_are_refused(tiny_scenario):
+    with pytest.raises(ValueError, match="unknown mode 'fast'"):
+        build_diagram(tiny_scenario, mode="fast")
+    with pytest.raises(ValueError, match="waypoints: empty"):
+        build_diagram(tiny_scenario, waypoints=np.zeros((0, 4)))
+
+
+# ---- analysis, against hand computations -----------------------------------------
+
+
+def test_config_deviation_point_to_segment_by_hand():
+    planned = np.array([[0, 0, 0, 0], [2, 0, 0, 0], [2, 2, 0, 0]], float)
+    executed = np.array([[1, 0.5, 0, 0], [2.3, 1, 0, 0], [3, -1, 0, 0], [1, 0, 0, 0.2]])
+    # Distances: 0.5 to the first segment; 0.3 to the second; (3,-1) is sqrt(2) from the corner; 0.2.
+    assert config_deviation(planned, executed) == pytest.approx(np.sqrt(2), abs=1e-12)
+    assert config_deviation(planned, executed[:2]) == pytest.approx(0.5, abs=1e-12)
+
+
+def test_point_deviation_of_the_path_itself_is_within_half_the_spacing(tiny_scenario, tiny_path):
+    geometry = ArmGeometry.from_scenario(tiny_scenario)
+    on_path = densify(geometry, tiny_path, 0.037)  # other samples of the same segments
+    dev = point_deviation(geometry, tiny_path, on_path, spacing=0.002)
+    assert dev["max"] <= 0.001 + 1e-12
+    # A base offset of 5 cm perpendicular to a straight path shows as 5 cm at the base.
+    straight = np.array([[1.0, 2.5, 0.0, 1.5], [6.0, 2.5, 0.0, 1.5]])
+    moved = densify(geometry, straight, 0.05) + [0.0, 0.05, 0.0, 0.0]
+    dev = point_deviation(geometry, straight, moved[5:-5], spacing=0.001)
+    assert dev["base"] == pytest.approx(0.05, abs=5e-4)
+
+
+def test_densify_bounds_the_motion_between_checked_configurations(tiny_scenario, tiny_path):
+    geometry = ArmGeometry.from_scenario(tiny_scenario)
+    dense = densify(geometry, tiny_path, 0.05)
+    step = geometry.max_displacement(dense[:-1], dense[1:], include_body=True)
+    assert step.max() <= 0.05 + 1e-12
+    # Independent: actual body point motion between neighbours is below the bound.
+    moved = np.linalg.norm(np.diff(body_points(geometry, dense), axis=0), axis=-1).max()
+    assert moved <= 0.05 + 1e-12
+    np.testing.assert_array_equal(dense[0], tiny_path[0])
+    np.testing.assert_array_equal(dense[-1], tiny_path[-1])
