@@ -387,7 +387,7 @@ def _write_executed_csv(path: Path, run) -> None:
 
 def _run_simulate(args: argparse.Namespace) -> int:
     from drake_social.outputs import OutputSet
-    from drake_social.sim.simulate import simulate
+    from drake_social.sim.run import simulate
     from drake_social.viz.tracking import tracking_figure
 
     scenario = load_with_overrides(args.scenario, args.set)

@@ -2,7 +2,7 @@
 
 * :mod:`drake_social.sim.diagram` :func:`build_diagram`: planner, sequencer,
   controller, Ruckig sources and the robot, every subsystem named.
-* :mod:`drake_social.sim.simulate` :func:`simulate`: runs it and measures the
+* :mod:`drake_social.sim.run` :func:`simulate`: runs it and measures the
   executed trajectory (:class:`SimulationResult`, :class:`ExecutionReport`).
 * :mod:`drake_social.sim.analysis` deviation and densification (no Drake).
 * :mod:`drake_social.sim.replay` Meshcat recording, overlays (heat map,
@@ -33,7 +33,7 @@ _EXPORTS = {
 
 _EXPORTS.update({name: "drake_social.sim.diagram" for name in ("TransportDiagram", "build_diagram", "dynamic_gains")})
 _EXPORTS.update({
-    name: "drake_social.sim.simulate"
+    name: "drake_social.sim.run"
     for name in ("ExecutionReport", "SimulationResult", "analyze_execution", "simulate")
 })
 

@@ -3,7 +3,7 @@
 :func:`build_diagram` wires the systems of :mod:`drake_social.control` into
 one Drake diagram and names every subsystem, so that a script can fetch any of
 them (``diagram.GetSubsystemByName("controller")``) or replace one (pass fixed
-``waypoints`` instead of planning). Running it is :func:`drake_social.sim.simulate`.
+``waypoints`` instead of planning). Running it is :func:`drake_social.sim.run`.
 
 Blocks (all named; ``[p]`` only with ``execution="paper"``, ``[s]`` only with
 ``"synchronized"``, ``[k]`` only in ``mode="kinematic"``, ``[d]`` only in

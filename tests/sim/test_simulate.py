@@ -17,7 +17,7 @@ from drake_social.model.checker import make_checker
 from drake_social.planning.variants import plan
 from drake_social.sim.analysis import body_points, config_deviation, densify, point_deviation
 from drake_social.sim.diagram import build_diagram
-from drake_social.sim.simulate import simulate
+from drake_social.sim.run import simulate
 
 
 @pytest.fixture(scope="module")
