@@ -27,6 +27,7 @@ from pydrake.common import Parallelism
 
 from drake_social.kinematics import config_distance
 from drake_social.model.checker import SceneGraphChecker
+from drake_social.model.planar_checker import PlanarChecker
 from drake_social.planning.geometric import GeometricChecker
 from drake_social.scenario import load_scenario
 
@@ -73,6 +74,7 @@ def _bench_scenario(path: Path, num_configs: int, num_edges: int, rng: np.random
     scenario = load_scenario(path)
     drake = SceneGraphChecker(scenario)
     numpy_ = GeometricChecker(scenario)
+    planar = PlanarChecker(scenario, model=drake.model)
     qs = rng.uniform(drake.lower, drake.upper, size=(num_configs, 4))
     q_a, q_b = random_edges(
         rng, drake.lower, drake.upper, scenario.planner.planning_range,
@@ -112,9 +114,14 @@ def _bench_scenario(path: Path, num_configs: int, num_edges: int, rng: np.random
             len(few_e),
         ),
         "numpy_edges_batched": (lambda: numpy_.are_motions_valid(q_a, q_b), num_edges),
+        # The compiled planar checker, one call per item as the planners make them.
+        "planar_clearance_per_call": (lambda: [planar.clearance(q) for q in q_list], num_configs),
+        "planar_configs_per_call": (lambda: [planar.is_valid(q) for q in q_list], num_configs),
+        "planar_edges_per_call": (lambda: [planar.is_motion_valid(a, b) for a, b in edge_list], num_edges),
         "numpy_edges_per_call": (lambda: [numpy_.is_motion_valid(a, b) for a, b in few_e], len(few_e)),
     }
     seconds, rate, cpu_rate = {}, {}, {}
+    planar.is_motion_valid(q_a[0], q_b[0])  # compiled (or loaded from numba's cache) before timing
     for label, (fn, count) in cases.items():
         wall, cpu = _best_time(fn, repeats)
         seconds[label] = {"wall": wall, "cpu": cpu, "items": count}
@@ -165,6 +172,19 @@ def _bench_scenario(path: Path, num_configs: int, num_edges: int, rng: np.random
         },
         "valid_fraction": {"configs": float(valid_d.mean()), "edges": float(edges_d.mean())},
         "steps_per_edge": {"drake": float(drake_steps.mean()), "numpy": (len(numpy_samples) - num_edges) / num_edges},
+        # Microseconds per call, planar beside Drake (CPU time, best of the repeats).
+        "per_call_us": {
+            "planar_clearance": 1e6 / cpu_rate["planar_clearance_per_call"],
+            "drake_clearance": 1e6 / cpu_rate["drake_configs_raw_per_call"],
+            "planar_is_valid": 1e6 / cpu_rate["planar_configs_per_call"],
+            "drake_is_valid": 1e6 / cpu_rate["drake_configs_per_call"],
+            "planar_motion": 1e6 / cpu_rate["planar_edges_per_call"],
+            "drake_motion": 1e6 / cpu_rate["drake_edges_per_call"],
+        },
+        "agreement_planar": {
+            "configs": int(np.sum(planar.are_valid(qs) == valid_d)),
+            "edges": int(np.sum(planar.are_motions_valid(q_a, q_b) == edges_d)),
+        },
         "seconds": seconds,
     }
     _log.info("%s: %s", path.name, result["configs_per_s"])
@@ -194,7 +214,11 @@ def run_checker_bench(
         ``numpy_per_call``), ``parallel_speedup`` (Drake, parallel over
         single-threaded), ``python_fraction`` (``configs_batched``,
         ``configs_per_call``, ``edges_batched``, ``edges_per_call``; see the
-        module docstring), ``agreement`` counts between the checkers,
+        module docstring), ``per_call_us`` (CPU microseconds per call:
+        ``planar_clearance`` / ``drake_clearance`` (Drake's
+        ``CalcRobotClearance``), ``planar_is_valid`` / ``drake_is_valid``,
+        ``planar_motion`` / ``drake_motion``), ``agreement`` counts between
+        the checkers (``agreement_planar``: planar against Drake),
         ``valid_fraction``, mean ``steps_per_edge`` (Drake's, numpy's; a
         valid motion checks steps + 1 configurations) and the raw ``seconds``
         (wall, CPU, items) of every measurement.
