@@ -51,7 +51,14 @@ from pydrake.systems.framework import DiagramBuilder
 from drake_social.cost import SocialCost
 from drake_social.model.robot_model import COLLISION_HEIGHT
 from drake_social.scenario import Scenario
-from drake_social.viz.world import FIELD_CMAP, VIEW_MARGIN, field_grid
+from drake_social.viz.world import (  # noqa: F401  (FIELD_MAX_CELLS, field_resolution: re-exported)
+    FIELD_CMAP,
+    FIELD_MAX_CELLS,
+    FIELD_MIN_RESOLUTION,
+    VIEW_MARGIN,
+    field_grid,
+    field_resolution,
+)
 
 __all__ = [
     "FIELD_MAX_CELLS",
@@ -76,12 +83,6 @@ OVERLAY_PREFIX = "/drake_social"
 #: Prefix of the MeshcatVisualizer (relative, so under ``/drake``): a body B of
 #: model M is drawn at ``/drake/illustration/M/B``.
 VISUALIZER_PREFIX = "illustration"
-#: Largest number of heat-map cells along either side of the map: a 1000 m
-#: world costs the same texture as a 25 m one.
-FIELD_MAX_CELLS = 512
-#: Finest heat-map cell, metres, as in the matplotlib figure (the texture is
-#: filtered linearly, so it looks smooth).
-FIELD_MIN_RESOLUTION = 0.05
 
 # Heights above the floor, metres: the heat map just above z = 0 (the floor
 # grid is hidden), the path above it, the facing arrows on top of the people's
@@ -136,13 +137,6 @@ def finish_recording(meshcat: Meshcat) -> None:
     """Stops the recording and publishes it as the page's animation."""
     meshcat.StopRecording()
     meshcat.PublishRecording()
-
-
-def field_resolution(bounds: Sequence[float], max_cells: int = FIELD_MAX_CELLS) -> float:
-    """Heat-map cell size for a map, metres: :data:`FIELD_MIN_RESOLUTION` or
-    coarser, so that neither side has more than ``max_cells`` cells."""
-    x0, y0, x1, y1 = (float(v) for v in bounds)
-    return max(FIELD_MIN_RESOLUTION, max(x1 - x0, y1 - y0) / max_cells)
 
 
 def _field_png(scenario: Scenario) -> bytes:

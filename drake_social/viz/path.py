@@ -224,7 +224,7 @@ def path_figure(
     title: str | None = None,
     poses: int | None = None,
     tree: bool | None = None,
-    resolution: float = 0.05,
+    resolution: float | None = None,
 ) -> Figure:
     """The path over the social heat map with the robot drawn along it (Fig. 5/7).
 
@@ -235,7 +235,8 @@ def path_figure(
         title: the figure title; None = the scenario's description.
         poses: see :func:`draw_path`.
         tree: draw the tree's base edges; None = only when there is no path.
-        resolution: heat-map cell size, metres.
+        resolution: heat-map cell size, metres; None = picked from the
+            world's size (a bounded number of cells).
     """
     fig, ax, full, geometry = scene_with_field(scenario, resolution)
     if tree if tree is not None else not result.success:

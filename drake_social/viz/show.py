@@ -63,9 +63,12 @@ def draw_start_goal(ax: Axes, scenario: Scenario, *, labels: bool = True) -> lis
     return artists
 
 
-def scene_with_field(scenario: Scenario, resolution: float = 0.05) -> tuple[Figure, Axes, SocialCost, ArmGeometry]:
+def scene_with_field(scenario: Scenario, resolution: float | None = None) -> tuple[Figure, Axes, SocialCost, ArmGeometry]:
     """The scene figure with the social heat map, the room, the people and the
-    start and goal rings drawn; returns the cost and geometry it used too."""
+    start and goal rings drawn; returns the cost and geometry it used too.
+
+    ``resolution`` is the heat-map cell size, metres; None = picked from the
+    world's size (:func:`~drake_social.viz.world.field_resolution`)."""
     fig, ax = scene_figure(scenario)
     cost = SocialCost.from_scenario(scenario)
     draw_social_field(ax, cost, scenario.world.bounds, resolution)
@@ -74,7 +77,7 @@ def scene_with_field(scenario: Scenario, resolution: float = 0.05) -> tuple[Figu
     return fig, ax, cost, ArmGeometry.from_scenario(scenario)
 
 
-def show_figure(scenario: Scenario, *, title: str | None = None, resolution: float = 0.05) -> Figure:
+def show_figure(scenario: Scenario, *, title: str | None = None, resolution: float | None = None) -> Figure:
     """The scene picture of a scenario.
 
     The social-cost heat map ``G(x, y)`` with its colour bar, walls and
@@ -84,7 +87,8 @@ def show_figure(scenario: Scenario, *, title: str | None = None, resolution: flo
     Args:
         scenario: a validated scenario.
         title: the figure title; None = the scenario's description.
-        resolution: heat-map cell size, metres.
+        resolution: heat-map cell size, metres; None = picked from the
+            world's size (a bounded number of cells).
 
     Returns:
         A matplotlib figure (not attached to pyplot; save it with ``savefig``).

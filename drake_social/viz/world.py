@@ -28,7 +28,10 @@ __all__ = [
     "box_corners",
     "draw_social_field",
     "draw_world",
+    "FIELD_MAX_CELLS",
+    "FIELD_MIN_RESOLUTION",
     "field_grid",
+    "field_resolution",
 ]
 
 #: Fill of walls and obstacles.
@@ -39,6 +42,11 @@ PERSON_COLOR = "#e8c39e"
 FIELD_CMAP = "Reds"
 #: Free space shown around the outer walls, metres.
 VIEW_MARGIN = 0.3
+#: Largest number of heat-map cells along either side of the map, so that a
+#: 1000 m (or 10^6 m) world costs the same figure or texture as a 25 m one.
+FIELD_MAX_CELLS = 512
+#: Finest heat-map cell, metres (a cell of a small room's figure).
+FIELD_MIN_RESOLUTION = 0.05
 
 
 def box_corners(box: Box) -> np.ndarray:
@@ -109,6 +117,16 @@ def draw_world(ax: Axes, scenario: Scenario, *, names: bool = True, margin: floa
     return out
 
 
+def field_resolution(bounds: Sequence[float], max_cells: int = FIELD_MAX_CELLS) -> float:
+    """Heat-map cell size for a map, metres: :data:`FIELD_MIN_RESOLUTION` or
+    coarser, so that neither side of :func:`field_grid` has more than
+    ``max_cells`` cells (the figures and the Meshcat texture both use it)."""
+    x0, y0, x1, y1 = (float(v) for v in bounds)
+    if not max_cells >= 1:
+        raise ValueError(f"max_cells must be >= 1, got {max_cells}")
+    return max(FIELD_MIN_RESOLUTION, max(x1 - x0, y1 - y0) / max_cells)
+
+
 def field_grid(bounds: Sequence[float], resolution: float) -> tuple[np.ndarray, np.ndarray]:
     """Cell-centre coordinates of a grid over ``bounds`` with cells of about
     ``resolution`` metres: returns (xs (nx,), ys (ny,))."""
@@ -126,7 +144,7 @@ def draw_social_field(
     ax: Axes,
     cost: SocialCost,
     bounds: Sequence[float],
-    resolution: float = 0.05,
+    resolution: float | None = None,
     *,
     colorbar: bool = True,
     vmax: float | None = None,
@@ -138,7 +156,9 @@ def draw_social_field(
         ax: the axes to draw on.
         cost: gives :meth:`SocialCost.field` (people, variances, threshold).
         bounds: [x_min, y_min, x_max, y_max] of the map, metres.
-        resolution: size of a heat-map cell, metres.
+        resolution: size of a heat-map cell, metres; None =
+            :func:`field_resolution` of ``bounds`` (at most
+            :data:`FIELD_MAX_CELLS` cells a side, whatever the world's size).
         colorbar: add a colour bar labelled "social cost" beside the axes.
         vmax: top of the colour scale; None = the field's maximum (1 when the
             field is zero everywhere, e.g. in an empty room).
@@ -148,7 +168,7 @@ def draw_social_field(
         The image; ``image.get_array()[j, i]`` is G at ``(xs[i], ys[j])`` of
         :func:`field_grid`.
     """
-    xs, ys = field_grid(bounds, resolution)
+    xs, ys = field_grid(bounds, field_resolution(bounds) if resolution is None else resolution)
     values = cost.field(xs[None, :], ys[:, None])
     top = float(values.max()) if vmax is None else float(vmax)
     if not top > 0:

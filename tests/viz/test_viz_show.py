@@ -103,3 +103,37 @@ def test_readme_drawing_snippet_runs(tmp_path, monkeypatch):
     assert (tmp_path / "generic.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     ax = namespace["ax"]
     assert len(ax.images) == 1 and len(ax.patches) > 10
+
+
+# ---- the heat map scales with the world (issue 9, part 1) ---------------------------
+
+
+@pytest.mark.parametrize("side", [1000.0, 1e6])
+def test_figures_of_a_huge_world_have_a_bounded_number_of_cells(tiny_scenario, monkeypatch, side):
+    """``show`` and ``plan`` figures of a 1000 m and a 10^6 m world evaluate
+    the heat map on at most FIELD_MAX_CELLS cells a side (on the old 0.05 m
+    grid: 4e8 and 4e14 cells, killed for memory)."""
+    from drake_social.planning.result import PlannerResult
+    from drake_social.viz.path import path_figure
+    from drake_social.viz.world import FIELD_MAX_CELLS
+
+    seen = []
+    field = SocialCost.field
+
+    def counted(self, x, y):
+        cells = np.broadcast_shapes(np.shape(x), np.shape(y))
+        seen.append(cells)
+        assert int(np.prod(cells)) <= FIELD_MAX_CELLS**2, f"{cells} heat-map cells for a {side} m world"
+        return field(self, x, y)
+
+    monkeypatch.setattr(SocialCost, "field", counted)
+    world = dc.replace(tiny_scenario.world, bounds=[0.0, 0.0, side, side / 3])
+    scenario = dc.replace(tiny_scenario, world=world)
+    dut = show_figure(scenario)
+    assert np.asarray(dut.axes[0].images[0].get_array()).shape == (171, 512) == seen[-1]
+    no_path = PlannerResult(algorithm="rrt_star", success=False, message="no path", waypoints=np.zeros((0, 4)),
+                            cost=float("inf"), tree_nodes=np.array([scenario.start]), tree_parents=np.array([-1]))
+    path = path_figure(scenario, no_path)
+    assert np.asarray(path.axes[0].images[0].get_array()).shape == (171, 512)
+    # A small room keeps the fine 0.05 m cells.
+    assert np.asarray(show_figure(tiny_scenario).axes[0].images[0].get_array()).shape == (100, 160)
