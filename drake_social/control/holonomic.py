@@ -32,6 +32,8 @@ Example::
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 from pydrake.systems.framework import BasicVector, Context, LeafSystem
 
@@ -137,8 +139,12 @@ class HolonomicPController(LeafSystem):
         self._target_port = self.DeclareVectorInputPort("base_target", 2)
         self._position_port = self.DeclareVectorInputPort("base_position", 2)
         self._ff_port = self.DeclareVectorInputPort("base_velocity_ff", 2) if feedforward else None
-        self.DeclareVectorOutputPort("wheel_speeds", 4, self._CalcWheelSpeeds)
-        self.DeclareVectorOutputPort("base_velocity", 2, self._CalcBaseVelocity)
+        # Outputs depend on the inputs only (not on time): Drake's cache then
+        # keeps them across integrator stages while the inputs hold.
+        inputs = {self.input_port_ticket(port.get_index())
+                  for port in (self._target_port, self._position_port, self._ff_port) if port is not None}
+        self.DeclareVectorOutputPort("wheel_speeds", 4, self._CalcWheelSpeeds, prerequisites_of_calc=inputs)
+        self.DeclareVectorOutputPort("base_velocity", 2, self._CalcBaseVelocity, prerequisites_of_calc=inputs)
 
     @classmethod
     def from_options(cls, execution_options: ExecutionOptions, feedforward: bool = False) -> "HolonomicPController":
@@ -151,17 +157,28 @@ class HolonomicPController(LeafSystem):
             feedforward=feedforward,
         )
 
-    def _LimitedWheelSpeeds(self, context: Context) -> np.ndarray:
-        # target - position, not the paper's current - next: only this sign converges.
-        error = np.asarray(self._target_port.Eval(context), float) - self._position_port.Eval(context)
-        v = self._kp * error
+    def _LimitedWheelSpeeds(self, context: Context) -> list[float]:
+        # The same law as saturate_norm / wheel_speeds, in plain floats: this runs
+        # once per control period of every simulation (numpy's per-call cost
+        # on 2-vectors was most of it); tests compare the two.
+        target = self._target_port.Eval(context)
+        position = self._position_port.Eval(context)
+        vx = self._kp * (float(target[0]) - float(position[0]))
+        vy = self._kp * (float(target[1]) - float(position[1]))
         if self._ff_port is not None:
-            v = v + self._ff_port.Eval(context)
-        v = saturate_norm(v, self._max_base_speed)
-        w = wheel_speeds(v, self._wheel_radius)
-        largest = np.max(np.abs(w))
+            ff = self._ff_port.Eval(context)
+            vx += float(ff[0])
+            vy += float(ff[1])
+        norm = math.hypot(vx, vy)
+        if norm > self._max_base_speed:
+            scale = self._max_base_speed / norm
+            vx, vy = vx * scale, vy * scale
+        r = self._wheel_radius
+        w = [(vx - vy) / r, (vx + vy) / r, (vy - vx) / r, (-vx - vy) / r]  # (1/r) M^T v
+        largest = max(abs(w[0]), abs(w[1]))  # |w3| = |w1| and |w4| = |w2|
         if largest > self._max_wheel_speed:
-            w = w * (self._max_wheel_speed / largest)
+            scale = self._max_wheel_speed / largest
+            w = [wi * scale for wi in w]
         return w
 
     def _CalcWheelSpeeds(self, context: Context, output: BasicVector) -> None:
@@ -186,7 +203,8 @@ class MecanumDrive(LeafSystem):
         super().__init__()
         self._wheel_radius = _positive("wheel_radius", wheel_radius, "MecanumDrive")
         self._wheels_port = self.DeclareVectorInputPort("wheel_speeds", 4)
-        self.DeclareVectorOutputPort("base_velocity", 2, self._CalcBaseVelocity)
+        self.DeclareVectorOutputPort("base_velocity", 2, self._CalcBaseVelocity,
+                                     prerequisites_of_calc={self.input_port_ticket(self._wheels_port.get_index())})
 
     def _CalcBaseVelocity(self, context: Context, output: BasicVector) -> None:
         output.SetFromVector(base_velocity(self._wheels_port.Eval(context), self._wheel_radius))

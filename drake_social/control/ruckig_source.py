@@ -44,12 +44,14 @@ Example::
 
 from __future__ import annotations
 
+import itertools
+
 from typing import Sequence
 
 import numpy as np
 import ruckig
 from pydrake.common.value import AbstractValue
-from pydrake.systems.framework import BasicVector, Context, LeafSystem, State
+from pydrake.systems.framework import EventStatus, BasicVector, Context, LeafSystem, State
 
 from drake_social.scenario import ExecutionOptions
 
@@ -71,6 +73,8 @@ _SYNCHRONIZATIONS = {
 # DoF that does not move still has a valid (positive) limit.
 _SHARE_FLOOR = 1e-6
 
+_SERIALS = itertools.count()
+
 
 class RuckigSegment:
     """One reference segment: immutable, so copies may share it.
@@ -87,9 +91,10 @@ class RuckigSegment:
             has been seen yet (any target then starts a segment).
     """
 
-    __slots__ = ("t0", "trajectory", "rest", "target")
+    __slots__ = ("t0", "trajectory", "rest", "target", "target_list", "serial")
 
     def __init__(self, t0: float, trajectory, rest: np.ndarray, target: np.ndarray | None):
+        object.__setattr__(self, "serial", next(_SERIALS))  # identifies the segment in caches
         object.__setattr__(self, "t0", float(t0))
         object.__setattr__(self, "trajectory", trajectory)
         rest = np.array(rest, float)
@@ -99,6 +104,7 @@ class RuckigSegment:
             target = np.array(target, float)
             target.flags.writeable = False
         object.__setattr__(self, "target", target)
+        object.__setattr__(self, "target_list", None if target is None else target.tolist())
 
     def __setattr__(self, name, value):
         raise AttributeError("RuckigSegment is immutable")
@@ -177,6 +183,11 @@ class RuckigTrajectorySource(LeafSystem):
             state stays within the per-DoF limits (that transition is then
             not on a straight line and its norm may exceed the limit by up
             to sqrt(2)).
+        preview: when given (seconds, > 0), an extra output port
+            ``mean_velocity`` = ``(position(t + preview) - position(t)) /
+            preview`` along the current segment: the feed-forward that makes
+            a controller sampled every ``preview`` seconds (behind a
+            zero-order hold) land exactly on the reference at the next sample.
 
     Raises:
         ValueError: limits not positive or of the wrong length, unknown
@@ -194,6 +205,7 @@ class RuckigTrajectorySource(LeafSystem):
         period: float,
         synchronization: str | ruckig.Synchronization = "time",
         xy_norm_dofs: Sequence[int] | None = None,
+        preview: float | None = None,
     ):
         super().__init__()
         initial = np.array(initial_position, float).reshape(-1)
@@ -236,6 +248,16 @@ class RuckigTrajectorySource(LeafSystem):
         self.DeclareVectorOutputPort("velocity", n, self._CalcVelocity, prerequisites_of_calc=prereqs)
         self.DeclareVectorOutputPort("acceleration", n, self._CalcAcceleration, prerequisites_of_calc=prereqs)
         self.DeclareVectorOutputPort("finished", 1, self._CalcFinished, prerequisites_of_calc=prereqs)
+        self._preview = None
+        if preview is not None:
+            if not (np.isfinite(preview) and preview > 0):
+                raise ValueError(f"RuckigTrajectorySource: preview must be a finite number > 0, got {preview!r}")
+            self._preview = float(preview)
+            self.DeclareVectorOutputPort("mean_velocity", n, self._CalcMeanVelocity, prerequisites_of_calc=prereqs)
+        # The last (segment, t) -> (p, v, a): the position, velocity and
+        # acceleration ports of one instant share one at_time() call. A pure
+        # cache of a function of the context, not state.
+        self._memo: tuple = (None, None, None)
 
     @staticmethod
     def _RestSegment(t0: float, position) -> RuckigSegment:
@@ -265,11 +287,12 @@ class RuckigTrajectorySource(LeafSystem):
 
     def _Retarget(self, context: Context, state: State) -> None:
         if not self._target_port.HasValue(context):
-            return  # no target yet (unconnected, unfixed): stay as is
+            return EventStatus.DidNothing()  # no target yet (unconnected, unfixed): stay as is
         segment = self._Segment(context)
-        target = np.asarray(self._target_port.Eval(context), float)
-        if segment.target is not None and np.array_equal(target, segment.target):
-            return
+        target = self._target_port.Eval(context)
+        if segment.target is not None and target.tolist() == segment.target_list:
+            return EventStatus.DidNothing()  # the common case, every period: keep it cheap
+        target = np.asarray(target, float)
         if not np.all(np.isfinite(target)):
             raise RuntimeError(f"{self.get_name()}: the target input must be finite, got {target}")
         t = context.get_time()
@@ -300,14 +323,28 @@ class RuckigTrajectorySource(LeafSystem):
 
     # ---- outputs ---------------------------------------------------------------
 
+    def _At(self, context: Context) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        segment, t = self._Segment(context), context.get_time()
+        serial, memo_t, value = self._memo
+        if serial == segment.serial and memo_t == t:
+            return value
+        value = segment.at(t)
+        self._memo = (segment.serial, t, value)  # not the segment: nothing of ruckig kept on self
+        return value
+
     def _CalcPosition(self, context: Context, output: BasicVector) -> None:
-        output.SetFromVector(self._Segment(context).at(context.get_time())[0])
+        output.SetFromVector(self._At(context)[0])
 
     def _CalcVelocity(self, context: Context, output: BasicVector) -> None:
-        output.SetFromVector(self._Segment(context).at(context.get_time())[1])
+        output.SetFromVector(self._At(context)[1])
 
     def _CalcAcceleration(self, context: Context, output: BasicVector) -> None:
-        output.SetFromVector(self._Segment(context).at(context.get_time())[2])
+        output.SetFromVector(self._At(context)[2])
+
+    def _CalcMeanVelocity(self, context: Context, output: BasicVector) -> None:
+        segment, t = self._Segment(context), context.get_time()
+        ahead = segment.at(t + self._preview)[0]
+        output.SetFromVector((ahead - self._At(context)[0]) / self._preview)
 
     def _CalcFinished(self, context: Context, output: BasicVector) -> None:
         segment = self._Segment(context)
@@ -338,7 +375,8 @@ def reference_source_from_options(
     Phase-synchronized, so base and arm start and arrive together and (from
     rest) move proportionally: the base on the straight segment. The base
     limits bound the norm of ``[vx, vy]`` (and of the acceleration and jerk)
-    through ``xy_norm_dofs=(0, 1)``.
+    through ``xy_norm_dofs=(0, 1)``. Its ``mean_velocity`` previews one
+    ``control_period``, the feed-forward of the sampled base controller.
 
     Args:
         execution_options: a scenario's ``execution`` section.
@@ -353,4 +391,5 @@ def reference_source_from_options(
         period=e.control_period,
         synchronization="phase",
         xy_norm_dofs=(0, 1),
+        preview=e.control_period,
     )

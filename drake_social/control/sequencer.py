@@ -43,7 +43,7 @@ from __future__ import annotations
 
 import numpy as np
 from pydrake.common.value import AbstractValue
-from pydrake.systems.framework import BasicVector, Context, DiscreteValues, LeafSystem
+from pydrake.systems.framework import EventStatus, BasicVector, Context, DiscreteValues, LeafSystem
 
 from drake_social.scenario import ExecutionOptions
 
@@ -166,7 +166,7 @@ class WaypointSequencer(LeafSystem):
     def _Advance(self, context: Context, discrete_state: DiscreteValues) -> None:
         xd = context.get_discrete_state(self._state_index).value()
         if xd[_DONE] > 0.5:
-            return  # latched
+            return EventStatus.DidNothing()  # latched
         waypoints = self._Waypoints(context)
         index = self._Index(context, len(waypoints))
         target = waypoints[index]
@@ -179,7 +179,7 @@ class WaypointSequencer(LeafSystem):
         if arrived and self._reference_done_port is not None:
             arrived = self._reference_done_port.Eval(context)[0] > 0.5
         if not arrived:
-            return
+            return EventStatus.DidNothing()  # Drake then keeps the state (and its dependents' caches)
         out = discrete_state.get_mutable_vector(self._state_index)
         if index + 1 < len(waypoints):
             out.SetAtIndex(_INDEX, index + 1)  # one step per update

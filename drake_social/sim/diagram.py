@@ -15,7 +15,7 @@ Blocks (all named; ``[p]`` only with ``execution="paper"``, ``[s]`` only with
                           │            [p] arm (2-DoF Ruckig) ◀─psi─┘
                           │  controller ─wheel_speeds─▶ drive (mecanum forward kinematics)
     [k] base (Integrator of the drive's velocity) + arm position ─▶ configuration ─▶ to_pose ─▶ scene_graph
-    [d] drive velocity + arm references ─▶ desired_state ─▶ hold (ZOH) ─▶ plant (PD actuators)
+    [d] drive velocity + arm references ─▶ desired_state ─▶ hold (ZOH) ─▶ pd ─▶ plant (actuators)
 
 The planner is left out when ``waypoints`` are given. In ``synchronized``
 execution each segment's reference is one phase-synchronized Ruckig
@@ -27,22 +27,27 @@ In ``paper`` execution (the paper's Section IV-C) the P-controller drives the
 base to the target's (x, y) and a Ruckig trajectory the arm to its
 (psi1, psi2), independently.
 
+The base controller is sampled every ``execution.control_period`` (behind a
+zero-order hold ``hold``), like the digital controller of a real base; in
+``synchronized`` execution its feed-forward is the reference's mean velocity
+over the coming period, so the sampled loop lands on the reference.
+
 ``kinematic`` mode: the base integrates the velocity its wheels produce (a
 continuous ``Integrator``) and the arm follows its reference exactly; the
 plant is not simulated (it stays outside the diagram and only turns
 positions into SceneGraph poses, :attr:`TransportDiagram.plant`).
 ``dynamic`` mode: the ``MultibodyPlant`` is a discrete system
-(``execution.plant_time_step``) whose joints are actuated by Drake's built-in
-PD controllers: the base joints as velocity servos on the drive's velocity,
-the arm joints on the reference's position and velocity; the Python
-controllers' outputs reach it through a zero-order hold at
-``execution.control_period``.
+(``execution.plant_time_step``, TAMSI) whose joint actuators are driven by a
+PD law ``u = K (x_d - x)`` in C++ gain blocks (``pd``) at every plant step:
+the base joints as velocity servos on the drive's velocity, the arm joints
+on the reference's position and velocity; the Python controllers' outputs
+reach it through a zero-order hold (``hold``) at ``execution.control_period``.
 
 Loggers (``VectorLogSink``, period ``execution.control_period``), in
 :attr:`TransportDiagram.loggers`: ``q`` (configuration), ``v`` (its
 velocity), ``wheel_speeds``, ``target`` (the sequencer's), ``reference``
 (what is being tracked: the reference position, or the target's xy with the
-arm trajectory), ``index`` (the target index).
+arm trajectory), ``index`` (the target index), ``done`` (the sequencer's flag).
 """
 
 from __future__ import annotations
@@ -55,9 +60,11 @@ from pydrake.multibody.plant import AddMultibodyPlantSceneGraph, DiscreteContact
 from pydrake.multibody.tree import ModelInstanceIndex
 from pydrake.systems.framework import Diagram, DiagramBuilder, OutputPort
 from pydrake.systems.primitives import (
+    Adder,
     Demultiplexer,
     Integrator,
     LogVectorOutput,
+    MatrixGain,
     Multiplexer,
     VectorLogSink,
     ZeroOrderHold,
@@ -72,7 +79,7 @@ from drake_social.control import (
     arm_source_from_options,
     reference_source_from_options,
 )
-from drake_social.model.plant import add_actuators, add_environment, add_robot
+from drake_social.model.plant import ACTUATED_JOINTS, add_environment, add_robot
 from drake_social.planning.validity import ValidityChecker
 from drake_social.scenario import EXECUTIONS, SIM_MODES, Scenario
 
@@ -114,40 +121,45 @@ class TransportDiagram:
         return self.diagram.GetSubsystemByName(name)
 
 
-def dynamic_gains(scenario: Scenario) -> dict[str, tuple[float, float]]:
-    """PD gains (proportional, derivative) of the dynamic mode's joint actuators.
+def dynamic_gains(plant: MultibodyPlant, *, bandwidth: float = 60.0, base_time_constant: float = 0.02,
+                  samples: int = 72) -> dict[str, tuple[float, float]]:
+    """PD gains (proportional, derivative) of the dynamic mode's joints, from the plant's inertia.
 
-    The base joints are velocity servos (proportional gain 0): the derivative
-    gain is the robot's mass over a 50 ms time constant, N s/m. The arm
-    joints track their reference with a 20 rad/s, critically damped loop on
-    a bound of the inertia about the shoulder (links as rods, the object as
-    a point mass at the gripper, plus its own extent), N m/rad and N m s/rad.
+    Each joint j gets the effective inertia ``m_j = 1 / (M(q)^-1)_jj`` (what
+    a force on that joint alone accelerates, the others free), minimised over
+    ``samples`` values of psi2 (the mass matrix of this planar chain depends
+    on psi2 only). The arm joints then get a critically damped loop of
+    ``bandwidth`` rad/s on that inertia, ``kp = m w^2``, ``kd = 2 m w``
+    (N m/rad, N m s/rad); the base joints are velocity servos, ``kp = 0``,
+    ``kd = m / base_time_constant`` (N s/m). The discrete plant (TAMSI)
+    applies the PD force explicitly, which is stable while ``kd dt / m`` stays
+    well below 1 (here ``2 w dt`` = 0.24 and ``dt / tau`` = 0.1 at the 2 ms
+    step); using the smallest inertia keeps it so in every configuration (the
+    loop is only slower where the inertia is larger).
     """
-    from drake_social.model.robot_model import _MASSES  # the masses the model uses
-
-    mass = sum(_MASSES.values())
-    l1, l2 = scenario.robot.link_lengths
-    extent = float(np.max(np.linalg.norm(_object_points(scenario), axis=1)))
-    inertia = (_MASSES["link1"] * l1**2 / 3 + _MASSES["link2"] * (l1 + l2) ** 2
-               + _MASSES["object"] * (l1 + l2 + extent) ** 2)
-    omega = 20.0
-    arm = (inertia * omega**2, 2.0 * omega * inertia)
-    base = (0.0, mass / 0.05)
-    return {"base_x": base, "base_y": base, "psi1": arm, "psi2": arm}
-
-
-def _object_points(scenario: Scenario) -> np.ndarray:
-    from drake_social.kinematics import object_polyline
-
-    return object_polyline(scenario.object)
+    context = plant.CreateDefaultContext()
+    q = np.zeros(plant.num_positions())
+    effective = np.full(4, np.inf)
+    for psi2 in np.linspace(-np.pi, np.pi, samples, endpoint=False):
+        q[3] = psi2
+        plant.SetPositions(context, q)
+        effective = np.minimum(effective, 1.0 / np.diag(np.linalg.inv(plant.CalcMassMatrix(context))))
+    gains = {}
+    for j, name in enumerate(ACTUATED_JOINTS):
+        m = float(effective[j])
+        gains[name] = (0.0, m / base_time_constant) if j < 2 else (m * bandwidth**2, 2.0 * m * bandwidth)
+    return gains
 
 
-def _populate(plant: MultibodyPlant, scenario: Scenario, gains=None) -> ModelInstanceIndex:
+def _populate(plant: MultibodyPlant, scenario: Scenario) -> ModelInstanceIndex:
     robot = add_robot(plant, scenario)
     add_environment(plant, scenario)
-    if gains is not None:
-        add_actuators(plant, robot, gains)
     plant.Finalize()
+    # The model's joints each have an actuator (Drake's SDFormat parser adds one
+    # per joint of unlimited effort): the actuation input is [u_x, u_y, u_1, u_2].
+    B = plant.MakeActuationMatrix()
+    if plant.num_positions() != 4 or not np.array_equal(B, np.eye(4)):  # our own model: a bug if it fails
+        raise RuntimeError(f"unexpected actuation matrix of the robot model:\n{B}")
     return robot
 
 
@@ -199,9 +211,12 @@ def build_diagram(
     builder = DiagramBuilder()
     if mode == "dynamic":
         plant, scene_graph = AddMultibodyPlantSceneGraph(builder, time_step=float(opts.plant_time_step))
-        # Drake's joint-actuator PD controllers are implicit in SAP-family solvers.
-        plant.set_discrete_contact_approximation(DiscreteContactApproximation.kLagged)
-        robot = _populate(plant, scenario, dynamic_gains(scenario))
+        # TAMSI: a step of this plant costs ~60 us against ~200 us with the
+        # SAP solvers (measured on office_bar), which Drake's built-in joint
+        # PD controllers would need; the PD law is therefore a C++ gain block
+        # (pd) on the plant's actuation input.
+        plant.set_discrete_contact_approximation(DiscreteContactApproximation.kTamsi)
+        robot = _populate(plant, scenario)
         plant.SetDefaultPositions(robot, start)
     else:
         scene_graph = builder.AddNamedSystem("scene_graph", SceneGraph())
@@ -222,7 +237,16 @@ def build_diagram(
     # ---- how to get there -----------------------------------------------------
     controller = builder.AddNamedSystem("controller", HolonomicPController.from_options(opts, feedforward=synchronized))
     drive = builder.AddNamedSystem("drive", MecanumDrive(float(opts.wheel_radius)))
-    builder.Connect(controller.GetOutputPort("wheel_speeds"), drive.GetInputPort("wheel_speeds"))
+    if mode == "kinematic":
+        # The controller is sampled every control period (a digital controller):
+        # the base integrates the velocity of the held wheel speeds.
+        hold = builder.AddNamedSystem("hold", ZeroOrderHold(period, 4))
+        builder.Connect(controller.GetOutputPort("wheel_speeds"), hold.get_input_port())
+        builder.Connect(hold.get_output_port(), drive.GetInputPort("wheel_speeds"))
+        wheel_port = hold.get_output_port()
+    else:
+        builder.Connect(controller.GetOutputPort("wheel_speeds"), drive.GetInputPort("wheel_speeds"))
+        wheel_port = controller.GetOutputPort("wheel_speeds")
     if synchronized:
         reference = builder.AddNamedSystem("reference", reference_source_from_options(opts, start))
         builder.Connect(sequencer.GetOutputPort("target"), reference.GetInputPort("target"))
@@ -231,8 +255,10 @@ def build_diagram(
         ref_vel = builder.AddNamedSystem("reference_velocity_split", Demultiplexer([2, 2]))
         builder.Connect(reference.GetOutputPort("position"), ref_pos.get_input_port())
         builder.Connect(reference.GetOutputPort("velocity"), ref_vel.get_input_port())
+        ref_ff = builder.AddNamedSystem("reference_feedforward_split", Demultiplexer([2, 2]))
+        builder.Connect(reference.GetOutputPort("mean_velocity"), ref_ff.get_input_port())
         builder.Connect(ref_pos.get_output_port(0), controller.GetInputPort("base_target"))
-        builder.Connect(ref_vel.get_output_port(0), controller.GetInputPort("base_velocity_ff"))
+        builder.Connect(ref_ff.get_output_port(0), controller.GetInputPort("base_velocity_ff"))
         arm_position: OutputPort = ref_pos.get_output_port(1)
         arm_velocity: OutputPort = ref_vel.get_output_port(1)
         reference_out: OutputPort = reference.GetOutputPort("position")
@@ -264,7 +290,17 @@ def build_diagram(
         builder.Connect(arm_velocity, desired.get_input_port(3))
         hold = builder.AddNamedSystem("hold", ZeroOrderHold(period, 8))
         builder.Connect(desired.get_output_port(0), hold.get_input_port())
-        builder.Connect(hold.get_output_port(), plant.get_desired_state_input_port(robot))
+        # u = K (x_d - x) with K = [diag(kp) diag(kd)], in joint order.
+        gains = dynamic_gains(plant)
+        K = np.hstack([np.diag([gains[j][0] for j in ACTUATED_JOINTS]), np.diag([gains[j][1] for j in ACTUATED_JOINTS])])
+        pd_desired = builder.AddNamedSystem("pd_desired", MatrixGain(K))
+        pd_state = builder.AddNamedSystem("pd_state", MatrixGain(-K))
+        pd = builder.AddNamedSystem("pd", Adder(2, 4))
+        builder.Connect(hold.get_output_port(), pd_desired.get_input_port())
+        builder.Connect(plant.get_state_output_port(robot), pd_state.get_input_port())
+        builder.Connect(pd_desired.get_output_port(), pd.get_input_port(0))
+        builder.Connect(pd_state.get_output_port(), pd.get_input_port(1))
+        builder.Connect(pd.get_output_port(), plant.get_actuation_input_port(robot))
     else:
         base = builder.AddNamedSystem("base", Integrator(2))
         base.set_default_integral_value(start[:2])
@@ -288,10 +324,11 @@ def build_diagram(
     ports = {
         "q": q_port,
         "v": v_port,
-        "wheel_speeds": controller.GetOutputPort("wheel_speeds"),
+        "wheel_speeds": wheel_port,
         "target": sequencer.GetOutputPort("target"),
         "reference": reference_out,
         "index": sequencer.GetOutputPort("index"),
+        "done": sequencer.GetOutputPort("done"),
     }
     loggers = {}
     for name, port in ports.items():

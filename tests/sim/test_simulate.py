@@ -66,17 +66,12 @@ def test_kinematic_speeds_respect_the_limits(runs, tiny_scenario, execution):
     assert np.max(np.abs(dut.wheel_speeds)) <= e.max_wheel_speed * (1 + 1e-9)
     # The arm's velocity is the Ruckig reference's, within its limits.
     assert np.all(np.max(np.abs(dut.v[:, 2:]), axis=0) <= np.asarray(e.arm_max_velocity) * (1 + 1e-6))
-    # The logged base velocity is what moved the base: finite differences agree
-    # (everywhere for the smooth synchronized reference; the paper's P-law
-    # jumps when the target switches, so there only away from the switches).
-    dt = np.diff(dut.times)
-    fd = np.diff(dut.q[:, :2], axis=0) / dt[:, None]
-    mid = 0.5 * (dut.v[1:, :2] + dut.v[:-1, :2])
-    error = np.max(np.abs(fd - mid), axis=1)
-    if execution == "synchronized":
-        assert error.max() < 1e-3
-    else:
-        assert np.quantile(error, 0.95) < 1e-3
+    # The logged base velocity is what moved the base: the controller is held
+    # for each control period, so the base moves in straight pieces and the
+    # velocity logged at t_k (published before the update at t_k) is the one
+    # applied over [t_k-1, t_k].
+    fd = np.diff(dut.q[:, :2], axis=0) / np.diff(dut.times)[:, None]
+    np.testing.assert_allclose(fd, dut.v[1:, :2], atol=1e-9)
 
 
 def test_synchronized_kinematic_stays_on_the_planned_path(runs):
