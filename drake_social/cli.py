@@ -14,7 +14,9 @@ Usage::
     drake-social simulate scenarios/tiny.yaml --mode dynamic --execution paper --path out/tiny/path.csv
     drake-social bench --seeds 10 --out out/bench
 
-Exit codes: 0 success, 1 an output could not be written, 2 bad command line
+Exit codes: 0 success, 1 an output could not be written (also when another
+run of the same command is writing into the same ``--out``: the second run is
+refused at once, before any work, and writes nothing), 2 bad command line
 or invalid input (the message names the file and the field, or the start or
 goal in collision), 3 ``plan`` found no path (its outputs are still written),
 4 ``plan`` returned a path that Drake's independent check rejects (a bug in
@@ -77,7 +79,7 @@ def load_with_overrides(path: str | Path, sets: Sequence[str] | None) -> Scenari
             raise ScenarioError(f"{path} (--set {text!r}): not valid YAML: {e}") from e
         if not isinstance(node, yaml.MappingNode):
             raise ScenarioError(f"{path} (--set {text!r}): must be a YAML mapping such as 'random_seed: 3'")
-    return load_scenario(path, texts)
+    return load_scenario(path, texts, overrides_name="--set")
 
 
 def _add_scenario_arguments(parser: argparse.ArgumentParser) -> None:
@@ -111,12 +113,14 @@ def _add_show(subparsers) -> None:
 
 
 def _run_show(args: argparse.Namespace) -> int:
+    from drake_social.outputs import OutputSet
     from drake_social.viz import write_show  # matplotlib figures: only when drawing
 
     scenario = load_with_overrides(args.scenario, args.set)
     out = args.out if args.out is not None else _default_out(args.scenario)
-    path = write_show(scenario, out, title=scenario.description or args.scenario.name)
-    print(f"wrote {path}")
+    with OutputSet(out, "show") as outputs:
+        write_show(scenario, outputs.folder, title=scenario.description or args.scenario.name)
+    print(f"wrote {out / 'scene.png'}")
     return 0
 
 
@@ -160,10 +164,12 @@ class ProgressBar:
             return
         self._last = now
         filled = min(self.width, self.width * done // self.total)
+        # Marked drawn before writing: a Ctrl-C raised during or right after the
+        # write must still let close() end the line (the message goes below it).
+        self._drawn = True
         self.stream.write(f"\r{self.label} [{'#' * filled}{'.' * (self.width - filled)}] "
                           f"{done}/{self.total}  {status}  {now - self._t0:.1f} s ")
         self.stream.flush()
-        self._drawn = True
 
     def close(self) -> None:
         if self._drawn:
@@ -245,35 +251,39 @@ def _json_lines(record: dict) -> str:
 
 
 def _run_plan(args: argparse.Namespace) -> int:
+    from drake_social.outputs import OutputSet
     from drake_social.planning.variants import plan
     from drake_social.viz.path import write_plan_figures  # matplotlib figures: only when drawing
 
     scenario = load_with_overrides(args.scenario, args.set)
     out = args.out if args.out is not None else _default_out(args.scenario)
-    out.mkdir(parents=True, exist_ok=True)  # fail early (exit 1), before planning
     checker = _make_checker(scenario, args.checker, str(args.scenario))
     iterations = args.iterations or scenario.planner.iterations
-    bar = ProgressBar(iterations, sys.stderr) if _show_progress(args) else None
-    try:
-        result = plan(scenario, checker, algorithm=args.algorithm, iterations=iterations, seed=args.seed,
-                      progress=bar)
-    except PlanningInputError as e:
-        raise PlanningInputError(f"{args.scenario}: {e}") from e
-    finally:
-        if bar is not None:
-            bar.close()
-    print(result.summary())
+    # Entered before planning: an unwritable or busy --out fails early (exit 1),
+    # and nothing of this run lands in --out unless all of it does.
+    with OutputSet(out, "plan") as outputs:
+        bar = ProgressBar(iterations, sys.stderr) if _show_progress(args) else None
+        try:
+            result = plan(scenario, checker, algorithm=args.algorithm, iterations=iterations, seed=args.seed,
+                          progress=bar)
+        except PlanningInputError as e:
+            raise PlanningInputError(f"{args.scenario}: {e}") from e
+        finally:
+            if bar is not None:
+                bar.close()
+        print(result.summary())
 
-    _write_path_csv(out / "path.csv", result.waypoints)
-    record = {
-        "scenario": str(args.scenario),
-        "overrides": list(args.set or []),
-        "checker": args.checker,
-        "iterations": iterations,
-        **result.to_json_dict(),
-    }
-    (out / "result.json").write_text(_json_lines(record))
-    figures = write_plan_figures(scenario, result, out, title=scenario.description or args.scenario.name)
+        _write_path_csv(outputs.path("path.csv"), result.waypoints)
+        record = {
+            "scenario": str(args.scenario),
+            "overrides": list(args.set or []),
+            "checker": args.checker,
+            "iterations": iterations,
+            **result.to_json_dict(),
+        }
+        outputs.write_text("result.json", _json_lines(record))
+        figures = write_plan_figures(scenario, result, outputs.folder,
+                                     title=scenario.description or args.scenario.name)
     names = ["path.csv", "result.json"] + [p.name for p in figures.values()]
     print(f"wrote {out}/: {', '.join(names)}")
     if result.success:
@@ -362,12 +372,18 @@ def read_path_csv(path: Path, scenario: Scenario) -> np.ndarray:
         if not line.strip():
             continue
         cells = line.split(",")
-        try:
-            values = [float(c) for c in cells]
-        except ValueError:
-            raise ScenarioError(f"{path}: line {i}: needs 4 numbers x,y,psi1,psi2, got {line!r}") from None
-        if len(values) != 4 or not all(np.isfinite(values)):
-            raise ScenarioError(f"{path}: line {i}: needs 4 finite numbers x,y,psi1,psi2, got {line!r}")
+        if len(cells) != 4:
+            raise ScenarioError(f"{path}: line {i}: needs 4 numbers x,y,psi1,psi2, got {len(cells)} values: {line!r}")
+        values = []
+        for column, cell in zip(("x", "y", "psi1", "psi2"), cells):
+            try:
+                value = float(cell)
+            except ValueError:
+                value = None
+            if value is None or not np.isfinite(value):
+                raise ScenarioError(f"{path}: line {i}: {column}: must be a finite number, got {cell.strip()!r} "
+                                    f"(--path)")
+            values.append(value)
         rows.append(values)
     if len(rows) < 2:
         raise ScenarioError(f"{path}: needs at least 2 waypoints (start and goal), got {len(rows)}")
@@ -493,8 +509,11 @@ def _add_bench(subparsers) -> None:
 
 def _run_bench(args: argparse.Namespace) -> int:
     from drake_social.experiments.bench import run_bench
+    from drake_social.outputs import OutputSet
 
     for path in args.scenarios:
+        if path.is_dir():
+            raise ScenarioError(f"{path}: is a directory, not a scenario file (--scenarios)")
         if not path.is_file():
             raise ScenarioError(f"{path}: no such scenario file (--scenarios)")
     bar = ProgressBar(1, sys.stderr, label="bench", interval=0.0) if _show_progress(args) else None
@@ -503,21 +522,22 @@ def _run_bench(args: argparse.Namespace) -> int:
         bar.total = total
         bar.update(done, label)
 
-    try:
-        run_bench(
-            scenario_paths=list(args.scenarios),
-            algorithms=list(args.algorithms),
-            iterations=args.iterations,
-            seeds=args.seeds,
-            checker=args.checker,
-            include_ompl=not args.no_ompl,
-            include_checker=not args.no_checker_bench,
-            out_dir=args.out,
-            progress=progress if bar is not None else None,
-        )
-    finally:
-        if bar is not None:
-            bar.close()
+    with OutputSet(args.out, "bench") as outputs:  # held over the run: a second bench is refused at once
+        try:
+            run_bench(
+                scenario_paths=list(args.scenarios),
+                algorithms=list(args.algorithms),
+                iterations=args.iterations,
+                seeds=args.seeds,
+                checker=args.checker,
+                include_ompl=not args.no_ompl,
+                include_checker=not args.no_checker_bench,
+                out_dir=outputs.folder,
+                progress=progress if bar is not None else None,
+            )
+        finally:
+            if bar is not None:
+                bar.close()
     table = args.out / "bench.md"
     if table.is_file():
         print(table.read_text().rstrip())
@@ -560,12 +580,12 @@ def main(argv: Sequence[str] | None = None) -> int:
         parser.print_help(sys.stderr)
         return 2
     logging.basicConfig(level=logging.INFO if args.verbose else logging.WARNING, format="%(name)s: %(message)s")
-    if not args.verbose:
-        # pydrake sets its "drake" logger to INFO on import; keep its chatter for --verbose.
-        import pydrake.common  # noqa: F401  (so that our level is not overwritten later)
+    try:  # from here on, Ctrl-C (even while pydrake imports) is one line and exit 130
+        if not args.verbose:
+            # pydrake sets its "drake" logger to INFO on import; keep its chatter for --verbose.
+            import pydrake.common  # noqa: F401  (so that our level is not overwritten later)
 
-        logging.getLogger("drake").setLevel(logging.WARNING)
-    try:
+            logging.getLogger("drake").setLevel(logging.WARNING)
         return args.run(args)
     except (ScenarioError, PlanningInputError) as e:
         print(f"drake-social: error: {e}", file=sys.stderr)
@@ -573,8 +593,15 @@ def main(argv: Sequence[str] | None = None) -> int:
     except OSError as e:  # e.g. --out names a file, or a directory without write access
         print(f"drake-social: error: {e}", file=sys.stderr)
         return 1
-    except KeyboardInterrupt:
-        print(f"drake-social: {args.command} interrupted; no output of this run was written", file=sys.stderr)
+    except KeyboardInterrupt as e:
+        from drake_social.outputs import InterruptedAfterCommit
+
+        if isinstance(e, InterruptedAfterCommit):  # Ctrl-C while the set was moved into place
+            where = e.committed[0].parent if e.committed else "its folder"
+            print(f"drake-social: {args.command} interrupted after its outputs were written to {where}",
+                  file=sys.stderr)
+        else:
+            print(f"drake-social: {args.command} interrupted; no output of this run was written", file=sys.stderr)
         return 130
 
 

@@ -12,14 +12,23 @@ A command writes its files through an :class:`OutputSet`::
   ``os.replace`` only when the block ends normally, so a crash or Ctrl-C
   while writing leaves the previous set untouched (and the staging folder
   removed).
-* The move happens with SIGINT held back, so Ctrl-C cannot split it; files
-  of this command's *previous* set that the new one does not have (listed in
+* The move happens with SIGINT and SIGTERM deferred (Python-level handlers
+  that only note the signal, re-raised once the move is done: blocking the
+  signal in the main thread would not do, since Drake's and numba's threads
+  may receive it), so Ctrl-C cannot split it; files of this command's
+  *previous* set that the new one does not have (listed in
   ``.<command>.manifest``) are removed in the same step, so the folder never
-  holds a new ``path.csv`` beside an old ``path.png``.
+  holds a new ``path.csv`` beside an old ``path.png``. A Ctrl-C that arrives
+  during the move raises :class:`InterruptedAfterCommit` (a
+  ``KeyboardInterrupt``) after it, so the caller can say the set was written.
+* Committed files get the permissions of a plainly created file
+  (``0o666 & ~umask``): the staging folder is private (``mkdtemp``: 0700) and
+  writers using ``tempfile`` create 0600 files.
 * A second run writing the same command's set into the same folder at the
   same time is refused (:class:`OutputBusyError`) through an advisory lock
   (``fcntl.flock`` on ``.<command>.lock``, released by the kernel when the
-  process dies, so a crashed run never leaves a stale lock).
+  process dies, so a crashed run never leaves a stale lock; the staging
+  folders a killed run left are removed by the next run of the command).
 
 Different commands (``show`` and ``plan``) keep their own sets in one folder.
 """
@@ -35,11 +44,35 @@ import tempfile
 import threading
 from pathlib import Path
 
-__all__ = ["OutputBusyError", "OutputSet"]
+__all__ = ["InterruptedAfterCommit", "OutputBusyError", "OutputSet"]
+
+#: Signals deferred while a set is moved into place.
+_DEFERRED_SIGNALS = (signal.SIGINT, signal.SIGTERM)
 
 
 class OutputBusyError(OSError):
     """Another run is writing the same output set."""
+
+    def __str__(self) -> str:  # the sentence, without OSError's "[Errno 16]"
+        return str(self.strerror)
+
+
+class InterruptedAfterCommit(KeyboardInterrupt):
+    """Ctrl-C arrived while the set was moved into place: the set is complete.
+
+    Attributes:
+        committed: the files of the set, in their final place.
+    """
+
+    def __init__(self, committed: list[Path]):
+        super().__init__(f"interrupted after writing {len(committed)} files")
+        self.committed = committed
+
+
+def _umask() -> int:
+    mask = os.umask(0o022)
+    os.umask(mask)
+    return mask
 
 
 class OutputSet:
@@ -74,23 +107,47 @@ class OutputSet:
                     "wait for it or choose another --out") from None
             raise
         self._lock_fd = fd
-        self._staging = Path(tempfile.mkdtemp(prefix=f".staging-{self.command}-{os.getpid()}-", dir=self.out_dir))
+        try:
+            # We hold the lock: a staging folder of this command is a killed run's.
+            for stale in self.out_dir.glob(f".staging-{self.command}-*"):
+                shutil.rmtree(stale, ignore_errors=True)
+            self._staging = Path(tempfile.mkdtemp(prefix=f".staging-{self.command}-{os.getpid()}-",
+                                                  dir=self.out_dir))
+        except BaseException:
+            self._release()
+            raise
         return self
 
     def __exit__(self, exc_type, exc, tb) -> bool:
-        try:
-            if exc_type is None:
-                self._commit()
-        finally:
-            if self._staging is not None:
-                shutil.rmtree(self._staging, ignore_errors=True)
-                self._staging = None
-            if self._lock_fd is not None:
-                os.close(self._lock_fd)  # releases the flock
-                self._lock_fd = None
+        with _Deferred() as deferred:
+            try:
+                if exc_type is None:
+                    self._commit()
+            finally:
+                self._release()
+        if deferred.received:
+            if signal.SIGINT in deferred.received and self.committed:
+                raise InterruptedAfterCommit(self.committed)
+            deferred.reraise()
         return False
 
+    def _release(self) -> None:
+        if self._staging is not None:
+            shutil.rmtree(self._staging, ignore_errors=True)
+            self._staging = None
+        if self._lock_fd is not None:
+            os.close(self._lock_fd)  # releases the flock
+            self._lock_fd = None
+
     # ---- writing --------------------------------------------------------------
+
+    @property
+    def folder(self) -> Path:
+        """The staging folder, for writers that take a folder and write
+        several files (plain, non-hidden file names only)."""
+        if self._staging is None:
+            raise RuntimeError("OutputSet.folder outside its 'with' block")
+        return self._staging
 
     def path(self, name: str) -> Path:
         """Where to write file ``name`` of the set (inside the staging folder)."""
@@ -112,26 +169,54 @@ class OutputSet:
         return self.out_dir / f".{self.command}.manifest"
 
     def _commit(self) -> None:
-        staged = sorted(p.name for p in self._staging.iterdir() if p.is_file())
+        entries = list(self._staging.iterdir())
+        odd = [p.name for p in entries if not p.is_file() or p.name.startswith(".")]
+        if odd:  # never drop a writer's output silently
+            raise RuntimeError(f"output set {self.command!r}: staged entries that are not plain files: {odd}")
+        staged = sorted(p.name for p in entries)
         try:
-            previous = set(self._manifest().read_text().split())
+            previous = set(self._manifest().read_text().splitlines())
         except FileNotFoundError:
             previous = set()
+        mode = 0o666 & ~_umask()
+        for name in staged:
+            os.chmod(self._staging / name, mode)
         manifest_tmp = self._staging / ".manifest"
         manifest_tmp.write_text("".join(f"{n}\n" for n in staged))
-        held = threading.current_thread() is threading.main_thread()
-        if held:
-            old = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT, signal.SIGTERM})
-        try:
-            for name in staged:
-                os.replace(self._staging / name, self.out_dir / name)
-            for name in sorted(previous - set(staged)):
-                try:
-                    (self.out_dir / name).unlink()
-                except FileNotFoundError:
-                    pass
-            os.replace(manifest_tmp, self._manifest())
-        finally:
-            if held:
-                signal.pthread_sigmask(signal.SIG_SETMASK, old)
+        os.chmod(manifest_tmp, mode)
+        for name in staged:
+            os.replace(self._staging / name, self.out_dir / name)
+        for name in sorted(previous - set(staged)):
+            if name and Path(name).name == name and not name.startswith("."):
+                (self.out_dir / name).unlink(missing_ok=True)
+        os.replace(manifest_tmp, self._manifest())
         self.committed = [self.out_dir / n for n in staged]
+
+
+class _Deferred:
+    """Holds back SIGINT and SIGTERM over a block (main thread only; elsewhere
+    Python runs no signal handler anyway): the signals received are noted and
+    :meth:`reraise` delivers them afterwards with the original handlers."""
+
+    def __init__(self):
+        self.received: list[int] = []
+        self._old: dict[int, object] = {}
+
+    def __enter__(self) -> "_Deferred":
+        if threading.current_thread() is threading.main_thread():
+            for sig in _DEFERRED_SIGNALS:
+                if signal.getsignal(sig) is not None:  # None: a handler set outside Python, left alone
+                    self._old[sig] = signal.signal(sig, self._note)
+        return self
+
+    def _note(self, signum, frame) -> None:
+        self.received.append(signum)
+
+    def __exit__(self, *exc) -> bool:
+        for sig, handler in self._old.items():
+            signal.signal(sig, handler)
+        return False
+
+    def reraise(self) -> None:
+        for sig in dict.fromkeys(self.received):
+            signal.raise_signal(sig)

@@ -18,6 +18,7 @@ pure-numpy core may use the dataclasses without importing Drake.
 
 import dataclasses as dc
 import math
+import typing
 from pathlib import Path
 from typing import Optional, Sequence, Union
 
@@ -295,38 +296,203 @@ class Scenario:
     random_seed: int = 0
 
 
-def load_scenario(path: str | Path, overrides: str | Sequence[str] | None = None) -> Scenario:
+def load_scenario(path: str | Path, overrides: str | Sequence[str] | None = None, *,
+                  overrides_name: str = "overrides") -> Scenario:
     """Loads and validates a scenario file.
+
+    The YAML is read first with PyYAML and checked against the schema field by
+    field (:func:`check_yaml`: duplicate keys, unknown keys, types), so that
+    every error names its source, line and dotted field (``world.bounds[2]``,
+    ``robot.wheels``) before Drake's loader builds the dataclasses.
 
     Args:
         path: a YAML file following the :class:`Scenario` schema.
         overrides: optional YAML text, or several applied in turn (a later
             one merges into what the earlier ones left), on top of the file, e.g.
             ``"random_seed: 3\\nsocial: {weights: [1, 0, 0, 0, 0]}"``.
+        overrides_name: how errors name an override, e.g. ``"--set"``: an
+            error caused by one reads ``<path> (--set '<text>'): ...``.
 
     Returns:
         The validated scenario.
 
     Raises:
-        ScenarioError: the file is missing, malformed, has unknown keys or
-            invalid values; the message names the file and the field.
+        ScenarioError: the file is missing, a directory, malformed, has
+            duplicate or unknown keys or invalid values; the message names
+            the file (or the override at fault), the line and the field.
     """
     from pydrake.common.yaml import yaml_load_typed  # lazy: keep pydrake out of the core
 
     path = Path(path)
+    if path.is_dir():
+        raise ScenarioError(f"{path}: is a directory, not a scenario file")
     if not path.is_file():
         raise ScenarioError(f"{path}: no such scenario file")
     try:
-        scenario = yaml_load_typed(schema=Scenario, filename=str(path))
-    except Exception as e:  # yaml / schema errors carry no file name: add it
-        raise ScenarioError(f"{path}: {e}") from e
-    for text in [overrides] if isinstance(overrides, str) else list(overrides or []):
+        text = path.read_text(encoding="utf-8")
+    except UnicodeDecodeError as e:
+        raise ScenarioError(f"{path}: not a text (UTF-8) file ({e})") from None
+    sources = [(str(path), text)]
+    for extra in [overrides] if isinstance(overrides, str) else list(overrides or []):
+        sources.append((f"{path} ({overrides_name} {extra!r})", extra))
+    stages = []
+    scenario = None
+    for source, data in sources:
+        check_yaml(data, source)
         try:
-            scenario = yaml_load_typed(schema=Scenario, data=text, defaults=scenario)
-        except Exception as e:
-            raise ScenarioError(f"{path} (overrides {text!r}): {e}") from e
-    validate_scenario(scenario, source=str(path))
+            scenario = yaml_load_typed(schema=Scenario, data=data, **({} if scenario is None else
+                                                                        {"defaults": scenario}))
+        except Exception as e:  # what check_yaml lets through; Drake's message has no file name: add it
+            raise ScenarioError(f"{source}: {e}") from e
+        stages.append(scenario)
+    # Blame the source after which the scenario stopped being valid: a bad
+    # --set is named, not the file it was applied to.
+    culprit = len(stages) - 1
+    try:
+        validate_scenario(stages[culprit], source=sources[culprit][0])
+    except ScenarioError:
+        while culprit > 0 and not _is_valid(stages[culprit - 1]):
+            culprit -= 1
+        validate_scenario(stages[-1], source=sources[culprit][0])
     return scenario
+
+
+def _is_valid(scenario: Scenario) -> bool:
+    try:
+        validate_scenario(scenario)
+    except ScenarioError:
+        return False
+    return True
+
+
+# --------------------------------------------------------------------------
+# Schema check of the YAML text, before Drake's loader: each error names the
+# source, the line and the dotted field, and says what is allowed.
+
+
+def _describe(tp) -> str:
+    """What a value of schema type ``tp`` looks like, for error messages."""
+    origin = typing.get_origin(tp)
+    if origin is Union:
+        alts = [a for a in typing.get_args(tp) if a is not type(None)]
+        text = " or ".join(_describe(a) if not dc.is_dataclass(a) else f"!{a.__name__} {{...}}" for a in alts)
+        return text + (" or null" if len(alts) < len(typing.get_args(tp)) else "")
+    if origin is list:
+        return "a list of " + _plural(typing.get_args(tp)[0])
+    if dc.is_dataclass(tp):
+        return f"a mapping ({tp.__name__}: {', '.join(f.name for f in dc.fields(tp))})"
+    return {float: "a number", int: "an integer", bool: "true or false", str: "a string"}.get(tp, str(tp))
+
+
+def _plural(tp) -> str:
+    if typing.get_origin(tp) is list:
+        return "lists of " + _plural(typing.get_args(tp)[0])
+    if dc.is_dataclass(tp):
+        return f"mappings ({tp.__name__}: {', '.join(f.name for f in dc.fields(tp))})"
+    return {float: "numbers", int: "integers", bool: "booleans", str: "strings"}.get(tp, str(tp))
+
+
+def check_yaml(text: str, source: str, schema: type = Scenario) -> None:
+    """Checks YAML ``text`` against the dataclass ``schema`` before it is loaded.
+
+    Refuses invalid YAML, duplicate keys (PyYAML and Drake keep the last one
+    silently), keys the schema does not have and values of the wrong type
+    (a word for a number, null or a mapping for a list, an unknown ``!Tag``).
+    Values are not range-checked here (see :func:`validate_scenario`).
+
+    Raises:
+        ScenarioError: ``<source>: line <n>: <dotted field>: <what is allowed>, got <value>``.
+    """
+    import yaml  # PyYAML, as Drake's Python loader uses; lazy like pydrake
+
+    try:
+        root = yaml.compose(text, Loader=yaml.SafeLoader)
+    except yaml.YAMLError as e:
+        raise ScenarioError(f"{source}: not valid YAML: {e}") from None
+    if root is None:
+        raise ScenarioError(f"{source}: empty; a scenario is a mapping ({', '.join(f.name for f in dc.fields(schema))})")
+    _check_node(schema, root, "", source, yaml)
+
+
+def _check_node(tp, node, field: str, source: str, yaml) -> None:
+    def fail(message: str, at=node) -> None:
+        name = f"{field}: " if field else ""
+        raise ScenarioError(f"{source}: line {at.start_mark.line + 1}: {name}{message}")
+
+    def shown(n) -> str:
+        if isinstance(n, yaml.MappingNode):
+            return "a mapping"
+        if isinstance(n, yaml.SequenceNode):
+            return "a list"
+        return "null" if n.tag == "tag:yaml.org,2002:null" else repr(n.value)
+
+    is_null = isinstance(node, yaml.ScalarNode) and node.tag == "tag:yaml.org,2002:null"
+    origin = typing.get_origin(tp)
+    if origin is Union:
+        args = typing.get_args(tp)
+        if type(None) in args and is_null:
+            return
+        alts = [a for a in args if a is not type(None)]
+        if len(alts) == 1:
+            return _check_node(alts[0], node, field, source, yaml)
+        tags = {f"!{a.__name__}": a for a in alts}
+        if node.tag in tags:
+            return _check_node(tags[node.tag], node, field, source, yaml)
+        if node.tag.startswith("!"):
+            fail(f"unknown type {node.tag}; allowed: {', '.join(tags)}")
+        return _check_node(alts[0], node, field, source, yaml)  # untagged: the first alternative
+    if origin is list:
+        if not isinstance(node, yaml.SequenceNode):
+            fail(f"must be {_describe(tp)}, got {shown(node)}")
+        (item,) = typing.get_args(tp)
+        for i, child in enumerate(node.value):
+            _check_node(item, child, f"{field}[{i}]", source, yaml)
+        return
+    if dc.is_dataclass(tp):
+        if not isinstance(node, yaml.MappingNode):
+            fail(f"must be {_describe(tp)}, got {shown(node)}")
+        types = {f.name: f.type for f in dc.fields(tp)}
+        seen: dict[str, int] = {}
+        for key_node, value_node in node.value:
+            key = key_node.value
+            sub = f"{field}.{key}" if field else str(key)
+            line = key_node.start_mark.line + 1
+            if key in seen:  # YAML loaders keep the last silently
+                raise ScenarioError(f"{source}: line {line}: {sub}: duplicate key (first at line {seen[key]})")
+            seen[key] = line
+            if not isinstance(key_node, yaml.ScalarNode) or key not in types:
+                where = f"in {field}" if field else "at the top level"
+                raise ScenarioError(f"{source}: line {line}: {sub}: unknown field {where}; allowed: "
+                                    f"{', '.join(types)}")
+            _check_node(types[key], value_node, sub, source, yaml)
+        return
+    if not isinstance(node, yaml.ScalarNode) or is_null:
+        fail(f"must be {_describe(tp)}, got {shown(node)}")
+    value = yaml.SafeLoader("").construct_object(node) if node.tag.startswith("tag:yaml.org") else node.value
+    if tp is bool:
+        ok = isinstance(value, bool)
+    elif tp is str:
+        ok = isinstance(value, str)
+    elif isinstance(value, bool):
+        ok = False
+    elif tp is int:
+        ok = isinstance(value, int) or (isinstance(value, float) and value.is_integer()) or _parses(int, value)
+    elif tp is float:
+        ok = isinstance(value, (int, float)) or _parses(float, value)
+    else:
+        ok = True
+    if not ok:
+        fail(f"must be {_describe(tp)}, got {shown(node)}")
+
+
+def _parses(kind, value) -> bool:
+    if not isinstance(value, str):
+        return False
+    try:
+        kind(value)
+    except ValueError:
+        return False
+    return True
 
 
 # --------------------------------------------------------------------------

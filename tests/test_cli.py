@@ -104,7 +104,7 @@ def test_invalid_override_value_names_the_file_and_field(tmp_path, capsys):
 def test_unknown_key_in_an_override_names_the_key(tmp_path, capsys):
     tiny = SCENARIO_DIR / "tiny.yaml"
     err = _error(capsys, ["show", str(tiny), "--set", "social: {sigmah: 2}", "--out", str(tmp_path)])
-    assert str(tiny) in err and "overrides" in err and "sigmah" in err
+    assert f"{tiny} (--set 'social: {{sigmah: 2}}'): line 1: social.sigmah: unknown field in social" in err
 
 
 def test_unknown_key_in_a_file_names_the_file_and_key(tmp_path, capsys):

@@ -162,14 +162,22 @@ def test_progress_bar_draws_fraction_and_best_cost():
 def test_bench_parses_and_calls_run_bench_with_keywords(tmp_path, monkeypatch, capsys):
     calls = []
     fake = types.ModuleType("drake_social.experiments.bench")
-    fake.run_bench = lambda **kwargs: calls.append(kwargs)
+
+    def fake_run_bench(**kwargs):
+        calls.append(kwargs)
+        (kwargs["out_dir"] / "bench.md").write_text("| table |\n")
+
+    fake.run_bench = fake_run_bench
     monkeypatch.setitem(sys.modules, "drake_social.experiments.bench", fake)
     argv = ["bench", "--scenarios", str(TINY), "--algorithms", "rrt_star", "social_rrt_star", "--iterations", "50",
             "--seeds", "3", "--checker", "numpy", "--no-ompl", "--out", str(tmp_path)]
     assert main(argv) == 0
+    # run_bench writes into the output set's staging folder inside --out, moved into --out as a whole.
+    staging = calls[0].pop("out_dir")
+    assert staging.parent == tmp_path and staging.name.startswith(".staging-bench-") and not staging.exists()
     assert calls == [dict(scenario_paths=[TINY], algorithms=["rrt_star", "social_rrt_star"], iterations=50, seeds=3,
-                          checker="numpy", include_ompl=False, include_checker=True, out_dir=tmp_path,
-                          progress=None)]
+                          checker="numpy", include_ompl=False, include_checker=True, progress=None)]
+    assert (tmp_path / "bench.md").read_text() == "| table |\n" and "| table |" in capsys.readouterr().out
     defaults = build_parser().parse_args(["bench"])
     assert [str(p) for p in defaults.scenarios] == ["scenarios/office_bar.yaml", "scenarios/generic_L.yaml"]
     assert defaults.algorithms == list(ALGORITHMS) and defaults.iterations == 2000 and defaults.seeds == 10

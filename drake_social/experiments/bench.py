@@ -16,7 +16,8 @@ waypoint and motion (``path_valid``). ``wall_time`` is the planner's search
 only (``RrtStar.solve``, OMPL's ``solve``).
 
 Ratios are ours / OMPL of the medians: ``time`` (wall time), ``social_cost``
-(full weights) and ``objective``.
+(full weights) and ``objective``; not defined (null, "n/a" in the table)
+where either median is 0.
 """
 
 from __future__ import annotations
@@ -122,8 +123,11 @@ def summarize(runs: Sequence[dict]) -> dict:
 
 
 def _ratio(a: dict, b: dict, field: str) -> float | None:
+    """Median of ``a`` over median of ``b``; None (not defined, "n/a" in the
+    table) when either is missing or 0: 0 / c or c / 0 compares nothing, e.g.
+    where every social planner finds a path of cost 0."""
     x, y = a[field]["median"], b[field]["median"]
-    return None if x is None or y is None or y == 0 else x / y
+    return None if x is None or y is None or x == 0 or y == 0 else x / y
 
 
 def _plan_ompl_runs(scenario: Scenario, key: str, iterations: int, seeds: int, checker: str, tick) -> dict:

@@ -220,3 +220,31 @@ def test_bench_without_ompl_says_so(tiny_scenario_path, tmp_path, monkeypatch):
     assert dut["scenarios"]["tiny.yaml"]["algorithms"]["rrt_star"]["vs_ompl"] is None
     md = (tmp_path / "bench.md").read_text()
     assert "OMPL was not importable" in md and "| tiny | rrt_star | 1 |" in md
+
+
+def test_ratios_where_a_median_is_zero_are_not_defined():
+    """A scenario where every social planner finds a path of cost 0: the
+    social-cost and objective ratios are n/a, not 0; the time ratio stays."""
+    from drake_social.experiments import bench
+
+    def summary(time, cost):
+        stat = lambda m: {"n": 2, "median": m, "q25": m, "q75": m, "iqr": 0.0, "min": m, "max": m}  # noqa: E731
+        return {"runs": 2, "success_rate": 1.0, "wall_time": stat(time), "social_cost_full": stat(cost),
+                "objective": stat(cost), "median_first_solution_iteration": 3.0}
+
+    ours, ompl = summary(0.5, 0.0), summary(2.0, 1.5)
+    assert bench._ratio(ours, ompl, "wall_time") == pytest.approx(0.25)
+    assert bench._ratio(ours, ompl, "social_cost_full") is None  # 0 / 1.5
+    assert bench._ratio(ompl, ours, "social_cost_full") is None  # 1.5 / 0
+    assert bench._ratio(summary(0.5, 0.0), summary(2.0, 0.0), "objective") is None  # 0 / 0
+    vs = {"ompl": "ompl_rrt_star[social_rrt_star]",
+          **{f: bench._ratio(ours, ompl, g)
+             for f, g in (("time", "wall_time"), ("social_cost", "social_cost_full"), ("objective", "objective"))}}
+    out = {"settings": {"iterations": 10, "seeds": [0, 1], "checker": "numpy"},
+           "machine": {"platform": "p", "cpu_count": 2, "numpy": "n", "drake": "d", "ompl": None},
+           "ompl": {"requested": False}, "checker_bench": None,
+           "scenarios": {"tiny.yaml": {"algorithms": {"social_rrt_star": {"summary": ours, "vs_ompl": vs}},
+                                       "ompl": {}}}}
+    row = next(line for line in bench._markdown(out).splitlines() if line.startswith("| tiny | social_rrt_star"))
+    assert row.endswith("| 0.25 | n/a | n/a |")
+    assert json.loads(json.dumps(bench._finite(vs)))["social_cost"] is None

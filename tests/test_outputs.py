@@ -1,0 +1,168 @@
+"""drake_social.outputs: a command's files land as one set or not at all."""
+
+from __future__ import annotations
+
+import os
+import signal
+import stat
+import subprocess
+import sys
+import tempfile
+import textwrap
+from pathlib import Path
+
+import pytest
+
+from drake_social import outputs as outputs_module
+from drake_social.outputs import InterruptedAfterCommit, OutputBusyError, OutputSet
+
+
+def _listing(folder: Path) -> dict[str, bytes]:
+    """Visible files of ``folder`` and their bytes (hidden lock and manifest left out)."""
+    return {p.name: p.read_bytes() for p in sorted(folder.iterdir()) if not p.name.startswith(".")}
+
+
+def _hidden(folder: Path) -> list[str]:
+    return sorted(p.name for p in folder.iterdir() if p.name.startswith("."))
+
+
+def _write_set(folder: Path, files: dict[str, str], command: str = "plan") -> OutputSet:
+    with OutputSet(folder, command) as dut:
+        for name, text in files.items():
+            dut.write_text(name, text)
+    return dut
+
+
+def test_a_new_set_replaces_the_previous_one_as_a_whole(tmp_path):
+    _write_set(tmp_path, {"path.csv": "old", "path.png": "old png", "extra.png": "old extra"})
+    (tmp_path / "notes.txt").write_text("the user's")  # not in any set: never touched
+    dut = _write_set(tmp_path, {"path.csv": "new", "path.png": "new png"})
+    assert _listing(tmp_path) == {"notes.txt": b"the user's", "path.csv": b"new", "path.png": b"new png"}
+    assert dut.committed == [tmp_path / "path.csv", tmp_path / "path.png"]
+    assert _hidden(tmp_path) == [".plan.lock", ".plan.manifest"]  # the staging folder is gone
+    assert (tmp_path / ".plan.manifest").read_text() == "path.csv\npath.png\n"
+
+
+def test_sets_of_different_commands_are_independent(tmp_path):
+    _write_set(tmp_path, {"scene.png": "show"}, command="show")
+    _write_set(tmp_path, {"path.csv": "a"}, command="plan")
+    _write_set(tmp_path, {"result.json": "b"}, command="plan")
+    assert _listing(tmp_path) == {"result.json": b"b", "scene.png": b"show"}
+
+
+@pytest.mark.parametrize("error", [RuntimeError("figure failed"), KeyboardInterrupt()])
+def test_an_exception_or_ctrl_c_inside_the_block_leaves_the_old_set_untouched(tmp_path, error):
+    _write_set(tmp_path, {"path.csv": "old", "path.png": "old png"})
+    before = _listing(tmp_path)
+    with pytest.raises(type(error)):
+        with OutputSet(tmp_path, "plan") as dut:
+            dut.write_text("path.csv", "new")
+            dut.write_text("result.json", "new")
+            raise error
+    assert _listing(tmp_path) == before
+    assert _hidden(tmp_path) == [".plan.lock", ".plan.manifest"]
+    # The lock was released: the next run goes ahead.
+    _write_set(tmp_path, {"path.csv": "next"})
+    assert _listing(tmp_path) == {"path.csv": b"next"}
+
+
+def test_committed_files_have_normal_permissions(tmp_path):
+    """The staging folder is 0700 and tempfile's files 0600; what lands in
+    out_dir has the permissions of a plainly created file (0644 at umask 022)."""
+    old = os.umask(0o022)
+    try:
+        with OutputSet(tmp_path, "simulate") as dut:
+            assert stat.S_IMODE(dut.folder.stat().st_mode) == 0o700
+            fd, tmp = tempfile.mkstemp(dir=dut.folder)  # as write_replay_html writes
+            os.close(fd)
+            os.replace(tmp, dut.path("replay.html"))
+            assert stat.S_IMODE(dut.path("replay.html").stat().st_mode) == 0o600
+            dut.write_text("sim.json", "{}")
+    finally:
+        os.umask(old)
+    for name in ("replay.html", "sim.json", ".simulate.manifest"):
+        assert stat.S_IMODE((tmp_path / name).stat().st_mode) == 0o644, name
+
+
+_HOLDER = textwrap.dedent("""
+    import sys
+    from drake_social.outputs import OutputSet
+    with OutputSet(sys.argv[1], "plan") as dut:
+        dut.write_text("path.csv", "holder")
+        print("ready", flush=True)
+        sys.stdin.read()  # until the test closes our stdin
+""")
+
+
+def test_a_concurrent_run_in_another_process_is_refused(tmp_path):
+    _write_set(tmp_path, {"path.csv": "old"})
+    holder = subprocess.Popen([sys.executable, "-c", _HOLDER, str(tmp_path)], stdin=subprocess.PIPE,
+                              stdout=subprocess.PIPE, text=True)
+    try:
+        assert holder.stdout.readline() == "ready\n"
+        with pytest.raises(OutputBusyError) as info:
+            _write_set(tmp_path, {"path.csv": "intruder"})
+        assert str(info.value) == (f"another drake-social plan run is writing into {tmp_path}; "
+                                   "wait for it or choose another --out")
+        _write_set(tmp_path, {"scene.png": "show"}, command="show")  # another command is not blocked
+    finally:
+        holder.stdin.close()
+        assert holder.wait(timeout=60) == 0
+    assert _listing(tmp_path) == {"path.csv": b"holder", "scene.png": b"show"}
+
+
+def test_a_killed_run_leaves_a_staging_folder_that_the_next_run_removes(tmp_path):
+    holder = subprocess.Popen([sys.executable, "-c", _HOLDER, str(tmp_path)], stdin=subprocess.PIPE,
+                              stdout=subprocess.PIPE, text=True)
+    assert holder.stdout.readline() == "ready\n"
+    holder.kill()  # SIGKILL: no cleanup; the kernel drops the lock
+    holder.wait(timeout=60)
+    holder.stdin.close()
+    assert [n for n in _hidden(tmp_path) if n.startswith(".staging-plan-")]
+    _write_set(tmp_path, {"path.csv": "next"})
+    assert _hidden(tmp_path) == [".plan.lock", ".plan.manifest"]
+    assert _listing(tmp_path) == {"path.csv": b"next"}
+
+
+def test_ctrl_c_while_moving_the_set_into_place_completes_it_first(tmp_path, monkeypatch):
+    """SIGINT arriving between two renames is held back until the set is
+    complete, then raised as InterruptedAfterCommit (a KeyboardInterrupt)."""
+    _write_set(tmp_path, {"path.csv": "old", "path.png": "old png", "stale.png": "old"})
+    replace = os.replace
+    calls = []
+
+    def interrupted_replace(src, dst):
+        calls.append(Path(dst).name)
+        if len(calls) == 1:
+            signal.raise_signal(signal.SIGINT)  # as if Ctrl-C were pressed now
+        replace(src, dst)
+
+    monkeypatch.setattr(outputs_module.os, "replace", interrupted_replace)
+    with pytest.raises(InterruptedAfterCommit) as info:
+        _write_set(tmp_path, {"path.csv": "new", "path.png": "new png"})
+    assert isinstance(info.value, KeyboardInterrupt)
+    assert info.value.committed == [tmp_path / "path.csv", tmp_path / "path.png"]
+    assert calls == ["path.csv", "path.png", ".plan.manifest"]
+    assert _listing(tmp_path) == {"path.csv": b"new", "path.png": b"new png"}
+    assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
+
+
+def test_names_must_be_plain_and_the_block_must_be_open(tmp_path):
+    dut = OutputSet(tmp_path, "plan")
+    with pytest.raises(RuntimeError, match="outside its 'with' block"):
+        dut.path("a.csv")
+    with dut:
+        for bad in ("../a.csv", "sub/a.csv", ".hidden"):
+            with pytest.raises(ValueError, match="plain file name"):
+                dut.path(bad)
+    with pytest.raises(RuntimeError, match="not plain files"):
+        with OutputSet(tmp_path, "plan") as dut:
+            (dut.folder / "sub").mkdir()
+    assert _listing(tmp_path) == {}
+
+
+def test_an_unwritable_out_is_an_oserror(tmp_path):
+    (tmp_path / "file").write_text("")
+    with pytest.raises(OSError):
+        with OutputSet(tmp_path / "file", "plan"):
+            pass
