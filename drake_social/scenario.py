@@ -45,6 +45,11 @@ __all__ = [
     "validate_scenario",
 ]
 
+#: Largest ``planner.iterations`` accepted (the tree grows with the nodes
+#: added, but K samples still take time: 10^7 is hours of planning).
+MAX_ITERATIONS = 10_000_000
+#: Values of ``planner.near_radius_mode``.
+NEAR_RADIUS_MODES = ("fixed", "shrinking")
 #: Planner names accepted in ``planner.algorithm`` (see ``drake_social.planning``).
 ALGORITHMS = (
     "rrt_star",
@@ -221,6 +226,18 @@ class PlannerOptions:
     # Largest displacement of any robot or object point between two checked
     # configurations of a motion, metres (> 0).
     collision_resolution: float = 0.05
+    # Near-set radius rule: "fixed" (r_near, the paper's Algorithm 2) or
+    # "shrinking" (standard RRT*: min(r_near, gamma (log n / n)^(1/4)) with n
+    # the tree's size, so the near set stops growing with the tree).
+    near_radius_mode: str = "fixed"
+    # gamma of the shrinking radius, configuration-space units (> 0), or 0 for
+    # OMPL's choice: 2 (1 + 1/d)^(1/d) (volume / unit-ball volume)^(1/d) of
+    # the weighted configuration box, d = 4.
+    near_radius_gamma: float = 0.0
+    # Optimise the returned path (shortcuts and a local descent on the
+    # waypoints, drake_social.planning.optimize); false keeps the raw RRT*
+    # path of the paper. Never raises the cost, keeps every motion valid.
+    optimize: bool = False
 
 
 @dc.dataclass
@@ -624,8 +641,16 @@ def validate_scenario(scenario: Scenario, source: str = "<scenario>") -> None:
     p = scenario.planner
     if p.algorithm not in ALGORITHMS:
         c.fail("planner.algorithm", f"unknown algorithm {p.algorithm!r}; allowed: {', '.join(ALGORITHMS)}")
-    if p.iterations < 1:
-        c.fail("planner.iterations", f"must be >= 1, got {p.iterations}")
+    if not 1 <= p.iterations <= MAX_ITERATIONS:
+        c.fail("planner.iterations", f"must be in [1, {MAX_ITERATIONS}], got {p.iterations}")
+    if p.near_radius_mode not in NEAR_RADIUS_MODES:
+        c.fail("planner.near_radius_mode",
+               f"unknown mode {p.near_radius_mode!r}; allowed: {', '.join(NEAR_RADIUS_MODES)}")
+    c.finite("planner.near_radius_gamma", p.near_radius_gamma)
+    if p.near_radius_gamma < 0:
+        c.fail("planner.near_radius_gamma", f"must be >= 0 (0: computed from the space), got {p.near_radius_gamma}")
+    if not isinstance(p.optimize, bool):
+        c.fail("planner.optimize", f"must be true or false, got {p.optimize!r}")
     c.positive("planner.planning_range", p.planning_range)
     c.positive("planner.near_radius", p.near_radius)
     c.finite("planner.goal_bias", p.goal_bias)

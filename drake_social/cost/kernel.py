@@ -27,7 +27,7 @@ except ImportError:  # pragma: no cover - exercised only where numba is missing
         return lambda f: f
 
 
-__all__ = ["AVAILABLE", "msc_sums"]
+__all__ = ["AVAILABLE", "msc_sums", "people_grid"]
 
 
 @njit(cache=True)
@@ -62,8 +62,44 @@ def _gaussian(dx, dy, c, s, inv_front, inv_rear, inv_side):
 
 
 @njit(cache=True)
+def people_grid(people, cell):
+    """Buckets people (H, 3) into square cells of side ``cell`` metres.
+
+    Returns (x0, y0, nx, ny, start, order): person ``order[start[c]:start[c + 1]]``
+    stand in cell ``c = iy * nx + ix``, counted from the corner (x0, y0).
+    """
+    h = people.shape[0]
+    if h == 0:
+        return 0.0, 0.0, 1, 1, np.zeros(2, dtype=np.int64), np.zeros(0, dtype=np.int64)
+    x0, y0 = people[:, 0].min(), people[:, 1].min()
+    nx = int((people[:, 0].max() - x0) / cell) + 1
+    ny = int((people[:, 1].max() - y0) / cell) + 1
+    cells = np.empty(h, dtype=np.int64)
+    for i in range(h):
+        ix = min(int((people[i, 0] - x0) / cell), nx - 1)
+        iy = min(int((people[i, 1] - y0) / cell), ny - 1)
+        cells[i] = iy * nx + ix
+    order = np.argsort(cells, kind="mergesort")
+    start = np.zeros(nx * ny + 1, dtype=np.int64)
+    for i in range(h):
+        start[cells[i] + 1] += 1
+    for c in range(nx * ny):
+        start[c + 1] += start[c]
+    return x0, y0, nx, ny, start, order
+
+
+@njit(cache=True)
+def _segment_distance(px, py, ax, ay, bx, by):
+    dx, dy = bx - ax, by - ay
+    dd = dx * dx + dy * dy
+    t = 0.0 if dd == 0.0 else min(max(((px - ax) * dx + (py - ay) * dy) / dd, 0.0), 1.0)
+    return math.hypot(px - (ax + t * dx), py - (ay + t * dy))
+
+
+@njit(cache=True)
 def msc_sums(
-    q_a, q_b, people, l1, l2, obj, active, weights, lever, resolution, reach, inv_front, inv_rear, inv_side, tau
+    q_a, q_b, people, l1, l2, obj, active, weights, lever, resolution, reach, inv_front, inv_rear, inv_side, tau,
+    point_reach, grid_cell, grid_x0, grid_y0, grid_nx, grid_ny, grid_start, grid_order,
 ):
     """Per motion (E,): the sum over steps of the weighted trapezoid areas
     (multiply by h = length / n for Msc) and the step count n.
@@ -71,7 +107,17 @@ def msc_sums(
     Args mirror SocialCost: people (H, 3); obj (P, 2) object interest points
     in the gripper frame; active (K,) interest-point indices with weights (K,);
     lever (c_shoulder, c_gripper); reach: the AGF's largest reach (inf for
-    no culling).
+    no culling); point_reach: the largest distance of a weighted point from
+    the base centre; grid_*: :func:`people_grid` with cell side grid_cell.
+
+    People are culled in two exact steps before any sample is taken: the
+    grid gives those standing within ``reach + point_reach`` of the base's
+    segment's bounding box, and a person farther than that from the segment
+    itself has every term <= threshold (every weighted point stays within
+    point_reach of the base), so it adds exactly nothing. The interest
+    points of a motion's samples are computed once and shared by its people.
+    The arithmetic and the order of the sums are those of the per-person
+    loop, so the sums are the same bit for bit.
     """
     e_count, h_count, k_count = q_a.shape[0], people.shape[0], active.shape[0]
     sums = np.zeros(e_count)
@@ -80,22 +126,63 @@ def msc_sums(
     sin_t = np.sin(people[:, 2])
     xa, ya = np.empty(k_count), np.empty(k_count)
     xb, yb = np.empty(k_count), np.empty(k_count)
-    xs, ys = np.empty(k_count), np.empty(k_count)
     g_prev = np.empty(k_count)
+    cand = np.empty(h_count, dtype=np.int64)
+    k0s = np.empty(h_count, dtype=np.int64)
+    k1s = np.empty(h_count, dtype=np.int64)
+    cull = math.isfinite(reach)
+    radius = reach + point_reach + 1e-9
+    n_max = 1
     for e in range(e_count):
         d0, d1 = q_b[e, 0] - q_a[e, 0], q_b[e, 1] - q_a[e, 1]
         d2, d3 = q_b[e, 2] - q_a[e, 2], q_b[e, 3] - q_a[e, 3]
         span = math.hypot(d0, d1) + lever[0] * abs(d2) + lever[1] * abs(d2 + d3)
-        n = max(1, int(math.ceil(span / resolution - 1e-9)))
-        steps[e] = n
+        steps[e] = max(1, int(math.ceil(span / resolution - 1e-9)))
+        n_max = max(n_max, steps[e])
+    xs = np.empty((n_max + 1, k_count))
+    ys = np.empty((n_max + 1, k_count))
+    for e in range(e_count):
+        d0, d1 = q_b[e, 0] - q_a[e, 0], q_b[e, 1] - q_a[e, 1]
+        d2, d3 = q_b[e, 2] - q_a[e, 2], q_b[e, 3] - q_a[e, 3]
+        span = math.hypot(d0, d1) + lever[0] * abs(d2) + lever[1] * abs(d2 + d3)
+        n = steps[e]
         if d0 == 0.0 and d1 == 0.0 and d2 == 0.0 and d3 == 0.0:
+            continue
+        # Candidate people, in ascending order.
+        m = 0
+        if cull:
+            ax, ay, bx, by = q_a[e, 0], q_a[e, 1], q_b[e, 0], q_b[e, 1]
+            ix0 = max(int(math.floor((min(ax, bx) - radius - grid_x0) / grid_cell)), 0)
+            ix1 = min(int(math.floor((max(ax, bx) + radius - grid_x0) / grid_cell)), grid_nx - 1)
+            iy0 = max(int(math.floor((min(ay, by) - radius - grid_y0) / grid_cell)), 0)
+            iy1 = min(int(math.floor((max(ay, by) + radius - grid_y0) / grid_cell)), grid_ny - 1)
+            for iy in range(iy0, iy1 + 1):
+                for ix in range(ix0, ix1 + 1):
+                    c = iy * grid_nx + ix
+                    for r in range(grid_start[c], grid_start[c + 1]):
+                        h = grid_order[r]
+                        if _segment_distance(people[h, 0], people[h, 1], ax, ay, bx, by) <= radius:
+                            cand[m] = h
+                            m += 1
+            for i in range(1, m):  # insertion sort: few candidates
+                v, j = cand[i], i - 1
+                while j >= 0 and cand[j] > v:
+                    cand[j + 1] = cand[j]
+                    j -= 1
+                cand[j + 1] = v
+        else:
+            for h in range(h_count):
+                cand[m] = h
+                m += 1
+        if m == 0:
             continue
         _points(q_a[e, 0], q_a[e, 1], q_a[e, 2], q_a[e, 3], l1, l2, obj, active, xa, ya)
         _points(q_b[e, 0], q_b[e, 1], q_b[e, 2], q_b[e, 3], l1, l2, obj, active, xb, yb)
-        total = 0.0
-        for h in range(h_count):
-            px, py, c, s = people[h, 0], people[h, 1], cos_t[h], sin_t[h]
-            # The window of the motion where this person can matter.
+        # The window of the motion where each candidate can matter.
+        k_lo, k_hi = n + 1, -1
+        for i in range(m):
+            h = cand[i]
+            px, py = people[h, 0], people[h, 1]
             relevant = False
             near_a, near_b = math.inf, math.inf
             for j in range(k_count):
@@ -105,6 +192,7 @@ def msc_sums(
                     relevant = True
                 near_a, near_b = min(near_a, da), min(near_b, db)
             if not relevant:
+                k0s[i], k1s[i] = 0, -1
                 continue
             t0, t1 = 0.0, 1.0
             if span > 0 and math.isfinite(reach):
@@ -114,14 +202,26 @@ def msc_sums(
             k1 = min(int(math.ceil(t1 * n)), n)
             k1 = max(k1, k0 + 1)
             k0 = min(k0, k1 - 1)
-            for k in range(k0, k1 + 1):
-                t = k / n
-                _points(
-                    q_a[e, 0] + t * d0, q_a[e, 1] + t * d1, q_a[e, 2] + t * d2, q_a[e, 3] + t * d3,
-                    l1, l2, obj, active, xs, ys,
-                )
+            k0s[i], k1s[i] = k0, k1
+            k_lo, k_hi = min(k_lo, k0), max(k_hi, k1)
+        if k_hi < 0:
+            continue
+        for k in range(k_lo, k_hi + 1):  # the samples, once for all people
+            t = k / n
+            _points(
+                q_a[e, 0] + t * d0, q_a[e, 1] + t * d1, q_a[e, 2] + t * d2, q_a[e, 3] + t * d3,
+                l1, l2, obj, active, xs[k], ys[k],
+            )
+        total = 0.0
+        for i in range(m):
+            if k1s[i] < 0:
+                continue
+            h = cand[i]
+            px, py, c, s = people[h, 0], people[h, 1], cos_t[h], sin_t[h]
+            k0 = k0s[i]
+            for k in range(k0, k1s[i] + 1):
                 for j in range(k_count):
-                    g = _gaussian(xs[j] - px, ys[j] - py, c, s, inv_front, inv_rear, inv_side)
+                    g = _gaussian(xs[k, j] - px, ys[k, j] - py, c, s, inv_front, inv_rear, inv_side)
                     if k > k0:
                         g0 = g_prev[j]
                         up0, up1 = g0 > tau, g > tau

@@ -123,6 +123,19 @@ class SocialCost:
         relevant, _, _ = self._window(q_a, q_b, displacement_bound(q_b - q_a, self._lever))
         return relevant
 
+    def _people_grid(self) -> tuple:
+        """(point reach, cell side, *kernel.people_grid) for the compiled
+        kernel's culling; rebuilt when ``people`` changes."""
+        key = self.people.tobytes()
+        if getattr(self, "_grid_key", None) != key:
+            point_reach = float(self.geometry.reach(active=self._active)[2]) if len(self._active) else 0.0
+            reach = self.space.max_reach
+            cell = reach + point_reach if np.isfinite(reach) and reach + point_reach > 0 else 1.0
+            people = np.ascontiguousarray(self.people)
+            self._grid = (point_reach, cell, *kernel.people_grid(people, cell))
+            self._grid_key = key
+        return self._grid
+
     def _window(self, q_a: np.ndarray, q_b: np.ndarray, span: np.ndarray):
         """For every (motion, person): whether the person may matter, and the
         parameter interval [t0, t1] outside which every term is 0."""
@@ -172,17 +185,18 @@ class SocialCost:
         out = np.zeros(len(q_a))
         if len(self.people) == 0 or len(self._active) == 0 or len(q_a) == 0:
             return out[0] if single else out
-        dq = q_b - q_a
         length = config_distance(q_a, q_b, self.distance_weights)
-        span = displacement_bound(dq, self._lever)
         if self.backend == "numba":
             sums, n = kernel.msc_sums(
                 np.ascontiguousarray(q_a), np.ascontiguousarray(q_b), self.people,
                 *self.geometry.link_lengths, self.geometry.object_interest, self._active, self._active_weights,
                 self._lever, self.resolution, self.space.max_reach, *self._inverse_variances, self.space.threshold,
+                *self._people_grid(),
             )  # fmt: skip
             out += sums * (length / n)
             return out[0] if single else out
+        dq = q_b - q_a
+        span = displacement_bound(dq, self._lever)
         relevant, t0, t1 = self._window(q_a, q_b, span)
         relevant &= (length > 0)[:, None]
         if relevant.any():

@@ -28,9 +28,18 @@ class Objective:
     #: Per-coordinate scale of the configuration distance.
     distance_weights: np.ndarray = np.ones(4)
 
+    #: Whether :meth:`length_bound` is the motion cost itself (no social term).
+    length_is_cost: bool = True
+
     def state_cost(self, q: np.ndarray) -> np.ndarray:
         """The cost rate at configurations (..., 4) (S for social objectives)."""
         return np.zeros(np.shape(q)[:-1])
+
+    def length_bound(self, q_a: np.ndarray, q_b: np.ndarray) -> np.ndarray:
+        """``lambda * ||W (b - a)||`` (E,): a lower bound of :meth:`motion_cost`
+        computed with the same arithmetic as its length term, so that
+        ``motion_cost >= length_bound`` holds exactly in floating point."""
+        return Objective.motion_cost(self, q_a, q_b)
 
     def motion_cost(self, q_a: np.ndarray, q_b: np.ndarray) -> np.ndarray:
         """Costs (E,) of straight motions q_a -> q_b, (E, 4) each (or (4,))."""
@@ -68,6 +77,7 @@ class SocialObjective(Objective):
             raise ValueError(f"length_weight must be >= 0, got {length_weight}")
         self.social = social
         self.length_weight = float(length_weight)
+        self.length_is_cost = False
         dw = social.distance_weights
         self.distance_weights = np.ones(4) if dw is None else np.asarray(dw, float)
 

@@ -48,6 +48,11 @@ class PlannerResult:
         informed_diameters: (K,) the informed ellipse's transverse diameter in
             force after each iteration (inf: uniform sampling); empty when the
             planner is not informed.
+        optimized: whether the path was optimised after planning
+            (``planner.optimize``); ``cost`` and ``waypoints`` are then the
+            optimised ones and ``cost_history`` stays the tree's.
+        raw_cost: the tree path's cost before optimisation (= cost when not optimised).
+        near_radius_mode: "fixed" or "shrinking" (see ``planning.rrt_star``).
     """
 
     algorithm: str
@@ -72,6 +77,9 @@ class PlannerResult:
     tree_parents: np.ndarray = dc.field(default_factory=lambda: np.zeros(0, dtype=int))
     tree_costs: np.ndarray = dc.field(default_factory=lambda: np.zeros(0))
     informed_diameters: np.ndarray = dc.field(default_factory=lambda: np.zeros(0))
+    optimized: bool = False
+    raw_cost: float = float("nan")
+    near_radius_mode: str = "fixed"
 
     def raise_if_failed(self) -> "PlannerResult":
         if not self.success:
@@ -100,6 +108,9 @@ class PlannerResult:
             "success": self.success,
             "message": self.message,
             "cost": num(self.cost),
+            "optimized": self.optimized,
+            "raw_cost": num(self.raw_cost),
+            "near_radius_mode": self.near_radius_mode,
             "social_cost_full": num(self.social_cost_full),
             "social_cost_planner": num(self.social_cost_planner),
             "path_length": num(self.path_length),

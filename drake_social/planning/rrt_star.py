@@ -2,14 +2,31 @@
 
 Per iteration: draw one sample (the goal with probability ``goal_bias``),
 find the nearest node, Steer by ``planning_range``, check the new
-configuration, gather the near set within ``near_radius``, cost *all* near
-motions in one batched call, then check motions lazily in order of
-``F(near) + Msc(near, new)`` and stop at the first collision-free one (the
-paper's choose-parent loop visits the same candidates in any order and keeps
-the same minimum). The new node then rewires its near set: a node whose cost
-drops through the new node is re-parented, and the change is propagated to
-all its descendants. Motion costs are symmetric (the trapezoid rule is), so
-the rewiring reuses the batch computed for the parent choice.
+configuration, gather the near set within the near radius, then choose the
+parent: motions are checked in order of ``F(near) + Msc(near, new)`` and the
+first collision-free one wins (the paper's choose-parent loop visits the same
+candidates in any order and keeps the same minimum). The new node then
+rewires its near set: a node whose cost drops through the new node is
+re-parented, and the change is propagated to all its descendants. Motion
+costs are symmetric (the trapezoid rule is), so the rewiring reuses the costs
+computed for the parent choice.
+
+Motion costs are lazy (``RrtStarOptions.lazy_costs``): every motion cost is
+at least ``lambda * length`` (the social integral is >= 0), so a candidate
+parent whose ``F(near) + lambda * length`` already exceeds the best checked
+candidate, or a near node that the new node cannot improve even at that
+bound, is never integrated. The parent, the rewiring and the motion checks
+are exactly those of the eager reference (``lazy_costs=False``), in the same
+order, bit for bit.
+
+The near radius is ``near_radius`` (``near_radius_mode="fixed"``, the paper)
+or the standard RRT* radius ``min(near_radius, gamma (log n / n)^(1/d))``
+(``"shrinking"``, n the tree's size with the new node, d = 4), which keeps
+the near set of a large tree small. The goal-connection radius is always
+``near_radius``. Nearest and near queries use a KD-tree over the weighted
+coordinates once the tree is large (rebuilt as it grows, recent nodes
+scanned directly); its candidates are re-measured with the same arithmetic
+as the direct scan, so the neighbours are the same bit for bit.
 
 Iteration k draws exactly one sample, valid or not, as in the paper.
 """
@@ -17,6 +34,7 @@ Iteration k draws exactly one sample, valid or not, as in the paper.
 from __future__ import annotations
 
 import dataclasses as dc
+import math
 import time
 from typing import Callable
 
@@ -28,19 +46,44 @@ from drake_social.planning.sampling import EllipseSampler, transverse_diameter
 from drake_social.planning.space import ConfigurationSpace
 from drake_social.planning.validity import ValidityChecker
 
-__all__ = ["RrtStar", "RrtStarOptions"]
+__all__ = ["MAX_ITERATIONS", "NEAR_RADIUS_MODES", "RrtStar", "RrtStarOptions", "default_gamma"]
+
+#: Largest iteration budget accepted (as ``scenario.MAX_ITERATIONS``).
+MAX_ITERATIONS = 10_000_000
+#: Allowed ``RrtStarOptions.near_radius_mode`` values.
+NEAR_RADIUS_MODES = ("fixed", "shrinking")
+#: The KD-tree serves neighbour queries from this many nodes on.
+KD_TREE_MIN_NODES = 2048
+
+
+def default_gamma(space: ConfigurationSpace) -> float:
+    """OMPL's RRT* radius constant for ``space`` (rewire factor 1.1):
+    ``1.1 * 2 (1 + 1/d)^(1/d) (V / zeta_d)^(1/d)`` with V the volume of the
+    weighted configuration box and zeta_d the unit d-ball's volume, d = 4."""
+    d = 4
+    volume = float(np.prod(space.weights * (space.upper - space.lower)))
+    zeta = np.pi ** (d / 2) / math.gamma(d / 2 + 1)
+    return 1.1 * 2.0 * (1.0 + 1.0 / d) ** (1.0 / d) * (volume / zeta) ** (1.0 / d)
 
 @dc.dataclass
 class RrtStarOptions:
     """Options of :class:`RrtStar` (configuration-space units).
 
     Attributes:
-        iterations: samples drawn, K.
+        iterations: samples drawn, K (1 .. MAX_ITERATIONS).
         planning_range: Steer distance delta.
-        near_radius: near-set radius r_near (also the goal-connection radius).
+        near_radius: near-set radius r_near (also the goal-connection radius);
+            the cap of the shrinking radius.
         goal_bias: probability of sampling the goal.
         informed: sample base positions in an XY ellipse after the first solution.
         informed_mode: "paper" or "admissible" (see ``planning.sampling``).
+        near_radius_mode: "fixed" (r_near) or "shrinking" (see the module docstring).
+        near_radius_gamma: gamma of the shrinking radius; 0 = :func:`default_gamma`.
+        optimize: optimise the returned path (:mod:`drake_social.planning.optimize`).
+        lazy_costs: skip motion costs that their lower bound shows cannot
+            matter (same result; False is the eager reference).
+        kd_tree: use a KD-tree for neighbours from ``KD_TREE_MIN_NODES`` on
+            (same neighbours; False scans every node, the reference).
     """
 
     iterations: int = 2000
@@ -49,11 +92,74 @@ class RrtStarOptions:
     goal_bias: float = 0.05
     informed: bool = False
     informed_mode: str = "paper"
+    near_radius_mode: str = "fixed"
+    near_radius_gamma: float = 0.0
+    optimize: bool = False
+    lazy_costs: bool = True
+    kd_tree: bool = True
 
     @classmethod
     def from_scenario(cls, planner_options, informed: bool = False) -> "RrtStarOptions":
         p = planner_options
-        return cls(p.iterations, p.planning_range, p.near_radius, p.goal_bias, informed, p.informed_mode)
+        return cls(
+            p.iterations, p.planning_range, p.near_radius, p.goal_bias, informed, p.informed_mode,
+            near_radius_mode=p.near_radius_mode, near_radius_gamma=p.near_radius_gamma, optimize=p.optimize,
+        )
+
+
+class _Neighbors:
+    """Exact nearest and near queries: a KD-tree over ``q * w`` of the first
+    ``kd_n`` nodes (rebuilt when the nodes added since exceed a sixteenth of
+    them, so rebuilds cost O(n log n) in all), the rest scanned directly. KD candidates are taken with a small
+    margin and re-measured with the direct scan's arithmetic, so the answers
+    are the direct scan's, ties included (lowest index first)."""
+
+    _MARGIN = 1e-9
+
+    def __init__(self, weights: np.ndarray, enabled: bool, min_nodes: int = KD_TREE_MIN_NODES):
+        self.w = weights
+        self.enabled = enabled
+        self.min_nodes = min_nodes
+        self.kd = None
+        self.kd_n = 0
+
+    def _distances2(self, tree: "_Tree", index: np.ndarray | None, q: np.ndarray) -> np.ndarray:
+        diff = ((tree.q[: tree.n] if index is None else tree.q[index]) - q) * self.w
+        return np.einsum("ij,ij->i", diff, diff)
+
+    def _update(self, tree: "_Tree") -> bool:
+        if not self.enabled or tree.n < self.min_nodes:
+            return False
+        if self.kd is None or tree.n - self.kd_n > max(256, self.kd_n // 16):
+            from scipy.spatial import cKDTree
+
+            self.kd = cKDTree(tree.q[: tree.n] * self.w)
+            self.kd_n = tree.n
+        return True
+
+    def nearest(self, tree: "_Tree", q: np.ndarray) -> tuple[int, float]:
+        """(index, distance) of the node nearest to q (the lowest index on ties)."""
+        if not self._update(tree):
+            d = np.sqrt(self._distances2(tree, None, q))
+            i = int(np.argmin(d))
+            return i, float(d[i])
+        d_kd, i_kd = self.kd.query(q * self.w, k=2)
+        if d_kd[1] > d_kd[0] * (1 + self._MARGIN) + 1e-12:  # a clear KD winner
+            cand = i_kd[:1]
+        else:  # near-ties: every KD node as near as the first, re-measured exactly
+            cand = self.kd.query_ball_point(q * self.w, d_kd[0] * (1 + self._MARGIN) + 1e-12)
+        index = np.concatenate([np.sort(np.asarray(cand, dtype=np.int64)), np.arange(self.kd_n, tree.n)])
+        d = np.sqrt(self._distances2(tree, index, q))
+        k = int(np.argmin(d))
+        return int(index[k]), float(d[k])
+
+    def within(self, tree: "_Tree", q: np.ndarray, radius: float) -> np.ndarray:
+        """Ascending indices of the nodes within ``radius`` of q."""
+        if not self._update(tree):
+            return np.flatnonzero(self._distances2(tree, None, q) <= radius**2)
+        cand = self.kd.query_ball_point(q * self.w, radius * (1 + self._MARGIN) + 1e-12)
+        index = np.concatenate([np.sort(np.asarray(cand, dtype=np.int64)), np.arange(self.kd_n, tree.n)])
+        return index[self._distances2(tree, index, q) <= radius**2]
 
 
 class _Tree:
@@ -153,8 +259,14 @@ class RrtStar:
         options: RrtStarOptions = RrtStarOptions(),
         name: str = "rrt_star",
     ):
-        if options.iterations < 1:
-            raise ValueError(f"iterations must be >= 1, got {options.iterations}")
+        if not 1 <= options.iterations <= MAX_ITERATIONS:
+            raise ValueError(f"planner.iterations must be in [1, {MAX_ITERATIONS}], got {options.iterations}")
+        if options.near_radius_mode not in NEAR_RADIUS_MODES:
+            raise ValueError(
+                f"unknown near_radius_mode {options.near_radius_mode!r}; allowed: {', '.join(NEAR_RADIUS_MODES)}"
+            )
+        if not (np.isfinite(options.near_radius_gamma) and options.near_radius_gamma >= 0):
+            raise ValueError(f"near_radius_gamma must be >= 0, got {options.near_radius_gamma}")
         if not (options.planning_range > 0 and options.near_radius > 0):
             raise ValueError("planning_range and near_radius must be > 0")
         if not 0 <= options.goal_bias < 1:
@@ -171,6 +283,8 @@ class RrtStar:
         self.objective = objective
         self.options = options
         self.name = name
+        #: gamma of the shrinking radius (unused in "fixed" mode).
+        self.gamma = options.near_radius_gamma or default_gamma(space)
 
     # ------------------------------------------------------------------
 
@@ -214,6 +328,7 @@ class RrtStar:
 
         tree = _Tree()
         tree.add(start, -1, 0.0)
+        neighbors = _Neighbors(space.weights, opt.kd_tree)
         sampler = EllipseSampler(space, start[:2], goal[:2]) if opt.informed else None
         goal_nodes: list[int] = []  # nodes with a valid, costed motion to the goal
         goal_edge_costs: list[float] = []
@@ -246,7 +361,7 @@ class RrtStar:
                 q_rand = sampler.sample(rng, ellipse_c)
             else:
                 q_rand = space.sample_uniform(rng)
-            i_new = self._extend(tree, q_rand, counts)
+            i_new = self._extend(tree, q_rand, counts, neighbors)
             if i_new >= 0:
                 connect_to_goal(i_new)
                 if goal_nodes:
@@ -267,44 +382,115 @@ class RrtStar:
 
         result = self._result(tree, goal, best_node, best_cost, first_iteration, history, counts, t0)
         result.informed_diameters = diameters
+        result.raw_cost = result.cost
+        result.near_radius_mode = opt.near_radius_mode
+        if opt.optimize and result.success:
+            from drake_social.planning.optimize import optimize_path
+
+            result.waypoints, result.cost = optimize_path(result.waypoints, objective, checker, space)
+            result.optimized = True
+            result.wall_time = time.perf_counter() - t0
         return result
 
-    def _extend(self, tree: _Tree, q_rand: np.ndarray, counts: "_Counts") -> int:
+    def near_radius(self, n: int) -> float:
+        """The near-set radius for a tree of n nodes (the new one included)."""
+        r = self.options.near_radius
+        if self.options.near_radius_mode == "shrinking" and n > 1:
+            r = min(r, self.gamma * (math.log(n) / n) ** 0.25)
+        return r
+
+    def _extend(self, tree: _Tree, q_rand: np.ndarray, counts: "_Counts", neighbors: "_Neighbors | None" = None) -> int:
         """Steer towards q_rand, choose the parent, insert, rewire (Algorithm 2,
         lines 4-25). Returns the new node's index, or -1 when nothing was added."""
-        opt, w, checker = self.options, self.space.weights, self.checker
-        nodes = tree.q[: tree.n]
-        diff = (nodes - q_rand) * w
-        d_rand = np.sqrt(np.einsum("ij,ij->i", diff, diff))
-        i_nearest = int(np.argmin(d_rand))
-        if d_rand[i_nearest] == 0.0:
+        opt, checker, objective = self.options, self.checker, self.objective
+        if neighbors is None:
+            neighbors = _Neighbors(self.space.weights, False)
+        i_nearest, d_nearest = neighbors.nearest(tree, q_rand)
+        if d_nearest == 0.0:
             return -1  # already a node (the goal, drawn again by the goal bias)
-        q_new = self.space.steer(nodes[i_nearest], q_rand, opt.planning_range, float(d_rand[i_nearest]))
+        nodes = tree.q
+        q_new = self.space.steer(nodes[i_nearest], q_rand, opt.planning_range, d_nearest)
         counts.config += 1
         if not checker.is_valid(q_new):
             return -1
 
-        # Choose the parent: all near costs in one batch, motions checked lazily.
-        near = self._near(tree, q_new, i_nearest)
-        phi = self.objective.motion_cost(nodes[near], q_new)
-        counts.cost += len(near)
-        total = tree.cost[near] + phi
+        near = self._near(tree, q_new, i_nearest, neighbors)
+        q_near = nodes[near]
+        phi = np.full(len(near), np.inf)  # motion costs near <-> new; inf = not integrated
+        lazy = opt.lazy_costs and objective.length_weight > 0  # without lambda the bound prunes nothing
+        if not lazy:
+            phi[:] = objective.motion_cost(q_near, q_new)
+            counts.cost += len(near)
+            bound = phi
+        elif objective.length_is_cost:
+            phi[:] = bound = objective.length_bound(q_near, q_new)
+            counts.cost += len(near)
+        else:
+            bound = objective.length_bound(q_near, q_new)
+
+        def cost(slots: np.ndarray) -> None:
+            slots = slots[np.isinf(phi[slots])]
+            if len(slots):
+                phi[slots] = objective.motion_cost(q_near[slots], q_new)
+                counts.cost += len(slots)
+
+        # Choose the parent: motions checked in order of F + Msc (ties: near
+        # order), the first collision-free one wins. Lazily, a candidate is
+        # integrated only once its bound F + lambda * length is no larger than
+        # the cheapest integrated candidate not yet checked, which visits the
+        # candidates in exactly the eager order.
+        f_near = tree.cost[near]
         checked: dict[int, bool] = {}
         parent_slot = -1
-        for slot in np.argsort(total, kind="stable"):
-            counts.motion += 1
-            ok = checker.is_motion_valid(nodes[near[slot]], q_new)
-            checked[int(slot)] = ok
-            if ok:
-                parent_slot = int(slot)
-                break
+        if lazy and not objective.length_is_cost:
+            low = f_near + bound
+            by_bound = np.argsort(low, kind="stable")
+            pos = 0  # by_bound[:pos] are integrated
+            open_ = np.zeros(len(near), dtype=bool)  # integrated, not yet checked
+            while True:
+                if not open_.any():
+                    if pos == len(near):
+                        break
+                    cost(by_bound[pos : pos + 1])
+                    open_[by_bound[pos]] = True
+                    pos += 1
+                total = f_near + phi
+                t_min = total[open_].min()
+                stop = pos + int(np.searchsorted(low[by_bound[pos:]], t_min, side="right"))
+                if stop > pos:
+                    cost(by_bound[pos:stop])
+                    open_[by_bound[pos:stop]] = True
+                    pos = stop
+                    total = f_near + phi
+                candidates = np.flatnonzero(open_)
+                slot = int(candidates[np.lexsort((candidates, total[candidates]))[0]])
+                open_[slot] = False
+                counts.motion += 1
+                ok = checker.is_motion_valid(q_near[slot], q_new)
+                checked[slot] = ok
+                if ok:
+                    parent_slot = slot
+                    break
+        else:
+            for slot in np.argsort(f_near + phi, kind="stable"):
+                counts.motion += 1
+                ok = checker.is_motion_valid(q_near[slot], q_new)
+                checked[int(slot)] = ok
+                if ok:
+                    parent_slot = int(slot)
+                    break
         if parent_slot < 0:
             return -1
         i_new = tree.add(q_new, int(near[parent_slot]), float(phi[parent_slot]))
 
         # Rewire the nodes the new one improves; costs are re-read because an
         # earlier re-parenting may already have lowered a later candidate.
-        for slot in np.flatnonzero(tree.cost[i_new] + phi < tree.cost[near]):
+        # Costs only fall while rewiring, so the bound test on the costs before
+        # it selects every node that can pass the exact test.
+        c_new = tree.cost[i_new]
+        if lazy:
+            cost(np.flatnonzero(c_new + bound < tree.cost[near]))
+        for slot in np.flatnonzero(c_new + phi < tree.cost[near]):
             j = int(near[slot])
             if j == tree.parent[i_new] or not tree.cost[i_new] + phi[slot] < tree.cost[j]:
                 continue
@@ -316,12 +502,13 @@ class RrtStar:
                 tree.reparent(j, i_new, float(phi[slot]))
         return i_new
 
-    def _near(self, tree: _Tree, q_new: np.ndarray, i_nearest: int) -> np.ndarray:
-        """Indices of the nodes within ``near_radius`` of q_new (ascending),
-        then ``i_nearest`` when it is not among them (r_near < delta), so the
+    def _near(self, tree: _Tree, q_new: np.ndarray, i_nearest: int, neighbors: "_Neighbors | None" = None) -> np.ndarray:
+        """Indices of the nodes within the near radius of q_new (ascending),
+        then ``i_nearest`` when it is not among them (radius < delta), so the
         tree stays connected."""
-        diff = (tree.q[: tree.n] - q_new) * self.space.weights
-        near = np.flatnonzero(np.einsum("ij,ij->i", diff, diff) <= self.options.near_radius**2)
+        if neighbors is None:
+            neighbors = _Neighbors(self.space.weights, False)
+        near = neighbors.within(tree, q_new, self.near_radius(tree.n + 1))
         if i_nearest not in near:
             near = np.append(near, i_nearest)
         return near

@@ -24,7 +24,7 @@ from drake_social.planning.result import PlannerResult
 from drake_social.planning.rrt_star import RrtStar, RrtStarOptions
 from drake_social.planning.space import ConfigurationSpace
 from drake_social.planning.validity import ValidityChecker
-from drake_social.scenario import ALGORITHMS
+from drake_social.scenario import ALGORITHMS, MAX_ITERATIONS, ScenarioError
 
 __all__ = ["base_only_weights", "evaluate_path", "make_objective", "make_planner", "plan"]
 
@@ -103,6 +103,8 @@ def plan(
     import copy
 
     if iterations is not None:
+        if not 1 <= int(iterations) <= MAX_ITERATIONS:
+            raise ScenarioError(f"planner.iterations: must be in [1, {MAX_ITERATIONS}], got {iterations}")
         scenario = copy.deepcopy(scenario)
         scenario.planner.iterations = int(iterations)
     planner = make_planner(scenario, checker, algorithm)
