@@ -1,0 +1,311 @@
+"""Social-navigation metrics of a path, per body part and overall.
+
+The field's tools (HuNavSim, SocNavBench, SEAN, Arena) reduce the robot to one
+point or disc; here every body part is measured on its own:
+
+==============  ===========================================================
+part            what is measured
+==============  ===========================================================
+``base``        the base disc (radius ``robot.base_radius``)
+``link1_tip``   the elbow, a point
+``link2_tip``   the gripper origin, a point
+``object_k``    the object's k-th interest point, a point
+``arm``         both link capsules (radius ``robot.link_width / 2``)
+``object``      every object capsule (radius ``object.thickness / 2``)
+``robot``       the whole robot: base disc, arm and object (overall)
+==============  ===========================================================
+
+Per part (``<metric>_<part>`` in :func:`path_metrics`' flat dictionary):
+
+* ``min_dist``: smallest *surface-to-surface* distance, metres, from the part
+  to any person's body disc (``people[i].radius``): a point's distance to the
+  disc's edge, the base disc's and a capsule's edge to the disc's edge. 0 is
+  contact; negative is overlap.
+* ``zone_intimate`` / ``zone_personal`` / ``zone_social`` / ``zone_public``:
+  Hall's proxemic zones, the share (0..1) of the base's arc length during
+  which the part's ``min_dist`` is < 0.45 m, in [0.45, 1.2) m, in [1.2, 3.6) m,
+  or >= 3.6 m (each step between samples is classified by the mean of its
+  end distances). Executed trajectories also get ``zone_time_<zone>``: the
+  share of time. NaN when the base does not move (resp. no time passes).
+* ``agf_max``: the largest thresholded AGF sum over people that the part
+  meets (for a shape: any point of its axis, sampled every
+  :data:`SHAPE_SPACING` metres); dimensionless, in [0, number of people].
+* ``agf_mean``: its mean over the configuration-space arc length s (the
+  paper's ``ds``): ``integral AGF ds / integral ds``. For an interest point,
+  ``agf_mean * path_length`` is its unweighted share of F.
+
+Overall:
+
+* ``F_multi``: the paper's final cost F(q_end), the social integral (Msc) with
+  weight 1 on every interest point, whatever weights the planner used;
+  ``F_base``: the same with base-only weights (1 on the base, 0 elsewhere);
+  ``F_planner``: with the planner's own weights.
+* ``path_length`` (configuration space, plain norm), ``base_length`` (metres),
+  ``irregularity``: the base track's total heading change per metre of it,
+  rad/m (the track is resampled every :data:`HEADING_STEP` metres first, so
+  that the jitter of an executed trajectory does not count).
+"""
+
+from __future__ import annotations
+
+import dataclasses as dc
+
+import numpy as np
+
+from drake_social.cost.agf import agf_xy, people_array
+from drake_social.cost.social import SocialCost
+from drake_social.kinematics import ArmGeometry, config_distance
+from drake_social.planning.variants import base_only_weights
+
+__all__ = [
+    "HEADING_STEP",
+    "SHAPE_SPACING",
+    "ZONES",
+    "HallZones",
+    "base_irregularity",
+    "executed_metrics",
+    "part_agf",
+    "part_distances",
+    "part_names",
+    "path_metrics",
+    "trajectory_metrics",
+    "zone_shares",
+]
+
+#: Spacing of the points sampled along a capsule's axis for its AGF, metres.
+SHAPE_SPACING = 0.05
+#: Resampling step of the base track before heading changes are summed, metres.
+HEADING_STEP = 0.05
+
+
+@dc.dataclass(frozen=True)
+class HallZones:
+    """Upper bounds of Hall's proxemic zones (surface-to-surface), metres.
+
+    Attributes:
+        intimate: below this, intimate (0.45 m).
+        personal: below this, personal (1.2 m).
+        social: below this, social (3.6 m); beyond, public.
+    """
+
+    intimate: float = 0.45
+    personal: float = 1.2
+    social: float = 3.6
+
+    @property
+    def names(self) -> tuple[str, ...]:
+        return ("intimate", "personal", "social", "public")
+
+    def classify(self, distance: np.ndarray) -> np.ndarray:
+        """Zone index (0 intimate .. 3 public) of each distance."""
+        return np.searchsorted([self.intimate, self.personal, self.social], np.asarray(distance, float), side="right")
+
+
+#: The zones used by the studies.
+ZONES = HallZones()
+
+
+def part_names(geometry: ArmGeometry) -> list[str]:
+    """The interest points (base first), then ``arm``, ``object`` and ``robot``."""
+    return geometry.interest_names + ["arm", "object", "robot"]
+
+
+def _segment_distance(p: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Distance from points p (H, 2) to segments a-b (..., S, 2): (..., S, H)."""
+    d = b - a
+    ap = p - a[..., None, :]  # (..., S, H, 2)
+    denom = np.einsum("...i,...i->...", d, d)[..., None]
+    with np.errstate(invalid="ignore", divide="ignore"):
+        t = np.where(denom > 0, np.einsum("...hi,...i->...h", ap, d) / np.where(denom > 0, denom, 1.0), 0.0)
+    t = np.clip(t, 0.0, 1.0)
+    closest = a[..., None, :] + t[..., None] * d[..., None, :]
+    return np.linalg.norm(p - closest, axis=-1)
+
+
+def part_distances(geometry: ArmGeometry, people: np.ndarray, radii: np.ndarray, q: np.ndarray) -> dict[str, np.ndarray]:
+    """Surface-to-surface distance (M,) of every part to the nearest person's
+    body disc at configurations q (M, 4), metres; +inf in an empty room."""
+    q = np.asarray(q, float).reshape(-1, 4)
+    people = np.asarray(people, float).reshape(-1, 3)
+    radii = np.asarray(radii, float).reshape(-1)
+    names = part_names(geometry)
+    if len(people) == 0:
+        return {n: np.full(len(q), np.inf) for n in names}
+    centres = people[:, :2]
+    pts = geometry.interest_points(q)  # (M, K, 2)
+    d_pts = np.linalg.norm(pts[:, :, None, :] - centres, axis=-1) - radii  # (M, K, H)
+    d_pts[:, 0] -= geometry.base_radius
+    out = {n: d_pts[:, k].min(-1) for k, n in enumerate(geometry.interest_names)}
+    seg = geometry.segments(q)  # (M, S, 2, 2)
+    d_seg = _segment_distance(centres, seg[..., 0, :], seg[..., 1, :]) - radii  # (M, S, H)
+    d_seg -= geometry.segment_radii[:, None]
+    out["arm"] = d_seg[:, :2].min(axis=(1, 2))
+    out["object"] = d_seg[:, 2:].min(axis=(1, 2))
+    out["robot"] = np.minimum.reduce([out["base"], out["arm"], out["object"]])
+    return out
+
+
+def _shape_points(geometry: ArmGeometry, q: np.ndarray, which: slice) -> np.ndarray:
+    """Points (M, n, 2) every <= SHAPE_SPACING metres along the capsule axes ``which``."""
+    seg = geometry.segments(q)[:, which]  # (M, S', 2, 2)
+    lengths = np.linalg.norm(seg[0, :, 1] - seg[0, :, 0], axis=-1)  # rigid: the same at every q
+    pieces = []
+    for s, length in enumerate(lengths):
+        t = np.linspace(0.0, 1.0, max(2, int(np.ceil(length / SHAPE_SPACING)) + 1))
+        pieces.append(seg[:, s, 0, None, :] + t[None, :, None] * (seg[:, s, 1, None, :] - seg[:, s, 0, None, :]))
+    return np.concatenate(pieces, axis=1)
+
+
+def part_agf(cost: SocialCost, q: np.ndarray) -> dict[str, np.ndarray]:
+    """Thresholded AGF sum over people (M,) met by every part at configurations q (M, 4).
+
+    Interest points: their value; ``arm`` and ``object``: the largest over
+    their axis; ``robot``: the largest over every part.
+    """
+    q = np.asarray(q, float).reshape(-1, 4)
+    g = cost.geometry
+    values = cost.point_costs(q)  # (M, K)
+    out = {n: values[:, k] for k, n in enumerate(g.interest_names)}
+    for name, which in (("arm", slice(0, 2)), ("object", slice(2, None))):
+        pts = _shape_points(g, q, which)
+        out[name] = agf_xy(pts[..., 0], pts[..., 1], cost.people, cost.space).sum(-1).max(-1)
+    out["robot"] = np.max([out[n] for n in g.interest_names + ["arm", "object"]], axis=0)
+    return out
+
+
+def zone_shares(distance: np.ndarray, weights: np.ndarray, zones: HallZones = ZONES) -> dict[str, float]:
+    """Share of the total weight spent in each zone.
+
+    Args:
+        distance: (M,) distances at the samples, metres.
+        weights: (M - 1,) weight of each step between samples (arc length, time).
+
+    Returns:
+        zone name -> share in [0, 1] (NaN each when the weights sum to 0).
+    """
+    distance = np.asarray(distance, float)
+    w = np.asarray(weights, float)
+    total = float(w.sum())
+    if len(distance) < 2 or not total > 0:
+        return {z: float("nan") for z in zones.names}
+    zone = zones.classify(0.5 * (distance[:-1] + distance[1:]))
+    share = np.bincount(zone, weights=w, minlength=4) / total
+    return {z: float(share[k]) for k, z in enumerate(zones.names)}
+
+
+def base_irregularity(xy: np.ndarray, step: float = HEADING_STEP) -> float:
+    """Total absolute heading change of a base track per metre of it, rad/m.
+
+    The track (M, 2) is resampled every ``step`` metres of arc length (its
+    end kept) so that steps far below the resolution do not count; 0 for a
+    straight or motionless track.
+    """
+    xy = np.asarray(xy, float).reshape(-1, 2)
+    s = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(xy, axis=0).T))]) if len(xy) else np.zeros(0)
+    if len(xy) < 2 or s[-1] <= step:
+        return 0.0
+    keep = np.concatenate([[True], np.diff(s) > 0])
+    xy, s = xy[keep], s[keep]
+    targets = np.append(np.arange(0.0, s[-1], step), s[-1])
+    r = np.stack([np.interp(targets, s, xy[:, 0]), np.interp(targets, s, xy[:, 1])], -1)
+    d = np.diff(r, axis=0)
+    d = d[np.hypot(d[:, 0], d[:, 1]) > 1e-12]
+    heading = np.arctan2(d[:, 1], d[:, 0])
+    turn = np.abs(np.angle(np.exp(1j * np.diff(heading))))
+    return float(turn.sum() / s[-1])
+
+
+def trajectory_metrics(
+    scenario, q: np.ndarray, s: np.ndarray | None = None, times: np.ndarray | None = None, zones: HallZones = ZONES
+) -> dict[str, float]:
+    """Per-part distances, zone shares and AGF of dense samples of a trajectory.
+
+    Args:
+        scenario: gives the robot, object and people.
+        q: (M, 4) configurations, dense enough that a part moves little between them.
+        s: (M,) configuration arc length at the samples (None: the plain norm
+            of the differences, summed).
+        times: (M,) seconds; given, the zone shares by time are added.
+        zones: the zone bounds.
+
+    Returns:
+        ``min_dist_<part>``, ``zone_<zone>_<part>``, (``zone_time_<zone>_<part>``),
+        ``agf_max_<part>``, ``agf_mean_<part>`` for every part of :func:`part_names`.
+    """
+    q = np.asarray(q, float).reshape(-1, 4)
+    cost = SocialCost.from_scenario(scenario, np.ones(ArmGeometry.from_scenario(scenario).num_interest_points))
+    g = cost.geometry
+    radii = np.array([p.radius for p in scenario.people], float)
+    if s is None:
+        s = np.concatenate([[0.0], np.cumsum(config_distance(q[:-1], q[1:]))]) if len(q) else np.zeros(0)
+    dist = part_distances(g, cost.people, radii, q)
+    values = part_agf(cost, q)
+    base_steps = np.hypot(*np.diff(q[:, :2], axis=0).T) if len(q) > 1 else np.zeros(0)
+    length = float(s[-1] - s[0]) if len(s) else 0.0
+    out: dict[str, float] = {}
+    for part in part_names(g):
+        out[f"min_dist_{part}"] = float(dist[part].min()) if len(q) else float("nan")
+        for z, v in zone_shares(dist[part], base_steps, zones).items():
+            out[f"zone_{z}_{part}"] = v
+        if times is not None:
+            for z, v in zone_shares(dist[part], np.diff(np.asarray(times, float)), zones).items():
+                out[f"zone_time_{z}_{part}"] = v
+        out[f"agf_max_{part}"] = float(values[part].max()) if len(q) else float("nan")
+        out[f"agf_mean_{part}"] = float(np.trapezoid(values[part], s) / length) if length > 0 else float("nan")
+    return out
+
+
+def path_metrics(scenario, waypoints: np.ndarray, planner_weights: np.ndarray | None = None,
+                 refine: int = 2) -> dict[str, float]:
+    """Every metric of a planned waypoint path (see the module docstring).
+
+    Args:
+        scenario: the planned scenario (people, robot, object).
+        waypoints: (N, 4), start to goal; straight motions between them.
+        planner_weights: the interest-point weights the planner used (for
+            ``F_planner``); None = the scenario's ``social.weights``.
+        refine: samples per integration step of the cost (each interest point
+            moves at most ``social.resolution / refine`` metres between samples).
+
+    Returns:
+        ``F_multi``, ``F_base``, ``F_planner``, ``path_length``,
+        ``base_length``, ``irregularity`` and :func:`trajectory_metrics`.
+    """
+    from drake_social.viz.path import sample_path  # the sampling of the cost-profile figure
+
+    wp = np.asarray(waypoints, float).reshape(-1, 4)
+    n = ArmGeometry.from_scenario(scenario).num_interest_points
+    multi = SocialCost.from_scenario(scenario, np.ones(n))
+    a, b = wp[:-1], wp[1:]
+
+    def integral(cost: SocialCost) -> float:
+        return float(cost.motion_cost(a, b).sum()) if len(a) else 0.0
+
+    planner = SocialCost.from_scenario(scenario, planner_weights)
+    out = {
+        "F_multi": integral(multi),
+        "F_base": integral(multi.with_weights(base_only_weights(n))),
+        "F_planner": integral(planner),
+        "path_length": float(config_distance(a, b).sum()),
+        "base_length": float(np.hypot(*(b - a)[:, :2].T).sum()),
+        "irregularity": base_irregularity(wp[:, :2]),
+    }
+    s, q = sample_path(wp, multi, refine)
+    out.update(trajectory_metrics(scenario, q, s))
+    return out
+
+
+def executed_metrics(scenario, times: np.ndarray, q: np.ndarray) -> dict[str, float]:
+    """Per-part metrics of an executed trajectory (times (T,), q (T, 4)),
+    with zone shares by time too, and its F and lengths; keys prefixed ``exec_``."""
+    q = np.asarray(q, float).reshape(-1, 4)
+    n = ArmGeometry.from_scenario(scenario).num_interest_points
+    multi = SocialCost.from_scenario(scenario, np.ones(n))
+    out = {
+        "F_multi": float(multi.motion_cost(q[:-1], q[1:]).sum()) if len(q) > 1 else 0.0,
+        "path_length": float(config_distance(q[:-1], q[1:]).sum()) if len(q) > 1 else 0.0,
+        "base_length": float(np.hypot(*np.diff(q[:, :2], axis=0).T).sum()) if len(q) > 1 else 0.0,
+        "irregularity": base_irregularity(q[:, :2]),
+    }
+    out.update(trajectory_metrics(scenario, q, None, np.asarray(times, float)))
+    return {f"exec_{k}": v for k, v in out.items()}
