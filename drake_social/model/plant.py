@@ -31,7 +31,6 @@ from drake_social.scenario import Box, Scenario
 __all__ = [
     "ACTUATED_JOINTS",
     "ScenarioDiagram",
-    "add_actuators",
     "add_environment",
     "add_robot",
     "build_robot_diagram",
@@ -111,38 +110,9 @@ def add_robot(plant: MultibodyPlant, scenario: Scenario, parser: Parser | None =
     return instance
 
 
-#: The robot's joints in the order of the plant's positions (and actuators).
+#: The robot's joints in the order of the plant's positions and actuators
+#: (Drake's SDFormat parser gives each joint of unlimited effort an actuator).
 ACTUATED_JOINTS = ("base_x", "base_y", "psi1", "psi2")
-
-
-def add_actuators(plant: MultibodyPlant, robot: ModelInstanceIndex, gains: dict[str, tuple[float, float]]) -> None:
-    """Makes every joint of :data:`ACTUATED_JOINTS` a PD-controlled actuator.
-
-    Drake's built-in joint-actuator PD controllers (implicit in a discrete
-    plant) then track the model instance's desired-state input port
-    ``[q_d, v_d]`` in this joint order. A proportional gain of 0 makes a
-    velocity servo (the base): the actuator then tracks only ``v_d``.
-
-    Must be called before ``plant.Finalize()``.
-
-    Args:
-        plant: a discrete plant holding the robot.
-        robot: the robot's model instance.
-        gains: joint name -> (proportional gain, derivative gain), in
-            N/m and N s/m for the prismatic base joints, N m/rad and
-            N m s/rad for the arm joints; every joint of ACTUATED_JOINTS.
-    """
-    from pydrake.multibody.tree import PdControllerGains
-
-    for name in ACTUATED_JOINTS:
-        kp, kd = gains[name]
-        # Drake's SDFormat parser already gives each joint of unlimited effort
-        # an actuator of the joint's name; add one only where it did not.
-        if plant.HasJointActuatorNamed(name, robot):
-            actuator = plant.GetJointActuatorByName(name, robot)
-        else:
-            actuator = plant.AddJointActuator(name, plant.GetJointByName(name, robot))
-        actuator.set_controller_gains(PdControllerGains(p=float(kp), d=float(kd)))
 
 
 @dc.dataclass(frozen=True)
@@ -161,26 +131,19 @@ class ScenarioDiagram:
     environment: list[str]
 
 
-def build_robot_diagram(scenario: Scenario, *, time_step: float = 0.0,
-                        actuator_gains: dict[str, tuple[float, float]] | None = None) -> ScenarioDiagram:
+def build_robot_diagram(scenario: Scenario, *, time_step: float = 0.0) -> ScenarioDiagram:
     """Builds the robot, its object and the room into a RobotDiagram.
 
     Args:
         scenario: the scenario.
         time_step: the plant's time step, seconds; 0 (the default) makes a
             continuous plant, which serves kinematics and collision queries.
-        actuator_gains: when given, PD-controlled actuators on every joint
-            (see :func:`add_actuators`); needs ``time_step > 0``.
 
     The plant's positions are ``[x, y, psi1, psi2]``.
     """
-    if actuator_gains is not None and time_step <= 0:
-        raise ValueError(f"PD-controlled actuators need a discrete plant (time_step > 0), got {time_step}")
     builder = RobotDiagramBuilder(time_step=float(time_step))
     robot = add_robot(builder.plant(), scenario, builder.parser())
     names = add_environment(builder.plant(), scenario)
-    if actuator_gains is not None:
-        add_actuators(builder.plant(), robot, actuator_gains)
     builder.plant().Finalize()
     diagram = builder.Build()
     plant = diagram.plant()
