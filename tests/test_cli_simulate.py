@@ -1,0 +1,112 @@
+"""``drake-social simulate``: a real run of tiny.yaml, its files, its replay in
+a browser against the executed trajectory, its exit codes and input errors."""
+
+from __future__ import annotations
+
+import json
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+from matplotlib.image import imread
+
+from drake_social.cli import main
+
+sys.path.insert(0, str(Path(__file__).parent / "sim"))
+import browser  # noqa: E402  (the shared headless-Chromium harness of tests/sim)
+
+
+@pytest.fixture(scope="module")
+def planned(tmp_path_factory, tiny_scenario_path):
+    out = tmp_path_factory.mktemp("plan")
+    assert main(["plan", str(tiny_scenario_path), "--checker", "numpy", "--out", str(out)]) == 0
+    return out / "path.csv"
+
+
+@pytest.fixture(scope="module")
+def simulated(tmp_path_factory, tiny_scenario_path, planned):
+    out = tmp_path_factory.mktemp("simulate")
+    code = main(["simulate", str(tiny_scenario_path), "--path", str(planned), "--out", str(out)])
+    return code, out
+
+
+def test_simulate_writes_its_files(simulated, planned):
+    code, out = simulated
+    assert code == 0
+    names = sorted(p.name for p in out.iterdir() if not p.name.startswith("."))
+    assert names == ["executed.csv", "replay.html", "sim.json", "tracking.png"]
+    record = json.loads((out / "sim.json").read_text())
+    assert record["reached"] and record["collision_free"]
+    assert record["mode"] == "kinematic" and record["execution"] == "synchronized"
+    assert record["max_point_deviation"]["max"] < 0.01
+    # The followed path is the file's.
+    np.testing.assert_array_equal(np.array(record["waypoints"]), np.loadtxt(planned, delimiter=",", skiprows=1))
+    executed = np.loadtxt(out / "executed.csv", delimiter=",", skiprows=1)
+    assert executed.shape[1] == 9
+    np.testing.assert_allclose(executed[-1, 1:5], record["waypoints"][-1], atol=0.06)
+    assert record["time_to_goal"] == pytest.approx(executed[-2, 0])
+    assert imread(out / "tracking.png").shape[0] > 500
+
+
+def test_replay_shows_the_executed_trajectory(simulated):
+    browser.require_chromium()
+    _, out = simulated
+    executed = np.loadtxt(out / "executed.csv", delimiter=",", skiprows=1)
+    t_end = executed[-1, 0]
+    times = [round(0.2 * t_end, 2), round(0.5 * t_end, 2), round(0.8 * t_end, 2)]
+    result = browser.probe(out / "replay.html", times)
+    # The run stops at the first quarter second after the goal (drake_social.sim.run._CHUNK).
+    assert t_end - 0.04 <= result["duration"] <= t_end + 0.25 + 0.04
+    assert sorted(result["overlays"]) == ["field", "path", "people"]
+    fps = 30.0
+    speed = np.max(np.hypot(executed[:, 5], executed[:, 6]))
+    tolerance = 0.003 + speed / fps  # float32 in the page, plus one frame of motion
+    positions = {t: np.array(xyz) for t, *xyz in result["positions"]}
+    for t in times:
+        expected = [np.interp(t, executed[:, 0], executed[:, 1]), np.interp(t, executed[:, 0], executed[:, 2]), 0.0]
+        np.testing.assert_allclose(positions[t], expected, atol=tolerance, err_msg=f"t = {t} s")
+
+
+def test_replay_first_view_is_the_whole_map(simulated, tmp_path):
+    browser.require_chromium()
+    _, out = simulated
+    png = browser.screenshot(out / "replay.html", tmp_path / "first.png", (1280, 720))
+    image = np.round(imread(png)[:, :, :3] * 255).astype(int)
+    assert len(np.unique(image.reshape(-1, 3), axis=0)) > 200
+    # The map (not the white background) fills the middle band edge to edge in
+    # height: the top-down frame holds the walls just inside the picture.
+    column = image[:, image.shape[1] // 2]
+    drawn = np.flatnonzero(np.any(column < 245, axis=1))
+    assert drawn[0] < 0.1 * image.shape[0] and drawn[-1] > 0.9 * image.shape[0]
+
+
+def test_time_limit_gives_exit_5(tmp_path, tiny_scenario_path, planned, capsys):
+    code = main(["simulate", str(tiny_scenario_path), "--path", str(planned), "--no-replay", "--out", str(tmp_path),
+                 "--set", "execution: {time_limit: 1.5}"])
+    assert code == 5
+    assert "not reached within the time limit of 1.5 s" in capsys.readouterr().err
+    record = json.loads((tmp_path / "sim.json").read_text())
+    assert record["reached"] is False and record["time_to_goal"] is None
+    assert not (tmp_path / "replay.html").exists()
+
+
+@pytest.mark.parametrize("text, message", [
+    ("x,y,psi1,psi2\n1,2\n", "line 2"),
+    ("a,b\n", "line 1: the header must be 'x,y,psi1,psi2'"),
+    ("x,y,psi1,psi2\n1.0,2.5,0.0,1.5708\n", "at least 2 waypoints"),
+    ("x,y,psi1,psi2\n1.0,2.5,0.0,1.5708\n6.5,2.5,0.0,nan\n", "line 3"),
+    ("x,y,psi1,psi2\n2.0,2.5,0.0,1.5708\n6.5,2.5,0.0,1.5708\n", "is not the scenario's start"),
+])
+def test_bad_path_file_names_file_and_line(tmp_path, tiny_scenario_path, capsys, text, message):
+    path = tmp_path / "path.csv"
+    path.write_text(text)
+    assert main(["simulate", str(tiny_scenario_path), "--path", str(path), "--no-replay",
+                 "--out", str(tmp_path / "out")]) == 2
+    err = capsys.readouterr().err
+    assert str(path) in err and message in err
+
+
+def test_bad_mode_is_a_usage_error(tiny_scenario_path, capsys):
+    assert main(["simulate", str(tiny_scenario_path), "--mode", "fast"]) == 2
+    assert "invalid choice: 'fast'" in capsys.readouterr().err
