@@ -56,7 +56,7 @@ def densify(geometry: ArmGeometry, q: np.ndarray, resolution: float) -> np.ndarr
     return np.concatenate(pieces)
 
 
-def _nearest_segment(points: np.ndarray, curve: np.ndarray, candidates: int = 8) -> np.ndarray:
+def _nearest_segment(points: np.ndarray, curve: np.ndarray, candidates: int = 16) -> np.ndarray:
     """Index (T,) of the segment of the polyline ``curve`` (M >= 2, 2) nearest
     each point (T, 2), among the segments next to its nearest vertices."""
     k = min(candidates, len(curve))
@@ -81,7 +81,7 @@ def _nearest_segment(points: np.ndarray, curve: np.ndarray, candidates: int = 8)
 
 def point_deviation(
     geometry: ArmGeometry, planned: np.ndarray, executed: np.ndarray, spacing: float = 0.005,
-    iterations: int = 40,
+    iterations: int = 30,
 ) -> dict[str, float]:
     """Largest distance of each executed body point from its planned curve, metres.
 
@@ -119,11 +119,37 @@ def point_deviation(
     planned_pts = body_points(geometry, dense)  # (M, K, 2)
     last = len(dense) - 1
 
+    l1, l2 = geometry.link_lengths
+    # Body point k as (link, p): link 0 the base centre, 1 the elbow (link-1
+    # tip), 2 a point p of the gripper frame (link-2 tip, object points).
+    n_interest = geometry.num_interest_points
+    gripper_points = np.concatenate([[[0.0, 0.0]], geometry.object_interest, geometry.object_points])
+
+    def point(q: np.ndarray, k: int) -> np.ndarray:
+        xy = q[:, :2].copy()
+        if k == 0:
+            return xy
+        xy[:, 0] += l1 * np.cos(q[:, 2])
+        xy[:, 1] += l1 * np.sin(q[:, 2])
+        if k == 1:
+            return xy
+        g = gripper_points[k - 2] if k < n_interest else gripper_points[1 + len(geometry.object_interest) + k - n_interest]
+        c, s_ = np.cos(q[:, 2] + q[:, 3]), np.sin(q[:, 2] + q[:, 3])
+        xy[:, 0] += c * (l2 + g[0]) - s_ * g[1]
+        xy[:, 1] += s_ * (l2 + g[0]) + c * g[1]
+        return xy
+
     def distance(u: np.ndarray, k: int, x: np.ndarray) -> np.ndarray:
         i = np.clip(np.floor(u).astype(int), 0, last - 1)
         f = (u - i)[:, None]
         q = dense[i] + f * (dense[i + 1] - dense[i])  # on the planned segments
-        return np.linalg.norm(body_points(geometry, q)[:, k] - x, axis=-1)
+        return np.linalg.norm(point(q, k) - x, axis=-1)
+
+    # The per-point form above must be body_points' (checked once, cheaply).
+    probe = dense[: min(len(dense), 8)]
+    if not all(np.allclose(point(probe, k), body_points(geometry, probe)[:, k], atol=1e-12)
+               for k in range(len(names))):
+        raise RuntimeError("point_deviation: the per-point kinematics disagree with body_points (a bug)")
 
     golden = (np.sqrt(5.0) - 1.0) / 2.0
     out = {}
@@ -139,14 +165,14 @@ def point_deviation(
             out[name] = float(np.linalg.norm(x - curve[keep[0]], axis=1).max())
             continue
         j = _nearest_segment(x, curve[keep])
-        # Search each dense step of that segment and the steps either side on
-        # its own: within one step (a short arc) the distance is unimodal,
-        # across a waypoint where the path turns back it need not be.
-        first = np.maximum(keep[j] - 1, 0)
-        stop = np.minimum(keep[j + 1] + 1, last)
+        # The segment's motion is the dense step keep[j] -> keep[j] + 1 (the
+        # samples after it repeat until keep[j + 1]). Search that step and the
+        # steps either side, each on its own: within one step (a short arc)
+        # the distance is unimodal, across a waypoint where the path turns
+        # back it need not be.
         best = np.full(len(x), np.inf)
-        for offset in range(int((stop - first).max())):
-            step = np.minimum(first + offset, last - 1)
+        for offset in (-1, 0, 1):
+            step = np.clip(keep[j] + offset, 0, last - 1)
             lo, hi = step.astype(float), step + 1.0
             a, b = hi - golden * (hi - lo), lo + golden * (hi - lo)
             fa, fb = distance(a, k, x), distance(b, k, x)
