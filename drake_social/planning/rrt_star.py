@@ -328,7 +328,7 @@ class RrtStar:
 
         tree = _Tree()
         tree.add(start, -1, 0.0)
-        neighbors = _Neighbors(space.weights, opt.kd_tree)
+        neighbors = _Neighbors(space.weights, opt.kd_tree, KD_TREE_MIN_NODES)
         sampler = EllipseSampler(space, start[:2], goal[:2]) if opt.informed else None
         goal_nodes: list[int] = []  # nodes with a valid, costed motion to the goal
         goal_edge_costs: list[float] = []
