@@ -500,6 +500,9 @@ def _add_bench(subparsers) -> None:
     p.add_argument("--no-ompl", action="store_true", help="leave out OMPL's RRTstar even when ompl is importable")
     p.add_argument("--no-checker-bench", action="store_true",
                    help="leave out the validity-checker throughput measurement")
+    p.add_argument("--sim-runs", type=_nonnegative_int, default=3, metavar="N",
+                   help="timed simulations per (mode, execution) of the execution benchmark, plus one recorded "
+                        "(default 3; 0 leaves it out)")
     p.add_argument("--out", type=Path, default=Path("out/bench"), metavar="DIR",
                    help="output directory (default: out/bench)")
     p.add_argument("--progress", action="store_true",
@@ -532,6 +535,7 @@ def _run_bench(args: argparse.Namespace) -> int:
                 checker=args.checker,
                 include_ompl=not args.no_ompl,
                 include_checker=not args.no_checker_bench,
+                sim_runs=args.sim_runs,
                 out_dir=outputs.folder,
                 progress=progress if bar is not None else None,
             )
@@ -545,9 +549,92 @@ def _run_bench(args: argparse.Namespace) -> int:
     return 0
 
 
+# ---- experiment ----------------------------------------------------------------
+
+
+def _add_experiment(subparsers) -> None:
+    from drake_social.experiments.executors import EXECUTORS
+
+    p = subparsers.add_parser(
+        "experiment",
+        help="the paper's studies (or your own sweep) with per-body-part metrics, figures and REPORT.md",
+        description="Runs a study (scenarios x algorithms x seeds x overrides) in parallel and writes, as one "
+        "output set, DIR/results.csv and DIR/results.json (every run), boxplots, cost-vs-distance and best-path "
+        "figures, DIR/REPORT.md (tables and each claim checked by a paired comparison over seeds) and the "
+        "Planner Arena files (DIR/arena_<group>.log, DIR/arena.db).",
+    )
+    kinds = p.add_subparsers(dest="study", metavar="STUDY", required=True)
+    paper = kinds.add_parser("paper", help="the paper's Section V: A office_bar, B generic_L, D weight study",
+                             description="A: office_bar (bar) and B: generic_L (L object) with RRT*, Social "
+                             "Risk-RRT* multi-point and base-only, Informed multi-point and base-only; D: generic_L "
+                             "with the 1.5 m bar, Social Risk-RRT* with object, base and equal weights.")
+    paper.add_argument("--runs", type=_positive_int, default=10, metavar="N", help="runs per algorithm (default 10)")
+    paper.add_argument("--iterations", type=_positive_int, default=2000, metavar="K", help="K (default 2000)")
+    paper.add_argument("--seed", type=_nonnegative_int, default=0, metavar="S",
+                       help="study seed; run seeds are drawn from it with SeedSequence (default 0)")
+    paper.add_argument("--scenario-dir", type=Path, default=Path("scenarios"), metavar="DIR",
+                       help="folder of office_bar.yaml and generic_L.yaml (default: scenarios)")
+    paper.add_argument("--simulate", action="store_true",
+                       help="also execute every path (kinematic simulation) and measure the executed trajectory")
+    sweep = kinds.add_parser("sweep", help="your own study from a YAML file (see studies/example_sweep.yaml)")
+    sweep.add_argument("config", type=Path, help="the sweep's YAML file")
+    for q in (paper, sweep):
+        q.add_argument("--out", type=Path, metavar="DIR", help="output directory (default: out/<study name>)")
+        q.add_argument("--workers", type=_positive_int, default=1, metavar="N",
+                       help="parallel worker processes (default 1: in this process); results do not depend on it")
+        q.add_argument("--executor", choices=EXECUTORS, default="process",
+                       help="process (concurrent.futures, default) or dask (the distributed package)")
+        q.add_argument("--scheduler", metavar="ADDRESS",
+                       help="with --executor dask: a running scheduler, e.g. tcp://10.0.0.5:8786 "
+                       "(default: a LocalCluster of --workers processes)")
+        q.add_argument("--progress", action="store_true",
+                       help="draw the progress bar on stderr even when it is not a terminal")
+    p.set_defaults(run=_run_experiment)
+
+
+def _run_experiment(args: argparse.Namespace) -> int:
+    from tqdm import tqdm
+
+    from drake_social.experiments.study import load_sweep, paper_study, run_study, write_study
+    from drake_social.outputs import OutputSet
+
+    if args.scheduler is not None and args.executor != "dask":
+        raise ScenarioError("--scheduler needs --executor dask")
+    if args.study == "paper":
+        for name in ("office_bar.yaml", "generic_L.yaml"):
+            if not (args.scenario_dir / name).is_file():
+                raise ScenarioError(f"{args.scenario_dir / name}: no such scenario file (--scenario-dir)")
+        study = paper_study(runs=args.runs, iterations=args.iterations, seed=args.seed, simulate=args.simulate,
+                            scenario_dir=args.scenario_dir)
+    else:
+        study = load_sweep(args.config)
+    out = args.out if args.out is not None else Path("out") / study.name
+    with OutputSet(out, "experiment") as outputs:  # entered first: a busy --out is refused before any run
+        bar = tqdm(total=1, desc=f"experiment {study.name}", unit="run", file=sys.stderr, dynamic_ncols=True,
+                   disable=not _show_progress(args))
+
+        def progress(done: int, total: int, record: dict) -> None:
+            bar.total = total
+            bar.set_postfix_str(f"{record['group']} {record['algorithm']} run {record['run']}", refresh=False)
+            bar.update(done - bar.n)
+
+        try:
+            result = run_study(study, executor=args.executor, workers=args.workers, scheduler=args.scheduler,
+                               progress=progress)
+        finally:
+            bar.close()
+        names = write_study(result, outputs.folder)
+    print(f"{len(result.records)} runs in {result.wall_time:.1f} s ({args.workers} worker(s), {args.executor})")
+    for line in (out / "REPORT.md").read_text().splitlines():
+        if line.startswith("- **"):
+            print(line)
+    print(f"wrote {out}/: {', '.join(names)}")
+    return 0
+
+
 # ---- parser and entry point ----------------------------------------------------
 
-_SUBCOMMANDS: list[Callable] = [_add_show, _add_plan, _add_simulate, _add_bench]
+_SUBCOMMANDS: list[Callable] = [_add_show, _add_plan, _add_simulate, _add_bench, _add_experiment]
 
 
 def build_parser() -> argparse.ArgumentParser:

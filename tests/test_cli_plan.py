@@ -176,7 +176,7 @@ def test_bench_parses_and_calls_run_bench_with_keywords(tmp_path, monkeypatch, c
     staging = calls[0].pop("out_dir")
     assert staging.parent == tmp_path and staging.name.startswith(".staging-bench-") and not staging.exists()
     assert calls == [dict(scenario_paths=[TINY], algorithms=["rrt_star", "social_rrt_star"], iterations=50, seeds=3,
-                          checker="numpy", include_ompl=False, include_checker=True, progress=None)]
+                          checker="numpy", include_ompl=False, include_checker=True, sim_runs=3, progress=None)]
     assert (tmp_path / "bench.md").read_text() == "| table |\n" and "| table |" in capsys.readouterr().out
     defaults = build_parser().parse_args(["bench"])
     assert [str(p) for p in defaults.scenarios] == ["scenarios/office_bar.yaml", "scenarios/generic_L.yaml"]
@@ -188,8 +188,8 @@ def test_bench_parses_and_calls_run_bench_with_keywords(tmp_path, monkeypatch, c
 
 def test_bench_runs_on_tiny_and_prints_its_table(tmp_path, capsys):
     argv = ["bench", "--scenarios", str(TINY), "--algorithms", "social_rrt_star", "rrt_star", "--iterations", "40",
-            "--seeds", "2", "--checker", "numpy", "--no-ompl", "--no-checker-bench", "--out", str(tmp_path),
-            "--progress"]
+            "--seeds", "2", "--checker", "numpy", "--no-ompl", "--no-checker-bench", "--sim-runs", "0",
+            "--out", str(tmp_path), "--progress"]
     assert main(argv) == 0
     captured = capsys.readouterr()
     assert captured.out.rstrip().endswith(f"wrote {tmp_path}/: bench.json, bench.md")

@@ -36,7 +36,7 @@ from drake_social.model.checker import CHECKERS, make_checker
 from drake_social.planning.space import ConfigurationSpace
 from drake_social.planning.validity import ValidityChecker
 from drake_social.planning.variants import evaluate_path, make_objective, plan
-from drake_social.scenario import ALGORITHMS, Scenario, load_scenario
+from drake_social.scenario import ALGORITHMS, EXECUTIONS, SIM_MODES, Scenario, load_scenario
 
 __all__ = ["CHECKERS", "ompl_available", "run_bench", "summarize"]
 
@@ -169,6 +169,7 @@ def run_bench(
     checker: str = "drake",
     include_ompl: bool = True,
     include_checker: bool = True,
+    sim_runs: int = 0,
     out_dir: str | Path,
     progress: Callable[[int, int, str], None] | None = None,
 ) -> dict:
@@ -183,6 +184,9 @@ def run_bench(
         include_ompl: also run OMPL's RRTstar when ``ompl`` is importable.
         include_checker: also measure the checkers
             (:func:`run_checker_bench` on 2000 configurations and 200 motions).
+        sim_runs: when > 0, also the execution benchmark
+            (:func:`~drake_social.experiments.bench_sim.run_sim_bench`) with
+            this many timed runs per (mode, execution).
         out_dir: where the two files go (created).
         progress: optional ``progress(done, total, label)`` after each run.
 
@@ -213,6 +217,7 @@ def run_bench(
         _log.info("ompl is not importable (pip install 'drake-social[bench]'); skipping the OMPL baseline")
     keys = list(dict.fromkeys(_objective_key(a) for a in algorithms)) if use_ompl else []
     total = len(paths) * seeds * (len(algorithms) + len(keys)) + (1 if include_checker else 0)
+    total += len(paths) * len(SIM_MODES) * len(EXECUTIONS) * (sim_runs + 1) if sim_runs > 0 else 0
     done = 0
 
     def tick(label: str) -> None:
@@ -257,13 +262,20 @@ def run_bench(
         checker_bench = run_checker_bench(scenario_paths=paths, num_configs=2000, num_edges=200, repeats=1)
         tick("checker bench")
 
+    sim_bench = None
+    if sim_runs > 0:
+        from drake_social.experiments.bench_sim import run_sim_bench
+
+        sim_bench = run_sim_bench(scenario_paths=paths, runs=sim_runs, progress=tick)
+
     out = {
         "settings": {"scenario_paths": [str(p) for p in paths], "algorithms": algorithms, "iterations": iterations,
-                     "seeds": list(range(seeds)), "checker": checker},
+                     "seeds": list(range(seeds)), "checker": checker, "sim_runs": sim_runs},
         "machine": _machine(),
         "ompl": {"requested": include_ompl, "available": ompl_available(), "objectives": keys},
         "scenarios": scenarios,
         "checker_bench": checker_bench,
+        "sim_bench": sim_bench,
     }
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
@@ -342,4 +354,8 @@ def _markdown(out: dict) -> str:
             c, e = r["configs_per_s"], r["edges_per_s"]
             lines.append(f"| {Path(name).stem} | {c['drake_per_call']:.0f} | {c['numpy_per_call']:.0f} "
                          f"| {e['drake_per_call']:.0f} | {e['numpy_per_call']:.0f} |")
+    if out.get("sim_bench"):
+        from drake_social.experiments.bench_sim import sim_markdown
+
+        lines += sim_markdown(out["sim_bench"])
     return "\n".join(lines) + "\n"
