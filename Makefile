@@ -14,12 +14,16 @@ $(VENV)/.installed: pyproject.toml
 
 install: $(VENV)/.installed
 
-# The main job: draw the office scenario, plan it with Social Risk-RRT* and write
-# the path, its figures and the result to $(OUT)/office_bar/.
+# The main job: draw the office scenario, plan it with Social Risk-RRT*, execute
+# the path in Drake's Simulator and write the figures, the path, the results and
+# a browser replay to $(OUT)/office_bar/.
 demo: install
 	$(VENV)/bin/drake-social show scenarios/office_bar.yaml --out $(OUT)/office_bar
 	$(VENV)/bin/drake-social plan scenarios/office_bar.yaml --algorithm social_rrt_star --out $(OUT)/office_bar
-	@echo "outputs in $(OUT)/office_bar/: scene.png path.png cost_profile.png convergence.png path.csv result.json"
+	$(VENV)/bin/drake-social simulate scenarios/office_bar.yaml --path $(OUT)/office_bar/path.csv --out $(OUT)/office_bar
+	@echo "outputs in $(OUT)/office_bar/: scene.png path.png cost_profile.png convergence.png path.csv result.json" \
+	  "replay.html executed.csv tracking.png sim.json"
+	@echo "watch the transport: open $(abspath $(OUT))/office_bar/replay.html in a browser"
 
 # Headless Chromium for the replay tests (tests/sim/browser.py): installed from
 # Debian when missing and we are root; if that fails the browser tests skip.
