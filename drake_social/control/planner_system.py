@@ -78,8 +78,8 @@ class PlannerSystem(LeafSystem):
 
     Args:
         scenario: a validated scenario (start, goal, planner options, seed).
-        checker: the validity checker; None = Drake's
-            :class:`~drake_social.model.checker.SceneGraphChecker` of the scenario.
+        checker: the validity checker; None = the exact planar checker built
+            from the scenario's SceneGraph (:class:`~drake_social.model.planar_checker.PlanarChecker`).
         algorithm: one of ``scenario.ALGORITHMS``; None = ``scenario.planner.algorithm``.
         iterations: K; None = ``scenario.planner.iterations``.
         seed: the planner's seed; None = ``scenario.random_seed``.
@@ -102,9 +102,9 @@ class PlannerSystem(LeafSystem):
     ):
         super().__init__()
         if checker is None:
-            from drake_social.model.checker import SceneGraphChecker
+            from drake_social.model.checker import make_checker
 
-            checker = SceneGraphChecker(scenario)
+            checker = make_checker(scenario, "planar")
         self._scenario = scenario
         self._checker = checker
         self._algorithm = algorithm

@@ -60,11 +60,12 @@ def test_outputs_equal_plan_with_the_same_seed_bit_for_bit(tiny_scenario):
     np.testing.assert_allclose(path.value(mid).ravel(), expected.waypoints[1:3].mean(0), atol=1e-12)
 
 
-def test_the_default_checker_is_drake_and_gives_the_same_path_as_plan(tiny_scenario):
-    from drake_social.model.checker import SceneGraphChecker
+def test_the_default_checker_is_the_planar_one_and_gives_the_same_path_as_plan(tiny_scenario):
+    from drake_social.model.planar_checker import PlanarChecker
 
     dut = PlannerSystem(tiny_scenario, iterations=60, seed=3)
-    expected = plan(tiny_scenario, SceneGraphChecker(tiny_scenario), iterations=60, seed=3)
+    assert isinstance(dut._checker, PlanarChecker)
+    expected = plan(tiny_scenario, PlanarChecker(tiny_scenario), iterations=60, seed=3)
     context = _initialized(dut)
     result = dut.GetOutputPort("result").Eval(context)
     assert result.algorithm == tiny_scenario.planner.algorithm
