@@ -83,6 +83,11 @@ def _record(scenario: Scenario, result, objective, checker: ValidityChecker) -> 
         "num_motion_checks": int(result.num_motion_checks),
         "num_cost_evaluations": int(result.num_cost_evaluations),
         "num_waypoints": int(len(result.waypoints)),
+        # How the path was made: planner.optimize (then raw_cost is the tree
+        # path's cost before optimisation) and planner.near_radius_mode.
+        "optimized": bool(getattr(result, "optimized", False)),
+        "raw_cost": float(result.raw_cost) if result.success and np.isfinite(result.raw_cost) else None,
+        "near_radius_mode": getattr(result, "near_radius_mode", "fixed"),
     }
     if result.success:
         wp = np.asarray(result.waypoints, float)
@@ -233,7 +238,11 @@ def run_bench(
         _make_checker(scenario, checker, path)  # a start or goal in collision: a clear error naming the file
         # Warm-up, untimed: loads (or compiles) the motion-cost kernel.
         make_objective(scenario, "social_rrt_star").motion_cost(np.array(scenario.start), np.array(scenario.goal))
-        entry = {"algorithms": {}, "ompl": {}}
+        entry = {"algorithms": {}, "ompl": {},
+                 # The planner options that change how paths are made (see PlannerOptions).
+                 "planner_options": {"near_radius_mode": scenario.planner.near_radius_mode,
+                                     "near_radius_gamma": scenario.planner.near_radius_gamma,
+                                     "optimize": scenario.planner.optimize}}
         for algorithm in algorithms:
             objective = make_objective(scenario, algorithm)
             runs = []
@@ -313,6 +322,11 @@ def _markdown(out: dict) -> str:
         "",
         f"K = {s['iterations']} iterations, seeds 0..{len(s['seeds']) - 1}, checker `{s['checker']}`; "
         f"{m['platform']}, {m['cpu_count']} CPUs, numpy {m['numpy']}, drake {m['drake']}, ompl {m['ompl']}.",
+        "",
+        "Planner options: " + "; ".join(
+            f"{name}: near radius {e['planner_options']['near_radius_mode']}, "
+            f"optimize {'on' if e['planner_options']['optimize'] else 'off'}"
+            for name, e in out["scenarios"].items() if "planner_options" in e) + ".",
         "",
         "Wall time (s) over all runs and social cost (the scenario's full weights) over successful runs: "
         "median [25th, 75th percentile]. Ratios: ours / OMPL RRTstar with the same objective, of the medians "
