@@ -410,16 +410,6 @@ def results_csv(records: Sequence[dict]) -> str:
     return buf.getvalue()
 
 
-def _finite(x):
-    if isinstance(x, dict):
-        return {k: _finite(v) for k, v in x.items()}
-    if isinstance(x, (list, tuple)):
-        return [_finite(v) for v in x]
-    if isinstance(x, float) and not np.isfinite(x):
-        return None
-    return x
-
-
 def write_study(result: StudyResult, out_dir: str | Path, *, scenario_loader=None) -> list[str]:
     """Writes results.csv, results.json, the figures, REPORT.md and the Planner
     Arena log (``arena_<scenario>.log``, one experiment per scenario) and, when
@@ -429,6 +419,7 @@ def write_study(result: StudyResult, out_dir: str | Path, *, scenario_loader=Non
         The names of the written files.
     """
     from drake_social.experiments import arena, report
+    from drake_social.experiments.bench import _finite  # non-finite floats -> None (strict JSON)
 
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)

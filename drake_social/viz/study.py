@@ -20,7 +20,7 @@ from drake_social.viz.world import VIEW_MARGIN, draw_social_field, draw_world
 
 __all__ = ["boxplot_figure", "paths_side_by_side"]
 
-_BOX_COLORS = ("#9e9e9e", "#1f77b4", "#aec7e8", "#d62728", "#ff9896", "#2ca02c", "#98df8a", "#9467bd")
+_BOX_COLORS = ("#1f77b4", "#aec7e8", "#d62728", "#ff9896", "#2ca02c", "#98df8a", "#9467bd")
 
 
 def boxplot_figure(values: Mapping[str, Sequence[float]], *, title: str, ylabel: str,
