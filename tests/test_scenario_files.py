@@ -20,7 +20,7 @@ import pytest
 from drake_social.cost import SocialCost
 from drake_social.kinematics import ArmGeometry
 from drake_social.planning.geometric import GeometricChecker
-from drake_social.scenario import Bar, LShape, load_scenario
+from drake_social.scenario import Bar, LShape, load_scenario, validate_scenario
 
 SCENARIO_DIR = Path(__file__).resolve().parent.parent / "scenarios"
 SCENARIO_FILES = sorted(SCENARIO_DIR.glob("*.yaml"))
@@ -34,8 +34,11 @@ def test_the_three_scenarios_are_shipped():
 @pytest.mark.parametrize("path", SCENARIO_FILES, ids=lambda p: p.stem)
 def test_every_scenario_file_loads_and_validates(path):
     dut = load_scenario(path)
+    assert validate_scenario(dut, source=str(path)) is None  # idempotent: still valid
     assert dut.description, f"{path.name}: give the scenario a description (shown in figures)"
     x0, y0, x1, y1 = dut.world.bounds
+    for q in (dut.start, dut.goal):
+        assert len(q) == 4 and x0 <= q[0] <= x1 and y0 <= q[1] <= y1
     for p in dut.people:
         assert x0 < p.x < x1 and y0 < p.y < y1
 
