@@ -100,8 +100,8 @@ def test_bench_rejects_bad_arguments(tiny_scenario_path, tmp_path):
 # ---- OMPL -------------------------------------------------------------------
 
 
-def test_radius_formula_by_hand():
-    ompl_baseline = pytest.importorskip("drake_social.experiments.ompl_baseline", exc_type=ImportError)
+def test_radius_formula_by_hand(extra):
+    ompl_baseline = extra("ompl", "drake_social.experiments.ompl_baseline")
     assert ompl_baseline.unit_ball_measure(2) == pytest.approx(math.pi)
     assert ompl_baseline.unit_ball_measure(3) == pytest.approx(4 * math.pi / 3)
     assert ompl_baseline.unit_ball_measure(4) == pytest.approx(math.pi**2 / 2)
@@ -117,8 +117,8 @@ def test_radius_formula_by_hand():
     assert ompl_baseline.ompl_radius(small, 5.0, 4, 2, np.inf) == pytest.approx(1.0, rel=1e-12)
 
 
-def test_ompl_path_is_valid_and_costed_by_our_code(tiny_scenario):
-    ompl_baseline = pytest.importorskip("drake_social.experiments.ompl_baseline", exc_type=ImportError)
+def test_ompl_path_is_valid_and_costed_by_our_code(tiny_scenario, extra):
+    ompl_baseline = extra("ompl", "drake_social.experiments.ompl_baseline")
     objective = make_objective(tiny_scenario, "social_rrt_star")
     p = tiny_scenario.planner
 
@@ -154,8 +154,8 @@ def test_ompl_path_is_valid_and_costed_by_our_code(tiny_scenario):
     assert other.tree_size != dut.tree_size or not np.array_equal(other.waypoints, wp)
 
 
-def test_objective_adapter_equals_our_motion_cost(tiny_scenario_path, rng):
-    ompl_baseline = pytest.importorskip("drake_social.experiments.ompl_baseline", exc_type=ImportError)
+def test_objective_adapter_equals_our_motion_cost(tiny_scenario_path, rng, extra):
+    ompl_baseline = extra("ompl", "drake_social.experiments.ompl_baseline")
     from ompl import base as ob
     from ompl import geometric as og
 
@@ -192,8 +192,8 @@ def test_objective_adapter_equals_our_motion_cost(tiny_scenario_path, rng):
     assert dut.num_motion_costs == 20
 
 
-def test_bench_with_ompl_reports_ratios(tiny_scenario_path, tmp_path):
-    pytest.importorskip("ompl")
+def test_bench_with_ompl_reports_ratios(tiny_scenario_path, tmp_path, extra):
+    extra("ompl")
     dut = _small(tiny_scenario_path, tmp_path, algorithms=["informed_social_rrt_star"], iterations=150, include_ompl=True)
     entry = dut["scenarios"]["tiny.yaml"]
     assert list(entry["ompl"]) == ["social_rrt_star"]  # the informed variant's objective
