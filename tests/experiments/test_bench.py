@@ -35,7 +35,7 @@ def test_small_bench_reports_its_runs(tiny_scenario_path, tiny_scenario, tmp_pat
 
     on_disk = json.loads((tmp_path / "a" / "bench.json").read_text())
     assert on_disk["settings"] == {"scenario_paths": [str(tiny_scenario_path)], "algorithms": ALGOS,
-                                   "iterations": 200, "seeds": [0, 1], "checker": "numpy"}
+                                   "iterations": 200, "seeds": [0, 1], "checker": "numpy", "sim_runs": 0}
     assert on_disk["machine"]["cpu_count"] >= 1 and on_disk["machine"]["numpy"] == np.__version__
     assert on_disk["checker_bench"]["scenarios"]["tiny.yaml"]["configs_per_s"]["numpy_batched"] > 0
     md = (tmp_path / "a" / "bench.md").read_text()
