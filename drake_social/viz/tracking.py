@@ -18,7 +18,7 @@ _COLORS = ("#1f77b4", "#d62728", "#2ca02c", "#9467bd")
 
 def tracking_figure(run, *, max_base_speed: float | None = None, max_wheel_speed: float | None = None,
                     title: str | None = None) -> Figure:
-    """Reference against actual over time for a :class:`~drake_social.sim.simulate.SimulationResult`.
+    """Reference against actual over time for a :class:`~drake_social.sim.run.SimulationResult`.
 
     Args:
         run: the simulation result (its ``times``, ``q``, ``reference``,
