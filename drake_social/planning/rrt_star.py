@@ -84,6 +84,10 @@ class RrtStarOptions:
             matter (same result; False is the eager reference).
         kd_tree: use a KD-tree for neighbours from ``KD_TREE_MIN_NODES`` on
             (same neighbours; False scans every node, the reference).
+        compiled: run the tree loop compiled (:mod:`planning.tree_kernel`)
+            when it applies (the planar checker, uniform sampling, a length or
+            numba social objective); same tree bit for bit. The Python loop
+            stays the reference and serves every other case.
     """
 
     iterations: int = 2000
@@ -97,6 +101,7 @@ class RrtStarOptions:
     optimize: bool = False
     lazy_costs: bool = True
     kd_tree: bool = True
+    compiled: bool = False
 
     @classmethod
     def from_scenario(cls, planner_options, informed: bool = False) -> "RrtStarOptions":
@@ -283,8 +288,6 @@ class RrtStar:
         self.objective = objective
         self.options = options
         self.name = name
-        #: gamma of the shrinking radius (unused in "fixed" mode).
-        self.gamma = options.near_radius_gamma or default_gamma(space)
 
     # ------------------------------------------------------------------
 
@@ -326,6 +329,8 @@ class RrtStar:
         self._check_endpoints(start, goal)
         space, checker, objective = self.space, self.checker, self.objective
 
+        if opt.compiled and self._compiled_applies():
+            return self._solve_compiled(start, goal, rng, t0)
         tree = _Tree()
         tree.add(start, -1, 0.0)
         neighbors = _Neighbors(space.weights, opt.kd_tree, KD_TREE_MIN_NODES)
@@ -388,6 +393,63 @@ class RrtStar:
             from drake_social.planning.optimize import optimize_path
 
             result.waypoints, result.cost = optimize_path(result.waypoints, objective, checker, space)
+            result.optimized = True
+            result.wall_time = time.perf_counter() - t0
+        return result
+
+    @property
+    def gamma(self) -> float:
+        """gamma of the shrinking radius (unused in "fixed" mode)."""
+        return self.options.near_radius_gamma or default_gamma(self.space)
+
+    def _compiled_applies(self) -> bool:
+        from drake_social.planning import tree_kernel
+        from drake_social.planning.objective import PathLengthObjective, SocialObjective
+
+        c, o = self.checker, self.objective
+        planar = all(hasattr(c, a) for a in ("bodies", "robot", "env", "lever", "lower", "upper"))
+        known = type(o) is PathLengthObjective or (type(o) is SocialObjective and o.social.backend == "numba")
+        return tree_kernel.AVAILABLE and planar and known and not self.options.informed
+
+    def _solve_compiled(self, start, goal, rng, t0) -> PlannerResult:
+        from drake_social.planning import tree_kernel
+        from drake_social.planning.objective import SocialObjective
+
+        opt, space, c, o = self.options, self.space, self.checker, self.objective
+        f = np.ascontiguousarray
+        if isinstance(o, SocialObjective):
+            sc = o.social
+            soc = (f(sc.people), *map(float, sc.geometry.link_lengths), f(sc.geometry.object_interest, float),
+                   f(sc._active, np.int64), f(sc._active_weights), f(sc._lever, float), sc.resolution,
+                   float(sc.space.max_reach), *sc._inverse_variances, float(sc.space.threshold))
+            grid = sc._people_grid()
+            kind = 1
+        else:
+            empty = np.zeros((0, 3))
+            soc = (empty, 0.0, 0.0, np.zeros((0, 2)), np.zeros(0, np.int64), np.zeros(0), np.zeros(2), 1.0,
+                   0.0, 0.0, 0.0, 0.0, 0.0)
+            grid = (0.0, 1.0, 0.0, 0.0, 1, 1, np.zeros(2, np.int64), np.zeros(0, np.int64))
+            kind = 0
+        grid = (float(grid[0]), float(grid[1]), float(grid[2]), float(grid[3]), int(grid[4]), int(grid[5]),
+                f(grid[6], np.int64), f(grid[7], np.int64))
+        chk = (f(c.lower, float), f(c.upper, float), f(c.bodies), f(c.robot), f(c.env), f(c.lever, float))
+        q, parent, cost, n, history, best_node, best_cost, first, counts = tree_kernel.grow(
+            rng, f(start), f(goal), f(space.lower), f(space.upper), f(space.weights), int(opt.iterations),
+            float(opt.planning_range), float(opt.near_radius), float(opt.goal_bias),
+            opt.near_radius_mode == "shrinking", float(self.gamma), kind, float(o.length_weight),
+            f(o.distance_weights, float), soc, grid, chk,
+        )
+        tree = _Tree(max(n, 1))
+        tree.q[:n], tree.parent[:n], tree.cost[:n] = q, parent, cost
+        tree.n = n
+        result = self._result(tree, goal, int(best_node), float(best_cost), None if first < 0 else int(first),
+                              history, _Counts(int(counts[0]), int(counts[1]), int(counts[2])), t0)
+        result.raw_cost = result.cost
+        result.near_radius_mode = opt.near_radius_mode
+        if opt.optimize and result.success:
+            from drake_social.planning.optimize import optimize_path
+
+            result.waypoints, result.cost = optimize_path(result.waypoints, o, c, space)
             result.optimized = True
             result.wall_time = time.perf_counter() - t0
         return result

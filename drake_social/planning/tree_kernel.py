@@ -1,0 +1,278 @@
+"""The RRT* tree loop compiled (numba), for the planar checker.
+
+:meth:`drake_social.planning.rrt_star.RrtStar.solve` stays the tested
+reference; :func:`grow` runs the same iterations (uniform sampling with goal
+bias, fixed or shrinking near radius, eager motion costs, choose parent in
+order of F + Msc, rewiring with cost propagation, goal connections within
+r_near) with the random numbers drawn from the same ``numpy.random.Generator``
+in the same order, and returns the same tree bit for bit. Squared distances
+are summed as numpy's ``einsum`` sums four terms on this platform,
+``(s0 + s2) + (s1 + s3)``; the equality tests against the reference guard it.
+
+Motion checks call :mod:`drake_social.planning.planar_kernel` (the planar
+checker's compiled functions), motion costs :func:`drake_social.cost.kernel.msc_sums`.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from drake_social.cost import kernel as cost_kernel
+from drake_social.planning import planar_kernel
+
+njit = cost_kernel.njit
+AVAILABLE = cost_kernel.AVAILABLE
+
+__all__ = ["AVAILABLE", "grow"]
+
+
+@njit(cache=True)
+def _d2(a, b, w):
+    d0 = (a[0] - b[0]) * w[0]
+    d1 = (a[1] - b[1]) * w[1]
+    d2 = (a[2] - b[2]) * w[2]
+    d3 = (a[3] - b[3]) * w[3]
+    return (d0 * d0 + d2 * d2) + (d1 * d1 + d3 * d3)
+
+
+@njit(cache=True)
+def _costs(q_a, q_b, kind, lam, dw, soc, grid):
+    """Objective motion costs (E,) of q_a[e] -> q_b[e], as Objective.motion_cost."""
+    e_count = q_a.shape[0]
+    out = np.zeros(e_count)
+    length = np.empty(e_count)
+    for e in range(e_count):
+        length[e] = math.sqrt(_d2(q_b[e], q_a[e], dw))
+    if kind == 1:
+        (people, l1, l2, obj, active, weights, lever, resolution, reach, inv_f, inv_r, inv_s, tau) = soc
+        if people.shape[0] > 0 and active.shape[0] > 0:
+            point_reach, cell, gx0, gy0, gnx, gny, gstart, gorder = grid
+            sums, n = cost_kernel.msc_sums(
+                q_a, q_b, people, l1, l2, obj, active, weights, lever, resolution, reach, inv_f, inv_r, inv_s, tau,
+                point_reach, cell, gx0, gy0, gnx, gny, gstart, gorder,
+            )
+            for e in range(e_count):
+                out[e] += sums[e] * (length[e] / n[e])
+        if lam > 0:
+            for e in range(e_count):
+                out[e] = out[e] + lam * length[e]
+    else:
+        for e in range(e_count):
+            out[e] = lam * length[e]
+    return out
+
+
+@njit(cache=True)
+def grow(rng, start, goal, lower, upper, w, iterations, delta, r_near, goal_bias, shrinking, gamma,
+         kind, lam, dw, soc, grid, chk):
+    """The whole RRT* run. Returns (q, parent, cost, n, history, best_node,
+    best_cost, first_iteration, counts[config, motion, cost])."""
+    c_lower, c_upper, bodies, robot, env, c_lever = chk
+    cap = 256
+    q = np.empty((cap, 4))
+    parent = np.full(cap, -1, dtype=np.int64)
+    cost = np.zeros(cap)
+    edge = np.zeros(cap)
+    first_child = np.full(cap, -1, dtype=np.int64)
+    next_sib = np.full(cap, -1, dtype=np.int64)
+    prev_sib = np.full(cap, -1, dtype=np.int64)
+    counts = np.zeros(3, dtype=np.int64)
+    history = np.full(iterations, np.inf)
+    goal_nodes = np.empty(16, dtype=np.int64)
+    goal_edges = np.empty(16)
+    n_goal = 0
+    q[0] = start
+    n = 1
+    best_cost, best_node, first_iteration = np.inf, -1, -1
+    one = np.empty((1, 4))
+    gq = np.empty((1, 4))
+    gq[0] = goal
+    near = np.empty(cap, dtype=np.int64)
+    d2s = np.empty(cap)
+    stack = np.empty(cap, dtype=np.int64)
+
+    for it in range(-1, iterations):
+        i_new = 0
+        if it >= 0:
+            # ---- sample
+            if rng.random() < goal_bias:
+                q_rand = goal.copy()
+            else:
+                q_rand = np.empty(4)
+                for c in range(4):
+                    q_rand[c] = rng.random()
+                q_rand = lower + q_rand * (upper - lower)
+            # ---- nearest, steer, check
+            i_near = 0
+            d_best = np.inf
+            for i in range(n):
+                d = math.sqrt(_d2(q[i], q_rand, w))
+                if d < d_best:
+                    d_best, i_near = d, i
+            i_new = -1
+            if d_best != 0.0:
+                if d_best <= delta:
+                    q_new = q_rand.copy()
+                else:
+                    q_new = q[i_near] + (q_rand - q[i_near]) * (delta / d_best)
+                counts[0] += 1
+                one[0] = q_new
+                if planar_kernel.valid(one, c_lower, c_upper, bodies, robot, env)[0]:
+                    # ---- near set
+                    r = r_near
+                    if shrinking and n + 1 > 1:
+                        r = min(r, gamma * (math.log(n + 1) / (n + 1)) ** 0.25)
+                    r2 = r * r
+                    m = 0
+                    has_nearest = False
+                    for i in range(n):
+                        d2 = _d2(q[i], q_new, w)
+                        if d2 <= r2:
+                            near[m] = i
+                            m += 1
+                            if i == i_near:
+                                has_nearest = True
+                    if not has_nearest:
+                        near[m] = i_near
+                        m += 1
+                    near_idx = near[:m].copy()
+                    q_a = np.empty((m, 4))
+                    q_b = np.empty((m, 4))
+                    for s in range(m):
+                        q_a[s] = q[near[s]]
+                        q_b[s] = q_new
+                    phi = _costs(q_a, q_b, kind, lam, dw, soc, grid)
+                    counts[2] += m
+                    total = np.empty(m)
+                    for s in range(m):
+                        total[s] = cost[near[s]] + phi[s]
+                    order = np.argsort(total, kind="mergesort")
+                    checked = np.zeros(m, dtype=np.int8)  # 0 unknown, 1 valid, 2 invalid
+                    p_slot = -1
+                    for o in range(m):
+                        s = order[o]
+                        counts[1] += 1
+                        ok = planar_kernel.motion_valid(q_a[s], q_new, c_lower, c_upper, bodies, robot, env, c_lever)
+                        checked[s] = 1 if ok else 2
+                        if ok:
+                            p_slot = s
+                            break
+                    if p_slot >= 0:
+                        # ---- insert
+                        if n == cap:
+                            cap *= 2
+                            q2 = np.empty((cap, 4))
+                            q2[:n] = q[:n]
+                            q = q2
+                            parent = np.concatenate((parent, np.full(cap - n, -1, dtype=np.int64)))
+                            cost = np.concatenate((cost, np.zeros(cap - n)))
+                            edge = np.concatenate((edge, np.zeros(cap - n)))
+                            first_child = np.concatenate((first_child, np.full(cap - n, -1, dtype=np.int64)))
+                            next_sib = np.concatenate((next_sib, np.full(cap - n, -1, dtype=np.int64)))
+                            prev_sib = np.concatenate((prev_sib, np.full(cap - n, -1, dtype=np.int64)))
+                            near = np.empty(cap, dtype=np.int64)
+                            stack = np.empty(cap, dtype=np.int64)
+                        i_new = n
+                        n += 1
+                        p = near_idx[p_slot]
+                        q[i_new] = q_new
+                        parent[i_new] = p
+                        edge[i_new] = phi[p_slot]
+                        cost[i_new] = cost[p] + phi[p_slot]
+                        _link(i_new, p, first_child, next_sib, prev_sib)
+                        # ---- rewire
+                        c_new = cost[i_new]
+                        cand = np.empty(m, dtype=np.int64)
+                        nc = 0
+                        for s in range(m):
+                            if c_new + phi[s] < cost[near_idx[s]]:
+                                cand[nc] = s
+                                nc += 1
+                        for ci in range(nc):
+                            s = cand[ci]
+                            j = near_idx[s]
+                            if j == parent[i_new] or not cost[i_new] + phi[s] < cost[j]:
+                                continue
+                            if checked[s] == 0:
+                                counts[1] += 1
+                                ok = planar_kernel.motion_valid(q_new, q[j], c_lower, c_upper, bodies, robot, env,
+                                                                c_lever)
+                            else:
+                                ok = checked[s] == 1
+                            if ok:
+                                _unlink(j, parent[j], first_child, next_sib, prev_sib)
+                                _link(j, i_new, first_child, next_sib, prev_sib)
+                                parent[j] = i_new
+                                edge[j] = phi[s]
+                                top = 0
+                                stack[0] = j
+                                top = 1
+                                while top > 0:
+                                    top -= 1
+                                    k = stack[top]
+                                    if k == i_new:
+                                        raise RuntimeError("rewiring a node under its descendant")
+                                    cost[k] = cost[parent[k]] + edge[k]
+                                    c = first_child[k]
+                                    while c >= 0:
+                                        stack[top] = c
+                                        top += 1
+                                        c = next_sib[c]
+                    else:
+                        i_new = -1
+                else:
+                    i_new = -1
+        # ---- goal connection of node i_new (the start before the first iteration)
+        if i_new >= 0:
+            d = math.sqrt(_d2(goal, q[i_new], w))
+            if d <= r_near:
+                c_goal = 0.0
+                ok = True
+                if d != 0.0:
+                    counts[2] += 1
+                    one[0] = q[i_new]
+                    c_goal = _costs(one, gq, kind, lam, dw, soc, grid)[0]
+                    counts[1] += 1
+                    ok = planar_kernel.motion_valid(q[i_new], goal, c_lower, c_upper, bodies, robot, env, c_lever)
+                if ok:
+                    if n_goal == goal_nodes.shape[0]:
+                        goal_nodes = np.concatenate((goal_nodes, np.empty(n_goal, dtype=np.int64)))
+                        goal_edges = np.concatenate((goal_edges, np.empty(n_goal)))
+                    goal_nodes[n_goal] = i_new
+                    goal_edges[n_goal] = c_goal
+                    n_goal += 1
+            if it >= 0 and n_goal > 0:
+                g_best, g = np.inf, -1
+                for t in range(n_goal):
+                    tot = cost[goal_nodes[t]] + goal_edges[t]
+                    if tot < g_best:
+                        g_best, g = tot, t
+                best_cost, best_node = g_best, goal_nodes[g]
+                if first_iteration < 0:
+                    first_iteration = it + 1
+        if it >= 0:
+            history[it] = best_cost
+    return q[:n].copy(), parent[:n].copy(), cost[:n].copy(), n, history, best_node, best_cost, first_iteration, counts
+
+
+@njit(cache=True)
+def _link(i, p, first_child, next_sib, prev_sib):
+    next_sib[i] = first_child[p]
+    prev_sib[i] = -1
+    if first_child[p] >= 0:
+        prev_sib[first_child[p]] = i
+    first_child[p] = i
+
+
+@njit(cache=True)
+def _unlink(i, p, first_child, next_sib, prev_sib):
+    if prev_sib[i] >= 0:
+        next_sib[prev_sib[i]] = next_sib[i]
+    else:
+        first_child[p] = next_sib[i]
+    if next_sib[i] >= 0:
+        prev_sib[next_sib[i]] = prev_sib[i]
+    next_sib[i] = -1
+    prev_sib[i] = -1

@@ -1,0 +1,78 @@
+"""The compiled tree loop returns the Python reference's tree bit for bit."""
+
+from __future__ import annotations
+
+import copy
+import dataclasses as dc
+
+import numpy as np
+import pytest
+
+from drake_social.model.planar_checker import PlanarChecker
+from drake_social.planning import tree_kernel
+from drake_social.planning.variants import make_planner
+from drake_social.scenario import load_scenario
+
+pytestmark = pytest.mark.skipif(not tree_kernel.AVAILABLE, reason="numba is not importable")
+
+
+def run(scenario, checker, algorithm, seed, compiled, **options):
+    planner = make_planner(scenario, checker, algorithm)
+    planner.options = dc.replace(planner.options, compiled=compiled, lazy_costs=False, **options)
+    assert planner._compiled_applies()
+    return planner.solve(np.array(scenario.start), np.array(scenario.goal), np.random.default_rng(seed))
+
+
+def assert_same(reference, dut):
+    np.testing.assert_array_equal(dut.waypoints, reference.waypoints)
+    np.testing.assert_array_equal(dut.tree_nodes, reference.tree_nodes)
+    np.testing.assert_array_equal(dut.tree_parents, reference.tree_parents)
+    np.testing.assert_array_equal(dut.tree_costs, reference.tree_costs)
+    np.testing.assert_array_equal(dut.cost_history, reference.cost_history)
+    assert dut.cost == reference.cost and dut.first_solution_iteration == reference.first_solution_iteration
+    assert (dut.num_config_checks, dut.num_motion_checks, dut.num_cost_evaluations) == (
+        reference.num_config_checks, reference.num_motion_checks, reference.num_cost_evaluations)
+
+
+@pytest.fixture(scope="module")
+def tiny(tiny_scenario):
+    scenario = copy.deepcopy(tiny_scenario)
+    scenario.planner = dc.replace(scenario.planner, iterations=300)
+    return scenario, PlanarChecker(scenario)
+
+
+@pytest.mark.parametrize("seed", [0, 7])
+@pytest.mark.parametrize("algorithm", ["rrt_star", "social_rrt_star", "base_rrt_star"])
+def test_compiled_loop_equals_the_reference_on_tiny(tiny, algorithm, seed):
+    scenario, checker = tiny
+    assert_same(run(scenario, checker, algorithm, seed, False), run(scenario, checker, algorithm, seed, True))
+
+
+def test_compiled_loop_equals_the_reference_with_lambda_and_a_shrinking_radius(tiny):
+    """A small gamma makes the radius shrink below r_near within the run."""
+    scenario, checker = tiny
+    scenario = copy.deepcopy(scenario)
+    scenario.social.length_weight = 0.5
+    options = dict(near_radius_mode="shrinking", near_radius_gamma=2.5)
+    reference = run(scenario, checker, "social_rrt_star", 3, False, **options)
+    planner = make_planner(scenario, checker)
+    planner.options = dc.replace(planner.options, **options)
+    assert planner.near_radius(reference.tree_size) < scenario.planner.near_radius
+    assert_same(reference, run(scenario, checker, "social_rrt_star", 3, True, **options))
+
+
+@pytest.mark.parametrize("name", ["office_bar", "generic_L"])
+def test_compiled_loop_equals_the_reference_on_the_shipped_maps(name, repo_root):
+    scenario = load_scenario(repo_root / "scenarios" / f"{name}.yaml")
+    scenario.planner = dc.replace(scenario.planner, iterations=600)
+    checker = PlanarChecker(scenario)
+    assert_same(run(scenario, checker, "social_rrt_star", 1, False), run(scenario, checker, "social_rrt_star", 1, True))
+
+
+def test_informed_and_other_checkers_use_the_python_loop(tiny, tiny_scenario):
+    from drake_social.planning.geometric import GeometricChecker
+
+    scenario, checker = tiny
+    planner = make_planner(scenario, checker, "informed_social_rrt_star")
+    assert not planner._compiled_applies()
+    assert not make_planner(scenario, GeometricChecker(scenario))._compiled_applies()
