@@ -4,7 +4,7 @@ VENV   := .venv
 PY     := $(VENV)/bin/python
 OUT    ?= out
 
-.PHONY: demo test bench install clean chromium
+.PHONY: demo test bench install clean chromium mutate
 
 $(VENV)/.installed: pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -41,6 +41,17 @@ test: install chromium
 
 bench: install
 	$(VENV)/bin/drake-social bench --out $(OUT)/bench
+
+# Mutation testing of the pure core (cost/, planning/, kinematics.py) with
+# mutmut 3 ([tool.mutmut] in pyproject.toml): hours on two cores, so not part
+# of make test. Works in mutants/; MUTANTS picks a subset, e.g.
+# make mutate MUTANTS='drake_social.kinematics*'. Survivors: mutmut results,
+# then mutmut show <name>.
+MUTANTS ?=
+mutate: install
+	$(PY) -m pip install --quiet -e '.[test,bench,mutate]'
+	$(VENV)/bin/mutmut run $(MUTANTS)
+	$(VENV)/bin/mutmut export-cicd-stats && cat mutants/mutmut-cicd-stats.json
 
 clean:
 	rm -rf $(VENV) $(OUT) build *.egg-info

@@ -9,7 +9,13 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from drake_social.kinematics import ArmGeometry, config_distance, object_interest_points, object_polyline
+from drake_social.kinematics import (
+    ArmGeometry,
+    config_distance,
+    cumulative_distance,
+    object_interest_points,
+    object_polyline,
+)
 from drake_social.scenario import Bar, LShape, Polyline, Robot, Scenario
 
 PI = math.pi
@@ -304,3 +310,20 @@ def test_property_finite_for_any_finite_q(q):
         reach = dut.reach()[2]
         scale = max(1.0, float(np.abs(q[:2]).max()))
         assert np.all(np.abs(pts - q[:2]) <= reach * (1 + 1e-9) + 1e-15 * scale)
+
+
+def test_cumulative_distance_by_hand():
+    """The path parameter of the cost profiles: 0 at the first waypoint, then
+    the running sum of weighted configuration distances (a mutation run found
+    it untested by the core's tests)."""
+    wp = [[0, 0, 0, 0], [3, 4, 0, 0], [3, 4, 1, 0], [3, 4, 1, -2]]
+    np.testing.assert_allclose(cumulative_distance(wp), [0.0, 5.0, 6.0, 8.0], rtol=0, atol=1e-12)
+    dut = cumulative_distance(wp, [1.0, 1.0, 0.5, 3.0])
+    np.testing.assert_allclose(dut, [0.0, 5.0, 5.5, 11.5], rtol=0, atol=1e-12)
+    assert dut.shape == (4,) and dut.dtype == float
+    one = cumulative_distance([[1.0, 2.0, 3.0, 4.0]])
+    assert one.shape == (1,) and one[0] == 0.0
+    empty = cumulative_distance(np.zeros((0, 4)))
+    assert empty.shape == (0,)
+    # A flat list of 8 numbers is two waypoints.
+    np.testing.assert_allclose(cumulative_distance([0, 0, 0, 0, 0, 0, 0, 2]), [0.0, 2.0], atol=1e-12)
