@@ -84,7 +84,7 @@ class RrtStarOptions:
             matter (same result; False is the eager reference).
         kd_tree: use a KD-tree for neighbours from ``KD_TREE_MIN_NODES`` on
             (same neighbours; False scans every node, the reference).
-        compiled: run the tree loop compiled (:mod:`planning.tree_kernel`)
+        compiled: run the tree loop compiled (:mod:`planning.tree_kernel`, the default)
             when it applies (the planar checker, uniform sampling, a length or
             numba social objective); same tree bit for bit. The Python loop
             stays the reference and serves every other case.
@@ -101,7 +101,7 @@ class RrtStarOptions:
     optimize: bool = False
     lazy_costs: bool = True
     kd_tree: bool = True
-    compiled: bool = False
+    compiled: bool = True
 
     @classmethod
     def from_scenario(cls, planner_options, informed: bool = False) -> "RrtStarOptions":
