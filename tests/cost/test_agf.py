@@ -261,3 +261,31 @@ def test_nan_input_stays_nan():
     assert np.all(np.isnan(dut[0]))
     assert np.all(dut[1] > 0.2)
     assert np.isnan(agf(np.array([0.5, 0.5]), [np.nan, 0.0, 0.0], PAPER)[0])
+
+
+@BOTH
+def test_a_value_exactly_at_the_threshold_counts_as_zero(dut):
+    """tau itself is "no discomfort" (values <= tau are 0), one ulp above is
+    kept: the threshold is set to the point's own AGF value, so the
+    comparison is hit exactly (a mutation run found ``>=`` surviving)."""
+    person, x, y = [1.0, 2.0, math.pi / 4], 2.1, 2.6
+    value = dut(x, y, person, PersonalSpace(threshold=0.0))
+    assert 0.2 < value < 1.0
+    assert dut(x, y, person, PersonalSpace(threshold=value)) == 0.0
+    below = math.nextafter(value, 0.0)
+    assert dut(x, y, person, PersonalSpace(threshold=below)) == value
+
+
+def test_unthresholded_agf_xy_is_the_raw_gaussian():
+    """``thresholded=False`` keeps the values <= tau that the motion integral
+    needs to locate threshold crossings: 3 m straight ahead of a person
+    facing +x, exp(-9 / (2 sigma_h^2)) = exp(-9/8) = 0.325 with the paper's
+    sigma_h = 2, and 5 m ahead exp(-25/8) = 0.044 < tau, zeroed only when
+    thresholded (a mutation run found the flag ignored without a test)."""
+    from drake_social.cost.agf import agf_xy
+
+    people = np.array([[0.0, 0.0, 0.0]])
+    x, y = np.array([3.0, 5.0]), np.array([0.0, 0.0])
+    raw = agf_xy(x, y, people, PAPER, thresholded=False)
+    np.testing.assert_allclose(raw[:, 0], [math.exp(-9 / 8), math.exp(-25 / 8)], rtol=1e-12)
+    np.testing.assert_allclose(agf_xy(x, y, people, PAPER)[:, 0], [math.exp(-9 / 8), 0.0], rtol=1e-12)
