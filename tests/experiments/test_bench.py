@@ -90,7 +90,7 @@ def test_small_bench_reports_its_runs(tiny_scenario_path, tiny_scenario, tmp_pat
 def test_bench_rejects_bad_arguments(tiny_scenario_path, tmp_path):
     with pytest.raises(ValueError, match="allowed: rrt_star, social_rrt_star"):
         _small(tiny_scenario_path, tmp_path, algorithms=["rrt"])
-    with pytest.raises(ValueError, match="checker 'fcl' not allowed; allowed: drake, numpy"):
+    with pytest.raises(ValueError, match="checker 'fcl' not allowed; allowed: planar, drake, numpy"):
         _small(tiny_scenario_path, tmp_path, checker="fcl")
     with pytest.raises(ValueError, match="iterations and seeds must be >= 1"):
         _small(tiny_scenario_path, tmp_path, seeds=0)
