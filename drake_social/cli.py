@@ -34,7 +34,6 @@ import argparse
 import json
 import logging
 import sys
-import time
 from pathlib import Path
 from typing import Callable, Sequence, TextIO
 
@@ -128,11 +127,11 @@ def _run_show(args: argparse.Namespace) -> int:
 
 
 class ProgressBar:
-    """A one-line textual progress bar, redrawn in place with a carriage return.
+    """A one-line progress bar on a stream (tqdm), e.g. ``planning [####......] 800/2000, best 5.1  00:01``.
 
     Called as ``bar(iteration, best_cost)`` (the planners' progress callback)
-    or :meth:`update` with any status text; redraws at most every
-    ``interval`` seconds and at the last step, so the callback stays cheap.
+    or :meth:`update` with any status text; tqdm redraws at most every
+    ``interval`` seconds (and at the end), so the callback stays cheap.
     :meth:`close` ends the line.
 
     Args:
@@ -145,37 +144,30 @@ class ProgressBar:
 
     def __init__(self, total: int, stream: TextIO, label: str = "planning", width: int = 30,
                  interval: float = 0.1):
-        self.total = max(1, int(total))
-        self.stream = stream
-        self.label = label
-        self.width = width
-        self.interval = interval
-        self._t0 = time.perf_counter()
-        self._last = -float("inf")
-        self._drawn = False
+        from tqdm import tqdm
+
+        self._bar = tqdm(total=max(1, int(total)), file=stream, desc=label, ascii=".#", mininterval=interval,
+                         bar_format="{desc} [{bar:%d}] {n_fmt}/{total_fmt}{postfix}  {elapsed}" % width,
+                         dynamic_ncols=False, leave=True)
+
+    @property
+    def total(self) -> int:
+        return self._bar.total
+
+    @total.setter
+    def total(self, value: int) -> None:
+        self._bar.total = max(1, int(value))
 
     def __call__(self, iteration: int, best_cost: float) -> None:
         self.update(iteration, f"best {best_cost:.4g}" if best_cost < float("inf") else "no path yet")
 
     def update(self, done: int, status: str) -> None:
-        """Redraws the bar at ``done`` of :attr:`total` steps with ``status`` after it."""
-        now = time.perf_counter()
-        if now - self._last < self.interval and done < self.total:
-            return
-        self._last = now
-        filled = min(self.width, self.width * done // self.total)
-        # Marked drawn before writing: a Ctrl-C raised during or right after the
-        # write must still let close() end the line (the message goes below it).
-        self._drawn = True
-        self.stream.write(f"\r{self.label} [{'#' * filled}{'.' * (self.width - filled)}] "
-                          f"{done}/{self.total}  {status}  {now - self._t0:.1f} s ")
-        self.stream.flush()
+        """Moves the bar to ``done`` of :attr:`total` steps with ``status`` after it."""
+        self._bar.set_postfix_str(status, refresh=False)
+        self._bar.update(int(done) - self._bar.n)
 
     def close(self) -> None:
-        if self._drawn:
-            self.stream.write("\n")
-            self.stream.flush()
-            self._drawn = False
+        self._bar.close()
 
 
 def _int_at_least(minimum: int) -> Callable[[str], int]:

@@ -368,6 +368,15 @@ def _markdown(out: dict) -> str:
             c, e = r["configs_per_s"], r["edges_per_s"]
             lines.append(f"| {Path(name).stem} | {c['drake_per_call']:.0f} | {c['numpy_per_call']:.0f} "
                          f"| {e['drake_per_call']:.0f} | {e['numpy_per_call']:.0f} |")
+    if cb and all("per_call_us" in r for r in cb["scenarios"].values()):
+        lines += ["", "## Checkers, one call (microseconds of CPU, best of the repeats)", "",
+                  "| scenario | planar clearance | Drake clearance | planar is_valid | Drake is_valid "
+                  "| planar motion | Drake motion | motion speed-up |", "|---|---:|---:|---:|---:|---:|---:|---:|"]
+        for name, r in cb["scenarios"].items():
+            u = r["per_call_us"]
+            lines.append(f"| {Path(name).stem} | {u['planar_clearance']:.1f} | {u['drake_clearance']:.1f} "
+                         f"| {u['planar_is_valid']:.1f} | {u['drake_is_valid']:.1f} | {u['planar_motion']:.1f} "
+                         f"| {u['drake_motion']:.1f} | {u['drake_motion'] / u['planar_motion']:.0f}x |")
     if out.get("sim_bench"):
         from drake_social.experiments.bench_sim import sim_markdown
 
