@@ -264,6 +264,11 @@ def _run_plan(args: argparse.Namespace) -> int:
             if bar is not None:
                 bar.close()
         print(result.summary())
+        bad = None
+        if result.success:  # Drake's independent second opinion, before anything is committed
+            from drake_social.model.checker import verify_path
+
+            bad = verify_path(checker, result.waypoints)
 
         _write_path_csv(outputs.path("path.csv"), result.waypoints)
         record = {
@@ -271,6 +276,8 @@ def _run_plan(args: argparse.Namespace) -> int:
             "overrides": list(args.set or []),
             "checker": args.checker,
             "iterations": iterations,
+            # Every segment passes Drake's SceneGraphCollisionChecker (None: no path).
+            "drake_verified": (bad is None) if result.success else None,
             **result.to_json_dict(),
         }
         outputs.write_text("result.json", _json_lines(record))
@@ -279,9 +286,6 @@ def _run_plan(args: argparse.Namespace) -> int:
     names = ["path.csv", "result.json"] + [p.name for p in figures.values()]
     print(f"wrote {out}/: {', '.join(names)}")
     if result.success:
-        from drake_social.model.checker import verify_path  # Drake's independent second opinion
-
-        bad = verify_path(checker, result.waypoints)
         if bad is not None:
             print(f"drake-social: Drake's check rejects segment {bad} of the path the {args.checker} checker "
                   f"accepted (a bug; exit code {EXIT_UNVERIFIED}); the path is in {out / 'path.csv'}", file=sys.stderr)
@@ -333,7 +337,7 @@ def _add_simulate(subparsers) -> None:
                    help="samples drawn (default: the scenario's planner.iterations)")
     p.add_argument("--seed", type=_nonnegative_int, metavar="S",
                    help="random seed >= 0 (default: the scenario's random_seed)")
-    _add_checker_argument(p)
+    _add_checker_argument(p, default="planar")
     p.add_argument("--no-replay", action="store_true", help="do not record nor write replay.html (faster)")
     p.add_argument("--out", type=Path, metavar="DIR", help="output directory (default: out/<scenario name>)")
     p.add_argument("--progress", action="store_true",

@@ -31,6 +31,11 @@ A command writes its files through an :class:`OutputSet`::
   folders a killed run left are removed by the next run of the command).
 
 Different commands (``show`` and ``plan``) keep their own sets in one folder.
+
+What this does not cover: the move is a handful of renames, each atomic, not
+one; a process killed by SIGKILL or a power loss in those milliseconds can
+leave part of the new set beside part of the old one (the manifest then still
+lists the old set).
 """
 
 from __future__ import annotations

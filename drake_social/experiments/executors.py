@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import logging
 import multiprocessing
+import signal
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from typing import Callable, Sequence
 
@@ -76,11 +77,26 @@ def map_tasks(
             done(k, fn(task), k + 1)
     else:
         context = multiprocessing.get_context("spawn")
-        with ProcessPoolExecutor(max_workers=min(workers, total), mp_context=context) as pool:
+        # Workers ignore SIGINT: Ctrl-C reaches the main process only, which
+        # then cancels what has not started and stops the workers at once
+        # (a pool's own shutdown would wait for every queued task).
+        pool = ProcessPoolExecutor(max_workers=min(workers, total), mp_context=context,
+                                   initializer=_ignore_sigint)
+        try:
             futures = {pool.submit(fn, task): k for k, task in enumerate(tasks)}
             for count, future in enumerate(as_completed(futures), start=1):
                 done(futures[future], future.result(), count)
+        except BaseException:
+            for process in list(getattr(pool, "_processes", {}).values()):
+                process.terminate()
+            pool.shutdown(wait=False, cancel_futures=True)
+            raise
+        pool.shutdown(wait=True)
     return results  # type: ignore[return-value]
+
+
+def _ignore_sigint() -> None:
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
 
 
 def _map_dask(fn, tasks, workers: int, scheduler: str | None, done) -> None:

@@ -316,7 +316,10 @@ class RrtStar:
             start, goal: configurations (4,).
             rng: the only source of randomness.
             progress: optional ``progress(iteration, best_cost)`` called every
-                iteration (for progress bars; keep it cheap).
+                iteration (for progress bars; keep it cheap). The compiled
+                loop cannot call back into Python (nor notice Ctrl-C) while it
+                runs, so with a callback the Python loop runs instead: the
+                same path, tree and costs bit for bit, only slower.
 
         Raises:
             PlanningInputError: start or goal invalid. A goal that cannot be
@@ -329,7 +332,7 @@ class RrtStar:
         self._check_endpoints(start, goal)
         space, checker, objective = self.space, self.checker, self.objective
 
-        if opt.compiled and self._compiled_applies():
+        if opt.compiled and progress is None and self._compiled_applies():
             return self._solve_compiled(start, goal, rng, t0)
         tree = _Tree()
         tree.add(start, -1, 0.0)
@@ -387,15 +390,7 @@ class RrtStar:
 
         result = self._result(tree, goal, best_node, best_cost, first_iteration, history, counts, t0)
         result.informed_diameters = diameters
-        result.raw_cost = result.cost
-        result.near_radius_mode = opt.near_radius_mode
-        if opt.optimize and result.success:
-            from drake_social.planning.optimize import optimize_path
-
-            result.waypoints, result.cost = optimize_path(result.waypoints, objective, checker, space)
-            result.optimized = True
-            result.wall_time = time.perf_counter() - t0
-        return result
+        return self._finish(result, t0)
 
     @property
     def gamma(self) -> float:
@@ -444,12 +439,20 @@ class RrtStar:
         tree.n = n
         result = self._result(tree, goal, int(best_node), float(best_cost), None if first < 0 else int(first),
                               history, _Counts(int(counts[0]), int(counts[1]), int(counts[2])), t0)
+        return self._finish(result, t0)
+
+    def _finish(self, result: PlannerResult, t0: float) -> PlannerResult:
+        """Records the raw cost and, when asked, optimises the path (kept only
+        when strictly cheaper, so rounding in the recomputed sum can never
+        report a higher cost than the planner's own)."""
         result.raw_cost = result.cost
-        result.near_radius_mode = opt.near_radius_mode
-        if opt.optimize and result.success:
+        result.near_radius_mode = self.options.near_radius_mode
+        if self.options.optimize and result.success:
             from drake_social.planning.optimize import optimize_path
 
-            result.waypoints, result.cost = optimize_path(result.waypoints, o, c, space)
+            waypoints, cost = optimize_path(result.waypoints, self.objective, self.checker, self.space)
+            if cost < result.cost:
+                result.waypoints, result.cost = waypoints, cost
             result.optimized = True
             result.wall_time = time.perf_counter() - t0
         return result

@@ -3,7 +3,7 @@
 :func:`build_diagram` wires the systems of :mod:`drake_social.control` into
 one Drake diagram and names every subsystem, so that a script can fetch any of
 them (``diagram.GetSubsystemByName("controller")``) or replace one (pass fixed
-``waypoints`` instead of planning). Running it is :func:`drake_social.sim.run`.
+``waypoints`` instead of planning). Running it is :func:`drake_social.sim.simulate` (in :mod:`drake_social.sim.run`).
 
 Blocks (all named; ``[p]`` only with ``execution="paper"``, ``[s]`` only with
 ``"synchronized"``, ``[k]`` only in ``mode="kinematic"``, ``[d]`` only in
@@ -122,13 +122,13 @@ class TransportDiagram:
 
 
 def dynamic_gains(plant: MultibodyPlant, *, bandwidth: float = 60.0, base_time_constant: float = 0.02,
-                  samples: int = 72) -> dict[str, tuple[float, float]]:
+                  samples: int = 24) -> dict[str, tuple[float, float]]:
     """PD gains (proportional, derivative) of the dynamic mode's joints, from the plant's inertia.
 
     Each joint j gets the effective inertia ``m_j = 1 / (M(q)^-1)_jj`` (what
     a force on that joint alone accelerates, the others free), minimised over
-    ``samples`` values of psi2 (the mass matrix of this planar chain depends
-    on psi2 only). The arm joints then get a critically damped loop of
+    a ``samples`` x ``samples`` grid of (psi1, psi2) (the mass matrix does not
+    depend on the base position). The arm joints then get a critically damped loop of
     ``bandwidth`` rad/s on that inertia, ``kp = m w^2``, ``kd = 2 m w``
     (N m/rad, N m s/rad); the base joints are velocity servos, ``kp = 0``,
     ``kd = m / base_time_constant`` (N s/m). The discrete plant (TAMSI)
@@ -140,10 +140,12 @@ def dynamic_gains(plant: MultibodyPlant, *, bandwidth: float = 60.0, base_time_c
     context = plant.CreateDefaultContext()
     q = np.zeros(plant.num_positions())
     effective = np.full(4, np.inf)
-    for psi2 in np.linspace(-np.pi, np.pi, samples, endpoint=False):
-        q[3] = psi2
-        plant.SetPositions(context, q)
-        effective = np.minimum(effective, 1.0 / np.diag(np.linalg.inv(plant.CalcMassMatrix(context))))
+    angles = np.linspace(-np.pi, np.pi, samples, endpoint=False)
+    for psi1 in angles:
+        for psi2 in angles:
+            q[2], q[3] = psi1, psi2
+            plant.SetPositions(context, q)
+            effective = np.minimum(effective, 1.0 / np.diag(np.linalg.inv(plant.CalcMassMatrix(context))))
     gains = {}
     for j, name in enumerate(ACTUATED_JOINTS):
         m = float(effective[j])

@@ -248,7 +248,7 @@ def simulate(
                           meshcat=meshcat)
     limit = float(scenario.execution.time_limit if time_limit is None else time_limit)
     if not limit > 0:
-        raise ValueError(f"time_limit must be > 0 seconds, got {time_limit}")
+        raise ValueError(f"time_limit must be > 0 seconds, got {limit}")
     root = built.diagram.CreateDefaultContext()
     if built.visualizer is not None:
         from drake_social.sim.replay import start_recording

@@ -48,6 +48,7 @@ def test_ompl_script_reads_our_log_into_rows_equal_to_the_records(small, tmp_pat
     runid = by_key[(rec["group"], rec["algorithm"], rec["run"])]["id"]
     progress = con.execute("SELECT time, best_cost, iterations FROM progress WHERE runid = ? ORDER BY iterations",
                            (runid,)).fetchall()
+    assert len(rec["progress"]) >= 2 and rec["progress"][-1][0] == rec["iterations"]  # a real curve
     assert [p["iterations"] for p in progress] == [k for k, _ in rec["progress"]]
     for p, (_, c) in zip(progress, rec["progress"]):
         assert (p["best_cost"] is None and c is None) or math.isclose(p["best_cost"], c, rel_tol=1e-12)

@@ -76,3 +76,22 @@ def test_informed_and_other_checkers_use_the_python_loop(tiny, tiny_scenario):
     planner = make_planner(scenario, checker, "informed_social_rrt_star")
     assert not planner._compiled_applies()
     assert not make_planner(scenario, GeometricChecker(scenario))._compiled_applies()
+
+
+def test_a_progress_callback_runs_the_python_loop_with_the_same_result(tiny, monkeypatch):
+    """The compiled loop cannot call back: with a callback the Python loop runs,
+    every iteration is reported, and the result is the compiled one's."""
+    scenario, checker = tiny
+    planner = make_planner(scenario, checker, "social_rrt_star")
+    planner.options = dc.replace(planner.options, lazy_costs=False)
+    compiled_calls = []
+    original = planner._solve_compiled
+    monkeypatch.setattr(planner, "_solve_compiled", lambda *a: compiled_calls.append(1) or original(*a))
+    seen = []
+    args = (np.array(scenario.start), np.array(scenario.goal))
+    with_progress = planner.solve(*args, np.random.default_rng(5), lambda k, c: seen.append((k, c)))
+    assert not compiled_calls and [k for k, _ in seen] == list(range(1, scenario.planner.iterations + 1))
+    np.testing.assert_array_equal([c for _, c in seen], with_progress.cost_history)
+    without = planner.solve(*args, np.random.default_rng(5))
+    assert compiled_calls == [1]
+    assert_same(with_progress, without)
