@@ -203,6 +203,23 @@ def _make_checker(scenario: Scenario, kind: str, source: str):
     return make_checker(scenario, kind, source=source)
 
 
+def _add_planner_arguments(parser: argparse.ArgumentParser) -> None:
+    """--algorithm, --iterations, --seed and --checker, as plan and simulate take them."""
+    parser.add_argument("--algorithm", choices=ALGORITHMS, help="planner (default: the scenario's planner.algorithm)")
+    parser.add_argument("--iterations", type=_positive_int, metavar="K",
+                        help="samples drawn (default: the scenario's planner.iterations)")
+    parser.add_argument("--seed", type=_nonnegative_int, metavar="S",
+                        help="random seed >= 0 (default: the scenario's random_seed)")
+    _add_checker_argument(parser, default="planar")
+
+
+def _add_output_arguments(parser: argparse.ArgumentParser) -> None:
+    """--out and --progress."""
+    parser.add_argument("--out", type=Path, metavar="DIR", help="output directory (default: out/<scenario name>)")
+    parser.add_argument("--progress", action="store_true",
+                        help="draw the progress bar on stderr even when it is not a terminal")
+
+
 def _show_progress(args: argparse.Namespace) -> bool:
     return bool(args.progress) or sys.stderr.isatty()
 
@@ -218,15 +235,8 @@ def _add_plan(subparsers) -> None:
         "iteration). Exit code 3 when no path was found (the files are still written).",
     )
     _add_scenario_arguments(p)
-    p.add_argument("--algorithm", choices=ALGORITHMS, help="planner (default: the scenario's planner.algorithm)")
-    p.add_argument("--iterations", type=_positive_int, metavar="K",
-                   help="samples drawn (default: the scenario's planner.iterations)")
-    p.add_argument("--seed", type=_nonnegative_int, metavar="S",
-                   help="random seed >= 0 (default: the scenario's random_seed)")
-    _add_checker_argument(p, default="planar")
-    p.add_argument("--out", type=Path, metavar="DIR", help="output directory (default: out/<scenario name>)")
-    p.add_argument("--progress", action="store_true",
-                   help="draw the progress bar on stderr even when it is not a terminal")
+    _add_planner_arguments(p)
+    _add_output_arguments(p)
     p.set_defaults(run=_run_plan)
 
 
@@ -332,16 +342,9 @@ def _add_simulate(subparsers) -> None:
     p.add_argument("--path", type=Path, metavar="CSV",
                    help="follow this path (a path.csv of 'drake-social plan': header x,y,psi1,psi2) "
                         "instead of planning")
-    p.add_argument("--algorithm", choices=ALGORITHMS, help="planner (default: the scenario's planner.algorithm)")
-    p.add_argument("--iterations", type=_positive_int, metavar="K",
-                   help="samples drawn (default: the scenario's planner.iterations)")
-    p.add_argument("--seed", type=_nonnegative_int, metavar="S",
-                   help="random seed >= 0 (default: the scenario's random_seed)")
-    _add_checker_argument(p, default="planar")
+    _add_planner_arguments(p)
     p.add_argument("--no-replay", action="store_true", help="do not record nor write replay.html (faster)")
-    p.add_argument("--out", type=Path, metavar="DIR", help="output directory (default: out/<scenario name>)")
-    p.add_argument("--progress", action="store_true",
-                   help="draw the progress bar on stderr even when it is not a terminal")
+    _add_output_arguments(p)
     p.set_defaults(run=_run_simulate)
 
 
