@@ -60,7 +60,8 @@ class ExecutionReport:
         max_config_deviation: largest configuration-space distance of an
             executed configuration from the planned waypoint polyline.
         min_clearance: smallest signed distance (metres) of the robot to the
-            environment along the executed trajectory (checked configurations).
+            environment along the executed trajectory (checked configurations;
+            exact planar distances).
         collision_free: no checked configuration collides.
         first_collision_time: time (s) of the first colliding configuration, or None.
         checked_configurations: how many configurations were checked (the
@@ -174,12 +175,17 @@ def analyze_execution(
         waypoints: (N, 4) planned path.
         times, q: (T,), (T, 4) executed configurations over time.
         checker: the collision checker of the executed configurations;
-            None = Drake's (:class:`~drake_social.model.checker.SceneGraphChecker`).
+            None = Drake's (:class:`~drake_social.model.checker.SceneGraphChecker`),
+            independent of the planar checker that planned. The minimum
+            clearance is the exact planar checker's.
     """
-    if checker is None:
-        from drake_social.model.checker import make_checker
+    from drake_social.model.checker import make_checker
 
+    if checker is None:
         checker = make_checker(scenario, "drake")
+    # Clearances from the exact planar checker: Drake's cylinder-box distance
+    # can exceed the true one (see drake_social.model.checker).
+    planar = make_checker(scenario, "planar")
     geometry = ArmGeometry.from_scenario(scenario)
     social = SocialCost.from_scenario(scenario)
     wp = np.asarray(waypoints, float).reshape(-1, 4)
@@ -194,7 +200,7 @@ def analyze_execution(
     counts = np.concatenate([[1], np.maximum(1, np.ceil(span / resolution).astype(int))])
     owner = np.repeat(np.arange(len(q)), counts)
     valid = np.asarray(checker.are_valid(dense), bool)
-    clearance = min((checker.clearance(c) for c in dense), default=math.inf)
+    clearance = float(np.min(planar.clearances(dense))) if len(dense) else math.inf
     first = None if valid.all() else float(times[owner[int(np.argmin(valid))]])
     return ExecutionReport(
         planned_social_cost=planned,
