@@ -28,6 +28,9 @@ def geometry(obj) -> ArmGeometry:
 
 BAR = geometry(Bar(length=1.5, thickness=0.05))
 L_SHAPE = geometry(LShape(lengths=[3.0, 2.0], thickness=0.06))
+# An object folded back towards the elbow: every object point is nearer the
+# elbow than the link-2 tip, so the tip itself sets the gripper's lever.
+FOLDED = geometry(Polyline(points=[[-0.3, 0.0], [-0.4, 0.05]], thickness=0.04))
 
 
 # ---- an independent scalar forward kinematics ---------------------------------------
@@ -252,7 +255,7 @@ def arc_lengths(points: np.ndarray) -> np.ndarray:
     return np.linalg.norm(np.diff(points, axis=0), axis=-1).sum(0)
 
 
-@pytest.mark.parametrize("dut", [BAR, L_SHAPE], ids=["bar", "L"])
+@pytest.mark.parametrize("dut", [BAR, L_SHAPE, FOLDED], ids=["bar", "L", "folded"])
 def test_max_displacement_bounds_every_interest_and_body_point(dut, rng):
     body = random_body_points(dut, rng)
     t = np.linspace(0.0, 1.0, 1001)[:, None]
@@ -272,6 +275,9 @@ def test_max_displacement_bounds_every_interest_and_body_point(dut, rng):
         for active in ([0], [1], [2], [0, 3], [len(arcs) - 1]):
             sub = dut.max_displacement(q_a[e], q_b[e], active=np.array(active))
             assert np.all(arcs[active] <= sub * (1 + 1e-9) + 1e-12)
+        # The base alone moves exactly its straight displacement: the subset's bound is that, not the whole arm's.
+        base_only = dut.max_displacement(q_a[e], q_b[e], active=np.array([0]))
+        assert base_only == pytest.approx(math.hypot(*(q_b[e, :2] - q_a[e, :2])), rel=1e-12)
 
 
 def test_max_displacement_is_tight_for_simple_motions():
