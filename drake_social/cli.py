@@ -232,7 +232,8 @@ def _add_plan(subparsers) -> None:
         "DIR/path.csv (waypoints x,y,psi1,psi2), DIR/result.json (costs, counters, the anytime curve), "
         "DIR/path.png (the path over the social heat map with the robot along it), DIR/cost_profile.png "
         "(social cost versus cumulative configuration distance) and DIR/convergence.png (best cost per "
-        "iteration). Exit code 3 when no path was found (the files are still written).",
+        "iteration). Exit code 3 when no path was found, 4 when Drake's independent check rejects the "
+        "returned path (the files are written in both cases).",
     )
     _add_scenario_arguments(p)
     _add_planner_arguments(p)

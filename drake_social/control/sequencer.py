@@ -179,7 +179,7 @@ class WaypointSequencer(LeafSystem):
         if arrived and self._reference_done_port is not None:
             arrived = self._reference_done_port.Eval(context)[0] > 0.5
         if not arrived:
-            return EventStatus.DidNothing()  # Drake then keeps the state (and its dependents' caches)
+            return EventStatus.DidNothing()  # nothing changed (the outputs still recompute each period)
         out = discrete_state.get_mutable_vector(self._state_index)
         if index + 1 < len(waypoints):
             out.SetAtIndex(_INDEX, index + 1)  # one step per update

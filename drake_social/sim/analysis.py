@@ -40,20 +40,29 @@ def body_points(geometry: ArmGeometry, q: np.ndarray) -> np.ndarray:
     return np.concatenate([geometry.interest_points(q), geometry.gripper_to_world(q, geometry.object_points)], -2)
 
 
-def densify(geometry: ArmGeometry, q: np.ndarray, resolution: float) -> np.ndarray:
+def densify(geometry: ArmGeometry, q: np.ndarray, resolution: float, *, return_owner: bool = False):
     """Configurations along the straight pieces between consecutive ``q`` (T, 4)
     such that no body point (capsule radii included) moves more than
-    ``resolution`` metres between neighbours; the given ones are kept."""
+    ``resolution`` metres between neighbours; the given ones are kept exactly.
+
+    With ``return_owner``, also the index (M,) into ``q`` of the configuration
+    each dense one is (the given ones) or follows (those in between).
+    """
     q = np.asarray(q, float).reshape(-1, 4)
     if len(q) < 2:
-        return q.copy()
+        return (q.copy(), np.zeros(len(q), int)) if return_owner else q.copy()
     span = geometry.max_displacement(q[:-1], q[1:], include_body=True)
     n = np.maximum(1, np.ceil(span / resolution).astype(int))
-    pieces = [q[:1]]
-    for a, b, k in zip(q[:-1], q[1:], n):
-        t = (np.arange(1, k + 1) / k)[:, None]
-        pieces.append(a + t * (b - a))
-    return np.concatenate(pieces)
+    segment = np.repeat(np.arange(len(n)), n)
+    step = np.arange(n.sum()) - np.repeat(np.cumsum(n) - n, n) + 1  # 1 .. n within each segment
+    end = step == n[segment]
+    t = (step / n[segment])[:, None]
+    inner = q[segment] + t * (q[segment + 1] - q[segment])
+    inner[end] = q[segment[end] + 1]  # the segment ends bit for bit
+    dense = np.concatenate([q[:1], inner])
+    if not return_owner:
+        return dense
+    return dense, np.concatenate([[0], segment + end])
 
 
 def _nearest_segment(points: np.ndarray, curve: np.ndarray, candidates: int = 16) -> np.ndarray:

@@ -195,10 +195,7 @@ def analyze_execution(
 
     resolution = float(scenario.planner.collision_resolution)
     # Which executed sample each densified configuration follows (for the collision time).
-    dense = densify(geometry, q, resolution)
-    span = geometry.max_displacement(q[:-1], q[1:], include_body=True) if len(q) > 1 else np.zeros(0)
-    counts = np.concatenate([[1], np.maximum(1, np.ceil(span / resolution).astype(int))])
-    owner = np.repeat(np.arange(len(q)), counts)
+    dense, owner = densify(geometry, q, resolution, return_owner=True)
     valid = np.asarray(checker.are_valid(dense), bool)
     clearance = float(np.min(planar.clearances(dense))) if len(dense) else math.inf
     first = None if valid.all() else float(times[owner[int(np.argmin(valid))]])

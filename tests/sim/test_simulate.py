@@ -181,3 +181,20 @@ def test_densify_bounds_the_motion_between_checked_configurations(tiny_scenario,
     assert moved <= 0.05 + 1e-12
     np.testing.assert_array_equal(dense[0], tiny_path[0])
     np.testing.assert_array_equal(dense[-1], tiny_path[-1])
+
+
+def test_densify_owner_names_the_configuration_each_sample_follows(tiny_scenario, tiny_path):
+    geometry = ArmGeometry.from_scenario(tiny_scenario)
+    dense, owner = densify(geometry, tiny_path, 0.05, return_owner=True)
+    assert len(owner) == len(dense) and owner[0] == 0 and owner[-1] == len(tiny_path) - 1
+    assert np.all(np.diff(owner) >= 0)
+    # Every given configuration stands in the dense list exactly, at its owner's first index.
+    for k, q in enumerate(tiny_path):
+        first = int(np.argmax(owner == k))
+        np.testing.assert_array_equal(dense[first], q)
+    # Samples in between lie on the segment from their owner to the next one.
+    mid = np.flatnonzero(np.r_[True, np.diff(owner) == 0])[1:]
+    a, b = tiny_path[owner[mid]], tiny_path[owner[mid] + 1]
+    t = np.einsum("ij,ij->i", dense[mid] - a, b - a) / np.einsum("ij,ij->i", b - a, b - a)
+    np.testing.assert_allclose(dense[mid], a + t[:, None] * (b - a), atol=1e-12)
+    assert np.all((t > 0) & (t < 1))
