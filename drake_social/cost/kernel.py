@@ -55,10 +55,29 @@ def _points(q0, q1, q2, q3, l1, l2, obj, active, xs, ys):
 
 
 @njit(cache=True)
-def _gaussian(dx, dy, c, s, inv_front, inv_rear, inv_side):
+def _point_levers(l1, l2, obj, active):
+    """(K, 2) per interest point ``(c_shoulder, c_gripper)``: the base centre
+    moves with the base only, the elbow also turns about the shoulder (l1),
+    the gripper and the object's points also about the elbow (their distance
+    from it); see :meth:`ArmGeometry.lever`."""
+    out = np.zeros((active.shape[0], 2))
+    for j in range(active.shape[0]):
+        p = active[j]
+        if p == 1:
+            out[j, 0] = l1
+        elif p == 2:
+            out[j, 0], out[j, 1] = l1, l2
+        elif p >= 3:
+            out[j, 0], out[j, 1] = l1, math.hypot(l2 + obj[p - 3, 0], obj[p - 3, 1])
+    return out
+
+
+@njit(cache=True)
+def _exponent(dx, dy, c, s, inv_front, inv_rear, inv_side):
+    """a of the AGF value exp(-a) at offset (dx, dy) from a person facing (c, s)."""
     u = c * dx + s * dy
     v = c * dy - s * dx
-    return math.exp(-(u * u * (inv_front if u > 0 else inv_rear) + v * v * inv_side))
+    return u * u * (inv_front if u > 0 else inv_rear) + v * v * inv_side
 
 
 @njit(cache=True)
@@ -126,10 +145,14 @@ def msc_sums(
     sin_t = np.sin(people[:, 2])
     xa, ya = np.empty(k_count), np.empty(k_count)
     xb, yb = np.empty(k_count), np.empty(k_count)
-    g_prev = np.empty(k_count)
+    spans = np.empty(k_count)
+    point_levers = _point_levers(l1, l2, obj, active)
+    # exp(-a) <= tau with margin beyond this exponent (tau > 0; 1e-9 relative
+    # is far more than exp's and log's rounding).
+    a_cut = -math.log(tau) * (1.0 + 1e-9) + 1e-12 if tau > 0.0 else math.inf
     cand = np.empty(h_count, dtype=np.int64)
-    k0s = np.empty(h_count, dtype=np.int64)
-    k1s = np.empty(h_count, dtype=np.int64)
+    k0s = np.empty((h_count, k_count), dtype=np.int64)
+    k1s = np.empty((h_count, k_count), dtype=np.int64)
     cull = math.isfinite(reach)
     radius = reach + point_reach + 1e-9
     n_max = 1
@@ -139,8 +162,8 @@ def msc_sums(
         span = math.hypot(d0, d1) + lever[0] * abs(d2) + lever[1] * abs(d2 + d3)
         steps[e] = max(1, int(math.ceil(span / resolution - 1e-9)))
         n_max = max(n_max, steps[e])
-    xs = np.empty((n_max + 1, k_count))
-    ys = np.empty((n_max + 1, k_count))
+    xs = np.empty((k_count, n_max + 1))
+    ys = np.empty((k_count, n_max + 1))
     for e in range(e_count):
         d0, d1 = q_b[e, 0] - q_a[e, 0], q_b[e, 1] - q_a[e, 1]
         d2, d3 = q_b[e, 2] - q_a[e, 2], q_b[e, 3] - q_a[e, 3]
@@ -178,58 +201,92 @@ def msc_sums(
             continue
         _points(q_a[e, 0], q_a[e, 1], q_a[e, 2], q_a[e, 3], l1, l2, obj, active, xa, ya)
         _points(q_b[e, 0], q_b[e, 1], q_b[e, 2], q_b[e, 3], l1, l2, obj, active, xb, yb)
-        # The window of the motion where each candidate can matter.
+        # Each point's own bound: it moves at most spans[j] per unit of t.
+        dxy, a1, a12 = math.hypot(d0, d1), abs(d2), abs(d2 + d3)
+        for j in range(k_count):
+            spans[j] = dxy + point_levers[j, 0] * a1 + point_levers[j, 1] * a12
+        # The window of samples where each (candidate, point) can matter:
+        # outside it the point is farther than reach from the person, so the
+        # term is <= threshold at both ends of every step and adds nothing.
         k_lo, k_hi = n + 1, -1
         for i in range(m):
             h = cand[i]
             px, py = people[h, 0], people[h, 1]
-            relevant = False
-            near_a, near_b = math.inf, math.inf
             for j in range(k_count):
-                da = math.hypot(xa[j] - px, ya[j] - py) - reach
-                db = math.hypot(xb[j] - px, yb[j] - py) - reach
-                if da + db <= span:
-                    relevant = True
-                near_a, near_b = min(near_a, da), min(near_b, db)
-            if not relevant:
-                k0s[i], k1s[i] = 0, -1
-                continue
-            t0, t1 = 0.0, 1.0
-            if span > 0 and math.isfinite(reach):
-                t0 = min(max(near_a / span, 0.0), 1.0)
-                t1 = min(max(1.0 - near_b / span, 0.0), 1.0)
-            k0 = int(math.floor(t0 * n))
-            k1 = min(int(math.ceil(t1 * n)), n)
-            k1 = max(k1, k0 + 1)
-            k0 = min(k0, k1 - 1)
-            k0s[i], k1s[i] = k0, k1
-            k_lo, k_hi = min(k_lo, k0), max(k_hi, k1)
+                da = math.hypot(xa[j] - px, ya[j] - py) - reach - 1e-9
+                db = math.hypot(xb[j] - px, yb[j] - py) - reach - 1e-9
+                if spans[j] > 0.0:
+                    if da + db > spans[j]:
+                        k0s[i, j], k1s[i, j] = 0, -1
+                        continue
+                    t0 = min(max(da / spans[j], 0.0), 1.0)
+                    t1 = min(max(1.0 - db / spans[j], 0.0), 1.0)
+                elif da <= 0.0:  # a point that does not move, within reach (or no culling)
+                    t0, t1 = 0.0, 1.0
+                else:
+                    k0s[i, j], k1s[i, j] = 0, -1
+                    continue
+                k0 = int(math.floor(t0 * n))
+                k1 = min(int(math.ceil(t1 * n)), n)
+                k1 = max(k1, k0 + 1)
+                k0 = min(k0, k1 - 1)
+                k0s[i, j], k1s[i, j] = k0, k1
+                k_lo, k_hi = min(k_lo, k0), max(k_hi, k1)
         if k_hi < 0:
             continue
-        for k in range(k_lo, k_hi + 1):  # the samples, once for all people
+        # The samples k_lo..k_hi, once for all people; the arm's angles by
+        # rotation steps from the first (angle addition, ~1e-15 from cos/sin).
+        t = k_lo / n
+        th1, th12 = q_a[e, 2] + t * d2, q_a[e, 2] + q_a[e, 3] + t * (d2 + d3)
+        c1, s1, c12, s12 = math.cos(th1), math.sin(th1), math.cos(th12), math.sin(th12)
+        cd1, sd1 = math.cos(d2 / n), math.sin(d2 / n)
+        cd12, sd12 = math.cos((d2 + d3) / n), math.sin((d2 + d3) / n)
+        for k in range(k_lo, k_hi + 1):
             t = k / n
-            _points(
-                q_a[e, 0] + t * d0, q_a[e, 1] + t * d1, q_a[e, 2] + t * d2, q_a[e, 3] + t * d3,
-                l1, l2, obj, active, xs[k], ys[k],
-            )
+            x0, y0 = q_a[e, 0] + t * d0, q_a[e, 1] + t * d1
+            ex, ey = x0 + l1 * c1, y0 + l1 * s1
+            gx, gy = ex + l2 * c12, ey + l2 * s12
+            for j in range(k_count):
+                p = active[j]
+                if p == 0:
+                    xs[j, k], ys[j, k] = x0, y0
+                elif p == 1:
+                    xs[j, k], ys[j, k] = ex, ey
+                elif p == 2:
+                    xs[j, k], ys[j, k] = gx, gy
+                else:
+                    ox, oy = obj[p - 3, 0], obj[p - 3, 1]
+                    xs[j, k] = gx + c12 * ox - s12 * oy
+                    ys[j, k] = gy + s12 * ox + c12 * oy
+            c1, s1 = c1 * cd1 - s1 * sd1, s1 * cd1 + c1 * sd1
+            c12, s12 = c12 * cd12 - s12 * sd12, s12 * cd12 + c12 * sd12
         total = 0.0
         for i in range(m):
-            if k1s[i] < 0:
-                continue
             h = cand[i]
             px, py, c, s = people[h, 0], people[h, 1], cos_t[h], sin_t[h]
-            k0 = k0s[i]
-            for k in range(k0, k1s[i] + 1):
-                for j in range(k_count):
-                    g = _gaussian(xs[k, j] - px, ys[k, j] - py, c, s, inv_front, inv_rear, inv_side)
+            for j in range(k_count):
+                k0, k1 = k0s[i, j], k1s[i, j]
+                w = weights[j]
+                g0, a0, up0 = -1.0, 0.0, False
+                for k in range(k0, k1 + 1):
+                    # The exponent first: where it shows the term below the
+                    # threshold, exp is taken only if a neighbour needs it.
+                    a = _exponent(xs[j, k] - px, ys[j, k] - py, c, s, inv_front, inv_rear, inv_side)
+                    up = a < a_cut
+                    g = -1.0
+                    if up:
+                        g = math.exp(-a)
+                        up = g > tau
                     if k > k0:
-                        g0 = g_prev[j]
-                        up0, up1 = g0 > tau, g > tau
-                        if up0 and up1:
-                            total += weights[j] * 0.5 * (g0 + g)
-                        elif up0 or up1:
+                        if up0 and up:
+                            total += w * 0.5 * (g0 + g)
+                        elif up0 or up:
+                            if g0 < 0.0:
+                                g0 = math.exp(-a0)
+                            if g < 0.0:
+                                g = math.exp(-a)
                             hi, lo = max(g0, g), min(g0, g)
-                            total += weights[j] * 0.5 * (hi + tau) * (hi - tau) / (hi - lo)
-                    g_prev[j] = g
+                            total += w * 0.5 * (hi + tau) * (hi - tau) / (hi - lo)
+                    g0, a0, up0 = g, a, up
         sums[e] = total
     return sums, steps

@@ -65,7 +65,10 @@ class PlanarChecker(CheckerBase):
         bodies: (B, 6) the planar chain, body names :attr:`body_names`.
         robot: (S, 6) the robot's capsules in their body frames.
         env: (K, 8) the environment's boxes and discs, names :attr:`env_names`.
-        lever: (2,) lever arms ``(c_shoulder, c_gripper)`` of the capsules, metres.
+        levers: (S, 2) lever arms ``(c_shoulder, c_gripper)`` of each capsule, metres
+            (:meth:`_levers`); motion checks advance each capsule by its own bound.
+        lever: (2,) the largest of them (and the elbow's distance from the
+            shoulder): the whole robot's bound, as :meth:`ArmGeometry.lever`.
         slab: ``(z_min, z_max)`` shared by every shape, metres.
     """
 
@@ -137,29 +140,33 @@ class PlanarChecker(CheckerBase):
             env.append([kind, x, y, c, s, a, b, rho])
             self.env_names.append(name)
         self.env = np.array(env, float).reshape(-1, 8)
-        self.lever = self._lever()
+        self.levers = self._levers()
+        self.lever = np.array([max(self.levers[:, 0].max(initial=0.0), float(np.hypot(*self.bodies[2, 1:3]))),
+                               self.levers[:, 1].max(initial=0.0)])
 
-    def _lever(self) -> np.ndarray:
-        """``(c_shoulder, c_gripper)``: every link-1 point (and the elbow) lies
-        within c_shoulder of the shoulder, every link-2 and object point within
-        c_gripper of the elbow (see :meth:`ArmGeometry.lever`)."""
-        def reach(body_rows: np.ndarray, offsets: dict[int, np.ndarray]) -> float:
-            out = 0.0
-            for row in body_rows:
-                o = offsets[int(row[0])]
-                for p in (row[1:3], row[3:5]):
-                    out = max(out, float(np.hypot(*(o[:2] + _rotate(o[2:], p)))) + row[5])
-            return out
+    def _levers(self) -> np.ndarray:
+        """(S, 2) per capsule ``(c_shoulder, c_gripper)``: every point of a
+        base capsule moves with the base only (0, 0); every point of a link-1
+        capsule lies within c_shoulder of the shoulder (c_gripper 0); for a
+        link-2 or object capsule c_shoulder is the elbow's distance from the
+        shoulder and every point lies within c_gripper of the elbow (see
+        :meth:`ArmGeometry.lever`)."""
+
+        def reach(row: np.ndarray, offset: np.ndarray) -> float:
+            return max(float(np.hypot(*(offset[:2] + _rotate(offset[2:], p)))) for p in (row[1:3], row[3:5])) + row[5]
 
         b = self.bodies
         ident = np.array([0.0, 0.0, 1.0, 0.0])
-        link2_in_link1 = b[2, 1:5]
-        # The object's pose in link 2 (welded) and link 2's own frame (the elbow).
-        object_in_link2 = b[3, 1:5]
-        c_s = max(float(np.hypot(*link2_in_link1[:2])), reach(self.robot[self.robot[:, 0] == 1], {1: ident}))
-        rows = self.robot[np.isin(self.robot[:, 0], (2, 3))]
-        c_g = reach(rows, {2: ident, 3: object_in_link2})
-        return np.array([c_s, c_g])
+        elbow = float(np.hypot(*b[2, 1:3]))  # link 2's origin (the elbow) in link 1
+        object_in_link2 = b[3, 1:5]  # welded
+        out = np.zeros((len(self.robot), 2))
+        for j, row in enumerate(self.robot):
+            body = int(row[0])
+            if body == 1:
+                out[j] = reach(row, ident), 0.0
+            elif body in (2, 3):
+                out[j] = elbow, reach(row, ident if body == 2 else object_in_link2)
+        return out
 
     # ---- kinematics -----------------------------------------------------------
 
@@ -201,13 +208,13 @@ class PlanarChecker(CheckerBase):
         """The straight motion from q_a to q_b (4,), ends included; sound
         (conservative advancement, :func:`planar_kernel.motion_valid`)."""
         return bool(kernel.motion_valid(np.asarray(q_a, float), np.asarray(q_b, float), self.lower, self.upper,
-                                        self.bodies, self.robot, self.env, self.lever))
+                                        self.bodies, self.robot, self.env, self.levers))
 
     def are_motions_valid(self, q_a: np.ndarray, q_b: np.ndarray) -> np.ndarray:
         """Many motions (E, 4), (E, 4) -> (E,) bool."""
         q_a = np.ascontiguousarray(q_a, float).reshape(-1, 4)
         q_b = np.ascontiguousarray(q_b, float).reshape(-1, 4)
-        return kernel.motions_valid(q_a, q_b, self.lower, self.upper, self.bodies, self.robot, self.env, self.lever)
+        return kernel.motions_valid(q_a, q_b, self.lower, self.upper, self.bodies, self.robot, self.env, self.levers)
 
     # ---- reports and the second opinion ----------------------------------------
 

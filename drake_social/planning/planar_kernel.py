@@ -65,14 +65,18 @@ __all__ = [
     "AVAILABLE",
     "BOX",
     "DISC",
+    "FAR",
     "MAX_STEPS",
     "STEP_MARGIN",
     "TOLERANCE",
     "body_poses",
+    "capsule_clearances",
+    "capsule_spans",
     "clearance",
     "clearances",
     "displacement",
     "motion_valid",
+    "motion_valid_ends",
     "motions_valid",
     "pair_distances",
     "segment_box_distance",
@@ -92,6 +96,9 @@ STEP_MARGIN = 1e-10
 #: A motion needing more clearance queries than this is rejected
 #: (conservative: it grazes an obstacle for a long stretch).
 MAX_STEPS = 100_000
+#: Motion checks measure only the shapes that can come within this of the
+#: robot during the motion, metres; each step then clears at most FAR / D_j.
+FAR = 1.0
 
 
 @njit(cache=True)
@@ -205,18 +212,75 @@ def _pair(cap, j, env, k):
 
 
 @njit(cache=True)
+def _pair_bound(mx, my, reach, env, k):
+    """A lower bound of the distance between a capsule (all of it within
+    ``reach`` of its midpoint m) and environment shape k: the distance of m
+    to the shape (1-Lipschitz, exact for a point) minus reach."""
+    cx, cy = env[k, 1], env[k, 2]
+    if env[k, 0] == DISC:
+        return math.hypot(mx - cx, my - cy) - env[k, 5] - reach
+    c, s = env[k, 3], env[k, 4]
+    u, v = c * (mx - cx) + s * (my - cy), c * (my - cy) - s * (mx - cx)
+    return _box_sdf(u, v, env[k, 5], env[k, 6]) - reach
+
+
+@njit(cache=True)
+def _capsule_reach(cap, j):
+    """(mx, my, reach): the midpoint of world capsule j and the distance of its
+    farthest point from it."""
+    mx, my = 0.5 * (cap[j, 0] + cap[j, 2]), 0.5 * (cap[j, 1] + cap[j, 3])
+    return mx, my, 0.5 * math.hypot(cap[j, 2] - cap[j, 0], cap[j, 3] - cap[j, 1]) + cap[j, 4]
+
+
+@njit(cache=True)
+def _capsule_clearances(cap, env, out):
+    """Per capsule j, the least signed distance to the environment, into out (S,)."""
+    for j in range(cap.shape[0]):
+        mx, my, reach = _capsule_reach(cap, j)
+        best = np.inf
+        for k in range(env.shape[0]):
+            # Broad phase: a lower bound of the pair's distance.
+            if _pair_bound(mx, my, reach, env, k) >= best:
+                continue
+            best = min(best, _pair(cap, j, env, k))
+        out[j] = best
+
+
+@njit(cache=True)
 def _clearance(q, bodies, robot, env):
     cap = world_capsules(q, bodies, robot)
     best = np.inf
     for j in range(cap.shape[0]):
-        mx, my = 0.5 * (cap[j, 0] + cap[j, 2]), 0.5 * (cap[j, 1] + cap[j, 3])
-        rho = 0.5 * math.hypot(cap[j, 2] - cap[j, 0], cap[j, 3] - cap[j, 1]) + cap[j, 4]
+        mx, my, reach = _capsule_reach(cap, j)
         for k in range(env.shape[0]):
-            # Broad phase: a lower bound of the pair's distance (bounding circles).
-            if math.hypot(mx - env[k, 1], my - env[k, 2]) - rho - env[k, 7] >= best:
+            # Broad phase: a lower bound of the pair's distance.
+            if _pair_bound(mx, my, reach, env, k) >= best:
                 continue
             best = min(best, _pair(cap, j, env, k))
     return best
+
+
+@njit(cache=True)
+def capsule_clearances(q, bodies, robot, env):
+    """Per robot capsule (S,), its least signed distance to the environment at
+    q (4,); :func:`clearance` is their minimum. Exact when positive."""
+    out = np.empty(robot.shape[0])
+    _capsule_clearances(world_capsules(q, bodies, robot), env, out)
+    return out
+
+
+@njit(cache=True)
+def _free(q, bodies, robot, env):
+    """clearance(q) > 0, deciding each pair by its broad-phase bound where it can."""
+    cap = world_capsules(q, bodies, robot)
+    for j in range(cap.shape[0]):
+        mx, my, reach = _capsule_reach(cap, j)
+        for k in range(env.shape[0]):
+            if _pair_bound(mx, my, reach, env, k) > 0.0:
+                continue
+            if not _pair(cap, j, env, k) > 0.0:
+                return False
+    return True
 
 
 @njit(cache=True)
@@ -259,7 +323,7 @@ def valid(qs, lower, upper, bodies, robot, env):
     """(N,) bool: configurations (N, 4) within the limits at clearance > 0."""
     out = np.zeros(qs.shape[0], dtype=np.bool_)
     for i in range(qs.shape[0]):
-        out[i] = _in_limits(qs[i], lower, upper) and _clearance(qs[i], bodies, robot, env) > 0.0
+        out[i] = _in_limits(qs[i], lower, upper) and _free(qs[i], bodies, robot, env)
     return out
 
 
@@ -271,78 +335,155 @@ def displacement(dq, lever):
 
 
 @njit(cache=True)
-def _motion_valid(q_a, q_b, lower, upper, bodies, robot, env, lever):
+def _step(cap, env, keep, n_keep, spans, far):
+    """One advancement step from world capsules ``cap``: the largest tau such
+    that every capsule j (moving at most ``spans[j]`` per unit of t) stays
+    free for ``|t' - t| < tau``, or -1 when a capsule is within TOLERANCE of
+    contact. Only the shapes ``keep[:n_keep]`` are measured; every other shape
+    is at least ``far`` from the robot along the whole motion."""
+    tau = np.inf
+    for j in range(cap.shape[0]):
+        if spans[j] > 0.0:
+            tau = min(tau, (far - STEP_MARGIN) / spans[j])
+    for j in range(cap.shape[0]):
+        d_j = spans[j]
+        if d_j == 0.0:  # a capsule that does not move stays as free as at the ends
+            continue
+        mx, my, reach = _capsule_reach(cap, j)
+        for i in range(n_keep):
+            k = keep[i]
+            if _pair_bound(mx, my, reach, env, k) - STEP_MARGIN >= tau * d_j:
+                continue  # this pair cannot shorten the step
+            d = _pair(cap, j, env, k)
+            if d <= TOLERANCE:
+                return -1.0
+            tau = min(tau, (d - STEP_MARGIN) / d_j)
+    return tau
+
+
+@njit(cache=True)
+def capsule_spans(dq, levers):
+    """Per capsule (S,), ``displacement(dq, levers[j])``: the most any point of
+    capsule j moves per unit of t along the motion ``dq``."""
+    out = np.empty(levers.shape[0])
+    for j in range(levers.shape[0]):
+        out[j] = displacement(dq, levers[j])
+    return out
+
+
+@njit(cache=True)
+def _motion_valid_ends(q_a, q_b, c_a, c_b, lower, upper, bodies, robot, env, levers):
     if not (_in_limits(q_a, lower, upper) and _in_limits(q_b, lower, upper)):
         return False
+    s_count = robot.shape[0]
+    for j in range(s_count):
+        if c_a[j] <= TOLERANCE or c_b[j] <= TOLERANCE:
+            return False
     dq = q_b - q_a
-    span = displacement(dq, lever)
-    c = _clearance(q_a, bodies, robot, env)
-    if c <= TOLERANCE:
-        return False
+    spans = capsule_spans(dq, levers)
+    span = 0.0
+    for j in range(s_count):
+        span = max(span, spans[j])
     if span == 0.0:
         return True
-    lo = (c - STEP_MARGIN) / span  # [0, lo) is cleared
-    c = _clearance(q_b, bodies, robot, env)
-    if c <= TOLERANCE:
-        return False
-    hi = 1.0 - (c - STEP_MARGIN) / span  # (hi, 1] is cleared
+    lo, hi = np.inf, -np.inf  # [0, lo) and (hi, 1] are cleared
+    for j in range(s_count):
+        if spans[j] > 0.0:
+            lo = min(lo, (c_a[j] - STEP_MARGIN) / spans[j])
+            hi = max(hi, 1.0 - (c_b[j] - STEP_MARGIN) / spans[j])
+    if lo > hi:
+        return True
+    # The shapes that can come within FAR of the robot: every robot point stays
+    # within radius + span of the base's start (x, y).
+    cap = world_capsules(q_a, bodies, robot)
+    radius = 0.0
+    for j in range(s_count):
+        radius = max(radius, math.hypot(cap[j, 0] - q_a[0], cap[j, 1] - q_a[1]) + cap[j, 4],
+                     math.hypot(cap[j, 2] - q_a[0], cap[j, 3] - q_a[1]) + cap[j, 4])
+    keep = np.empty(env.shape[0], dtype=np.int64)
+    n_keep = 0
+    for k in range(env.shape[0]):
+        lb = math.hypot(env[k, 1] - q_a[0], env[k, 2] - q_a[1]) - env[k, 7] - radius - span
+        if not lb >= FAR:
+            keep[n_keep] = k
+            n_keep += 1
     q = np.empty(4)
     for _ in range(MAX_STEPS):
-        if lo > hi:
-            return True
         for i in range(4):
             q[i] = q_a[i] + lo * dq[i]
-        c = _clearance(q, bodies, robot, env)
-        if c <= TOLERANCE:
+        tau = _step(world_capsules(q, bodies, robot), env, keep, n_keep, spans, FAR)
+        if tau < 0.0:
             return False
-        lo += (c - STEP_MARGIN) / span
+        lo += tau
         if lo > hi:
             return True
         for i in range(4):
             q[i] = q_a[i] + hi * dq[i]
-        c = _clearance(q, bodies, robot, env)
-        if c <= TOLERANCE:
+        tau = _step(world_capsules(q, bodies, robot), env, keep, n_keep, spans, FAR)
+        if tau < 0.0:
             return False
-        hi -= (c - STEP_MARGIN) / span
+        hi -= tau
+        if lo > hi:
+            return True
     return False
 
 
 @njit(cache=True)
-def motion_valid(q_a, q_b, lower, upper, bodies, robot, env, lever):
+def motion_valid_ends(q_a, q_b, c_a, c_b, lower, upper, bodies, robot, env, levers):
+    """:func:`motion_valid` given :func:`capsule_clearances` ``c_a``, ``c_b``
+    of both ends (the tree loop keeps them for every node)."""
+    return _motion_valid_ends(q_a, q_b, c_a, c_b, lower, upper, bodies, robot, env, levers)
+
+
+@njit(cache=True)
+def _motion_valid(q_a, q_b, lower, upper, bodies, robot, env, levers):
+    c_a = capsule_clearances(q_a, bodies, robot, env)
+    c_b = capsule_clearances(q_b, bodies, robot, env)
+    return _motion_valid_ends(q_a, q_b, c_a, c_b, lower, upper, bodies, robot, env, levers)
+
+
+@njit(cache=True)
+def motion_valid(q_a, q_b, lower, upper, bodies, robot, env, levers):
     """Whether the straight motion ``q_a + t (q_b - q_a)``, t in [0, 1], is free.
 
-    Conservative advancement, from both ends towards the middle. Soundness:
-    along the motion every body point moves with speed at most
-    ``D = displacement(q_b - q_a, lever)`` per unit of t (the velocity of a
-    point is the base's plus the rotations' about the shoulder and the elbow;
-    ``lever`` bounds their arms, :meth:`ArmGeometry.lever`). If the robot is
-    at clearance ``c > 0`` at ``q(t)``, then for ``|t' - t| < c / D`` every
-    point of it is less than ``c`` from where it was, and every environment
-    point is at least ``c`` from there, so ``q(t')`` is free (triangle
-    inequality). The clearance is exact when positive, so each query clears
-    ``[t, t + c / D)`` (from the start) or ``(t - c / D, t]`` (from the end);
-    the next query sits at the first point not yet cleared, and the motion
-    is valid once the two cleared parts overlap. Both end points are checked
-    exactly. Floors: a reached configuration within :data:`TOLERANCE` of
-    contact rejects the motion (so steps never shrink below
-    ``TOLERANCE / D``), steps are ``STEP_MARGIN`` metres shorter than
-    allowed (rounding), and more than :data:`MAX_STEPS` queries reject it.
-    Rejecting is always safe.
+    Conservative advancement, from both ends towards the middle, per capsule.
+    Soundness: along the motion every point of capsule j moves with speed at
+    most ``D_j = displacement(q_b - q_a, levers[j])`` per unit of t (a
+    point's velocity is the base's plus the rotations' about the shoulder and
+    the elbow; ``levers[j]`` bounds their arms for that capsule: zero for the
+    base, see :meth:`PlanarChecker.levers`). If capsule j is at distance at
+    least ``d_j > 0`` from every shape at ``q(t)``, then for
+    ``|t' - t| < d_j / D_j`` each of its points is less than ``d_j`` from
+    where it was, so it stays free (triangle inequality); a query at q(t)
+    clears ``tau = min_j d_j / D_j``. The distances are exact when positive;
+    a pair whose broad-phase lower bound already allows the step found so
+    far is not measured (its bound is used: still a lower bound). Shapes
+    that cannot come within :data:`FAR` of the robot anywhere on the motion
+    (the robot stays within its bounding circle at q_a grown by max_j D_j)
+    are not measured either, and each d_j is capped at FAR. Each query
+    clears ``[t, t + tau)`` (from the start) or ``(t - tau, t]`` (from the
+    end); the next query sits at the first point not yet cleared, and the
+    motion is valid once the two cleared parts overlap. Both ends are
+    checked exactly. Floors: a reached configuration with a capsule within
+    :data:`TOLERANCE` of contact rejects the motion (so steps never shrink
+    below ``min(TOLERANCE, FAR) / max_j D_j``), steps are ``STEP_MARGIN``
+    metres shorter than allowed (rounding), and more than :data:`MAX_STEPS`
+    queries from each end reject it. Rejecting is always safe.
 
     Args:
         q_a, q_b: the ends (4,).
         lower, upper: limits (4,); the limits are a box, so a motion between
             two configurations within them stays within them.
         bodies, robot, env: the scene (module docstring).
-        lever: ``(c_shoulder, c_gripper)`` lever arms, metres.
+        levers: (S, 2) per capsule ``(c_shoulder, c_gripper)`` lever arms, metres.
     """
-    return _motion_valid(q_a, q_b, lower, upper, bodies, robot, env, lever)
+    return _motion_valid(q_a, q_b, lower, upper, bodies, robot, env, levers)
 
 
 @njit(cache=True)
-def motions_valid(q_a, q_b, lower, upper, bodies, robot, env, lever):
+def motions_valid(q_a, q_b, lower, upper, bodies, robot, env, levers):
     """:func:`motion_valid` of motions (E, 4), (E, 4) -> (E,) bool."""
     out = np.zeros(q_a.shape[0], dtype=np.bool_)
     for e in range(q_a.shape[0]):
-        out[e] = _motion_valid(q_a[e], q_b[e], lower, upper, bodies, robot, env, lever)
+        out[e] = _motion_valid(q_a[e], q_b[e], lower, upper, bodies, robot, env, levers)
     return out

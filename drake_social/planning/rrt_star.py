@@ -402,7 +402,7 @@ class RrtStar:
         from drake_social.planning.objective import PathLengthObjective, SocialObjective
 
         c, o = self.checker, self.objective
-        planar = all(hasattr(c, a) for a in ("bodies", "robot", "env", "lever", "lower", "upper"))
+        planar = all(hasattr(c, a) for a in ("bodies", "robot", "env", "levers", "lower", "upper"))
         known = type(o) is PathLengthObjective or (type(o) is SocialObjective and o.social.backend == "numba")
         return tree_kernel.AVAILABLE and planar and known and not self.options.informed
 
@@ -427,7 +427,7 @@ class RrtStar:
             kind = 0
         grid = (float(grid[0]), float(grid[1]), float(grid[2]), float(grid[3]), int(grid[4]), int(grid[5]),
                 f(grid[6], np.int64), f(grid[7], np.int64))
-        chk = (f(c.lower, float), f(c.upper, float), f(c.bodies), f(c.robot), f(c.env), f(c.lever, float))
+        chk = (f(c.lower, float), f(c.upper, float), f(c.bodies), f(c.robot), f(c.env), f(c.levers, float))
         q, parent, cost, n, history, best_node, best_cost, first, counts = tree_kernel.grow(
             rng, f(start), f(goal), f(space.lower), f(space.upper), f(space.weights), int(opt.iterations),
             float(opt.planning_range), float(opt.near_radius), float(opt.goal_bias),

@@ -69,7 +69,8 @@ def grow(rng, start, goal, lower, upper, w, iterations, delta, r_near, goal_bias
          kind, lam, dw, soc, grid, chk):
     """The whole RRT* run. Returns (q, parent, cost, n, history, best_node,
     best_cost, first_iteration, counts[config, motion, cost])."""
-    c_lower, c_upper, bodies, robot, env, c_lever = chk
+    c_lower, c_upper, bodies, robot, env, levers = chk
+    s_count = robot.shape[0]
     cap = 256
     q = np.empty((cap, 4))
     parent = np.full(cap, -1, dtype=np.int64)
@@ -78,12 +79,15 @@ def grow(rng, start, goal, lower, upper, w, iterations, delta, r_near, goal_bias
     first_child = np.full(cap, -1, dtype=np.int64)
     next_sib = np.full(cap, -1, dtype=np.int64)
     prev_sib = np.full(cap, -1, dtype=np.int64)
+    clear = np.empty((cap, s_count))  # every node's capsule clearances (motion ends)
     counts = np.zeros(3, dtype=np.int64)
     history = np.full(iterations, np.inf)
     goal_nodes = np.empty(16, dtype=np.int64)
     goal_edges = np.empty(16)
     n_goal = 0
     q[0] = start
+    clear[0] = planar_kernel.capsule_clearances(start, bodies, robot, env)
+    goal_clear = planar_kernel.capsule_clearances(goal, bodies, robot, env)
     n = 1
     best_cost, best_node, first_iteration = np.inf, -1, -1
     one = np.empty((1, 4))
@@ -118,8 +122,8 @@ def grow(rng, start, goal, lower, upper, w, iterations, delta, r_near, goal_bias
                 else:
                     q_new = q[i_near] + (q_rand - q[i_near]) * (delta / d_best)
                 counts[0] += 1
-                one[0] = q_new
-                if planar_kernel.valid(one, c_lower, c_upper, bodies, robot, env)[0]:
+                c_new_caps = planar_kernel.capsule_clearances(q_new, bodies, robot, env)
+                if _valid(q_new, c_new_caps, c_lower, c_upper):
                     # ---- near set
                     r = r_near
                     if shrinking and n + 1 > 1:
@@ -154,7 +158,8 @@ def grow(rng, start, goal, lower, upper, w, iterations, delta, r_near, goal_bias
                     for o in range(m):
                         s = order[o]
                         counts[1] += 1
-                        ok = planar_kernel.motion_valid(q_a[s], q_new, c_lower, c_upper, bodies, robot, env, c_lever)
+                        ok = planar_kernel.motion_valid_ends(q_a[s], q_new, clear[near[s]], c_new_caps, c_lower,
+                                                             c_upper, bodies, robot, env, levers)
                         checked[s] = 1 if ok else 2
                         if ok:
                             p_slot = s
@@ -166,6 +171,9 @@ def grow(rng, start, goal, lower, upper, w, iterations, delta, r_near, goal_bias
                             q2 = np.empty((cap, 4))
                             q2[:n] = q[:n]
                             q = q2
+                            c2 = np.empty((cap, s_count))
+                            c2[:n] = clear[:n]
+                            clear = c2
                             parent = np.concatenate((parent, np.full(cap - n, -1, dtype=np.int64)))
                             cost = np.concatenate((cost, np.zeros(cap - n)))
                             edge = np.concatenate((edge, np.zeros(cap - n)))
@@ -178,6 +186,7 @@ def grow(rng, start, goal, lower, upper, w, iterations, delta, r_near, goal_bias
                         n += 1
                         p = near_idx[p_slot]
                         q[i_new] = q_new
+                        clear[i_new] = c_new_caps
                         parent[i_new] = p
                         edge[i_new] = phi[p_slot]
                         cost[i_new] = cost[p] + phi[p_slot]
@@ -197,8 +206,8 @@ def grow(rng, start, goal, lower, upper, w, iterations, delta, r_near, goal_bias
                                 continue
                             if checked[s] == 0:
                                 counts[1] += 1
-                                ok = planar_kernel.motion_valid(q_new, q[j], c_lower, c_upper, bodies, robot, env,
-                                                                c_lever)
+                                ok = planar_kernel.motion_valid_ends(q_new, q[j], c_new_caps, clear[j], c_lower,
+                                                                     c_upper, bodies, robot, env, levers)
                             else:
                                 ok = checked[s] == 1
                             if ok:
@@ -235,7 +244,8 @@ def grow(rng, start, goal, lower, upper, w, iterations, delta, r_near, goal_bias
                     one[0] = q[i_new]
                     c_goal = _costs(one, gq, kind, lam, dw, soc, grid)[0]
                     counts[1] += 1
-                    ok = planar_kernel.motion_valid(q[i_new], goal, c_lower, c_upper, bodies, robot, env, c_lever)
+                    ok = planar_kernel.motion_valid_ends(q[i_new], goal, clear[i_new], goal_clear, c_lower, c_upper,
+                                                         bodies, robot, env, levers)
                 if ok:
                     if n_goal == goal_nodes.shape[0]:
                         goal_nodes = np.concatenate((goal_nodes, np.empty(n_goal, dtype=np.int64)))
@@ -255,6 +265,17 @@ def grow(rng, start, goal, lower, upper, w, iterations, delta, r_near, goal_bias
         if it >= 0:
             history[it] = best_cost
     return q[:n].copy(), parent[:n].copy(), cost[:n].copy(), n, history, best_node, best_cost, first_iteration, counts
+
+
+@njit(cache=True)
+def _valid(q, caps, lower, upper):
+    """planar_kernel.valid of q given its capsule clearances."""
+    if not planar_kernel._in_limits(q, lower, upper):
+        return False
+    for j in range(caps.shape[0]):
+        if not caps[j] > 0.0:
+            return False
+    return True
 
 
 @njit(cache=True)

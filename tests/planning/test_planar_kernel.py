@@ -76,7 +76,7 @@ def _scene(obstacles):
     robot = np.array([[0, 0, 0, 0, 0, 0.3], [1, 0, 0, 2.0, 0, 0.05]], float)
     env = np.array([[dut.BOX, cx, cy, math.cos(yaw), math.sin(yaw), hx, hy, math.hypot(hx, hy)]
                     for cx, cy, yaw, hx, hy in obstacles], float).reshape(-1, 8)
-    lever = np.array([2.05, 0.0])
+    lever = np.array([[0.0, 0.0], [2.05, 0.0]])  # per capsule: the base disc, the link
     lower, upper = np.array([-10, -10, -math.pi, -math.pi]), np.array([10, 10, math.pi, math.pi])
     return bodies, robot, env, lever, lower, upper
 
