@@ -335,29 +335,34 @@ def displacement(dq, lever):
 
 
 @njit(cache=True)
-def _step(cap, env, keep, n_keep, spans, far):
-    """One advancement step from world capsules ``cap``: the largest tau such
-    that every capsule j (moving at most ``spans[j]`` per unit of t) stays
-    free for ``|t' - t| < tau``, or -1 when a capsule is within TOLERANCE of
-    contact. Only the shapes ``keep[:n_keep]`` are measured; every other shape
-    is at least ``far`` from the robot along the whole motion."""
-    tau = np.inf
-    for j in range(cap.shape[0]):
-        if spans[j] > 0.0:
-            tau = min(tau, (far - STEP_MARGIN) / spans[j])
+def _front(cap, env, keep, n_keep, spans, t, sign, known, tau_far):
+    """One advancement step of a front at t (sign +1 from the start, -1 from
+    the end) with the world capsules ``cap`` there: the largest tau such that
+    every capsule j (moving at most ``spans[j]`` per unit of t) stays free for
+    t' between t and t + sign * tau, or -1 when a capsule is within TOLERANCE
+    of contact at t. ``known[j, i]`` is the time up to which the pair (j,
+    ``keep[i]``) is already known to be free (from an earlier query of this
+    front: its distance then, less what it can have lost since); a pair is
+    measured again only where that would shorten the step. Shapes not in
+    ``keep`` are at least FAR away (``tau_far``: their step)."""
+    tau = tau_far
     for j in range(cap.shape[0]):
         d_j = spans[j]
         if d_j == 0.0:  # a capsule that does not move stays as free as at the ends
             continue
         mx, my, reach = _capsule_reach(cap, j)
         for i in range(n_keep):
+            if (known[j, i] - t) * sign >= tau:
+                continue  # already known free for the whole step so far
             k = keep[i]
-            if _pair_bound(mx, my, reach, env, k) - STEP_MARGIN >= tau * d_j:
-                continue  # this pair cannot shorten the step
-            d = _pair(cap, j, env, k)
-            if d <= TOLERANCE:
-                return -1.0
-            tau = min(tau, (d - STEP_MARGIN) / d_j)
+            allow = (_pair_bound(mx, my, reach, env, k) - STEP_MARGIN) / d_j
+            if allow < tau:
+                d = _pair(cap, j, env, k)
+                if d <= TOLERANCE:
+                    return -1.0
+                allow = (d - STEP_MARGIN) / d_j
+                tau = min(tau, allow)
+            known[j, i] = t + sign * allow
     return tau
 
 
@@ -407,11 +412,24 @@ def _motion_valid_ends(q_a, q_b, c_a, c_b, lower, upper, bodies, robot, env, lev
         if not lb >= FAR:
             keep[n_keep] = k
             n_keep += 1
+    # Per kept pair, the time up to which it is known free from each end.
+    known_a = np.empty((s_count, n_keep))
+    known_b = np.empty((s_count, n_keep))
+    for j in range(s_count):
+        ta, tb = np.inf, -np.inf
+        if spans[j] > 0.0:
+            ta, tb = (c_a[j] - STEP_MARGIN) / spans[j], 1.0 - (c_b[j] - STEP_MARGIN) / spans[j]
+        for i in range(n_keep):
+            known_a[j, i], known_b[j, i] = ta, tb
+    tau_far = np.inf
+    for j in range(s_count):
+        if spans[j] > 0.0:
+            tau_far = min(tau_far, (FAR - STEP_MARGIN) / spans[j])
     q = np.empty(4)
     for _ in range(MAX_STEPS):
         for i in range(4):
             q[i] = q_a[i] + lo * dq[i]
-        tau = _step(world_capsules(q, bodies, robot), env, keep, n_keep, spans, FAR)
+        tau = _front(world_capsules(q, bodies, robot), env, keep, n_keep, spans, lo, 1.0, known_a, tau_far)
         if tau < 0.0:
             return False
         lo += tau
@@ -419,7 +437,7 @@ def _motion_valid_ends(q_a, q_b, c_a, c_b, lower, upper, bodies, robot, env, lev
             return True
         for i in range(4):
             q[i] = q_a[i] + hi * dq[i]
-        tau = _step(world_capsules(q, bodies, robot), env, keep, n_keep, spans, FAR)
+        tau = _front(world_capsules(q, bodies, robot), env, keep, n_keep, spans, hi, -1.0, known_b, tau_far)
         if tau < 0.0:
             return False
         hi -= tau
