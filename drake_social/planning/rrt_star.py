@@ -57,13 +57,14 @@ KD_TREE_MIN_NODES = 2048
 
 
 def default_gamma(space: ConfigurationSpace) -> float:
-    """OMPL's RRT* radius constant for ``space`` (rewire factor 1.1):
-    ``1.1 * 2 (1 + 1/d)^(1/d) (V / zeta_d)^(1/d)`` with V the volume of the
-    weighted configuration box and zeta_d the unit d-ball's volume, d = 4."""
+    """OMPL's RRT* radius constant for ``space`` (its default rewire factor
+    1.1, ``RRTstar::calculateRewiringLowerBounds``):
+    ``1.1 (2 (1 + 1/d) V / zeta_d)^(1/d)`` with V the volume of the weighted
+    configuration box and zeta_d the unit d-ball's volume, d = 4."""
     d = 4
     volume = float(np.prod(space.weights * (space.upper - space.lower)))
     zeta = np.pi ** (d / 2) / math.gamma(d / 2 + 1)
-    return 1.1 * 2.0 * (1.0 + 1.0 / d) ** (1.0 / d) * (volume / zeta) ** (1.0 / d)
+    return 1.1 * (2.0 * (1.0 + 1.0 / d) * volume / zeta) ** (1.0 / d)
 
 @dc.dataclass
 class RrtStarOptions:

@@ -85,7 +85,13 @@ def grow(rng, start, goal, lower, upper, w, iterations, delta, r_near, goal_bias
     goal_nodes = np.empty(16, dtype=np.int64)
     goal_edges = np.empty(16)
     n_goal = 0
+    # Nodes bucketed by their weighted (x, y) in square cells (linked lists),
+    # so that nearest and near queries visit the nodes of nearby cells only.
+    g_geom = _grid_geometry(lower, upper, w, r_near)
+    g_head = np.full(int(g_geom[3]) * int(g_geom[4]), -1, dtype=np.int64)
+    g_next = np.full(cap, -1, dtype=np.int64)
     q[0] = start
+    _insert(0, q, w, g_head, g_next, g_geom)
     clear[0] = planar_kernel.capsule_clearances(start, bodies, robot, env)
     goal_clear = planar_kernel.capsule_clearances(goal, bodies, robot, env)
     n = 1
@@ -109,12 +115,7 @@ def grow(rng, start, goal, lower, upper, w, iterations, delta, r_near, goal_bias
                     q_rand[c] = rng.random()
                 q_rand = lower + q_rand * (upper - lower)
             # ---- nearest, steer, check
-            i_near = 0
-            d_best = np.inf
-            for i in range(n):
-                d = math.sqrt(_d2(q[i], q_rand, w))
-                if d < d_best:
-                    d_best, i_near = d, i
+            i_near, d_best = _nearest(q, q_rand, w, g_head, g_next, g_geom)
             i_new = -1
             if d_best != 0.0:
                 if d_best <= delta:
@@ -129,15 +130,11 @@ def grow(rng, start, goal, lower, upper, w, iterations, delta, r_near, goal_bias
                     if shrinking and n + 1 > 1:
                         r = min(r, gamma * (math.log(n + 1) / (n + 1)) ** 0.25)
                     r2 = r * r
-                    m = 0
+                    m = _within(q, q_new, w, r, r2, g_head, g_next, g_geom, near)
                     has_nearest = False
-                    for i in range(n):
-                        d2 = _d2(q[i], q_new, w)
-                        if d2 <= r2:
-                            near[m] = i
-                            m += 1
-                            if i == i_near:
-                                has_nearest = True
+                    for s in range(m):
+                        if near[s] == i_near:
+                            has_nearest = True
                     if not has_nearest:
                         near[m] = i_near
                         m += 1
@@ -181,11 +178,13 @@ def grow(rng, start, goal, lower, upper, w, iterations, delta, r_near, goal_bias
                             next_sib = np.concatenate((next_sib, np.full(cap - n, -1, dtype=np.int64)))
                             prev_sib = np.concatenate((prev_sib, np.full(cap - n, -1, dtype=np.int64)))
                             near = np.empty(cap, dtype=np.int64)
+                            g_next = np.concatenate((g_next, np.full(cap - n, -1, dtype=np.int64)))
                             stack = np.empty(cap, dtype=np.int64)
                         i_new = n
                         n += 1
                         p = near_idx[p_slot]
                         q[i_new] = q_new
+                        _insert(i_new, q, w, g_head, g_next, g_geom)
                         clear[i_new] = c_new_caps
                         parent[i_new] = p
                         edge[i_new] = phi[p_slot]
@@ -265,6 +264,79 @@ def grow(rng, start, goal, lower, upper, w, iterations, delta, r_near, goal_bias
         if it >= 0:
             history[it] = best_cost
     return q[:n].copy(), parent[:n].copy(), cost[:n].copy(), n, history, best_node, best_cost, first_iteration, counts
+
+
+@njit(cache=True)
+def _grid_geometry(lower, upper, w, r_near):
+    """(x0, y0, h, nx, ny): square cells of side h over the weighted (x, y)
+    box; h = r_near / 4, larger if that would make more than 4096 cells."""
+    x0, y0 = lower[0] * w[0], lower[1] * w[1]
+    width, height = max((upper[0] - lower[0]) * w[0], 1e-12), max((upper[1] - lower[1]) * w[1], 1e-12)
+    h = max(r_near / 4.0, math.sqrt(width * height / 4096.0), 1e-9)
+    return np.array([x0, y0, h, min(int(width / h) + 1, 4096), min(int(height / h) + 1, 4096)])
+
+
+@njit(cache=True)
+def _cell(x, y, geom):
+    ix = min(max(int(math.floor((x - geom[0]) / geom[2])), 0), int(geom[3]) - 1)
+    iy = min(max(int(math.floor((y - geom[1]) / geom[2])), 0), int(geom[4]) - 1)
+    return ix, iy
+
+
+@njit(cache=True)
+def _insert(i, q, w, head, nxt, geom):
+    ix, iy = _cell(q[i, 0] * w[0], q[i, 1] * w[1], geom)
+    c = iy * int(geom[3]) + ix
+    nxt[i] = head[c]
+    head[c] = i
+
+
+@njit(cache=True)
+def _nearest(q, x, w, head, nxt, geom):
+    """(index, distance) of the node nearest to x, the lowest index on ties:
+    exactly the direct scan's answer. Cells are visited in square rings
+    around x's cell; every node of ring k + 1 is at least k h from x in
+    (x, y) alone, so the search stops once that exceeds the best distance."""
+    nx, ny, h = int(geom[3]), int(geom[4]), geom[2]
+    cx, cy = _cell(x[0] * w[0], x[1] * w[1], geom)
+    best_i, best_d = -1, np.inf
+    k = 0
+    while True:
+        for iy in range(max(cy - k, 0), min(cy + k, ny - 1) + 1):
+            edge_y = iy == cy - k or iy == cy + k
+            step = 1 if edge_y else 2 * k
+            ix = cx - k
+            while ix <= cx + k:
+                if 0 <= ix < nx:
+                    i = head[iy * nx + ix]
+                    while i >= 0:
+                        d = math.sqrt(_d2(q[i], x, w))
+                        if d < best_d or (d == best_d and i < best_i):
+                            best_i, best_d = i, d
+                        i = nxt[i]
+                ix += step if step > 0 else 1
+        if (k * h - 1e-9 > best_d) or (cx - k <= 0 and cy - k <= 0 and cx + k >= nx - 1 and cy + k >= ny - 1):
+            return best_i, best_d
+        k += 1
+
+
+@njit(cache=True)
+def _within(q, x, w, r, r2, head, nxt, geom, out):
+    """The nodes with _d2 <= r2 (r2 = r * r), ascending, into out; returns their count."""
+    nx = int(geom[3])
+    ix0, iy0 = _cell(x[0] * w[0] - r - 1e-9, x[1] * w[1] - r - 1e-9, geom)
+    ix1, iy1 = _cell(x[0] * w[0] + r + 1e-9, x[1] * w[1] + r + 1e-9, geom)
+    m = 0
+    for iy in range(iy0, iy1 + 1):
+        for ix in range(ix0, ix1 + 1):
+            i = head[iy * nx + ix]
+            while i >= 0:
+                if _d2(q[i], x, w) <= r2:
+                    out[m] = i
+                    m += 1
+                i = nxt[i]
+    out[:m].sort()
+    return m
 
 
 @njit(cache=True)

@@ -84,13 +84,26 @@ def test_kd_neighbours_equal_brute_force_with_ties(rng):
     assert dut.kd is not None and dut.kd_n > 3000
 
 
+def test_default_gamma_is_ompls_r_rrt(repo_root):
+    """OMPL's RRTstar: r_rrt = rewire_factor (2 (1 + 1/d) mu / zeta_d)^(1/d),
+    rewire factor 1.1, d = 4, zeta_4 = pi^2 / 2; by hand for the office's
+    configuration box (unit weights)."""
+    from drake_social.scenario import load_scenario
+
+    space = ConfigurationSpace.from_scenario(load_scenario(repo_root / "scenarios" / "office_bar.yaml"))
+    assert np.all(space.weights == 1.0)
+    (w, h, a, b) = space.upper - space.lower
+    mu = w * h * a * b
+    assert default_gamma(space) == pytest.approx(1.1 * (2 * 1.25 * mu / (math.pi**2 / 2)) ** 0.25, rel=1e-12)
+
+
 def test_shrinking_radius_changes_nothing_while_it_is_r_near(tiny_scenario):
     scenario = copy.deepcopy(tiny_scenario)
-    scenario.planner = dc.replace(scenario.planner, iterations=400)
+    scenario.planner = dc.replace(scenario.planner, iterations=100)
     checker = GeometricChecker(scenario)
     space = ConfigurationSpace.from_scenario(scenario)
     gamma = default_gamma(space)
-    n = 401
+    n = 101
     assert gamma * (math.log(n) / n) ** 0.25 > scenario.planner.near_radius  # the promise applies
     fixed = plan(scenario, checker, seed=3)
     scenario.planner = dc.replace(scenario.planner, near_radius_mode="shrinking")
