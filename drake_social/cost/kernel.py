@@ -150,6 +150,9 @@ def msc_sums(
     # exp(-a) <= tau with margin beyond this exponent (tau > 0; 1e-9 relative
     # is far more than exp's and log's rounding).
     a_cut = -math.log(tau) * (1.0 + 1e-9) + 1e-12 if tau > 0.0 else math.inf
+    # sqrt of the exponent is a norm of the offset, Lipschitz with constant lip.
+    lip = math.sqrt(max(inv_front, inv_rear, inv_side))
+    root_cut = math.sqrt(a_cut) * (1.0 + 1e-9) + 1e-12 if math.isfinite(a_cut) else math.inf
     cand = np.empty(h_count, dtype=np.int64)
     k0s = np.empty((h_count, k_count), dtype=np.int64)
     k1s = np.empty((h_count, k_count), dtype=np.int64)
@@ -267,8 +270,12 @@ def msc_sums(
             for j in range(k_count):
                 k0, k1 = k0s[i, j], k1s[i, j]
                 w = weights[j]
+                # sqrt(a) changes by at most lip * (spans[j] / n) from one sample to the next.
+                skip_rate = lip * spans[j] / n
                 g0, a0, up0 = -1.0, 0.0, False
-                for k in range(k0, k1 + 1):
+                k = k0
+                pred_skipped = False  # sample k - 1 was skipped: below the threshold, not evaluated
+                while k <= k1:
                     # The exponent first: where it shows the term below the
                     # threshold, exp is taken only if a neighbour needs it.
                     a = _exponent(xs[j, k] - px, ys[j, k] - py, c, s, inv_front, inv_rear, inv_side)
@@ -278,6 +285,9 @@ def msc_sums(
                         g = math.exp(-a)
                         up = g > tau
                     if k > k0:
+                        if pred_skipped:
+                            g0, up0 = -1.0, False
+                            a0 = _exponent(xs[j, k - 1] - px, ys[j, k - 1] - py, c, s, inv_front, inv_rear, inv_side)
                         if up0 and up:
                             total += w * 0.5 * (g0 + g)
                         elif up0 or up:
@@ -288,5 +298,13 @@ def msc_sums(
                             hi, lo = max(g0, g), min(g0, g)
                             total += w * 0.5 * (hi + tau) * (hi - tau) / (hi - lo)
                     g0, a0, up0 = g, a, up
+                    pred_skipped = False
+                    k += 1
+                    if not up and skip_rate > 0.0:
+                        # Samples k .. k + jump - 1 are certainly below the threshold too.
+                        jump = int((math.sqrt(a) - root_cut) / skip_rate)
+                        if jump >= 2:
+                            k += jump - 1
+                            pred_skipped = True
         sums[e] = total
     return sums, steps
