@@ -16,6 +16,10 @@ import math
 
 import numpy as np
 
+from drake_social import _kernel_cache
+
+_kernel_cache.ensure_fresh()  # before any cached kernel is loaded
+
 try:  # numba is a runtime dependency; the numpy path stays usable without it.
     from numba import njit
 

@@ -50,6 +50,10 @@ import math
 
 import numpy as np
 
+from drake_social import _kernel_cache
+
+_kernel_cache.ensure_fresh()  # before any cached kernel is loaded
+
 try:  # numba is a runtime dependency; without it these run (slowly) as Python.
     from numba import njit
 
@@ -335,34 +339,28 @@ def displacement(dq, lever):
 
 
 @njit(cache=True)
-def _front(cap, env, keep, n_keep, spans, t, sign, known, tau_far):
-    """One advancement step of a front at t (sign +1 from the start, -1 from
-    the end) with the world capsules ``cap`` there: the largest tau such that
-    every capsule j (moving at most ``spans[j]`` per unit of t) stays free for
-    t' between t and t + sign * tau, or -1 when a capsule is within TOLERANCE
-    of contact at t. ``known[j, i]`` is the time up to which the pair (j,
-    ``keep[i]``) is already known to be free (from an earlier query of this
-    front: its distance then, less what it can have lost since); a pair is
-    measured again only where that would shorten the step. Shapes not in
-    ``keep`` are at least FAR away (``tau_far``: their step)."""
-    tau = tau_far
+def _probe(cap, env, keep, n_keep, spans, tau_max):
+    """The step tau of one query with the world capsules ``cap`` at q(t): every
+    capsule j (moving at most ``spans[j]`` per unit of t) stays free for
+    ``|t' - t| < tau``; or -1 when a capsule is within TOLERANCE of contact.
+    ``tau <= tau_max`` (no more is needed): a pair whose broad-phase bound
+    already allows the step found so far is not measured. Only the shapes
+    ``keep[:n_keep]`` are measured; ``tau_max`` also keeps the step within
+    what the others (at least FAR away) allow."""
+    tau = tau_max
     for j in range(cap.shape[0]):
         d_j = spans[j]
         if d_j == 0.0:  # a capsule that does not move stays as free as at the ends
             continue
         mx, my, reach = _capsule_reach(cap, j)
         for i in range(n_keep):
-            if (known[j, i] - t) * sign >= tau:
-                continue  # already known free for the whole step so far
             k = keep[i]
-            allow = (_pair_bound(mx, my, reach, env, k) - STEP_MARGIN) / d_j
-            if allow < tau:
-                d = _pair(cap, j, env, k)
-                if d <= TOLERANCE:
-                    return -1.0
-                allow = (d - STEP_MARGIN) / d_j
-                tau = min(tau, allow)
-            known[j, i] = t + sign * allow
+            if _pair_bound(mx, my, reach, env, k) - STEP_MARGIN >= tau * d_j:
+                continue
+            d = _pair(cap, j, env, k)
+            if d <= TOLERANCE:
+                return -1.0
+            tau = min(tau, (d - STEP_MARGIN) / d_j)
     return tau
 
 
@@ -412,37 +410,39 @@ def _motion_valid_ends(q_a, q_b, c_a, c_b, lower, upper, bodies, robot, env, lev
         if not lb >= FAR:
             keep[n_keep] = k
             n_keep += 1
-    # Per kept pair, the time up to which it is known free from each end.
-    known_a = np.empty((s_count, n_keep))
-    known_b = np.empty((s_count, n_keep))
-    for j in range(s_count):
-        ta, tb = np.inf, -np.inf
-        if spans[j] > 0.0:
-            ta, tb = (c_a[j] - STEP_MARGIN) / spans[j], 1.0 - (c_b[j] - STEP_MARGIN) / spans[j]
-        for i in range(n_keep):
-            known_a[j, i], known_b[j, i] = ta, tb
     tau_far = np.inf
     for j in range(s_count):
         if spans[j] > 0.0:
             tau_far = min(tau_far, (FAR - STEP_MARGIN) / spans[j])
+    # The part [lo, hi] not yet cleared, as a queue of closed intervals: each
+    # query at an interval's midpoint clears (t - tau, t + tau) and leaves
+    # the rest of it, so the motion is searched coarse to fine (a collision
+    # is found after a few queries) and each query clears both ways.
+    size = 64
+    q_lo, q_hi = np.empty(size), np.empty(size)
+    q_lo[0], q_hi[0] = lo, hi
+    head, tail = 0, 1  # queue slots head .. tail - 1 (circular)
     q = np.empty(4)
     for _ in range(MAX_STEPS):
+        if head == tail:
+            return True
+        a, b = q_lo[head % size], q_hi[head % size]
+        head += 1
+        t = 0.5 * (a + b)
         for i in range(4):
-            q[i] = q_a[i] + lo * dq[i]
-        tau = _front(world_capsules(q, bodies, robot), env, keep, n_keep, spans, lo, 1.0, known_a, tau_far)
+            q[i] = q_a[i] + t * dq[i]
+        tau = _probe(world_capsules(q, bodies, robot), env, keep, n_keep, spans, min(tau_far, 0.5 * (b - a) + 1e-12))
         if tau < 0.0:
             return False
-        lo += tau
-        if lo > hi:
-            return True
-        for i in range(4):
-            q[i] = q_a[i] + hi * dq[i]
-        tau = _front(world_capsules(q, bodies, robot), env, keep, n_keep, spans, hi, -1.0, known_b, tau_far)
-        if tau < 0.0:
-            return False
-        hi -= tau
-        if lo > hi:
-            return True
+        for lo_, hi_ in ((a, t - tau), (t + tau, b)):
+            if lo_ <= hi_:
+                if tail - head == size:  # full: double it, in order
+                    n_lo, n_hi = np.empty(2 * size), np.empty(2 * size)
+                    for r in range(size):
+                        n_lo[r], n_hi[r] = q_lo[(head + r) % size], q_hi[(head + r) % size]
+                    q_lo, q_hi, head, tail, size = n_lo, n_hi, 0, size, 2 * size
+                q_lo[tail % size], q_hi[tail % size] = lo_, hi_
+                tail += 1
     return False
 
 

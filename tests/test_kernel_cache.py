@@ -1,0 +1,58 @@
+"""The numba cache guard: cached kernels are dropped when any kernel source changes."""
+
+from __future__ import annotations
+
+import shutil
+
+import pytest
+
+from drake_social import _kernel_cache as dut
+
+
+@pytest.fixture
+def package(tmp_path, monkeypatch):
+    """A copy of the kernel sources with cached files beside them."""
+    for name in dut.KERNEL_SOURCES:
+        (tmp_path / name).parent.mkdir(parents=True, exist_ok=True)
+        shutil.copy(dut._PACKAGE / name, tmp_path / name)
+    monkeypatch.setattr(dut, "_PACKAGE", tmp_path)
+    monkeypatch.setattr(dut, "_done", False)
+    return tmp_path
+
+
+def _cached(package):
+    files = [package / "cost/__pycache__/kernel.msc_sums-101.py311.nbi",
+             package / "planning/__pycache__/tree_kernel.grow-70.py311.1.nbc",
+             package / "planning/__pycache__/planar_kernel._pair-99.py311.nbi"]
+    for f in files:
+        f.parent.mkdir(parents=True, exist_ok=True)
+        f.write_bytes(b"x")
+    other = package / "planning/__pycache__/rrt_star.cpython-311.pyc"
+    other.write_bytes(b"y")
+    return files, other
+
+
+def test_caches_survive_while_the_sources_stay_and_go_when_one_changes(package, monkeypatch):
+    dut.ensure_fresh()  # first run: no stamp yet, nothing cached
+    files, other = _cached(package)
+    monkeypatch.setattr(dut, "_done", False)
+    dut.ensure_fresh()
+    assert all(f.exists() for f in files)  # same sources: kept
+    stamp = dut.sources_hash()
+    with open(package / "planning/planar_kernel.py", "a") as f:
+        f.write("\n# edited\n")
+    assert dut.sources_hash() != stamp
+    monkeypatch.setattr(dut, "_done", False)
+    dut.ensure_fresh()
+    assert not any(f.exists() for f in files)  # tree_kernel's cache too, though its file did not change
+    assert other.exists()  # only numba's kernel caches are touched
+    assert (package / "planning/__pycache__" / dut._STAMP).read_text() == dut.sources_hash()
+
+
+def test_once_per_process(package, monkeypatch):
+    dut.ensure_fresh()
+    files, _ = _cached(package)
+    with open(package / "cost/kernel.py", "a") as f:
+        f.write("\n# edited\n")
+    dut.ensure_fresh()  # already done in this process
+    assert all(f.exists() for f in files)
