@@ -244,6 +244,44 @@ def test_body_poses_and_capsules_equal_drakes_and_the_scenarios(name, rng):
     assert np.all(dut.lever <= g.lever(include_body=True) + 1e-12)
 
 
+@pytest.mark.parametrize("name", NAMES)
+def test_each_capsule_moves_no_more_than_its_lever_bound(name, rng):
+    """The motion check advances capsule j by displacement(dq, levers[j]):
+    every point of the capsule (its axis ends pushed out by r in 16
+    directions fixed to its body) moves at most that far per unit of t,
+    measured along random motions at 1/64 steps; the base's capsules move
+    with the base only."""
+    from drake_social.planning import planar_kernel as kernel
+
+    _, dut, _ = _case(name)
+    angles = np.linspace(0, 2 * np.pi, 16, endpoint=False)
+
+    def points(q):
+        poses = kernel.body_poses(q, dut.bodies)
+        out = []
+        for body, ax, ay, bx, by, r in dut.robot:
+            x, y, c, s = poses[int(body)]
+            for px, py in ((ax, ay), (bx, by)):
+                local = np.column_stack([px + r * np.cos(angles), py + r * np.sin(angles)])
+                out.append(np.column_stack([x + c * local[:, 0] - s * local[:, 1], y + s * local[:, 0] + c * local[:, 1]]))
+        return np.stack(out).reshape(len(dut.robot), 2, 16, 2)
+
+    worst = 0.0
+    for _ in range(40):
+        q_a = rng.uniform(dut.lower, dut.upper)
+        dq = rng.normal(scale=[1.0, 1.0, 1.5, 1.5])
+        bound = kernel.capsule_spans(dq, dut.levers)
+        ts = np.linspace(0.0, 1.0, 65)
+        p = np.stack([points(q_a + t * dq) for t in ts])  # (T, S, 2, 16, 2)
+        moved = np.linalg.norm(np.diff(p, axis=0), axis=-1).max(axis=(2, 3)).sum(axis=0)  # path length per capsule
+        assert np.all(moved <= bound + 1e-9)
+        worst = max(worst, float((moved / bound).max()))
+        assert np.all(bound <= kernel.displacement(dq, dut.lever) + 1e-12)  # never looser than the whole robot's
+    assert worst > 0.8  # the bound is not vacuous: some capsule comes close to it
+    base = dut.robot[:, 0] == 0
+    np.testing.assert_array_equal(dut.levers[base], 0.0)
+
+
 # ---- protocol, reports, wiring --------------------------------------------------------
 
 

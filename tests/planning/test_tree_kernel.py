@@ -95,3 +95,28 @@ def test_a_progress_callback_runs_the_python_loop_with_the_same_result(tiny, mon
     without = planner.solve(*args, np.random.default_rng(5))
     assert compiled_calls == [1]
     assert_same(with_progress, without)
+
+
+def test_grid_neighbour_queries_equal_the_direct_scan(rng):
+    """Nearest (lowest index on ties) and near sets (ascending) over the grid
+    equal a brute-force scan, on clustered nodes with exact duplicates."""
+    lower, upper = np.array([0.0, 0.0, -3.0, -3.0]), np.array([20.0, 12.0, 3.0, 3.0])
+    w = np.array([1.0, 0.7, 0.5, 0.3])
+    q = np.vstack([lower + rng.random((600, 4)) * (upper - lower),
+                   rng.normal([3.0, 3.0, 0.0, 0.0], 0.2, (300, 4))])
+    q = np.vstack([q, q[:50]])  # duplicates: ties at any query
+    geom = tree_kernel._grid_geometry(lower, upper, w, 2.0)
+    head = np.full(int(geom[3]) * int(geom[4]), -1, dtype=np.int64)
+    nxt = np.full(len(q), -1, dtype=np.int64)
+    for i in range(len(q)):
+        tree_kernel._insert(i, q, w, head, nxt, geom)
+    out = np.empty(len(q), dtype=np.int64)
+    queries = np.vstack([lower + rng.random((200, 4)) * (upper - lower), q[:20], q[600:620] + 1e-3])
+    for x in queries:
+        d = np.sqrt((((q - x) * w) ** 2).sum(axis=1))
+        i, dist = tree_kernel._nearest(q, x, w, head, nxt, geom)
+        assert dist == pytest.approx(d.min(), abs=1e-12) and i == int(np.flatnonzero(d <= d[i])[0])
+        for r in (0.3, 1.0, 2.5, 30.0):
+            m = tree_kernel._within(q, x, w, r, r * r, head, nxt, geom, out)
+            d2 = np.array([tree_kernel._d2(p, x, w) for p in q])
+            np.testing.assert_array_equal(out[:m], np.flatnonzero(d2 <= r * r))
