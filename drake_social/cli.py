@@ -496,7 +496,10 @@ def _add_bench(subparsers) -> None:
                    help=f"planners (default: all of {', '.join(ALGORITHMS)})")
     p.add_argument("--iterations", type=_positive_int, default=2000, metavar="K", help="samples per run (default 2000)")
     p.add_argument("--seeds", type=_positive_int, default=10, metavar="N", help="seeds 0..N-1 per planner (default 10)")
-    _add_checker_argument(p)
+    _add_checker_argument(p, default="planar")
+    p.add_argument("--ompl-checker", choices=CHECKERS, default="drake",
+                   help="the checker of OMPL's RRTstar (default: drake, Drake's SceneGraph checks as before "
+                        "the planar checker); when it is not --checker, OMPL also runs with --checker")
     p.add_argument("--no-ompl", action="store_true", help="leave out OMPL's RRTstar even when ompl is importable")
     p.add_argument("--no-checker-bench", action="store_true",
                    help="leave out the validity-checker throughput measurement")
@@ -533,6 +536,7 @@ def _run_bench(args: argparse.Namespace) -> int:
                 iterations=args.iterations,
                 seeds=args.seeds,
                 checker=args.checker,
+                ompl_checker=args.ompl_checker,
                 include_ompl=not args.no_ompl,
                 include_checker=not args.no_checker_bench,
                 sim_runs=args.sim_runs,

@@ -150,7 +150,8 @@ def _plan_ompl_runs(scenario: Scenario, key: str, iterations: int, seeds: int, c
         )
         runs.append(_record(scenario, result, objective, chk))
         tick(f"ompl_rrt_star[{key}] seed {seed}")
-    return {"objective_of": key, "settings": settings.to_json_dict(), "runs": runs, "summary": summarize(runs)}
+    return {"objective_of": key, "checker": checker, "settings": settings.to_json_dict(), "runs": runs,
+            "summary": summarize(runs)}
 
 
 def _machine() -> dict:
@@ -171,7 +172,8 @@ def run_bench(
     algorithms: Sequence[str] | None = None,
     iterations: int = 2000,
     seeds: int = 10,
-    checker: str = "drake",
+    checker: str = "planar",
+    ompl_checker: str = "drake",
     include_ompl: bool = True,
     include_checker: bool = True,
     sim_runs: int = 0,
@@ -185,7 +187,12 @@ def run_bench(
         algorithms: planners to run (default: all of ``scenario.ALGORITHMS``).
         iterations: samples per run, K.
         seeds: runs per (scenario, algorithm), seeds ``0 .. seeds - 1``.
-        checker: ``"drake"`` (SceneGraph) or ``"numpy"`` (geometric).
+        checker: our planners' checker, one of ``CHECKERS`` (default the
+            exact planar one).
+        ompl_checker: the checker OMPL's RRTstar plans with (default Drake's
+            SceneGraph, the baseline of issue 8); when it differs from
+            ``checker``, OMPL also runs with ``checker`` (``ompl_same_checker``,
+            ratios ``vs_ompl_same_checker``): the same checks on both sides.
         include_ompl: also run OMPL's RRTstar when ``ompl`` is importable.
         include_checker: also measure the checkers
             (:func:`run_checker_bench` on 2000 configurations and 200 motions).
@@ -210,8 +217,9 @@ def run_bench(
     unknown = [a for a in algorithms if a not in ALGORITHMS]
     if unknown or not algorithms:
         raise ValueError(f"algorithms {unknown or '[]'} not allowed; allowed: {', '.join(ALGORITHMS)}")
-    if checker not in CHECKERS:
-        raise ValueError(f"checker {checker!r} not allowed; allowed: {', '.join(CHECKERS)}")
+    for label, value in (("checker", checker), ("ompl_checker", ompl_checker)):
+        if value not in CHECKERS:
+            raise ValueError(f"{label} {value!r} not allowed; allowed: {', '.join(CHECKERS)}")
     if iterations < 1 or seeds < 1:
         raise ValueError(f"iterations and seeds must be >= 1, got {iterations}, {seeds}")
     paths = [Path(p) for p in scenario_paths]
@@ -221,7 +229,8 @@ def run_bench(
     if include_ompl and not use_ompl:
         _log.info("ompl is not importable (pip install 'drake-social[bench]'); skipping the OMPL baseline")
     keys = list(dict.fromkeys(_objective_key(a) for a in algorithms)) if use_ompl else []
-    total = len(paths) * seeds * (len(algorithms) + len(keys)) + (1 if include_checker else 0)
+    ompl_sets = [("ompl", ompl_checker)] + ([("ompl_same_checker", checker)] if ompl_checker != checker else [])
+    total = len(paths) * seeds * (len(algorithms) + len(keys) * len(ompl_sets)) + (1 if include_checker else 0)
     total += len(paths) * len(SIM_MODES) * len(EXECUTIONS) * (sim_runs + 1) if sim_runs > 0 else 0
     done = 0
 
@@ -238,7 +247,7 @@ def run_bench(
         _make_checker(scenario, checker, path)  # a start or goal in collision: a clear error naming the file
         # Warm-up, untimed: loads (or compiles) the motion-cost kernel.
         make_objective(scenario, "social_rrt_star").motion_cost(np.array(scenario.start), np.array(scenario.goal))
-        entry = {"algorithms": {}, "ompl": {},
+        entry = {"algorithms": {}, "ompl": {}, "ompl_same_checker": {},
                  # The planner options that change how paths are made (see PlannerOptions).
                  "planner_options": {"near_radius_mode": scenario.planner.near_radius_mode,
                                      "near_radius_gamma": scenario.planner.near_radius_gamma,
@@ -252,16 +261,19 @@ def run_bench(
                 runs.append(_record(scenario, result, objective, chk))
                 tick(f"{path.stem} {algorithm} seed {seed}")
             entry["algorithms"][algorithm] = {"runs": runs, "summary": summarize(runs)}
-        for key in keys:
-            entry["ompl"][key] = _plan_ompl_runs(scenario, key, iterations, seeds, checker,
-                                                 lambda label: tick(f"{path.stem} {label}"))
+        for field, ompl_chk in ompl_sets:
+            for key in keys:
+                entry[field][key] = _plan_ompl_runs(scenario, key, iterations, seeds, ompl_chk,
+                                                    lambda label: tick(f"{path.stem} {label} ({ompl_chk})"))
         for algorithm, data in entry["algorithms"].items():
-            base = entry["ompl"].get(_objective_key(algorithm))
-            data["vs_ompl"] = None if base is None else {
-                "ompl": f"ompl_rrt_star[{_objective_key(algorithm)}]",
-                **{f: _ratio(data["summary"], base["summary"], g)
-                   for f, g in (("time", "wall_time"), ("social_cost", "social_cost_full"), ("objective", "objective"))},
-            }
+            for field in ("ompl", "ompl_same_checker"):
+                base = entry[field].get(_objective_key(algorithm))
+                data[f"vs_{field}"] = None if base is None else {
+                    "ompl": f"ompl_rrt_star[{_objective_key(algorithm)}]", "ompl_checker": base["checker"],
+                    **{f: _ratio(data["summary"], base["summary"], g)
+                       for f, g in (("time", "wall_time"), ("social_cost", "social_cost_full"),
+                                    ("objective", "objective"))},
+                }
         scenarios[path.name] = entry
 
     checker_bench = None
@@ -279,7 +291,8 @@ def run_bench(
 
     out = {
         "settings": {"scenario_paths": [str(p) for p in paths], "algorithms": algorithms, "iterations": iterations,
-                     "seeds": list(range(seeds)), "checker": checker, "sim_runs": sim_runs},
+                     "seeds": list(range(seeds)), "checker": checker, "ompl_checker": ompl_checker,
+                     "sim_runs": sim_runs},
         "machine": _machine(),
         "ompl": {"requested": include_ompl, "available": ompl_available(), "objectives": keys},
         "scenarios": scenarios,
@@ -320,7 +333,8 @@ def _markdown(out: dict) -> str:
     lines = [
         "# drake-social bench",
         "",
-        f"K = {s['iterations']} iterations, seeds 0..{len(s['seeds']) - 1}, checker `{s['checker']}`; "
+        f"K = {s['iterations']} iterations, seeds 0..{len(s['seeds']) - 1}, checker `{s['checker']}` "
+        f"(OMPL: `{s.get('ompl_checker', s['checker'])}`); "
         f"{m['platform']}, {m['cpu_count']} CPUs, numpy {m['numpy']}, drake {m['drake']}, ompl {m['ompl']}.",
         "",
         "Planner options: " + "; ".join(
@@ -330,20 +344,25 @@ def _markdown(out: dict) -> str:
         "",
         "Wall time (s) over all runs and social cost (the scenario's full weights) over successful runs: "
         "median [25th, 75th percentile]. Ratios: ours / OMPL RRTstar with the same objective, of the medians "
-        "(objective: each planner's own, recomputed from its path).",
+        f"(objective: each planner's own, recomputed from its path); OMPL checks with "
+        f"`{s.get('ompl_checker', s['checker'])}`, and where that is not ours also with ours (\"same checks\").",
         "",
         "| scenario | algorithm | runs | success | wall time s | social cost | first solution it. "
-        "| time ratio vs OMPL | social cost ratio vs OMPL | objective ratio vs OMPL |",
-        "|---|---|---:|---:|---|---|---:|---:|---:|---:|",
+        "| time ratio vs OMPL | time ratio vs OMPL, same checks | social cost ratio vs OMPL "
+        "| objective ratio vs OMPL |",
+        "|---|---|---:|---:|---|---|---:|---:|---:|---:|---:|",
     ]
     for name, entry in out["scenarios"].items():
-        rows = [(a, d["summary"], d.get("vs_ompl")) for a, d in entry["algorithms"].items()]
-        rows += [(f"ompl_rrt_star[{k}]", d["summary"], None) for k, d in entry["ompl"].items()]
-        for label, sm, vs in rows:
+        rows = [(a, d["summary"], d.get("vs_ompl"), d.get("vs_ompl_same_checker"))
+                for a, d in entry["algorithms"].items()]
+        rows += [(f"ompl_rrt_star[{k}] ({d.get('checker', s['checker'])})", d["summary"], None, None)
+                 for field in ("ompl", "ompl_same_checker") for k, d in entry.get(field, {}).items()]
+        for label, sm, vs, same in rows:
             lines.append(
                 f"| {Path(name).stem} | {label} | {sm['runs']} | {sm['success_rate']:.0%} | {_fmt(sm['wall_time'])} "
                 f"| {_fmt(sm['social_cost_full'])} | {_num(sm['median_first_solution_iteration'], '.0f')} "
-                f"| {_num(vs and vs['time'])} | {_num(vs and vs['social_cost'])} | {_num(vs and vs['objective'])} |"
+                f"| {_num(vs and vs['time'])} | {_num(same and same['time'])} | {_num(vs and vs['social_cost'])} "
+                f"| {_num(vs and vs['objective'])} |"
             )
     ompl_rows = [(name, k, d["settings"]) for name, e in out["scenarios"].items() for k, d in e["ompl"].items()]
     if ompl_rows:

@@ -35,7 +35,8 @@ def test_small_bench_reports_its_runs(tiny_scenario_path, tiny_scenario, tmp_pat
 
     on_disk = json.loads((tmp_path / "a" / "bench.json").read_text())
     assert on_disk["settings"] == {"scenario_paths": [str(tiny_scenario_path)], "algorithms": ALGOS,
-                                   "iterations": 200, "seeds": [0, 1], "checker": "numpy", "sim_runs": 0}
+                                   "iterations": 200, "seeds": [0, 1], "checker": "numpy", "ompl_checker": "drake",
+                                   "sim_runs": 0}
     assert on_disk["machine"]["cpu_count"] >= 1 and on_disk["machine"]["numpy"] == np.__version__
     assert on_disk["checker_bench"]["scenarios"]["tiny.yaml"]["configs_per_s"]["numpy_batched"] > 0
     md = (tmp_path / "a" / "bench.md").read_text()
@@ -194,9 +195,15 @@ def test_objective_adapter_equals_our_motion_cost(tiny_scenario_path, rng, extra
 
 def test_bench_with_ompl_reports_ratios(tiny_scenario_path, tmp_path, extra):
     extra("ompl")
-    dut = _small(tiny_scenario_path, tmp_path, algorithms=["informed_social_rrt_star"], iterations=150, include_ompl=True)
+    dut = _small(tiny_scenario_path, tmp_path, algorithms=["informed_social_rrt_star"], iterations=150, include_ompl=True,
+                 ompl_checker="planar")
     entry = dut["scenarios"]["tiny.yaml"]
     assert list(entry["ompl"]) == ["social_rrt_star"]  # the informed variant's objective
+    assert entry["ompl"]["social_rrt_star"]["checker"] == "planar"
+    same = entry["ompl_same_checker"]["social_rrt_star"]  # OMPL with our checker too
+    assert same["checker"] == "numpy" and same["summary"]["runs"] == 2
+    vs_same = entry["algorithms"]["informed_social_rrt_star"]["vs_ompl_same_checker"]
+    assert vs_same["ompl_checker"] == "numpy"
     ours = entry["algorithms"]["informed_social_rrt_star"]["summary"]
     ompl = entry["ompl"]["social_rrt_star"]
     assert ompl["summary"]["runs"] == 2 and ompl["summary"]["paths_valid"]
@@ -204,10 +211,12 @@ def test_bench_with_ompl_reports_ratios(tiny_scenario_path, tmp_path, extra):
         assert run["reported_cost"] == pytest.approx(run["objective"], rel=1e-9)
     vs = entry["algorithms"]["informed_social_rrt_star"]["vs_ompl"]
     assert vs["time"] == pytest.approx(ours["wall_time"]["median"] / ompl["summary"]["wall_time"]["median"])
+    assert vs_same["time"] == pytest.approx(ours["wall_time"]["median"] / same["summary"]["wall_time"]["median"])
     assert vs["social_cost"] == pytest.approx(
         ours["social_cost_full"]["median"] / ompl["summary"]["social_cost_full"]["median"])
     md = (tmp_path / "bench.md").read_text()
-    assert "| tiny | ompl_rrt_star[social_rrt_star] | 2 |" in md and "rewire factor" in md
+    assert "| tiny | ompl_rrt_star[social_rrt_star] (planar) | 2 |" in md and "rewire factor" in md
+    assert "| tiny | ompl_rrt_star[social_rrt_star] (numpy) | 2 |" in md
 
 
 def test_bench_without_ompl_says_so(tiny_scenario_path, tmp_path, monkeypatch):
@@ -246,5 +255,5 @@ def test_ratios_where_a_median_is_zero_are_not_defined():
            "scenarios": {"tiny.yaml": {"algorithms": {"social_rrt_star": {"summary": ours, "vs_ompl": vs}},
                                        "ompl": {}}}}
     row = next(line for line in bench._markdown(out).splitlines() if line.startswith("| tiny | social_rrt_star"))
-    assert row.endswith("| 0.25 | n/a | n/a |")
+    assert row.endswith("| 0.25 | n/a | n/a | n/a |")  # time, time with the same checks (none), costs
     assert json.loads(json.dumps(bench._finite(vs)))["social_cost"] is None
