@@ -506,6 +506,10 @@ def _add_bench(subparsers) -> None:
     p.add_argument("--sim-runs", type=_nonnegative_int, default=3, metavar="N",
                    help="timed simulations per (mode, execution) of the execution benchmark, plus one recorded "
                         "(default 3; 0 leaves it out)")
+    p.add_argument("--scaling", action="store_true",
+                   help="also the scaling benchmark per scenario (minutes): social_rrt_star at K = 2000 .. 50,000 "
+                        "with the shrinking radius and the fitted exponent of time ~ K^b, K = 2000 with "
+                        "planner.optimize against the median of three K = 50,000 runs, and 50 people far away")
     p.add_argument("--out", type=Path, default=Path("out/bench"), metavar="DIR",
                    help="output directory (default: out/bench)")
     p.add_argument("--progress", action="store_true",
@@ -540,6 +544,7 @@ def _run_bench(args: argparse.Namespace) -> int:
                 include_ompl=not args.no_ompl,
                 include_checker=not args.no_checker_bench,
                 sim_runs=args.sim_runs,
+                scaling=args.scaling,
                 out_dir=outputs.folder,
                 progress=progress if bar is not None else None,
             )

@@ -177,6 +177,7 @@ def run_bench(
     include_ompl: bool = True,
     include_checker: bool = True,
     sim_runs: int = 0,
+    scaling: bool = False,
     out_dir: str | Path,
     progress: Callable[[int, int, str], None] | None = None,
 ) -> dict:
@@ -199,6 +200,9 @@ def run_bench(
         sim_runs: when > 0, also the execution benchmark
             (:func:`~drake_social.experiments.bench_sim.run_sim_bench`) with
             this many timed runs per (mode, execution).
+        scaling: also :func:`~drake_social.experiments.bench_scaling.run_scaling_bench`
+            (K up to 50,000 with the shrinking radius, optimisation against
+            K = 50,000, 50 far people) on every scenario with ``checker``.
         out_dir: where the two files go (created).
         progress: optional ``progress(done, total, label)`` after each run.
 
@@ -232,6 +236,7 @@ def run_bench(
     ompl_sets = [("ompl", ompl_checker)] + ([("ompl_same_checker", checker)] if ompl_checker != checker else [])
     total = len(paths) * seeds * (len(algorithms) + len(keys) * len(ompl_sets)) + (1 if include_checker else 0)
     total += len(paths) * len(SIM_MODES) * len(EXECUTIONS) * (sim_runs + 1) if sim_runs > 0 else 0
+    total += len(paths) * (4 + 2 + 5 + 3) if scaling else 0  # run_scaling_bench's defaults
     done = 0
 
     def tick(label: str) -> None:
@@ -289,6 +294,12 @@ def run_bench(
 
         sim_bench = run_sim_bench(scenario_paths=paths, runs=sim_runs, progress=tick)
 
+    scaling_bench = None
+    if scaling:
+        from drake_social.experiments.bench_scaling import run_scaling_bench
+
+        scaling_bench = run_scaling_bench(scenario_paths=paths, checker=checker, progress=tick)
+
     out = {
         "settings": {"scenario_paths": [str(p) for p in paths], "algorithms": algorithms, "iterations": iterations,
                      "seeds": list(range(seeds)), "checker": checker, "ompl_checker": ompl_checker,
@@ -298,6 +309,7 @@ def run_bench(
         "scenarios": scenarios,
         "checker_bench": checker_bench,
         "sim_bench": sim_bench,
+        "scaling_bench": scaling_bench,
     }
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
@@ -400,4 +412,8 @@ def _markdown(out: dict) -> str:
         from drake_social.experiments.bench_sim import sim_markdown
 
         lines += sim_markdown(out["sim_bench"])
+    if out.get("scaling_bench"):
+        from drake_social.experiments.bench_scaling import markdown as scaling_markdown
+
+        lines += scaling_markdown(out["scaling_bench"])
     return "\n".join(lines) + "\n"
