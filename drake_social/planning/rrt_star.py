@@ -52,6 +52,10 @@ __all__ = ["MAX_ITERATIONS", "NEAR_RADIUS_MODES", "RrtStar", "RrtStarOptions", "
 MAX_ITERATIONS = 10_000_000
 #: Allowed ``RrtStarOptions.near_radius_mode`` values.
 NEAR_RADIUS_MODES = ("fixed", "shrinking")
+#: Iterations per call of the compiled loop (Ctrl-C is noticed between calls).
+CHUNK = 1024
+#: ... and with a progress callback (called after each call, for each of its iterations).
+PROGRESS_CHUNK = 64
 #: The KD-tree serves neighbour queries from this many nodes on.
 KD_TREE_MIN_NODES = 2048
 
@@ -316,11 +320,12 @@ class RrtStar:
         Args:
             start, goal: configurations (4,).
             rng: the only source of randomness.
-            progress: optional ``progress(iteration, best_cost)`` called every
-                iteration (for progress bars; keep it cheap). The compiled
-                loop cannot call back into Python (nor notice Ctrl-C) while it
-                runs, so with a callback the Python loop runs instead: the
-                same path, tree and costs bit for bit, only slower.
+            progress: optional ``progress(iteration, best_cost)`` called for
+                every iteration (for progress bars; keep it cheap). The
+                compiled loop runs in chunks of ``PROGRESS_CHUNK`` iterations
+                and calls it after each chunk for each of the chunk's
+                iterations (so at most a chunk late); without a callback the
+                chunks are ``CHUNK`` long. Ctrl-C is noticed between chunks.
 
         Raises:
             PlanningInputError: start or goal invalid. A goal that cannot be
@@ -333,8 +338,8 @@ class RrtStar:
         self._check_endpoints(start, goal)
         space, checker, objective = self.space, self.checker, self.objective
 
-        if opt.compiled and progress is None and self._compiled_applies():
-            return self._solve_compiled(start, goal, rng, t0)
+        if opt.compiled and self._compiled_applies():
+            return self._solve_compiled(start, goal, rng, t0, progress)
         tree = _Tree()
         tree.add(start, -1, 0.0)
         neighbors = _Neighbors(space.weights, opt.kd_tree, KD_TREE_MIN_NODES)
@@ -405,9 +410,9 @@ class RrtStar:
         c, o = self.checker, self.objective
         planar = all(hasattr(c, a) for a in ("bodies", "robot", "env", "levers", "lower", "upper"))
         known = type(o) is PathLengthObjective or (type(o) is SocialObjective and o.social.backend == "numba")
-        return tree_kernel.AVAILABLE and planar and known and not self.options.informed
+        return tree_kernel.AVAILABLE and planar and known
 
-    def _solve_compiled(self, start, goal, rng, t0) -> PlannerResult:
+    def _solve_compiled(self, start, goal, rng, t0, progress=None) -> PlannerResult:
         from drake_social.planning import tree_kernel
         from drake_social.planning.objective import SocialObjective
 
@@ -429,17 +434,41 @@ class RrtStar:
         grid = (float(grid[0]), float(grid[1]), float(grid[2]), float(grid[3]), int(grid[4]), int(grid[5]),
                 f(grid[6], np.int64), f(grid[7], np.int64))
         chk = (f(c.lower, float), f(c.upper, float), f(c.bodies), f(c.robot), f(c.env), f(c.levers, float))
-        q, parent, cost, n, history, best_node, best_cost, first, counts = tree_kernel.grow(
-            rng, f(start), f(goal), f(space.lower), f(space.upper), f(space.weights), int(opt.iterations),
-            float(opt.planning_range), float(opt.near_radius), float(opt.goal_bias),
-            opt.near_radius_mode == "shrinking", float(self.gamma), kind, float(o.length_weight),
-            f(o.distance_weights, float), soc, grid, chk,
-        )
+        if opt.informed:
+            sampler = EllipseSampler(space, start[:2], goal[:2])
+            xy_scale = float(o.length_weight * min(o.distance_weights[0], o.distance_weights[1]))
+            inf = (True, 0 if opt.informed_mode == "paper" else 1, f(sampler.f1), f(sampler.f2), f(sampler.centre),
+                   f(sampler.rotation), float(sampler.focal_distance), xy_scale)
+        else:
+            z = np.zeros(2)
+            inf = (False, 0, z, z, z, np.eye(2), 0.0, 0.0)
+        k = int(opt.iterations)
+        state = tree_kernel.init_state(f(start), f(goal), f(space.lower), f(space.upper), f(space.weights), k,
+                                       float(opt.near_radius), chk, bool(opt.informed))
+        params = (f(goal), f(space.lower), f(space.upper), f(space.weights), float(opt.planning_range),
+                  float(opt.near_radius), float(opt.goal_bias), opt.near_radius_mode == "shrinking",
+                  float(self.gamma), kind, float(o.length_weight), f(o.distance_weights, float), soc, grid, chk, inf)
+        # Chunks of iterations: between them Python runs (Ctrl-C is seen, the
+        # progress callback is called for each iteration of the chunk).
+        chunk = PROGRESS_CHUNK if progress is not None else CHUNK
+        done = -1
+        while done < k:
+            stop = min(k, done + chunk)
+            state = tree_kernel.grow(rng, done, stop, *params, state)
+            if progress is not None:
+                history = state[12]
+                for it in range(max(done, 0), stop):
+                    progress(it + 1, float(history[it]))
+            done = stop
+        q, parent, cost, counts, history, diameters, ints, floats = (state[0], state[1], state[2], state[11],
+                                                                      state[12], state[13], state[17], state[18])
+        n, best_node, first = int(ints[0]), int(ints[2]), int(ints[3])
         tree = _Tree(max(n, 1))
-        tree.q[:n], tree.parent[:n], tree.cost[:n] = q, parent, cost
+        tree.q[:n], tree.parent[:n], tree.cost[:n] = q[:n], parent[:n], cost[:n]
         tree.n = n
-        result = self._result(tree, goal, int(best_node), float(best_cost), None if first < 0 else int(first),
-                              history, _Counts(int(counts[0]), int(counts[1]), int(counts[2])), t0)
+        result = self._result(tree, goal, best_node, float(floats[0]), None if first < 0 else first,
+                              history.copy(), _Counts(int(counts[0]), int(counts[1]), int(counts[2])), t0)
+        result.informed_diameters = diameters.copy()
         return self._finish(result, t0)
 
     def _finish(self, result: PlannerResult, t0: float) -> PlannerResult:
@@ -582,7 +611,10 @@ class RrtStar:
     @staticmethod
     def _xy_length(tree: _Tree, node: int, goal: np.ndarray) -> float:
         pts = np.vstack([tree.q[tree.path_to(node), :2], goal[:2]])
-        return float(np.hypot(*np.diff(pts, axis=0).T).sum())
+        total = 0.0
+        for step in np.hypot(*np.diff(pts, axis=0).T):  # summed in order (the compiled loop's order)
+            total += float(step)
+        return total
 
     def _result(self, tree, goal, best_node, best_cost, first_iteration, history, counts, t0):
         nodes = tree.q[: tree.n].copy()

@@ -16,6 +16,8 @@ choose ``c`` (see :func:`transverse_diameter`):
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from drake_social.planning.space import ConfigurationSpace
@@ -65,11 +67,14 @@ class EllipseSampler:
             return q
         c = max(c, self.focal_distance)
         a = 0.5 * c
-        b = 0.5 * np.sqrt(max(c * c - self.focal_distance**2, 0.0))
+        b = 0.5 * math.sqrt(max(c * c - self.focal_distance * self.focal_distance, 0.0))
         lo, hi = self.space.lower[:2], self.space.upper[:2]
+        (r00, r01), (r10, r11) = self.rotation
         for _ in range(self.max_attempts):
-            r, phi = np.sqrt(rng.random()), 2 * np.pi * rng.random()
-            xy = self.centre + self.rotation @ np.array([a * r * np.cos(phi), b * r * np.sin(phi)])
+            # Scalar arithmetic in a fixed order: the compiled loop repeats it bit for bit.
+            r, phi = math.sqrt(rng.random()), 2 * math.pi * rng.random()
+            u, v = a * r * math.cos(phi), b * r * math.sin(phi)
+            xy = np.array([self.centre[0] + (r00 * u + r01 * v), self.centre[1] + (r10 * u + r11 * v)])
             if np.all(xy >= lo) and np.all(xy <= hi):
                 q[:2] = xy
                 return q

@@ -25,7 +25,7 @@ from drake_social.planning import planar_kernel
 njit = cost_kernel.njit
 AVAILABLE = cost_kernel.AVAILABLE
 
-__all__ = ["AVAILABLE", "grow"]
+__all__ = ["AVAILABLE", "grow", "init_state"]
 
 
 @njit(cache=True)
@@ -65,45 +65,27 @@ def _costs(q_a, q_b, kind, lam, dw, soc, grid):
 
 
 @njit(cache=True)
-def grow(rng, start, goal, lower, upper, w, iterations, delta, r_near, goal_bias, shrinking, gamma,
-         kind, lam, dw, soc, grid, chk):
-    """The whole RRT* run. Returns (q, parent, cost, n, history, best_node,
-    best_cost, first_iteration, counts[config, motion, cost])."""
+def grow(rng, it_start, it_stop, goal, lower, upper, w, delta, r_near, goal_bias, shrinking, gamma,
+         kind, lam, dw, soc, grid, chk, inf, state):
+    """Iterations ``it_start .. it_stop - 1`` of the RRT* run (-1: the start's
+    goal connection, before the first sample) on ``state`` from
+    :func:`init_state` or the previous chunk; returns the new state (arrays
+    may be replaced as they grow)."""
     c_lower, c_upper, bodies, robot, env, levers = chk
+    (informed, mode, f1, f2, centre, rot, focal, xy_scale) = inf
+    (q, parent, cost, edge, first_child, next_sib, prev_sib, clear, g_next, goal_nodes, goal_edges,
+     counts, history, diameters, g_head, g_geom, goal_clear, ints, floats) = state
+    n, n_goal, best_node, first_iteration = ints[0], ints[1], ints[2], ints[3]
+    best_cost, ellipse_c = floats[0], floats[1]
+    cap = q.shape[0]
     s_count = robot.shape[0]
-    cap = 256
-    q = np.empty((cap, 4))
-    parent = np.full(cap, -1, dtype=np.int64)
-    cost = np.zeros(cap)
-    edge = np.zeros(cap)
-    first_child = np.full(cap, -1, dtype=np.int64)
-    next_sib = np.full(cap, -1, dtype=np.int64)
-    prev_sib = np.full(cap, -1, dtype=np.int64)
-    clear = np.empty((cap, s_count))  # every node's capsule clearances (motion ends)
-    counts = np.zeros(3, dtype=np.int64)
-    history = np.full(iterations, np.inf)
-    goal_nodes = np.empty(16, dtype=np.int64)
-    goal_edges = np.empty(16)
-    n_goal = 0
-    # Nodes bucketed by their weighted (x, y) in square cells (linked lists),
-    # so that nearest and near queries visit the nodes of nearby cells only.
-    g_geom = _grid_geometry(lower, upper, w, r_near)
-    g_head = np.full(int(g_geom[3]) * int(g_geom[4]), -1, dtype=np.int64)
-    g_next = np.full(cap, -1, dtype=np.int64)
-    q[0] = start
-    _insert(0, q, w, g_head, g_next, g_geom)
-    clear[0] = planar_kernel.capsule_clearances(start, bodies, robot, env)
-    goal_clear = planar_kernel.capsule_clearances(goal, bodies, robot, env)
-    n = 1
-    best_cost, best_node, first_iteration = np.inf, -1, -1
     one = np.empty((1, 4))
     gq = np.empty((1, 4))
     gq[0] = goal
     near = np.empty(cap, dtype=np.int64)
-    d2s = np.empty(cap)
     stack = np.empty(cap, dtype=np.int64)
 
-    for it in range(-1, iterations):
+    for it in range(it_start, it_stop):
         i_new = 0
         if it >= 0:
             # ---- sample
@@ -114,6 +96,8 @@ def grow(rng, start, goal, lower, upper, w, iterations, delta, r_near, goal_bias
                 for c in range(4):
                     q_rand[c] = rng.random()
                 q_rand = lower + q_rand * (upper - lower)
+                if informed and math.isfinite(ellipse_c):
+                    _ellipse_xy(rng, q_rand, ellipse_c, centre, rot, focal, lower, upper)
             # ---- nearest, steer, check
             i_near, d_best = _nearest(q, q_rand, w, g_head, g_next, g_geom)
             i_new = -1
@@ -261,9 +245,88 @@ def grow(rng, start, goal, lower, upper, w, iterations, delta, r_near, goal_bias
                 best_cost, best_node = g_best, goal_nodes[g]
                 if first_iteration < 0:
                     first_iteration = it + 1
+                if informed:
+                    if mode == 0:  # "paper": the XY length of the best path's base
+                        ellipse_c = _xy_length(q, parent, best_node, goal)
+                    else:  # "admissible": best cost / (lambda min(w_x, w_y))
+                        ellipse_c = best_cost / xy_scale if xy_scale > 0 else np.inf
         if it >= 0:
             history[it] = best_cost
-    return q[:n].copy(), parent[:n].copy(), cost[:n].copy(), n, history, best_node, best_cost, first_iteration, counts
+            if informed:
+                diameters[it] = ellipse_c
+    ints[0], ints[1], ints[2], ints[3] = n, n_goal, best_node, first_iteration
+    floats[0], floats[1] = best_cost, ellipse_c
+    return (q, parent, cost, edge, first_child, next_sib, prev_sib, clear, g_next, goal_nodes, goal_edges,
+            counts, history, diameters, g_head, g_geom, goal_clear, ints, floats)
+
+
+@njit(cache=True)
+def init_state(start, goal, lower, upper, w, iterations, r_near, chk, informed):
+    """The state of a run before its first chunk: the tree of the start alone."""
+    c_lower, c_upper, bodies, robot, env, levers = chk
+    s_count = robot.shape[0]
+    cap = 256
+    q = np.empty((cap, 4))
+    parent = np.full(cap, -1, dtype=np.int64)
+    cost = np.zeros(cap)
+    edge = np.zeros(cap)
+    first_child = np.full(cap, -1, dtype=np.int64)
+    next_sib = np.full(cap, -1, dtype=np.int64)
+    prev_sib = np.full(cap, -1, dtype=np.int64)
+    clear = np.empty((cap, s_count))  # every node's capsule clearances (motion ends)
+    counts = np.zeros(3, dtype=np.int64)
+    history = np.full(iterations, np.inf)
+    diameters = np.full(iterations if informed else 0, np.inf)
+    goal_nodes = np.empty(16, dtype=np.int64)
+    goal_edges = np.empty(16)
+    # Nodes bucketed by their weighted (x, y) in square cells (linked lists),
+    # so that nearest and near queries visit the nodes of nearby cells only.
+    g_geom = _grid_geometry(lower, upper, w, r_near)
+    g_head = np.full(int(g_geom[3]) * int(g_geom[4]), -1, dtype=np.int64)
+    g_next = np.full(cap, -1, dtype=np.int64)
+    q[0] = start
+    _insert(0, q, w, g_head, g_next, g_geom)
+    clear[0] = planar_kernel.capsule_clearances(start, bodies, robot, env)
+    goal_clear = planar_kernel.capsule_clearances(goal, bodies, robot, env)
+    ints = np.array([1, 0, -1, -1], dtype=np.int64)  # n, goal nodes, best node, first solution iteration
+    floats = np.array([np.inf, np.inf])  # best cost, ellipse diameter
+    return (q, parent, cost, edge, first_child, next_sib, prev_sib, clear, g_next, goal_nodes, goal_edges,
+            counts, history, diameters, g_head, g_geom, goal_clear, ints, floats)
+
+
+@njit(cache=True)
+def _xy_length(q, parent, node, goal):
+    """The XY length of the tree path start -> node, then to the goal, summed
+    from the start (as RrtStar._xy_length)."""
+    path = []
+    i = node
+    while i >= 0:
+        path.append(i)
+        i = parent[i]
+    total = 0.0
+    for k in range(len(path) - 1, 0, -1):
+        a, b = path[k], path[k - 1]
+        total += math.hypot(q[b, 0] - q[a, 0], q[b, 1] - q[a, 1])
+    last = path[0]
+    return total + math.hypot(goal[0] - q[last, 0], goal[1] - q[last, 1])
+
+
+@njit(cache=True)
+def _ellipse_xy(rng, q, c, centre, rot, focal, lower, upper):
+    """EllipseSampler.sample's base position into q[:2] (the same draws)."""
+    c = max(c, focal)
+    a = 0.5 * c
+    b = 0.5 * math.sqrt(max(c * c - focal * focal, 0.0))
+    for _ in range(1000):
+        r = math.sqrt(rng.random())
+        phi = 2 * math.pi * rng.random()
+        u, v = a * r * math.cos(phi), b * r * math.sin(phi)
+        x = centre[0] + (rot[0, 0] * u + rot[0, 1] * v)
+        y = centre[1] + (rot[1, 0] * u + rot[1, 1] * v)
+        if lower[0] <= x <= upper[0] and lower[1] <= y <= upper[1]:
+            q[0], q[1] = x, y
+            return
+    raise RuntimeError("no ellipse sample inside the room bounds after 1000 attempts")
 
 
 @njit(cache=True)

@@ -69,32 +69,65 @@ def test_compiled_loop_equals_the_reference_on_the_shipped_maps(name, repo_root)
     assert_same(run(scenario, checker, "social_rrt_star", 1, False), run(scenario, checker, "social_rrt_star", 1, True))
 
 
-def test_informed_and_other_checkers_use_the_python_loop(tiny, tiny_scenario):
+def test_other_checkers_use_the_python_loop(tiny, tiny_scenario):
     from drake_social.planning.geometric import GeometricChecker
 
-    scenario, checker = tiny
-    planner = make_planner(scenario, checker, "informed_social_rrt_star")
-    assert not planner._compiled_applies()
+    scenario, _ = tiny
     assert not make_planner(scenario, GeometricChecker(scenario))._compiled_applies()
 
 
-def test_a_progress_callback_runs_the_python_loop_with_the_same_result(tiny, monkeypatch):
-    """The compiled loop cannot call back: with a callback the Python loop runs,
-    every iteration is reported, and the result is the compiled one's."""
+@pytest.mark.parametrize("mode", ["paper", "admissible"])
+def test_compiled_informed_sampling_equals_the_reference(tiny, mode):
+    """Informed sampling compiled: the same ellipse draws, the same diameters
+    after every iteration, the same tree (admissible needs lambda > 0)."""
+    scenario, checker = tiny
+    scenario = copy.deepcopy(scenario)
+    scenario.social.length_weight = 0.3
+    scenario.planner = dc.replace(scenario.planner, informed_mode=mode)
+    reference = run(scenario, checker, "informed_social_rrt_star", 2, False)
+    dut = run(scenario, checker, "informed_social_rrt_star", 2, True)
+    assert_same(reference, dut)
+    np.testing.assert_array_equal(dut.informed_diameters, reference.informed_diameters)
+    finite = np.isfinite(dut.informed_diameters)
+    assert finite.sum() > 100 and len(np.unique(dut.informed_diameters[finite])) > 2  # the ellipse shrank
+
+
+def test_a_progress_callback_sees_every_iteration_of_the_compiled_loop(tiny, monkeypatch):
+    """With a callback the compiled loop runs in chunks: every iteration is
+    reported, in order, with its best cost, and the result is the reference's."""
     scenario, checker = tiny
     planner = make_planner(scenario, checker, "social_rrt_star")
     planner.options = dc.replace(planner.options, lazy_costs=False)
-    compiled_calls = []
-    original = planner._solve_compiled
-    monkeypatch.setattr(planner, "_solve_compiled", lambda *a: compiled_calls.append(1) or original(*a))
     seen = []
     args = (np.array(scenario.start), np.array(scenario.goal))
     with_progress = planner.solve(*args, np.random.default_rng(5), lambda k, c: seen.append((k, c)))
-    assert not compiled_calls and [k for k, _ in seen] == list(range(1, scenario.planner.iterations + 1))
+    assert [k for k, _ in seen] == list(range(1, scenario.planner.iterations + 1))
     np.testing.assert_array_equal([c for _, c in seen], with_progress.cost_history)
-    without = planner.solve(*args, np.random.default_rng(5))
-    assert compiled_calls == [1]
-    assert_same(with_progress, without)
+    assert np.isinf(seen[0][1]) and np.isfinite(seen[-1][1])
+    reference = run(scenario, checker, "social_rrt_star", 5, False)
+    assert_same(reference, with_progress)
+    assert_same(reference, planner.solve(*args, np.random.default_rng(5)))
+
+
+def test_ctrl_c_stops_the_compiled_loop_between_chunks(tiny):
+    """KeyboardInterrupt raised in the callback (as Python raises it for
+    Ctrl-C between two chunks) ends the run at once, after one chunk."""
+    from drake_social.planning import rrt_star
+
+    scenario, checker = tiny
+    scenario = copy.deepcopy(scenario)
+    scenario.planner = dc.replace(scenario.planner, iterations=50 * rrt_star.PROGRESS_CHUNK)
+    planner = make_planner(scenario, checker, "social_rrt_star")
+    seen = []
+
+    def interrupt(k, c):
+        seen.append(k)
+        if k == 10:
+            raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt):
+        planner.solve(np.array(scenario.start), np.array(scenario.goal), np.random.default_rng(0), interrupt)
+    assert seen == list(range(1, 11))
 
 
 def test_grid_neighbour_queries_equal_the_direct_scan(rng):
