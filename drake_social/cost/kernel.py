@@ -145,8 +145,9 @@ def msc_sums(
     e_count, h_count, k_count = q_a.shape[0], people.shape[0], active.shape[0]
     sums = np.zeros(e_count)
     steps = np.ones(e_count, dtype=np.int64)
-    cos_t = np.cos(people[:, 2])
-    sin_t = np.sin(people[:, 2])
+    cos_t = np.empty(h_count)  # of the candidates only (far people cost nothing)
+    sin_t = np.empty(h_count)
+    have = np.zeros(h_count, dtype=np.bool_)
     xa, ya = np.empty(k_count), np.empty(k_count)
     xb, yb = np.empty(k_count), np.empty(k_count)
     spans = np.empty(k_count)
@@ -206,6 +207,10 @@ def msc_sums(
                 m += 1
         if m == 0:
             continue
+        for i in range(m):
+            h = cand[i]
+            if not have[h]:
+                cos_t[h], sin_t[h], have[h] = math.cos(people[h, 2]), math.sin(people[h, 2]), True
         _points(q_a[e, 0], q_a[e, 1], q_a[e, 2], q_a[e, 3], l1, l2, obj, active, xa, ya)
         _points(q_b[e, 0], q_b[e, 1], q_b[e, 2], q_b[e, 3], l1, l2, obj, active, xb, yb)
         # Each point's own bound: it moves at most spans[j] per unit of t.

@@ -229,6 +229,13 @@ def _pair_bound(mx, my, reach, env, k):
 
 
 @njit(cache=True)
+def _coarse_bound(mx, my, reach, env, k):
+    """A cheaper, looser lower bound than :func:`_pair_bound` (bounding
+    squares: no rotation, no square root), tried first."""
+    return max(abs(mx - env[k, 1]), abs(my - env[k, 2])) - env[k, 7] - reach
+
+
+@njit(cache=True)
 def _capsule_reach(cap, j):
     """(mx, my, reach): the midpoint of world capsule j and the distance of its
     farthest point from it."""
@@ -243,8 +250,8 @@ def _capsule_clearances(cap, env, out):
         mx, my, reach = _capsule_reach(cap, j)
         best = np.inf
         for k in range(env.shape[0]):
-            # Broad phase: a lower bound of the pair's distance.
-            if _pair_bound(mx, my, reach, env, k) >= best:
+            # Broad phase: lower bounds of the pair's distance.
+            if _coarse_bound(mx, my, reach, env, k) >= best or _pair_bound(mx, my, reach, env, k) >= best:
                 continue
             best = min(best, _pair(cap, j, env, k))
         out[j] = best
@@ -257,8 +264,8 @@ def _clearance(q, bodies, robot, env):
     for j in range(cap.shape[0]):
         mx, my, reach = _capsule_reach(cap, j)
         for k in range(env.shape[0]):
-            # Broad phase: a lower bound of the pair's distance.
-            if _pair_bound(mx, my, reach, env, k) >= best:
+            # Broad phase: lower bounds of the pair's distance.
+            if _coarse_bound(mx, my, reach, env, k) >= best or _pair_bound(mx, my, reach, env, k) >= best:
                 continue
             best = min(best, _pair(cap, j, env, k))
     return best
@@ -280,7 +287,7 @@ def _free(q, bodies, robot, env):
     for j in range(cap.shape[0]):
         mx, my, reach = _capsule_reach(cap, j)
         for k in range(env.shape[0]):
-            if _pair_bound(mx, my, reach, env, k) > 0.0:
+            if _coarse_bound(mx, my, reach, env, k) > 0.0 or _pair_bound(mx, my, reach, env, k) > 0.0:
                 continue
             if not _pair(cap, j, env, k) > 0.0:
                 return False
@@ -355,7 +362,8 @@ def _probe(cap, env, keep, n_keep, spans, tau_max):
         mx, my, reach = _capsule_reach(cap, j)
         for i in range(n_keep):
             k = keep[i]
-            if _pair_bound(mx, my, reach, env, k) - STEP_MARGIN >= tau * d_j:
+            if (_coarse_bound(mx, my, reach, env, k) - STEP_MARGIN >= tau * d_j
+                    or _pair_bound(mx, my, reach, env, k) - STEP_MARGIN >= tau * d_j):
                 continue
             d = _pair(cap, j, env, k)
             if d <= TOLERANCE:
