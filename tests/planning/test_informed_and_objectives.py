@@ -131,3 +131,63 @@ def test_base_only_cost_keeps_the_distance_weights():
     plain.distance_weights = None
     ratio = float(dut.motion_cost(q_a, q_b)) / float(plain.motion_cost(q_a, q_b))
     assert ratio == pytest.approx(math.hypot(2.0 * 3.0, 0.5 * 2.0) / math.hypot(3.0, 2.0), rel=1e-12)
+
+
+# ---- the objectives' own arithmetic (found untested by the mutation run of objective.py) ----
+
+
+def test_path_length_objective_is_the_weighted_norm(rng):
+    """Cost and bound of the RRT* baseline against ||W dq|| written out; the
+    state cost is 0 with the batch shape of q; the XY bound divides by the
+    lighter of w_x, w_y and is inf when one is 0."""
+    from drake_social.planning.objective import PathLengthObjective
+
+    default = PathLengthObjective()
+    assert default.length_weight == 1.0 and default.length_is_cost is True
+    np.testing.assert_array_equal(default.distance_weights, np.ones(4))
+    assert default.xy_length_bound(3.0) == 3.0
+    dut = PathLengthObjective([2.0, 0.5, 1.0, 3.0])
+    q_a, q_b = rng.normal(size=(20, 4)), rng.normal(size=(20, 4))
+    by_hand = [math.sqrt(sum((w * (b - a)) ** 2 for w, a, b in zip([2.0, 0.5, 1.0, 3.0], qa, qb)))
+               for qa, qb in zip(q_a, q_b)]
+    np.testing.assert_allclose(dut.motion_cost(q_a, q_b), by_hand, rtol=1e-14)
+    np.testing.assert_allclose(default.motion_cost(q_a, q_b), np.linalg.norm(q_b - q_a, axis=1), rtol=1e-14)
+    np.testing.assert_array_equal(dut.length_bound(q_a, q_b), dut.motion_cost(q_a, q_b))
+    single = dut.motion_cost(np.zeros(4), np.array([1.0, 1.0, 1.0, 1.0]))
+    assert single.shape == (1,) and single[0] == pytest.approx(math.sqrt(4 + 0.25 + 1 + 9), rel=1e-15)
+    assert dut.xy_length_bound(3.0) == pytest.approx(6.0, rel=1e-15)  # 3 / min(2, 0.5)
+    assert PathLengthObjective([0.0, 1.0, 1.0, 1.0]).xy_length_bound(3.0) == math.inf
+    for shape in [(4,), (3, 4), (2, 3, 4)]:
+        state = dut.state_cost(np.ones(shape))
+        assert state.shape == shape[:-1] and np.all(state == 0.0)
+
+
+def test_social_objective_arithmetic(tiny_scenario):
+    """lambda defaults to 0 (the pure social integral, bit for bit the cost's
+    Msc), the length term is lambda ||W dq|| and is its lower bound, the
+    state cost is S (by hand: the base 1 m in front of the person), the
+    length is not the cost, and the XY bound is inf without a length term."""
+    cost = SocialCost.from_scenario(tiny_scenario)
+    cost.distance_weights = None
+    pure = SocialObjective(cost)
+    assert pure.length_weight == 0.0 and pure.length_is_cost is False
+    np.testing.assert_array_equal(pure.distance_weights, np.ones(4))
+    q_a = np.array([[3.0, 2.8, 0.0, 1.0], [1.0, 1.0, 0.0, 0.0], [4.0, 2.0, 0.5, 0.5]])
+    q_b = np.array([[5.0, 2.8, 0.5, 1.0], [1.5, 1.0, 0.0, 0.0], [4.0, 2.0, 1.5, -0.5]])
+    social = cost.motion_cost(q_a, q_b)
+    assert social[0] > 0.5
+    np.testing.assert_array_equal(pure.motion_cost(q_a, q_b), social)
+    np.testing.assert_array_equal(pure.length_bound(q_a, q_b), 0.0)
+    assert pure.xy_length_bound(2.0) == math.inf
+    lengths = np.linalg.norm(q_b - q_a, axis=1)
+    dut = SocialObjective(cost, length_weight=0.5)
+    np.testing.assert_allclose(dut.motion_cost(q_a, q_b), social + 0.5 * lengths, rtol=1e-14)
+    np.testing.assert_allclose(dut.length_bound(q_a, q_b), 0.5 * lengths, rtol=1e-14)
+    assert np.all(dut.motion_cost(q_a, q_b) >= dut.length_bound(q_a, q_b))
+    assert dut.xy_length_bound(2.0) == pytest.approx(4.0, rel=1e-15)  # 2 / (0.5 min(1, 1))
+    base = cost.with_weights(np.array([1.0, 0.0, 0.0, 0.0, 0.0]))
+    q = np.array([[4.0, 2.8, 0.3, 2.0]])  # 1 m in front of the person at (4, 3.8) facing -y (-1.5708)
+    assert SocialObjective(base).state_cost(q)[0] == pytest.approx(math.exp(-1 / 8), rel=1e-9)
+    for bad in (-0.5, math.nan):
+        with pytest.raises(ValueError, match=rf"^length_weight must be >= 0, got {bad}$"):
+            SocialObjective(cost, length_weight=bad)
