@@ -146,9 +146,16 @@ class ProgressBar:
                  interval: float = 0.1):
         from tqdm import tqdm
 
-        self._bar = tqdm(total=max(1, int(total)), file=stream, desc=label, ascii=".#", mininterval=interval,
-                         bar_format="{desc} [{bar:%d}] {n_fmt}/{total_fmt}{postfix}  {elapsed}" % width,
-                         dynamic_ncols=False, leave=True)
+        self._stream = _LineEnd(stream)
+        try:  # tqdm draws the bar while it is made: a Ctrl-C then must not strand the line
+            self._bar = tqdm(total=max(1, int(total)), file=self._stream, desc=label, ascii=".#",
+                             mininterval=interval,
+                             bar_format="{desc} [{bar:%d}] {n_fmt}/{total_fmt}{postfix}  {elapsed}" % width,
+                             dynamic_ncols=False, leave=True)
+        except BaseException:
+            if self._stream.open:
+                self._stream.write("\n")
+            raise
 
     @property
     def total(self) -> int:
@@ -167,7 +174,30 @@ class ProgressBar:
         self._bar.update(int(done) - self._bar.n)
 
     def close(self) -> None:
+        """Ends the bar's line, also when a Ctrl-C cut its last redraw short
+        (tqdm then skips the final line)."""
         self._bar.close()
+        if self._stream.open:
+            self._stream.write("\n")
+
+
+class _LineEnd:
+    """A text stream that remembers whether its last line is still open."""
+
+    def __init__(self, stream: TextIO):
+        self._stream = stream
+        self.open = False
+
+    def write(self, text: str) -> int:
+        if text:
+            self.open = not text.endswith("\n")
+        return self._stream.write(text)
+
+    def flush(self) -> None:
+        self._stream.flush()
+
+    def __getattr__(self, name):  # isatty, encoding, ... of the wrapped stream
+        return getattr(self._stream, name)
 
 
 def _int_at_least(minimum: int) -> Callable[[str], int]:

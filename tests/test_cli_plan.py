@@ -163,6 +163,39 @@ def test_progress_bar_draws_fraction_and_best_cost():
     assert quiet.getvalue().rstrip().split("\r")[-1].startswith("planning [" + "#" * 30 + "] 10/10, best 1")
 
 
+class _CutStream(io.StringIO):
+    """Raises KeyboardInterrupt right after the n-th write (Ctrl-C mid-redraw)."""
+
+    def __init__(self, n):
+        super().__init__()
+        self.n = n
+
+    def write(self, text):
+        out = super().write(text)
+        self.n -= 1
+        if self.n == 0:
+            raise KeyboardInterrupt
+        return out
+
+
+@pytest.mark.parametrize("cut", [1, 2, 3, 4])
+def test_a_ctrl_c_mid_redraw_still_ends_the_bars_line(cut):
+    """Whether Ctrl-C lands while the bar is made, in a redraw or after, the
+    line ends once: the one message after it starts on a line of its own."""
+    stream = _CutStream(cut)
+    try:
+        bar = ProgressBar(300, stream, width=10, interval=0.0)
+        try:
+            for k in range(1, 4):
+                bar(k, 1.0)
+        finally:
+            bar.close()
+    except KeyboardInterrupt:
+        pass
+    text = stream.getvalue()
+    assert text.startswith("\rplanning [") and text.endswith("\n") and not text.endswith("\n\n")
+
+
 def test_bench_parses_and_calls_run_bench_with_keywords(tmp_path, monkeypatch, capsys):
     calls = []
     fake = types.ModuleType("drake_social.experiments.bench")
@@ -180,12 +213,14 @@ def test_bench_parses_and_calls_run_bench_with_keywords(tmp_path, monkeypatch, c
     staging = calls[0].pop("out_dir")
     assert staging.parent == tmp_path and staging.name.startswith(".staging-bench-") and not staging.exists()
     assert calls == [dict(scenario_paths=[TINY], algorithms=["rrt_star", "social_rrt_star"], iterations=50, seeds=3,
-                          checker="numpy", include_ompl=False, include_checker=True, sim_runs=3, progress=None)]
+                          checker="numpy", ompl_checker="drake", include_ompl=False, include_checker=True,
+                          sim_runs=3, scaling=False, progress=None)]
     assert (tmp_path / "bench.md").read_text() == "| table |\n" and "| table |" in capsys.readouterr().out
     defaults = build_parser().parse_args(["bench"])
     assert [str(p) for p in defaults.scenarios] == ["scenarios/office_bar.yaml", "scenarios/generic_L.yaml"]
     assert defaults.algorithms == list(ALGORITHMS) and defaults.iterations == 2000 and defaults.seeds == 10
-    assert defaults.checker == "drake" and defaults.no_ompl is False and defaults.out == Path("out/bench")
+    assert defaults.checker == "planar" and defaults.ompl_checker == "drake" and defaults.scaling is False
+    assert defaults.no_ompl is False and defaults.out == Path("out/bench")
     assert main(["bench", "--scenarios", str(tmp_path / "none.yaml")]) == 2
     assert "none.yaml: no such scenario file" in capsys.readouterr().err
 
