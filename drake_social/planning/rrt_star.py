@@ -447,7 +447,8 @@ class RrtStar:
                                        float(opt.near_radius), chk, bool(opt.informed))
         params = (f(goal), f(space.lower), f(space.upper), f(space.weights), float(opt.planning_range),
                   float(opt.near_radius), float(opt.goal_bias), opt.near_radius_mode == "shrinking",
-                  float(self.gamma), kind, float(o.length_weight), f(o.distance_weights, float), soc, grid, chk, inf)
+                  float(self.gamma), kind, float(o.length_weight), f(o.distance_weights, float), soc, grid, chk, inf,
+                  bool(opt.lazy_costs))
         # Chunks of iterations: between them Python runs (Ctrl-C is seen, the
         # progress callback is called for each iteration of the chunk).
         chunk = PROGRESS_CHUNK if progress is not None else CHUNK

@@ -66,7 +66,7 @@ def _costs(q_a, q_b, kind, lam, dw, soc, grid):
 
 @njit(cache=True)
 def grow(rng, it_start, it_stop, goal, lower, upper, w, delta, r_near, goal_bias, shrinking, gamma,
-         kind, lam, dw, soc, grid, chk, inf, state):
+         kind, lam, dw, soc, grid, chk, inf, lazy, state):
     """Iterations ``it_start .. it_stop - 1`` of the RRT* run (-1: the start's
     goal connection, before the first sample) on ``state`` from
     :func:`init_state` or the previous chunk; returns the new state (arrays
@@ -128,23 +128,71 @@ def grow(rng, it_start, it_stop, goal, lower, upper, w, delta, r_near, goal_bias
                     for s in range(m):
                         q_a[s] = q[near[s]]
                         q_b[s] = q_new
-                    phi = _costs(q_a, q_b, kind, lam, dw, soc, grid)
-                    counts[2] += m
-                    total = np.empty(m)
-                    for s in range(m):
-                        total[s] = cost[near[s]] + phi[s]
-                    order = np.argsort(total, kind="mergesort")
                     checked = np.zeros(m, dtype=np.int8)  # 0 unknown, 1 valid, 2 invalid
                     p_slot = -1
-                    for o in range(m):
-                        s = order[o]
-                        counts[1] += 1
-                        ok = planar_kernel.motion_valid_ends(q_a[s], q_new, clear[near[s]], c_new_caps, c_lower,
-                                                             c_upper, bodies, robot, env, levers)
-                        checked[s] = 1 if ok else 2
-                        if ok:
-                            p_slot = s
-                            break
+                    f_near = np.empty(m)
+                    for s in range(m):
+                        f_near[s] = cost[near[s]]
+                    if lazy and kind == 1 and lam > 0:
+                        # Lazy costs (RrtStar._extend): integrate a candidate only once its
+                        # bound F + lambda * length is no larger than the cheapest integrated
+                        # candidate not yet checked; the same candidates, order and checks.
+                        phi = np.full(m, np.inf)
+                        bound = np.empty(m)
+                        for s in range(m):
+                            bound[s] = lam * math.sqrt(_d2(q_new, q_a[s], dw))
+                        low = f_near + bound
+                        by_bound = np.argsort(low, kind="mergesort")
+                        is_open = np.zeros(m, dtype=np.bool_)
+                        n_open, pos = 0, 0
+                        while True:
+                            if n_open == 0:
+                                if pos == m:
+                                    break
+                                _cost_slots(by_bound[pos:pos + 1], phi, q_a, q_b, kind, lam, dw, soc, grid, counts)
+                                is_open[by_bound[pos]] = True
+                                n_open += 1
+                                pos += 1
+                            t_min = np.inf
+                            for s in range(m):
+                                if is_open[s]:
+                                    t_min = min(t_min, f_near[s] + phi[s])
+                            stop = pos
+                            while stop < m and low[by_bound[stop]] <= t_min:
+                                stop += 1
+                            if stop > pos:
+                                _cost_slots(by_bound[pos:stop], phi, q_a, q_b, kind, lam, dw, soc, grid, counts)
+                                for t in range(pos, stop):
+                                    is_open[by_bound[t]] = True
+                                n_open += stop - pos
+                                pos = stop
+                            slot, best_total = -1, np.inf
+                            for s in range(m):  # the cheapest open candidate, the lowest slot on ties
+                                if is_open[s] and (slot < 0 or f_near[s] + phi[s] < best_total):
+                                    slot, best_total = s, f_near[s] + phi[s]
+                            is_open[slot] = False
+                            n_open -= 1
+                            counts[1] += 1
+                            ok = planar_kernel.motion_valid_ends(q_a[slot], q_new, clear[near[slot]], c_new_caps,
+                                                                 c_lower, c_upper, bodies, robot, env, levers)
+                            checked[slot] = 1 if ok else 2
+                            if ok:
+                                p_slot = slot
+                                break
+                    else:
+                        phi = _costs(q_a, q_b, kind, lam, dw, soc, grid)
+                        bound = phi
+                        counts[2] += m
+                        order = np.argsort(f_near + phi, kind="mergesort")
+                        for o in range(m):
+                            s = order[o]
+                            counts[1] += 1
+                            ok = planar_kernel.motion_valid_ends(q_a[s], q_new, clear[near[s]], c_new_caps, c_lower,
+                                                                 c_upper, bodies, robot, env, levers)
+                            checked[s] = 1 if ok else 2
+                            if ok:
+                                p_slot = s
+                                break
                     if p_slot >= 0:
                         # ---- insert
                         if n == cap:
@@ -176,6 +224,15 @@ def grow(rng, it_start, it_stop, goal, lower, upper, w, delta, r_near, goal_bias
                         _link(i_new, p, first_child, next_sib, prev_sib)
                         # ---- rewire
                         c_new = cost[i_new]
+                        if lazy and kind == 1 and lam > 0:
+                            todo = np.empty(m, dtype=np.int64)
+                            nt = 0
+                            for s in range(m):
+                                if c_new + bound[s] < cost[near_idx[s]] and np.isinf(phi[s]):
+                                    todo[nt] = s
+                                    nt += 1
+                            if nt > 0:
+                                _cost_slots(todo[:nt], phi, q_a, q_b, kind, lam, dw, soc, grid, counts)
                         cand = np.empty(m, dtype=np.int64)
                         nc = 0
                         for s in range(m):
@@ -258,6 +315,19 @@ def grow(rng, it_start, it_stop, goal, lower, upper, w, delta, r_near, goal_bias
     floats[0], floats[1] = best_cost, ellipse_c
     return (q, parent, cost, edge, first_child, next_sib, prev_sib, clear, g_next, goal_nodes, goal_edges,
             counts, history, diameters, g_head, g_geom, goal_clear, ints, floats)
+
+
+@njit(cache=True)
+def _cost_slots(slots, phi, q_a, q_b, kind, lam, dw, soc, grid, counts):
+    """phi[slots] = the motion costs q_a[slots] -> q_b[slots] (RrtStar._extend's cost())."""
+    k = slots.shape[0]
+    a, b = np.empty((k, 4)), np.empty((k, 4))
+    for t in range(k):
+        a[t], b[t] = q_a[slots[t]], q_b[slots[t]]
+    out = _costs(a, b, kind, lam, dw, soc, grid)
+    for t in range(k):
+        phi[slots[t]] = out[t]
+    counts[2] += k
 
 
 @njit(cache=True)

@@ -18,7 +18,7 @@ pytestmark = pytest.mark.skipif(not tree_kernel.AVAILABLE, reason="numba is not 
 
 def run(scenario, checker, algorithm, seed, compiled, **options):
     planner = make_planner(scenario, checker, algorithm)
-    planner.options = dc.replace(planner.options, compiled=compiled, lazy_costs=False, **options)
+    planner.options = dc.replace(planner.options, compiled=compiled, **{"lazy_costs": False, **options})
     assert planner._compiled_applies()
     return planner.solve(np.array(scenario.start), np.array(scenario.goal), np.random.default_rng(seed))
 
@@ -59,6 +59,21 @@ def test_compiled_loop_equals_the_reference_with_lambda_and_a_shrinking_radius(t
     planner.options = dc.replace(planner.options, **options)
     assert planner.near_radius(reference.tree_size) < scenario.planner.near_radius
     assert_same(reference, run(scenario, checker, "social_rrt_star", 3, True, **options))
+
+
+@pytest.mark.parametrize("algorithm", ["social_rrt_star", "informed_social_rrt_star"])
+def test_compiled_lazy_costs_equal_the_reference(tiny, algorithm):
+    """With lambda > 0 both loops skip the same integrations: the same tree,
+    the same checks and the same (fewer) cost evaluations."""
+    scenario, checker = tiny
+    scenario = copy.deepcopy(scenario)
+    scenario.social.length_weight = 0.4
+    reference = run(scenario, checker, algorithm, 4, False, lazy_costs=True)
+    dut = run(scenario, checker, algorithm, 4, True, lazy_costs=True)
+    assert_same(reference, dut)
+    eager = run(scenario, checker, algorithm, 4, True)
+    np.testing.assert_array_equal(eager.tree_nodes, dut.tree_nodes)
+    assert dut.num_cost_evaluations < eager.num_cost_evaluations  # the laziness skips work
 
 
 @pytest.mark.parametrize("name", ["office_bar", "generic_L"])
