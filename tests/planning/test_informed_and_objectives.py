@@ -191,3 +191,103 @@ def test_social_objective_arithmetic(tiny_scenario):
     for bad in (-0.5, math.nan):
         with pytest.raises(ValueError, match=rf"^length_weight must be >= 0, got {bad}$"):
             SocialObjective(cost, length_weight=bad)
+
+
+# ---- the sampler's and the space's own arithmetic (found by the mutation run of sampling.py, space.py) ----
+
+
+def test_ellipse_contains_against_focal_distances(rng):
+    """contains is the sum of the distances to the two foci <= c (plus 1e-9),
+    broadcast over any leading shape."""
+    space = ConfigurationSpace(np.array([-20.0, -20.0, -PI, -PI]), np.array([20.0, 20.0, PI, PI]))
+    f1, f2 = np.array([1.0, -2.0]), np.array([4.0, 2.0])
+    dut = EllipseSampler(space, [1, -2], [4, 2])
+    xy = rng.uniform(-6, 10, (3, 400, 2))
+    s = np.hypot(*np.moveaxis(xy - f1, -1, 0)) + np.hypot(*np.moveaxis(xy - f2, -1, 0))
+    got = dut.contains(xy, 7.0)
+    assert got.shape == (3, 400)
+    np.testing.assert_array_equal(got, s <= 7.0 + 1e-9)
+    assert 0.05 < got.mean() < 0.5
+    # The ends of the major axis: 1 m beyond each focus along the axis (c = 7, focal distance 5).
+    axis = (f2 - f1) / 5.0
+    assert dut.contains(f2 + axis, 7.0) and dut.contains(f1 - axis, 7.0)
+    assert not dut.contains(f2 + 1.001 * axis, 7.0) and not dut.contains(f1 - 1.001 * axis, 7.0)
+
+
+def test_ellipse_sampler_thin_ellipse_quadrants_and_room(rng):
+    """A thin ellipse (c^2 - f^2 = 0.5: minor semi-axis 0.354 m) stays thin;
+    the angle is uniform (a quarter of the samples in each quadrant of the
+    ellipse's frame); a room that cuts the ellipse clips every sample."""
+    space = ConfigurationSpace(np.array([-20.0, -20.0, -PI, -PI]), np.array([20.0, 20.0, PI, PI]))
+    dut = EllipseSampler(space, [0.0, 0.0], [5.0, 0.0])
+    c = math.sqrt(25.5)
+    xy = np.array([dut.sample(rng, c)[:2] for _ in range(4000)])
+    assert np.all(np.hypot(*xy.T) + np.hypot(*(xy - [5.0, 0.0]).T) <= c + 1e-9)
+    assert np.abs(xy[:, 1]).max() == pytest.approx(0.5 * math.sqrt(0.5), rel=0.03)
+    u, v = xy[:, 0] - 2.5, xy[:, 1]
+    for quadrant in [(u > 0) & (v > 0), (u < 0) & (v > 0), (u < 0) & (v < 0), (u > 0) & (v < 0)]:
+        assert quadrant.mean() == pytest.approx(0.25, abs=0.03)
+    room = ConfigurationSpace(np.array([1.0, -0.1, -PI, -PI]), np.array([20.0, 20.0, PI, PI]))
+    clipped = EllipseSampler(room, [0.0, 0.0], [5.0, 0.0])
+    xy = np.array([clipped.sample(rng, 6.0)[:2] for _ in range(1000)])
+    assert np.all(room.contains(np.column_stack([xy, np.zeros((1000, 2))])))
+    assert xy[:, 0].min() < 1.05 and xy[:, 1].min() < -0.09 and xy[:, 0].max() > 5.4
+
+
+def test_ellipse_sampler_gives_up_after_its_attempts_and_modes_are_named(rng):
+    """A room that misses the ellipse: 1000 attempts by default, then an error
+    that says so; an unknown informed mode is refused by name."""
+    room = ConfigurationSpace(np.array([10.0, 10.0, -PI, -PI]), np.array([11.0, 11.0, PI, PI]))
+    dut = EllipseSampler(room, [0.0, 0.0], [1.0, 0.0])
+    assert dut.max_attempts == 1000
+    with pytest.raises(RuntimeError, match=r"^no ellipse sample inside the room bounds after 1000 attempts$"):
+        dut.sample(rng, 1.5)
+    with pytest.raises(ValueError, match=r"^unknown informed mode 'papers'; allowed: paper, admissible$"):
+        transverse_diameter("papers", 1.0, 1.0, None)
+
+
+def test_configuration_space_bounds_and_contains(tiny_scenario):
+    """from_scenario keeps the base disc inside the room (by hand for the
+    tiny room, 8 x 5 m, base radius 0.35 m) and takes the distance weights;
+    contains is the closed box, per configuration of a batch; lists become arrays."""
+    scenario = dc.replace(tiny_scenario, planner=dc.replace(tiny_scenario.planner, distance_weights=[1, 2, 0.5, 3]))
+    dut = ConfigurationSpace.from_scenario(scenario)
+    np.testing.assert_allclose(dut.lower, [0.35, 0.35, -PI, -PI], rtol=1e-15)
+    np.testing.assert_allclose(dut.upper, [7.65, 4.65, PI, PI], rtol=1e-15)
+    np.testing.assert_array_equal(dut.weights, [1.0, 2.0, 0.5, 3.0])
+    q = np.array([dut.lower, dut.upper, [4.0, 2.0, 0.0, 0.0], [4.0, 4.7, 0.0, 0.0], [0.3, 2.0, 0.0, 0.0],
+                  [4.0, 2.0, 0.0, 3.2]])
+    np.testing.assert_array_equal(dut.contains(q), [True, True, True, False, False, False])
+    assert dut.contains(q[2]) and not dut.contains(q[3])
+    listed = ConfigurationSpace([0.0, 0.0, -1.0, -1.0], [2.0, 1.0, 1.0, 1.0], [1.0, 1.0, 2.0, 2.0])
+    assert all(isinstance(a, np.ndarray) for a in (listed.lower, listed.upper, listed.weights))
+    samples = listed.sample_uniform(np.random.default_rng(0), 500)
+    assert np.all(listed.contains(samples)) and samples[:, 0].max() > 1.9
+    assert listed.distance(np.zeros(4), np.array([0.0, 0.0, 1.0, 0.0])) == pytest.approx(2.0, rel=1e-15)
+
+
+@pytest.mark.parametrize(
+    "lower, upper",
+    [
+        ([0.0, 0.0, -1.0, -1.0], [1.0, 1.0, -2.0, 1.0]),  # upper < lower in one coordinate
+        ([0.0, 0.0, -1.0, -1.0], [1.0, 1.0, 1.0, -1.0]),  # an empty interval
+        ([0.0], [1.0, 1.0, 1.0, 1.0]),  # a lower bound that would broadcast
+        ([0.0, 0.0, 0.0, 0.0], [1.0, 1.0, 1.0, 1.0, 1.0]),
+    ],
+)
+def test_configuration_space_refuses_bad_bounds(lower, upper):
+    with pytest.raises(ValueError, match=r"^bounds must be \(4,\) with upper > lower, got "):
+        ConfigurationSpace(np.array(lower), np.array(upper))
+
+
+def test_steer_returns_the_target_itself_within_one_step():
+    """Within ``step`` (here: exactly at it) Steer returns q_to bit for bit
+    (0.1 + (0.3 - 0.1) is not 0.3 in floating point), beyond it the point at
+    distance ``step`` on the way."""
+    space = ConfigurationSpace(np.array([-5.0, -5.0, -PI, -PI]), np.array([5.0, 5.0, PI, PI]))
+    q_from, q_to = np.array([0.1, 0.0, 0.0, 0.0]), np.array([0.3, 0.0, 0.0, 0.0])
+    d = float(space.distance(q_from, q_to))
+    got = space.steer(q_from, q_to, step=d)
+    assert got.tolist() == [0.3, 0.0, 0.0, 0.0] and got is not q_to
+    np.testing.assert_allclose(space.steer(np.zeros(4), np.array([3.0, 4.0, 0.0, 0.0]), step=1.0),
+                               [0.6, 0.8, 0.0, 0.0], rtol=1e-15)
