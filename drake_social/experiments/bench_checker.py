@@ -121,7 +121,8 @@ def _bench_scenario(path: Path, num_configs: int, num_edges: int, rng: np.random
         "numpy_edges_per_call": (lambda: [numpy_.is_motion_valid(a, b) for a, b in few_e], len(few_e)),
     }
     seconds, rate, cpu_rate = {}, {}, {}
-    planar.is_motion_valid(q_a[0], q_b[0])  # compiled (or loaded from numba's cache) before timing
+    # Every planar kernel timed below compiled (or loaded from numba's cache) before timing.
+    planar.is_motion_valid(q_a[0], q_b[0]), planar.clearance(q_a[0]), planar.is_valid(q_a[0])
     for label, (fn, count) in cases.items():
         wall, cpu = _best_time(fn, repeats)
         seconds[label] = {"wall": wall, "cpu": cpu, "items": count}

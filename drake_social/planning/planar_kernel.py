@@ -222,7 +222,7 @@ def _pair_bound(mx, my, reach, env, k):
     to the shape (1-Lipschitz, exact for a point) minus reach."""
     cx, cy = env[k, 1], env[k, 2]
     if env[k, 0] == DISC:
-        return math.hypot(mx - cx, my - cy) - env[k, 5] - reach
+        return math.sqrt((mx - cx) * (mx - cx) + (my - cy) * (my - cy)) - env[k, 5] - reach
     c, s = env[k, 3], env[k, 4]
     u, v = c * (mx - cx) + s * (my - cy), c * (my - cy) - s * (mx - cx)
     return _box_sdf(u, v, env[k, 5], env[k, 6]) - reach
@@ -240,7 +240,8 @@ def _capsule_reach(cap, j):
     """(mx, my, reach): the midpoint of world capsule j and the distance of its
     farthest point from it."""
     mx, my = 0.5 * (cap[j, 0] + cap[j, 2]), 0.5 * (cap[j, 1] + cap[j, 3])
-    return mx, my, 0.5 * math.hypot(cap[j, 2] - cap[j, 0], cap[j, 3] - cap[j, 1]) + cap[j, 4]
+    dx, dy = cap[j, 2] - cap[j, 0], cap[j, 3] - cap[j, 1]
+    return mx, my, 0.5 * math.sqrt(dx * dx + dy * dy) + cap[j, 4]
 
 
 @njit(cache=True)
@@ -414,7 +415,8 @@ def _motion_valid_ends(q_a, q_b, c_a, c_b, lower, upper, bodies, robot, env, lev
     keep = np.empty(env.shape[0], dtype=np.int64)
     n_keep = 0
     for k in range(env.shape[0]):
-        lb = math.hypot(env[k, 1] - q_a[0], env[k, 2] - q_a[1]) - env[k, 7] - radius - span
+        dx, dy = env[k, 1] - q_a[0], env[k, 2] - q_a[1]
+        lb = math.sqrt(dx * dx + dy * dy) - env[k, 7] - radius - span
         if not lb >= FAR:
             keep[n_keep] = k
             n_keep += 1
