@@ -282,12 +282,13 @@ def test_configuration_space_refuses_bad_bounds(lower, upper):
 
 def test_steer_returns_the_target_itself_within_one_step():
     """Within ``step`` (here: exactly at it) Steer returns q_to bit for bit
-    (0.1 + (0.3 - 0.1) is not 0.3 in floating point), beyond it the point at
+    (-2.2 + (2.1 + 2.2) is not 2.1 in floating point), beyond it the point at
     distance ``step`` on the way."""
     space = ConfigurationSpace(np.array([-5.0, -5.0, -PI, -PI]), np.array([5.0, 5.0, PI, PI]))
-    q_from, q_to = np.array([0.1, 0.0, 0.0, 0.0]), np.array([0.3, 0.0, 0.0, 0.0])
+    q_from, q_to = np.array([-2.2, 0.0, 0.0, 0.0]), np.array([2.1, 0.0, 0.0, 0.0])
     d = float(space.distance(q_from, q_to))
     got = space.steer(q_from, q_to, step=d)
-    assert got.tolist() == [0.3, 0.0, 0.0, 0.0] and got is not q_to
+    assert got.tolist() == [2.1, 0.0, 0.0, 0.0] and got is not q_to
+    assert (q_from + (q_to - q_from) * (d / d)).tolist() != [2.1, 0.0, 0.0, 0.0]  # what interpolation would give
     np.testing.assert_allclose(space.steer(np.zeros(4), np.array([3.0, 4.0, 0.0, 0.0]), step=1.0),
                                [0.6, 0.8, 0.0, 0.0], rtol=1e-15)
