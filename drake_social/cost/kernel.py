@@ -242,7 +242,7 @@ def msc_sums(
                     continue
                 k0 = int(math.floor(t0 * n))
                 k1 = min(int(math.ceil(t1 * n)), n)
-                k1 = max(k1, k0 + 1)
+                k1 = min(max(k1, k0 + 1), n)  # at least one step, never past q_b (t0 = 1: the last)
                 k0 = min(k0, k1 - 1)
                 k0s[i, j], k1s[i, j] = k0, k1
                 k_lo, k_hi = min(k_lo, k0), max(k_hi, k1)

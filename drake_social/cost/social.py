@@ -215,7 +215,9 @@ class SocialCost:
         n_pair = n[pair_edge]
         k0 = np.floor(t0[pair_edge, pair_person] * n_pair).astype(np.int64)
         k1 = np.minimum(np.ceil(t1[pair_edge, pair_person] * n_pair).astype(np.int64), n_pair)
-        k1 = np.maximum(k1, k0 + 1)  # at least one step (k0 <= n - 1 unless t0 = 1)
+        # At least one step, within the motion: with t0 = 1 (k0 = n) the step is
+        # the last one, n - 1 .. n, never a sample beyond q_b.
+        k1 = np.minimum(np.maximum(k1, k0 + 1), n_pair)
         k0 = np.minimum(k0, k1 - 1)
         count = k1 - k0 + 1
         pair = np.repeat(np.arange(len(pair_edge)), count)

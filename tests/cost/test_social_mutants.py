@@ -279,3 +279,22 @@ def test_non_finite_messages_name_the_culprits(bar):
     dut = SocialCost(bar, np.array([[0.0, 0.0, 0.0]]))
     with pytest.raises(ValueError, match=r"^motion_cost needs finite configurations$"):
         dut.motion_cost(np.zeros(4), np.array([0.0, np.nan, 0.0, 0.0]))
+
+
+@pytest.mark.parametrize("backend", ["numpy", "numba"])
+def test_a_window_starting_at_the_motions_end_stays_within_the_motion(bar, backend):
+    """A point that reaches the personal space's edge only at q_b (t0 = 1):
+    the window is the last step, never a sample beyond q_b, so the motion
+    costs (about) nothing, as a dense reference integral of its own says.
+    The two cases of the mutation run (a sample past q_b cost 0.02: numpy
+    in the first, the kernel, out of its buffers, in the second)."""
+    for x_a, x_b in ((R + 0.3, R), (R + 1e-9 + 1.0563545150501672, R + 1e-9)):
+        cost = SocialCost(bar, np.array([[0.0, 0.0, 0.0]]), weights=BASE_ONLY)
+        cost.backend = backend
+        q_a, q_b = np.array([x_a, 0.0, 0.0, 0.0]), np.array([x_b, 0.0, 0.0, 0.0])
+        got = float(cost.motion_cost(q_a, q_b))
+        # Independent: 20,001 samples of S along the motion, trapezoid rule.
+        t = np.linspace(0.0, 1.0, 20001)
+        s = cost(q_a + t[:, None] * (q_b - q_a))
+        ref = float(np.sum(0.5 * (s[1:] + s[:-1])) * (x_a - x_b) / 20000)
+        assert ref < 1e-6 and got == pytest.approx(ref, abs=1e-4)
