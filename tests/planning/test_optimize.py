@@ -264,18 +264,47 @@ def test_descent_checks_both_motions_and_stays_in_the_space():
     for box in [(0.45, 0.3, 0.55, 0.36), (1.45, 0.3, 1.55, 0.36)]:
         out = opt_mod._descent(wp.copy(), LENGTH, BoxChecker(boxes=[box]), SPACE, OptimizeOptions(step=0.3))
         np.testing.assert_allclose(out[1], q(1, 0.85), rtol=0, atol=1e-12)
-    # the space's lower y bound is 0.8: the step is clipped onto it
-    space = ConfigurationSpace(np.array([-1.0, -0.5, -3.0, -3.0]), np.array([10.0, 10.0, 3.0, 3.0]))
+    # the space's lower y bound is 1.7: the full step (to 1.6) is clipped onto it
     wp2 = np.array([q(0, 0.9), q(1, 0.9 + 1), q(2, 0.9)])
-    tight = ConfigurationSpace(np.array([-1.0, 1.6, -3.0, -3.0]), np.array([10.0, 10.0, 3.0, 3.0]))
+    tight = ConfigurationSpace(np.array([-1.0, 1.7, -3.0, -3.0]), np.array([10.0, 10.0, 3.0, 3.0]))
     out = opt_mod._descent(wp2.copy(), LENGTH, BoxChecker(), tight, OptimizeOptions(step=0.3))
-    np.testing.assert_allclose(out[1], q(1, 1.6), rtol=0, atol=1e-12)
-    out = opt_mod._descent(wp2.copy(), LENGTH, BoxChecker(), space, OptimizeOptions(step=0.3))
-    np.testing.assert_allclose(out[1], q(1, 1.6), rtol=0, atol=1e-12)
+    np.testing.assert_allclose(out[1], q(1, 1.7), rtol=0, atol=1e-12)
+    # psi1's upper bound is 0.05: a detour to psi1 = -0.2 steps up by 0.3, clipped to 0.05
     tight_hi = ConfigurationSpace(np.array([-1.0, -1.0, -3.0, -3.0]), np.array([10.0, 10.0, 0.05, 3.0]))
-    wp3 = np.array([q(0, 0, 0), q(1, 0, 0.0 - 1.0), q(2, 0, 0)])  # psi1 detours to -1: descent raises it
+    wp3 = np.array([q(0, 0, 0), q(1, 0, -0.2), q(2, 0, 0)])
     out = opt_mod._descent(wp3.copy(), LENGTH, BoxChecker(), tight_hi, OptimizeOptions(step=0.3))
-    np.testing.assert_allclose(out[1], q(1, 0, -0.7), rtol=0, atol=1e-12)
+    np.testing.assert_allclose(out[1], q(1, 0, 0.05), rtol=0, atol=1e-12)
+
+
+def test_descent_follows_a_small_gradient():
+    """|grad| = 0.2 < 1 still moves: 0.3 overshoots (costs more), 0.15 is kept."""
+    wp = np.array([q(0, 5), q(1, 5.1), q(2, 5)])
+    out = opt_mod._descent(wp.copy(), LENGTH, BoxChecker(), SPACE, OptimizeOptions(step=0.3))
+    np.testing.assert_allclose(out[1], q(1, 4.95), rtol=0, atol=1e-12)
+
+
+def test_descent_goes_on_after_a_stationary_waypoint():
+    wp = np.array([q(0, 0), q(1, 0), q(2, 0), q(3, 1), q(4, 0)])  # waypoint 1 has a zero gradient
+    out = opt_mod._descent(wp.copy(), LENGTH, BoxChecker(), SPACE, OptimizeOptions(step=0.3))
+    np.testing.assert_array_equal(out[1], wp[1])
+    assert out[3][1] < 1 - 0.1 and length(out) < length(wp)
+
+
+class StepObjective(Objective):
+    """``f(a) + f(b)`` with f = 0 on 0.998 <= y < 1, else 1: at y = 1 the
+    central difference points down, but every step down costs the same."""
+
+    length_is_cost = False
+
+    def motion_cost(self, q_a, q_b):
+        f = lambda p: np.where((p[..., 1] >= 0.998) & (p[..., 1] < 1.0), 0.0, 1.0)  # noqa: E731
+        return f(np.atleast_2d(q_a)) + f(np.atleast_2d(q_b))
+
+
+def test_descent_keeps_a_waypoint_when_the_cost_does_not_fall():
+    wp = np.array([q(0, 0), q(1, 1), q(2, 0)])
+    np.testing.assert_array_equal(opt_mod._descent(wp.copy(), StepObjective(), BoxChecker(), SPACE,
+                                                   OptimizeOptions(step=0.3)), wp)
 
 
 def test_descent_leaves_a_stationary_waypoint_and_a_flat_cost():
@@ -420,3 +449,47 @@ def test_optimise_stops_when_a_round_improves_too_little():
 def test_default_options():
     o = OptimizeOptions()
     assert (o.rounds, o.descent_steps, o.max_segment, o.step, o.epsilon, o.tolerance) == (4, 4, 0.5, 0.3, 1e-3, 1e-4)
+
+
+def test_optimise_takes_integer_waypoints_as_floats():
+    """An integer path is optimised as floats (the descent's moves are not truncated)."""
+    wp = [[0, 5, 0, 0], [1, 6, 0, 0], [2, 5, 0, 0]]
+    checker = BoxChecker(blocked=[(q(0, 5), q(2, 5))])
+    out, cost = optimize_path(np.array(wp), LENGTH, checker, SPACE, OptimizeOptions(rounds=1, max_segment=10.0))
+    ref, ref_cost = optimize_path(np.array(wp, float), LENGTH, checker, SPACE,
+                                  OptimizeOptions(rounds=1, max_segment=10.0))
+    assert out.dtype == float
+    np.testing.assert_array_equal(out, ref)
+    assert cost == ref_cost and 4.9 < out[1][1] < 5.2 and out[1][1] != 5
+
+
+def test_optimise_stops_after_a_round_without_gain():
+    """tolerance = 0: a round that only subdivides at equal cost ends the
+    rounds; one more round would shortcut from the new midpoint."""
+    a, m, b, c = q(0, 0), q(1, 0), q(2, 0), q(2, 1)
+    wp = np.array([a, b, c])
+    checker = BoxChecker(blocked=[(a, c)])
+    options = OptimizeOptions(rounds=4, descent_steps=0, max_segment=1.0, tolerance=0.0)
+    out, cost = optimize_path(wp, LENGTH, checker, SPACE, options)
+    np.testing.assert_array_equal(out, [a, m, b, c])
+    assert cost == 3.0
+    more, more_cost = manual_rounds(wp, LENGTH, checker, SPACE, options, 2)
+    np.testing.assert_array_equal(more[:2], [a, m])  # a second round would have shortcut m -> c
+    assert more_cost == pytest.approx(1 + np.sqrt(2), rel=1e-12)
+
+
+def test_optimise_tolerance_is_relative_to_costs_below_one():
+    """The stop threshold is tolerance * cost also when the cost is below 1."""
+    small, wall = WALLED * 0.03, [tuple(0.03 * v for v in WALL[0])]
+    options = OptimizeOptions(rounds=2, max_segment=0.06, step=0.01, epsilon=1e-5, tolerance=0.0)
+    start = length(small)
+    assert start < 1
+    one, one_cost = manual_rounds(small, LENGTH, BoxChecker(wall), SPACE, options, 1)
+    two, _ = manual_rounds(small, LENGTH, BoxChecker(wall), SPACE, options, 2)
+    assert not np.array_equal(one, two)
+    r = (start - one_cost) / start  # the first round's relative gain
+    tol = r * (1 + start) / 2  # below r, above r * start
+    out, _ = optimize_path(small, LENGTH, BoxChecker(wall), SPACE, dc_replace(options, tolerance=tol))
+    np.testing.assert_array_equal(out, two)
+    out, _ = optimize_path(small, LENGTH, BoxChecker(wall), SPACE, dc_replace(options, tolerance=r * 1.01))
+    np.testing.assert_array_equal(out, one)
