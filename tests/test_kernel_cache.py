@@ -17,6 +17,8 @@ def package(tmp_path, monkeypatch):
         shutil.copy(dut._PACKAGE / name, tmp_path / name)
     monkeypatch.setattr(dut, "_PACKAGE", tmp_path)
     monkeypatch.setattr(dut, "_done", False)
+    monkeypatch.delenv("NUMBA_CACHE_DIR", raising=False)
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "xdg"))  # not the user's own cache
     return tmp_path
 
 
@@ -56,3 +58,24 @@ def test_once_per_process(package, monkeypatch):
         f.write("\n# edited\n")
     dut.ensure_fresh()  # already done in this process
     assert all(f.exists() for f in files)
+
+
+def test_numbas_other_cache_folders_are_kept_fresh_too(package, monkeypatch, tmp_path_factory):
+    """With NUMBA_CACHE_DIR (or numba's user-wide folder), the cached kernels
+    below a drake_social folder there go when a source changes; other
+    packages' files called kernel.* stay."""
+    cache = tmp_path_factory.mktemp("numba_cache")
+    ours = cache / "work_main_drake_social_planning" / "tree_kernel.grow-70.py311.nbi"
+    theirs = cache / "other_pkg" / "kernel.run-3.py311.nbi"
+    for f in (ours, theirs):
+        f.parent.mkdir(parents=True)
+        f.write_bytes(b"x")
+    monkeypatch.setenv("NUMBA_CACHE_DIR", str(cache))
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path_factory.mktemp("xdg")))
+    dut.ensure_fresh()
+    assert not ours.exists() and theirs.exists()
+    assert (cache / dut._STAMP).read_text() == dut.sources_hash()
+    ours.write_bytes(b"x")  # cached again under the current sources
+    monkeypatch.setattr(dut, "_done", False)
+    dut.ensure_fresh()
+    assert ours.exists()  # stamp current: kept

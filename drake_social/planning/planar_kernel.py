@@ -474,29 +474,31 @@ def _motion_valid(q_a, q_b, lower, upper, bodies, robot, env, levers):
 def motion_valid(q_a, q_b, lower, upper, bodies, robot, env, levers):
     """Whether the straight motion ``q_a + t (q_b - q_a)``, t in [0, 1], is free.
 
-    Conservative advancement, from both ends towards the middle, per capsule.
+    Conservative advancement per capsule, coarse to fine.
     Soundness: along the motion every point of capsule j moves with speed at
     most ``D_j = displacement(q_b - q_a, levers[j])`` per unit of t (a
     point's velocity is the base's plus the rotations' about the shoulder and
     the elbow; ``levers[j]`` bounds their arms for that capsule: zero for the
-    base, see :meth:`PlanarChecker.levers`). If capsule j is at distance at
+    base, see :meth:`PlanarChecker._levers`). If capsule j is at distance at
     least ``d_j > 0`` from every shape at ``q(t)``, then for
     ``|t' - t| < d_j / D_j`` each of its points is less than ``d_j`` from
     where it was, so it stays free (triangle inequality); a query at q(t)
-    clears ``tau = min_j d_j / D_j``. The distances are exact when positive;
-    a pair whose broad-phase lower bound already allows the step found so
-    far is not measured (its bound is used: still a lower bound). Shapes
-    that cannot come within :data:`FAR` of the robot anywhere on the motion
-    (the robot stays within its bounding circle at q_a grown by max_j D_j)
-    are not measured either, and each d_j is capped at FAR. Each query
-    clears ``[t, t + tau)`` (from the start) or ``(t - tau, t]`` (from the
-    end); the next query sits at the first point not yet cleared, and the
-    motion is valid once the two cleared parts overlap. Both ends are
-    checked exactly. Floors: a reached configuration with a capsule within
-    :data:`TOLERANCE` of contact rejects the motion (so steps never shrink
-    below ``min(TOLERANCE, FAR) / max_j D_j``), steps are ``STEP_MARGIN``
-    metres shorter than allowed (rounding), and more than :data:`MAX_STEPS`
-    queries from each end reject it. Rejecting is always safe.
+    clears ``tau = min_j d_j / D_j`` both ways. The distances are exact when
+    positive; a pair whose broad-phase lower bound already allows the step
+    found so far is not measured (its bound is used: still a lower bound).
+    Shapes that cannot come within :data:`FAR` of the robot anywhere on the
+    motion (the robot stays within its bounding circle at q_a grown by
+    max_j D_j) are not measured either, and each step is capped at what FAR
+    allows. Both ends are checked exactly and clear ``[0, lo)`` and
+    ``(hi, 1]``; what is left is searched coarse to fine, as a queue of
+    closed intervals: a query at an interval's midpoint clears
+    ``(t - tau, t + tau)`` and queues what is left of it, so a collision is
+    found after a few queries. The motion is valid when the queue is empty.
+    Floors: a reached configuration with a capsule within :data:`TOLERANCE`
+    of contact rejects the motion (so steps never shrink below
+    ``min(TOLERANCE, FAR) / max_j D_j``), steps are ``STEP_MARGIN`` metres
+    shorter than allowed (rounding), and more than :data:`MAX_STEPS` queries
+    in all reject it. Rejecting is always safe.
 
     Args:
         q_a, q_b: the ends (4,).

@@ -1,11 +1,14 @@
 """The RRT* tree loop compiled (numba), for the planar checker.
 
 :meth:`drake_social.planning.rrt_star.RrtStar.solve` stays the tested
-reference; :func:`grow` runs the same iterations (uniform sampling with goal
-bias, fixed or shrinking near radius, eager motion costs, choose parent in
-order of F + Msc, rewiring with cost propagation, goal connections within
-r_near) with the random numbers drawn from the same ``numpy.random.Generator``
-in the same order, and returns the same tree bit for bit. Squared distances
+reference; :func:`grow` runs the same iterations (uniform or informed
+sampling with goal bias, fixed or shrinking near radius, eager or lazy
+motion costs, choose parent in order of F + Msc, rewiring with cost
+propagation, goal connections within r_near) with the random numbers drawn
+from the same ``numpy.random.Generator`` in the same order, and returns the
+same tree bit for bit. It runs a chunk of iterations per call on a state
+from :func:`init_state` (the caller loops, so Ctrl-C and progress callbacks
+get a turn between chunks). Squared distances
 are summed as numpy's ``einsum`` sums four terms on this platform,
 ``(s0 + s2) + (s1 + s3)``; the equality tests against the reference guard it.
 
