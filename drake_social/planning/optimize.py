@@ -39,7 +39,7 @@ class OptimizeOptions:
 
     Attributes:
         rounds: shortcut / subdivide / descent rounds (stops early when a
-            round improves the cost by less than ``tolerance``, relative).
+            round improves the cost by no more than ``tolerance``, relative).
         descent_steps: descent sweeps over the waypoints per round.
         max_segment: subdivision length of a motion.
         step: the descent's first step, times the gradient's unit direction.
