@@ -73,12 +73,7 @@ def _plan(scenario: Scenario, checker_kind: str, algorithm: str, iterations: int
     return {"iterations": iterations, "seed": seed, "wall_time": float(r.wall_time), "success": bool(r.success),
             "cost": float(r.cost) if r.success else None, "raw_cost": float(r.raw_cost) if r.success else None,
             "tree_size": int(r.tree_size), "cost_evaluations_per_iteration": r.num_cost_evaluations / iterations,
-            "motion_checks": int(r.num_motion_checks), "optimized": bool(getattr(r, "optimized", False)),
-            "_nodes": r.tree_nodes, "_parents": r.tree_parents}
-
-
-def _public(run: dict) -> dict:
-    return {k: v for k, v in run.items() if not k.startswith("_")}
+            "motion_checks": int(r.num_motion_checks), "optimized": bool(getattr(r, "optimized", False))}
 
 
 def _median(values) -> float | None:
@@ -121,17 +116,16 @@ def run_scaling_bench(
             runs.append(_plan(scenario, checker, algorithm, k, 0, near_radius_mode="shrinking"))
             tick(f"{path.stem} K = {k} (shrinking radius)")
         big = [(r["iterations"], r["wall_time"]) for r in runs if r["iterations"] >= 2000]
-        entry["scaling"] = {"near_radius_mode": "shrinking", "runs": [_public(r) for r in runs],
+        entry["scaling"] = {"near_radius_mode": "shrinking", "runs": runs,
                             "exponent": fit_exponent(*zip(*big)) if len(big) >= 2 else None}
         # ---- optimisation at K = 2000 against the reference K
-        reference = [_public(r) for r in runs if r["iterations"] == reference_k][:1]
+        reference = [r for r in runs if r["iterations"] == reference_k][:1]
         for seed in range(len(reference), reference_seeds):
-            reference.append(_public(_plan(scenario, checker, algorithm, reference_k, seed,
-                                           near_radius_mode="shrinking")))
+            reference.append(_plan(scenario, checker, algorithm, reference_k, seed, near_radius_mode="shrinking"))
             tick(f"{path.stem} reference K = {reference_k} seed {seed}")
         optimized = []
         for seed in range(seeds):
-            optimized.append(_public(_plan(scenario, checker, algorithm, 2000, seed, optimize=True)))
+            optimized.append(_plan(scenario, checker, algorithm, 2000, seed, optimize=True))
             tick(f"{path.stem} K = 2000 optimised seed {seed}")
         ref_median = _median(r["cost"] for r in reference)
         opt_median = _median(r["cost"] for r in optimized)
