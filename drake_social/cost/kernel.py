@@ -177,7 +177,6 @@ def msc_sums(
     for e in range(e_count):
         d0, d1 = q_b[e, 0] - q_a[e, 0], q_b[e, 1] - q_a[e, 1]
         d2, d3 = q_b[e, 2] - q_a[e, 2], q_b[e, 3] - q_a[e, 3]
-        span = math.hypot(d0, d1) + lever[0] * abs(d2) + lever[1] * abs(d2 + d3)
         n = steps[e]
         if d0 == 0.0 and d1 == 0.0 and d2 == 0.0 and d3 == 0.0:
             continue
