@@ -220,3 +220,10 @@ def test_plan_accepts_exactly_the_allowed_iterations(short, monkeypatch):
         with pytest.raises(ScenarioError, match=rf"^planner.iterations: must be in \[1, {MAX_ITERATIONS}\], got {n}$"):
             plan(short, None, iterations=n)
     assert len(seen) == 3
+
+
+def test_plan_passes_the_progress_callback(short):
+    calls = []
+    dut = plan(short, GeometricChecker(short), iterations=30, seed=2, progress=lambda k, c: calls.append((k, c)))
+    assert [k for k, _ in calls] == list(range(1, 31))
+    np.testing.assert_array_equal([c for _, c in calls], dut.cost_history)
