@@ -526,6 +526,9 @@ def _add_bench(subparsers) -> None:
                    help=f"planners (default: all of {', '.join(ALGORITHMS)})")
     p.add_argument("--iterations", type=_positive_int, default=2000, metavar="K", help="samples per run (default 2000)")
     p.add_argument("--seeds", type=_positive_int, default=10, metavar="N", help="seeds 0..N-1 per planner (default 10)")
+    p.add_argument("--repeats", type=_positive_int, default=1, metavar="R",
+                   help="time each seeded run R times, ours and OMPL's, and report the median (the same path each "
+                        "time: this only filters out the machine's noise; default 1)")
     _add_checker_argument(p, default="planar")
     p.add_argument("--ompl-checker", choices=CHECKERS, default="drake",
                    help="the checker of OMPL's RRTstar (default: drake, Drake's SceneGraph checks as before "
@@ -575,6 +578,7 @@ def _run_bench(args: argparse.Namespace) -> int:
                 include_checker=not args.no_checker_bench,
                 sim_runs=args.sim_runs,
                 scaling=args.scaling,
+                repeats=args.repeats,
                 out_dir=outputs.folder,
                 progress=progress if bar is not None else None,
             )

@@ -207,20 +207,20 @@ def test_bench_parses_and_calls_run_bench_with_keywords(tmp_path, monkeypatch, c
     fake.run_bench = fake_run_bench
     monkeypatch.setitem(sys.modules, "drake_social.experiments.bench", fake)
     argv = ["bench", "--scenarios", str(TINY), "--algorithms", "rrt_star", "social_rrt_star", "--iterations", "50",
-            "--seeds", "3", "--checker", "numpy", "--no-ompl", "--out", str(tmp_path)]
+            "--seeds", "3", "--repeats", "2", "--checker", "numpy", "--no-ompl", "--out", str(tmp_path)]
     assert main(argv) == 0
     # run_bench writes into the output set's staging folder inside --out, moved into --out as a whole.
     staging = calls[0].pop("out_dir")
     assert staging.parent == tmp_path and staging.name.startswith(".staging-bench-") and not staging.exists()
     assert calls == [dict(scenario_paths=[TINY], algorithms=["rrt_star", "social_rrt_star"], iterations=50, seeds=3,
                           checker="numpy", ompl_checker="drake", include_ompl=False, include_checker=True,
-                          sim_runs=3, scaling=False, progress=None)]
+                          sim_runs=3, scaling=False, repeats=2, progress=None)]
     assert (tmp_path / "bench.md").read_text() == "| table |\n" and "| table |" in capsys.readouterr().out
     defaults = build_parser().parse_args(["bench"])
     assert [str(p) for p in defaults.scenarios] == ["scenarios/office_bar.yaml", "scenarios/generic_L.yaml"]
     assert defaults.algorithms == list(ALGORITHMS) and defaults.iterations == 2000 and defaults.seeds == 10
     assert defaults.checker == "planar" and defaults.ompl_checker == "drake" and defaults.scaling is False
-    assert defaults.no_ompl is False and defaults.out == Path("out/bench")
+    assert defaults.no_ompl is False and defaults.out == Path("out/bench") and defaults.repeats == 1
     assert main(["bench", "--scenarios", str(tmp_path / "none.yaml")]) == 2
     assert "none.yaml: no such scenario file" in capsys.readouterr().err
 

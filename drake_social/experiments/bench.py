@@ -135,7 +135,22 @@ def _ratio(a: dict, b: dict, field: str) -> float | None:
     return None if x is None or y is None or x == 0 or y == 0 else x / y
 
 
-def _plan_ompl_runs(scenario: Scenario, key: str, iterations: int, seeds: int, checker: str, tick) -> dict:
+def _repeated(run_once: Callable[[], tuple], repeats: int) -> tuple:
+    """Runs ``run_once() -> (result, ...)`` ``repeats`` times and returns the
+    first run's tuple with ``wall_time`` the median of the repeats' (the
+    runs are seeded: the same path each time, only the machine's speed
+    differs), and the repeats' times."""
+    first, times = None, []
+    for _ in range(repeats):
+        out = run_once()
+        times.append(float(out[0].wall_time))
+        first = out if first is None else first
+    first[0].wall_time = float(np.median(times))
+    return first, times
+
+
+def _plan_ompl_runs(scenario: Scenario, key: str, iterations: int, seeds: int, checker: str, tick,
+                    repeats: int = 1) -> dict:
     from drake_social.experiments.ompl_baseline import plan_ompl
 
     objective = make_objective(scenario, key)
@@ -143,12 +158,16 @@ def _plan_ompl_runs(scenario: Scenario, key: str, iterations: int, seeds: int, c
     runs, settings = [], None
     for seed in range(seeds):
         chk = _make_checker(scenario, checker)
-        result, settings = plan_ompl(
-            ConfigurationSpace.from_scenario(scenario), chk, objective, np.asarray(scenario.start, float),
-            np.asarray(scenario.goal, float), iterations=iterations, planning_range=p.planning_range,
-            near_radius=p.near_radius, goal_bias=p.goal_bias, seed=seed, name=f"ompl_rrt_star[{key}]",
-        )
-        runs.append(_record(scenario, result, objective, chk))
+
+        def once():
+            return plan_ompl(
+                ConfigurationSpace.from_scenario(scenario), chk, objective, np.asarray(scenario.start, float),
+                np.asarray(scenario.goal, float), iterations=iterations, planning_range=p.planning_range,
+                near_radius=p.near_radius, goal_bias=p.goal_bias, seed=seed, name=f"ompl_rrt_star[{key}]",
+            )
+
+        (result, settings), times = _repeated(once, repeats)
+        runs.append({**_record(scenario, result, objective, chk), "wall_times": times})
         tick(f"ompl_rrt_star[{key}] seed {seed}")
     return {"objective_of": key, "checker": checker, "settings": settings.to_json_dict(), "runs": runs,
             "summary": summarize(runs)}
@@ -178,6 +197,7 @@ def run_bench(
     include_checker: bool = True,
     sim_runs: int = 0,
     scaling: bool = False,
+    repeats: int = 1,
     out_dir: str | Path,
     progress: Callable[[int, int, str], None] | None = None,
 ) -> dict:
@@ -203,6 +223,10 @@ def run_bench(
         scaling: also :func:`~drake_social.experiments.bench_scaling.run_scaling_bench`
             (K up to 50,000 with the shrinking radius, optimisation against
             K = 50,000, 50 far people) on every scenario with ``checker``.
+        repeats: runs of each seed, ours and OMPL's: a run's wall_time is the
+            median of its repeats' (``wall_times``: all of them). A seeded run
+            repeats its path exactly, so this only filters the machine's
+            noise (other processes, a shared host) out of the times.
         out_dir: where the two files go (created).
         progress: optional ``progress(done, total, label)`` after each run.
 
@@ -224,8 +248,8 @@ def run_bench(
     for label, value in (("checker", checker), ("ompl_checker", ompl_checker)):
         if value not in CHECKERS:
             raise ValueError(f"{label} {value!r} not allowed; allowed: {', '.join(CHECKERS)}")
-    if iterations < 1 or seeds < 1:
-        raise ValueError(f"iterations and seeds must be >= 1, got {iterations}, {seeds}")
+    if iterations < 1 or seeds < 1 or repeats < 1:
+        raise ValueError(f"iterations, seeds and repeats must be >= 1, got {iterations}, {seeds}, {repeats}")
     paths = [Path(p) for p in scenario_paths]
     if not paths:
         raise ValueError("scenario_paths is empty")
@@ -262,14 +286,15 @@ def run_bench(
             runs = []
             for seed in range(seeds):
                 chk = _make_checker(scenario, checker)
-                result = plan(scenario, chk, algorithm=algorithm, iterations=iterations, seed=seed)
-                runs.append(_record(scenario, result, objective, chk))
+                (result,), times = _repeated(
+                    lambda: (plan(scenario, chk, algorithm=algorithm, iterations=iterations, seed=seed),), repeats)
+                runs.append({**_record(scenario, result, objective, chk), "wall_times": times})
                 tick(f"{path.stem} {algorithm} seed {seed}")
             entry["algorithms"][algorithm] = {"runs": runs, "summary": summarize(runs)}
         for field, ompl_chk in ompl_sets:
             for key in keys:
                 entry[field][key] = _plan_ompl_runs(scenario, key, iterations, seeds, ompl_chk,
-                                                    lambda label: tick(f"{path.stem} {label} ({ompl_chk})"))
+                                                    lambda label: tick(f"{path.stem} {label} ({ompl_chk})"), repeats)
         for algorithm, data in entry["algorithms"].items():
             for field in ("ompl", "ompl_same_checker"):
                 base = entry[field].get(_objective_key(algorithm))
@@ -303,7 +328,7 @@ def run_bench(
     out = {
         "settings": {"scenario_paths": [str(p) for p in paths], "algorithms": algorithms, "iterations": iterations,
                      "seeds": list(range(seeds)), "checker": checker, "ompl_checker": ompl_checker,
-                     "sim_runs": sim_runs},
+                     "sim_runs": sim_runs, "repeats": repeats},
         "machine": _machine(),
         "ompl": {"requested": include_ompl, "available": ompl_available(), "objectives": keys},
         "scenarios": scenarios,
@@ -355,7 +380,9 @@ def _markdown(out: dict) -> str:
             for name, e in out["scenarios"].items() if "planner_options" in e) + ".",
         "",
         "Wall time (s) over all runs and social cost (the scenario's full weights) over successful runs: "
-        "median [25th, 75th percentile]. Ratios: ours / OMPL RRTstar with the same objective, of the medians "
+        "median [25th, 75th percentile]"
+        + (f"; each run's time is the median of {s.get('repeats', 1)} repeats of it" if s.get("repeats", 1) > 1 else "")
+        + ". Ratios: ours / OMPL RRTstar with the same objective, of the medians "
         f"(objective: each planner's own, recomputed from its path); OMPL checks with "
         f"`{s.get('ompl_checker', s['checker'])}`, and where that is not ours also with ours (\"same checks\").",
         "",

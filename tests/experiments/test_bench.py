@@ -36,7 +36,7 @@ def test_small_bench_reports_its_runs(tiny_scenario_path, tiny_scenario, tmp_pat
     on_disk = json.loads((tmp_path / "a" / "bench.json").read_text())
     assert on_disk["settings"] == {"scenario_paths": [str(tiny_scenario_path)], "algorithms": ALGOS,
                                    "iterations": 200, "seeds": [0, 1], "checker": "numpy", "ompl_checker": "drake",
-                                   "sim_runs": 0}
+                                   "sim_runs": 0, "repeats": 1}
     assert on_disk["machine"]["cpu_count"] >= 1 and on_disk["machine"]["numpy"] == np.__version__
     assert on_disk["checker_bench"]["scenarios"]["tiny.yaml"]["configs_per_s"]["numpy_batched"] > 0
     md = (tmp_path / "a" / "bench.md").read_text()
@@ -93,8 +93,10 @@ def test_bench_rejects_bad_arguments(tiny_scenario_path, tmp_path):
         _small(tiny_scenario_path, tmp_path, algorithms=["rrt"])
     with pytest.raises(ValueError, match="checker 'fcl' not allowed; allowed: planar, drake, numpy"):
         _small(tiny_scenario_path, tmp_path, checker="fcl")
-    with pytest.raises(ValueError, match="iterations and seeds must be >= 1"):
+    with pytest.raises(ValueError, match="iterations, seeds and repeats must be >= 1, got 200, 0, 1"):
         _small(tiny_scenario_path, tmp_path, seeds=0)
+    with pytest.raises(ValueError, match="repeats must be >= 1, got 200, 2, 0"):
+        _small(tiny_scenario_path, tmp_path, repeats=0)
     assert not (tmp_path / "bench.json").exists()
 
 
@@ -196,8 +198,17 @@ def test_objective_adapter_equals_our_motion_cost(tiny_scenario_path, rng, extra
 def test_bench_with_ompl_reports_ratios(tiny_scenario_path, tmp_path, extra):
     extra("ompl")
     dut = _small(tiny_scenario_path, tmp_path, algorithms=["informed_social_rrt_star"], iterations=150, include_ompl=True,
-                 ompl_checker="planar")
+                 ompl_checker="planar", repeats=3)
     entry = dut["scenarios"]["tiny.yaml"]
+    once = _small(tiny_scenario_path, tmp_path / "once", algorithms=["informed_social_rrt_star"], iterations=150,
+                  include_ompl=True, ompl_checker="planar")["scenarios"]["tiny.yaml"]
+    # Repeats: each run's time is the median of its three, the paths those of single runs.
+    for field, key in (("algorithms", "informed_social_rrt_star"), ("ompl", "social_rrt_star"),
+                       ("ompl_same_checker", "social_rrt_star")):
+        for run, single in zip(entry[field][key]["runs"], once[field][key]["runs"]):
+            assert len(run["wall_times"]) == 3 and len(single["wall_times"]) == 1
+            assert run["wall_time"] == np.median(run["wall_times"]) and single["wall_time"] == single["wall_times"][0]
+            assert run["waypoints"] == single["waypoints"] and run["objective"] == single["objective"]
     assert list(entry["ompl"]) == ["social_rrt_star"]  # the informed variant's objective
     assert entry["ompl"]["social_rrt_star"]["checker"] == "planar"
     same = entry["ompl_same_checker"]["social_rrt_star"]  # OMPL with our checker too
