@@ -191,3 +191,20 @@ def test_the_point_where_both_sides_meet_is_queried(monkeypatch):
     np.testing.assert_array_equal(seen[2], [(q_a + q_b) / 2] * 2)
     monkeypatch.setattr(geometric, "TOLERANCE", mid - 1e-6)
     assert dut.is_motion_valid(q_a, q_b)
+
+
+def test_the_limits_are_closed(tiny_scenario):
+    """in_limits includes both bounds (room bounds for x, y, the joint limits
+    for the joints) and nothing beyond them, for one and for many q."""
+    dut = GeometricChecker(tiny_scenario)
+    lower, upper = dut.lower, dut.upper
+    np.testing.assert_array_equal(lower, [0.0, 0.0, *tiny_scenario.robot.joint_lower])
+    np.testing.assert_array_equal(upper, [8.0, 5.0, *tiny_scenario.robot.joint_upper])
+    assert dut.in_limits(lower) and dut.in_limits(upper)
+    qs = [lower, upper]
+    for i in range(4):
+        below, above = lower.copy(), upper.copy()
+        below[i], above[i] = np.nextafter(lower[i], -np.inf), np.nextafter(upper[i], np.inf)
+        qs += [below, above]
+    assert dut.in_limits(np.array(qs)).tolist() == [True, True] + [False] * 8
+    assert dut.in_limits(np.array(qs).reshape(2, 5, 4)).shape == (2, 5)

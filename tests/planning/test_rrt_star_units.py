@@ -5,6 +5,8 @@ endpoint checks' messages and the XY length of a path to the goal
 
 from __future__ import annotations
 
+import copy
+import dataclasses as dc
 import math
 
 import numpy as np
@@ -12,7 +14,7 @@ import pytest
 
 from drake_social.planning.geometric import GeometricChecker
 from drake_social.planning.result import PlanningInputError
-from drake_social.planning.rrt_star import RrtStar, RrtStarOptions, _Tree
+from drake_social.planning.rrt_star import RrtStar, RrtStarOptions, _Tree, default_gamma
 from drake_social.planning.space import ConfigurationSpace
 from drake_social.planning.variants import make_objective
 from drake_social.scenario import Bar, Box, Scenario, World, validate_scenario
@@ -84,3 +86,105 @@ def test_xy_length_sums_the_base_steps_to_the_goal():
     goal = np.array([6.0, 10.0, 2.0, 2.0])
     assert RrtStar._xy_length(tree, 2, goal) == pytest.approx(5.0 + 2.0 + 5.0, rel=1e-15)
     assert RrtStar._xy_length(tree, 0, goal) == pytest.approx(math.hypot(6.0, 10.0), rel=1e-15)
+
+
+def test_default_gamma_by_hand_with_weights():
+    """OMPL's 1.1 (2 (1 + 1/d) V / zeta_d)^(1/d), d = 4, zeta_4 = pi^2 / 2,
+    V the weighted box's volume (here 4 * 2 * 3 * 1 times the weights)."""
+    space = ConfigurationSpace(np.array([0.0, 1.0, -1.5, -0.5]), np.array([4.0, 3.0, 1.5, 0.5]),
+                               np.array([1.0, 2.0, 0.5, 3.0]))
+    volume = (4.0 * 1.0) * (2.0 * 2.0) * (3.0 * 0.5) * (1.0 * 3.0)
+    expected = 1.1 * (2.0 * 1.25 * volume / (math.pi**2 / 2)) ** 0.25
+    assert default_gamma(space) == pytest.approx(expected, rel=1e-14)
+    scenario = room()
+    planner = planner_for(scenario)
+    assert planner.gamma == default_gamma(planner.space)  # near_radius_gamma = 0: OMPL's
+    planner.options = dc.replace(planner.options, near_radius_gamma=2.5)
+    assert planner.gamma == 2.5
+
+
+def run_room(iterations=150, seed=2, **options):
+    scenario = room()
+    planner = planner_for(scenario)
+    planner.options = dc.replace(planner.options, iterations=iterations, **options)
+    return planner.solve(np.array(scenario.start), np.array(scenario.goal), np.random.default_rng(seed))
+
+
+def test_python_loop_uses_the_kd_tree_once_large_and_finds_the_same_tree(monkeypatch):
+    """The Python loop (the numpy checker) with the KD-tree from the 16th node
+    on: the KD-tree does answer queries, and the tree is the direct scan's."""
+    from drake_social.planning import rrt_star
+
+    reference = run_room(kd_tree=False)
+    served = []
+    original = rrt_star._Neighbors._update
+
+    def spy(self, tree):
+        used = original(self, tree)
+        served.append(used)
+        return used
+
+    monkeypatch.setattr(rrt_star, "KD_TREE_MIN_NODES", 16)
+    monkeypatch.setattr(rrt_star._Neighbors, "_update", spy)
+    dut = run_room(kd_tree=True)
+    assert reference.tree_size > 40 and sum(served) > 50  # the KD-tree served most queries
+    np.testing.assert_array_equal(dut.tree_nodes, reference.tree_nodes)
+    np.testing.assert_array_equal(dut.tree_parents, reference.tree_parents)
+    np.testing.assert_array_equal(dut.cost_history, reference.cost_history)
+    served.clear()
+    run_room(kd_tree=False)
+    assert served and not any(served)  # kd_tree=False: never
+
+
+def test_python_loop_history_is_float_and_inf_before_the_first_solution():
+    dut = run_room()
+    assert dut.success and dut.cost_history.dtype == np.float64 and dut.cost_history.shape == (150,)
+    k = dut.first_solution_iteration
+    assert np.all(np.isinf(dut.cost_history[: k - 1])) and np.isfinite(dut.cost_history[k - 1])
+    assert dut.cost_history[-1] == dut.cost and np.all(np.diff(dut.cost_history[k - 1 :]) <= 0)
+    assert dut.informed_diameters.shape == (0,)
+    assert dut.informed_diameters.dtype == np.float64
+
+
+def room_planner(start, goal, iterations):
+    scenario = room()
+    scenario.start, scenario.goal = list(start), list(goal)
+    planner = planner_for(scenario)
+    planner.options = dc.replace(planner.options, iterations=iterations, goal_bias=0.0)
+    return planner, np.array(start, float), np.array(goal, float)
+
+
+@pytest.mark.parametrize("distance", [2.5, 1.0])
+def test_the_start_connects_to_a_goal_within_the_near_radius_inclusive(distance):
+    """Start and goal on a free line, exactly ``distance`` apart (r_near =
+    2.5 m is included): the root's own goal connection is found before any
+    sample, so the best path is the straight motion, of length ``distance``
+    (any path through other nodes is longer)."""
+    planner, start, goal = room_planner([1.0, 1.0, 0.0, math.pi / 2], [1.0 + distance, 1.0, 0.0, math.pi / 2], 30)
+    assert planner.options.near_radius == 2.5 and planner.space.distance(start, goal) == distance
+    assert planner.checker.is_motion_valid(start, goal)
+    dut = planner.solve(start, goal, np.random.default_rng(0))
+    assert dut.success and dut.cost == distance
+    np.testing.assert_array_equal(dut.waypoints, [start, goal])
+
+
+def test_integer_ends_give_the_float_ends_result(tiny_scenario):
+    """Start and goal given as integer arrays are planned as floats: the
+    compiled loop (the planar checker) and the Python loop (the numpy
+    checker) return the trees of the float ends."""
+    from drake_social.model.planar_checker import PlanarChecker
+    from drake_social.planning import tree_kernel
+    from drake_social.planning.variants import make_planner
+
+    scenario = copy.deepcopy(tiny_scenario)
+    scenario.planner = dc.replace(scenario.planner, iterations=60)
+    start, goal = np.array([1, 2, 0, 1]), np.array([6, 2, 0, 1])
+    checkers = [GeometricChecker(scenario)] + ([PlanarChecker(scenario)] if tree_kernel.AVAILABLE else [])
+    for checker in checkers:
+        planner = make_planner(scenario, checker, "rrt_star")
+        assert checker.is_valid(start.astype(float)) and checker.is_valid(goal.astype(float))
+        expected = planner.solve(start.astype(float), goal.astype(float), np.random.default_rng(3))
+        dut = planner.solve(start, goal, np.random.default_rng(3))
+        assert dut.success and dut.waypoints.dtype == np.float64
+        np.testing.assert_array_equal(dut.tree_nodes, expected.tree_nodes)
+        np.testing.assert_array_equal(dut.waypoints, expected.waypoints)
