@@ -188,3 +188,16 @@ def test_integer_ends_give_the_float_ends_result(tiny_scenario):
         assert dut.success and dut.waypoints.dtype == np.float64
         np.testing.assert_array_equal(dut.tree_nodes, expected.tree_nodes)
         np.testing.assert_array_equal(dut.waypoints, expected.waypoints)
+
+
+def test_a_node_on_the_goal_costs_nothing_more():
+    """planning_range 2 > r_near 0.5: the start, 1.5 m from the goal, has no
+    goal connection of its own, but a goal sample is steered onto the goal
+    exactly; that node's path is the path (cost 1.5 m, no extra motion)."""
+    planner, start, goal = room_planner([1.0, 1.0, 0.0, math.pi / 2], [2.5, 1.0, 0.0, math.pi / 2], 5)
+    planner.options = dc.replace(planner.options, planning_range=2.0, near_radius=0.5, goal_bias=0.5)
+    assert np.random.default_rng(2).random() < 0.5  # the first sample is the goal
+    dut = planner.solve(start, goal, np.random.default_rng(2))
+    assert dut.success and dut.cost == 1.5
+    np.testing.assert_array_equal(dut.waypoints, [start, goal])
+    assert any(np.array_equal(q, goal) for q in dut.tree_nodes)
