@@ -139,12 +139,21 @@ def _repeated(run_once: Callable[[], tuple], repeats: int) -> tuple:
     """Runs ``run_once() -> (result, ...)`` ``repeats`` times and returns the
     first run's tuple with ``wall_time`` the median of the repeats' (the
     runs are seeded: the same path each time, only the machine's speed
-    differs), and the repeats' times."""
+    differs), and the repeats' times.
+
+    Raises:
+        RuntimeError: a repeat returned another path or cost than the first
+            (the run is not deterministic, so its repeats cannot be pooled).
+    """
     first, times = None, []
     for _ in range(repeats):
         out = run_once()
         times.append(float(out[0].wall_time))
-        first = out if first is None else first
+        if first is None:
+            first = out
+        elif not (np.array_equal(out[0].waypoints, first[0].waypoints) and out[0].cost == first[0].cost):
+            raise RuntimeError(f"{first[0].algorithm}: a repeat of seed {first[0].seed} returned another path "
+                               f"(cost {out[0].cost!r}, first {first[0].cost!r}); --repeats needs deterministic runs")
     first[0].wall_time = float(np.median(times))
     return first, times
 

@@ -268,3 +268,24 @@ def test_ratios_where_a_median_is_zero_are_not_defined():
     row = next(line for line in bench._markdown(out).splitlines() if line.startswith("| tiny | social_rrt_star"))
     assert row.endswith("| 0.25 | n/a | n/a | n/a |")  # time, time with the same checks (none), costs
     assert json.loads(json.dumps(bench._finite(vs)))["social_cost"] is None
+
+
+def test_repeats_pool_only_identical_runs():
+    """_repeated: the median of the repeats' times on the first result; a
+    repeat with another path is refused, not averaged in."""
+    from types import SimpleNamespace
+
+    from drake_social.experiments import bench
+
+    def run(times, costs):
+        it = iter(zip(times, costs))
+
+        def once():
+            t, c = next(it)
+            return (SimpleNamespace(algorithm="a", seed=3, wall_time=t, cost=c, waypoints=np.zeros((2, 4))), "x")
+        return once
+
+    (result, extra), times = bench._repeated(run([0.3, 0.1, 0.2], [1.0, 1.0, 1.0]), 3)
+    assert times == [0.3, 0.1, 0.2] and result.wall_time == 0.2 and extra == "x"
+    with pytest.raises(RuntimeError, match="a: a repeat of seed 3 returned another path .cost 1.5, first 1.0."):
+        bench._repeated(run([0.3, 0.1], [1.0, 1.5]), 2)
