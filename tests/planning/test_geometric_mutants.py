@@ -208,3 +208,17 @@ def test_the_limits_are_closed(tiny_scenario):
         qs += [below, above]
     assert dut.in_limits(np.array(qs)).tolist() == [True, True] + [False] * 8
     assert dut.in_limits(np.array(qs).reshape(2, 5, 4)).shape == (2, 5)
+
+
+def test_walls_of_a_room_not_at_the_origin():
+    """Room bounds [-3, -2] .. [5, 4]: the base 0.5 m from the west (then
+    the south) wall, the arm and a 1 m bar pointing into the room: clearance
+    0.5 - 0.35 m, by hand."""
+    scenario = Scenario(world=World(bounds=[-3.0, -2.0, 5.0, 4.0], obstacles=[]), people=[],
+                        object=Bar(length=1.0, thickness=0.05))
+    dut = GeometricChecker(scenario)
+    assert dut.geometry.base_radius == 0.35
+    west = np.array([-2.5, 1.0, 0.0, 0.0])  # the arm along +x
+    south = np.array([1.0, -1.5, math.pi / 2, 0.0])  # the arm along +y
+    np.testing.assert_allclose(dut.clearances(np.array([west, south])), [0.15, 0.15], rtol=1e-12)
+    assert dut.is_valid(west) and not dut.is_valid(west - [0.2, 0.0, 0.0, 0.0])  # 0.05 m into the wall
