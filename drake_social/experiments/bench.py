@@ -283,8 +283,12 @@ def run_bench(
     for path in paths:
         scenario = load_scenario(path)
         _make_checker(scenario, checker, path)  # a start or goal in collision: a clear error naming the file
-        # Warm-up, untimed: loads (or compiles) the motion-cost kernel.
+        # Warm-up, untimed: loads (or compiles) the motion-cost kernel and each
+        # planner's loop (numba's cache is read on the first call: about 0.15 s
+        # that would otherwise land in the first timed run).
         make_objective(scenario, "social_rrt_star").motion_cost(np.array(scenario.start), np.array(scenario.goal))
+        for algorithm in algorithms:
+            plan(scenario, _make_checker(scenario, checker), algorithm=algorithm, iterations=10, seed=0)
         entry = {"algorithms": {}, "ompl": {}, "ompl_same_checker": {},
                  # The planner options that change how paths are made (see PlannerOptions).
                  "planner_options": {"near_radius_mode": scenario.planner.near_radius_mode,
