@@ -222,3 +222,7 @@ def test_walls_of_a_room_not_at_the_origin():
     south = np.array([1.0, -1.5, math.pi / 2, 0.0])  # the arm along +y
     np.testing.assert_allclose(dut.clearances(np.array([west, south])), [0.15, 0.15], rtol=1e-12)
     assert dut.is_valid(west) and not dut.is_valid(west - [0.2, 0.0, 0.0, 0.0])  # 0.05 m into the wall
+
+
+def test_the_checker_keeps_its_scenario(tiny_scenario):
+    assert GeometricChecker(tiny_scenario).scenario is tiny_scenario
