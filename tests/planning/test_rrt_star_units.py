@@ -201,3 +201,42 @@ def test_a_node_on_the_goal_costs_nothing_more():
     assert dut.success and dut.cost == 1.5
     np.testing.assert_array_equal(dut.waypoints, [start, goal])
     assert any(np.array_equal(q, goal) for q in dut.tree_nodes)
+
+
+def test_lazy_path_length_costs_count_like_the_eager_loop():
+    """For a length objective the lazy loop takes the motion costs as the
+    length bounds it computes anyway: the same tree and the same counts as
+    the eager reference (every near motion costed once per extension)."""
+    eager = run_room(lazy_costs=False)
+    lazy = run_room(lazy_costs=True)
+    np.testing.assert_array_equal(lazy.tree_nodes, eager.tree_nodes)
+    np.testing.assert_array_equal(lazy.tree_parents, eager.tree_parents)
+    assert (lazy.num_cost_evaluations, lazy.num_motion_checks, lazy.num_config_checks) == (
+        eager.num_cost_evaluations, eager.num_motion_checks, eager.num_config_checks)
+    assert lazy.num_cost_evaluations > lazy.tree_size  # several near motions per extension
+
+
+def test_a_goal_drawn_again_adds_nothing_and_counts_like_the_compiled_loop():
+    """Goal bias 0.5 near the goal: once the goal is a node, drawing it again
+    adds no node and checks nothing; the Python loop's counts equal the
+    compiled loop's (a second implementation) on the planar checker."""
+    from drake_social.model.planar_checker import PlanarChecker
+    from drake_social.planning import tree_kernel
+
+    if not tree_kernel.AVAILABLE:
+        pytest.skip("numba is not importable")
+    scenario = room()
+    scenario.start, scenario.goal = [1.0, 1.0, 0.0, math.pi / 2], [2.5, 1.0, 0.0, math.pi / 2]
+    checker = PlanarChecker(scenario)
+    runs = []
+    for compiled in (False, True):
+        planner = RrtStar(ConfigurationSpace.from_scenario(scenario), checker, make_objective(scenario, "rrt_star"),
+                          dc.replace(RrtStarOptions.from_scenario(scenario.planner), iterations=40, goal_bias=0.5,
+                                     compiled=compiled))
+        assert planner._compiled_applies()
+        runs.append(planner.solve(np.array(scenario.start), np.array(scenario.goal), np.random.default_rng(4)))
+    python, compiled = runs
+    assert sum(np.array_equal(q, scenario.goal) for q in python.tree_nodes) == 1  # the goal, once
+    np.testing.assert_array_equal(python.tree_nodes, compiled.tree_nodes)
+    assert (python.num_cost_evaluations, python.num_motion_checks, python.num_config_checks) == (
+        compiled.num_cost_evaluations, compiled.num_motion_checks, compiled.num_config_checks)
