@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import copy
 import dataclasses as dc
+import math
 
 import numpy as np
 import pytest
@@ -168,3 +169,45 @@ def test_grid_neighbour_queries_equal_the_direct_scan(rng):
             m = tree_kernel._within(q, x, w, r, r * r, head, nxt, geom, out)
             d2 = np.array([tree_kernel._d2(p, x, w) for p in q])
             np.testing.assert_array_equal(out[:m], np.flatnonzero(d2 <= r * r))
+
+
+def test_compiled_loop_culls_people_in_a_wider_than_tall_grid(tiny):
+    """People 7 m apart along x (the kernel's people grid is then 2 cells by
+    1, its cell side being reach + point reach, about 6 m): the compiled loop
+    reads the grid's shape right and finds every person near a motion, as
+    the reference's cost does (a mutation run let nx = ny pass)."""
+    from drake_social.cost import SocialCost
+    from drake_social.scenario import Person
+
+    scenario, _ = tiny
+    scenario = copy.deepcopy(scenario)
+    scenario.people = [Person(x=0.5, y=0.4, theta=0.0), Person(x=7.5, y=0.4, theta=math.pi)]
+    grid = SocialCost.from_scenario(scenario)._people_grid()
+    assert (grid[4], grid[5]) == (2, 1)  # nx, ny of the people grid
+    checker = PlanarChecker(scenario)
+    reference = run(scenario, checker, "social_rrt_star", 6, False)
+    assert_same(reference, run(scenario, checker, "social_rrt_star", 6, True))
+    # The person in the second cell costs something: without it the tree differs.
+    alone = copy.deepcopy(scenario)
+    alone.people = alone.people[:1]
+    without = run(alone, checker, "social_rrt_star", 6, False)  # the same checks, one person costed
+    assert not np.array_equal(without.tree_costs[:50], reference.tree_costs[:50])
+
+
+def test_compiled_admissible_ellipse_with_unequal_distance_weights(tiny):
+    """The admissible informed bound divides by lambda min(w_x, w_y): with
+    w_x != w_y the compiled loop's diameters and tree are the reference's
+    (a mutation run let lambda / min and min(w_x, w_psi1) pass)."""
+    scenario, checker = tiny
+    scenario = copy.deepcopy(scenario)
+    scenario.social.length_weight = 0.3
+    scenario.planner = dc.replace(scenario.planner, informed_mode="admissible",
+                                  distance_weights=[2.0, 2.5, 0.4, 0.3])
+    reference = run(scenario, checker, "informed_social_rrt_star", 2, False)
+    dut = run(scenario, checker, "informed_social_rrt_star", 2, True)
+    assert_same(reference, dut)
+    np.testing.assert_array_equal(dut.informed_diameters, reference.informed_diameters)
+    finite = dut.informed_diameters[np.isfinite(dut.informed_diameters)]
+    # Admissible: best cost / (lambda min(w_x, w_y)) = cost / (0.3 * 2.0).
+    assert len(finite) > 100
+    np.testing.assert_allclose(finite[-1], dut.cost / 0.6, rtol=1e-12)
