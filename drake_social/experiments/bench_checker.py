@@ -122,7 +122,9 @@ def _bench_scenario(path: Path, num_configs: int, num_edges: int, rng: np.random
     }
     seconds, rate, cpu_rate = {}, {}, {}
     # Every planar kernel timed below compiled (or loaded from numba's cache) before timing.
-    planar.is_motion_valid(q_a[0], q_b[0]), planar.clearance(q_a[0]), planar.is_valid(q_a[0])
+    planar.is_motion_valid(q_a[0], q_b[0])
+    planar.clearance(q_a[0])
+    planar.is_valid(q_a[0])
     for label, (fn, count) in cases.items():
         wall, cpu = _best_time(fn, repeats)
         seconds[label] = {"wall": wall, "cpu": cpu, "items": count}

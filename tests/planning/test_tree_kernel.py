@@ -125,6 +125,41 @@ def test_a_progress_callback_sees_every_iteration_of_the_compiled_loop(tiny, mon
     assert_same(reference, planner.solve(*args, np.random.default_rng(5)))
 
 
+def test_progress_is_at_most_one_chunk_of_64_iterations_late(tiny, monkeypatch):
+    """The README's "at most 64 iterations late": with a callback the loop
+    runs chunks of at most PROGRESS_CHUNK = 64 iterations, and iteration k is
+    reported after the chunk that ran it and before the next chunk starts."""
+    from drake_social.planning import rrt_star
+
+    assert rrt_star.PROGRESS_CHUNK == 64
+    scenario, checker = tiny
+    planner = make_planner(scenario, checker, "social_rrt_star")
+    events = []
+    grow = tree_kernel.grow
+
+    def spy(rng, it_start, it_stop, *rest):
+        events.append(("grow", it_start, it_stop))
+        return grow(rng, it_start, it_stop, *rest)
+
+    monkeypatch.setattr(tree_kernel, "grow", spy)
+    planner.solve(np.array(scenario.start), np.array(scenario.goal), np.random.default_rng(5),
+                  lambda k, c: events.append(("progress", k)))
+    chunks = [(e[1], e[2]) for e in events if e[0] == "grow"]
+    assert chunks[0] == (-1, 63) and all(b - max(a, 0) <= 64 for a, b in chunks)
+    assert [a for a, _ in chunks[1:]] == [b for _, b in chunks[:-1]] and chunks[-1][1] == scenario.planner.iterations
+    ran_by = -1  # iterations 1 .. ran_by have run when a progress event comes
+    for e in events:
+        if e[0] == "grow":
+            assert e[1] == ran_by  # chunks follow each other
+            reported_up_to = max(e[1], 0)
+            ran_by = e[2]
+        else:
+            assert reported_up_to < e[1] <= ran_by  # after its chunk ran, before the next one
+            assert ran_by - e[1] < 64  # at most 63 iterations ran beyond it
+            reported_up_to = e[1]
+    assert reported_up_to == scenario.planner.iterations
+
+
 def test_ctrl_c_stops_the_compiled_loop_between_chunks(tiny):
     """KeyboardInterrupt raised in the callback (as Python raises it for
     Ctrl-C between two chunks) ends the run at once, after one chunk."""
