@@ -240,3 +240,43 @@ def test_a_goal_drawn_again_adds_nothing_and_counts_like_the_compiled_loop():
     np.testing.assert_array_equal(python.tree_nodes, compiled.tree_nodes)
     assert (python.num_cost_evaluations, python.num_motion_checks, python.num_config_checks) == (
         compiled.num_cost_evaluations, compiled.num_motion_checks, compiled.num_config_checks)
+
+
+@pytest.mark.parametrize("case", ["found", "found, optimised", "not found"])
+def test_compiled_and_python_loops_fill_the_result_alike(case):
+    """The compiled loop's result (built from its arrays) against the Python
+    loop's on the same tree: the counts and sizes as ints, the first solution
+    None when there is none, the raw cost before optimisation and a positive
+    wall time measured from the start of solve."""
+    from drake_social.model.planar_checker import PlanarChecker
+    from drake_social.planning import tree_kernel
+
+    if not tree_kernel.AVAILABLE:
+        pytest.skip("numba is not importable")
+    scenario = room()
+    options = dict(iterations=150, optimize=case == "found, optimised")
+    if case == "not found":  # 8 iterations of 0.5 m steps cannot cross the 7.2 m room
+        options.update(iterations=8, planning_range=0.5, near_radius=0.5)
+    runs = []
+    for compiled in (False, True):
+        planner = RrtStar(ConfigurationSpace.from_scenario(scenario), PlanarChecker(scenario),
+                          make_objective(scenario, "rrt_star"),
+                          dc.replace(RrtStarOptions.from_scenario(scenario.planner), compiled=compiled, **options))
+        assert planner._compiled_applies()
+        runs.append(planner.solve(np.array(scenario.start), np.array(scenario.goal), np.random.default_rng(2)))
+    python, compiled = runs
+    for dut in runs:
+        assert type(dut.tree_size) is int and dut.tree_size == len(dut.tree_nodes) == len(dut.tree_parents) > 1
+        assert math.isfinite(dut.wall_time) and dut.wall_time > 0
+        assert dut.near_radius_mode == "fixed" and dut.optimized == (case == "found, optimised")
+        if case == "not found":
+            assert not dut.success and dut.first_solution_iteration is None and dut.raw_cost == np.inf
+        else:
+            assert dut.success and type(dut.first_solution_iteration) is int and dut.first_solution_iteration >= 1
+            assert dut.raw_cost == dut.cost_history[-1] and dut.cost <= dut.raw_cost
+            if not dut.optimized:
+                assert dut.cost == dut.raw_cost
+    for name in ("success", "tree_size", "first_solution_iteration", "raw_cost", "cost", "num_config_checks",
+                 "num_motion_checks", "num_cost_evaluations"):
+        assert getattr(compiled, name) == getattr(python, name), name
+    np.testing.assert_array_equal(compiled.tree_nodes, python.tree_nodes)
