@@ -8,6 +8,7 @@ from __future__ import annotations
 import copy
 import dataclasses as dc
 import math
+import time
 
 import numpy as np
 import pytest
@@ -263,11 +264,19 @@ def test_compiled_and_python_loops_fill_the_result_alike(case):
                           make_objective(scenario, "rrt_star"),
                           dc.replace(RrtStarOptions.from_scenario(scenario.planner), compiled=compiled, **options))
         assert planner._compiled_applies()
+        before = time.perf_counter()
         runs.append(planner.solve(np.array(scenario.start), np.array(scenario.goal), np.random.default_rng(2)))
+        spent = time.perf_counter() - before
+        assert 0 < runs[-1].wall_time <= spent
     python, compiled = runs
+    goal, weights = np.array(scenario.goal), np.array(planner.space.weights)
     for dut in runs:
         assert type(dut.tree_size) is int and dut.tree_size == len(dut.tree_nodes) == len(dut.tree_parents) > 1
-        assert math.isfinite(dut.wall_time) and dut.wall_time > 0
+        for name in ("num_config_checks", "num_motion_checks", "num_cost_evaluations"):
+            assert type(getattr(dut, name)) is int and getattr(dut, name) > 0, name
+        by_hand = min(math.sqrt(sum((w * (a - b)) ** 2 for w, a, b in zip(weights, q, goal))) for q in dut.tree_nodes)
+        assert dut.closest_distance_to_goal == pytest.approx(by_hand, rel=1e-12)
+        assert dut.algorithm == "rrt_star" and dut.cost_history.shape == (options["iterations"],)
         assert dut.near_radius_mode == "fixed" and dut.optimized == (case == "found, optimised")
         if case == "not found":
             assert not dut.success and dut.first_solution_iteration is None and dut.raw_cost == np.inf
