@@ -229,6 +229,49 @@ def test_compiled_loop_culls_people_in_a_wider_than_tall_grid(tiny):
     assert not np.array_equal(without.tree_costs[:50], reference.tree_costs[:50])
 
 
+def test_compiled_loop_culls_people_in_a_two_by_two_grid(tiny):
+    """Two people by the south wall 7 m apart and one 5.3 m north of them,
+    facing the robot's corridor (the people grid is 2 x 2 cells of about 5 m
+    from (0.5, 0.3)): the compiled loop reads the grid's origin and shape
+    right and costs every person as the reference does (a mutation run let
+    the origin's y be read from the grid's nx, which drops the north person
+    for motions that stay below y = 2)."""
+    from drake_social.cost import SocialCost
+    from drake_social.scenario import Person, validate_scenario
+
+    scenario, _ = tiny
+    scenario = copy.deepcopy(scenario)
+    scenario.world.bounds = [0.0, 0.0, 8.0, 10.0]
+    scenario.people = [Person(x=0.5, y=0.3, theta=0.0), Person(x=7.5, y=0.3, theta=math.pi),
+                       Person(x=4.0, y=5.6, theta=-math.pi / 2)]
+    validate_scenario(scenario)
+    grid = SocialCost.from_scenario(scenario)._people_grid()
+    assert (grid[2], grid[3], grid[4], grid[5]) == (0.5, 0.3, 2, 2)  # x0, y0, nx, ny of the people grid
+    checker = PlanarChecker(scenario)
+    reference = run(scenario, checker, "social_rrt_star", 6, False)
+    assert_same(reference, run(scenario, checker, "social_rrt_star", 6, True))
+    alone = copy.deepcopy(scenario)
+    alone.people = alone.people[:2]
+    without = run(alone, checker, "social_rrt_star", 6, False)  # the north person costs something
+    assert not np.array_equal(without.tree_costs[:50], reference.tree_costs[:50])
+
+
+@pytest.mark.parametrize("algorithm", ["rrt_star", "social_rrt_star"])
+def test_compiled_loop_connects_the_start_to_a_near_goal_once(tiny, algorithm):
+    """Start and goal 1 m apart (within r_near): the root's goal connection
+    is made once, before the first sample, by both loops; the same tree,
+    costs and counts (a mutation run let the compiled loop make it twice)."""
+    scenario, _ = tiny
+    scenario = copy.deepcopy(scenario)
+    scenario.goal = [2.0, 2.5, 0.0, 1.5708]
+    scenario.planner = dc.replace(scenario.planner, iterations=40)
+    checker = PlanarChecker(scenario)
+    reference = run(scenario, checker, algorithm, 1, False, lazy_costs=True)
+    dut = run(scenario, checker, algorithm, 1, True, lazy_costs=True)
+    assert_same(reference, dut)
+    assert dut.first_solution_iteration == 1 and np.isfinite(dut.cost_history[0])
+
+
 def test_compiled_admissible_ellipse_with_unequal_distance_weights(tiny):
     """The admissible informed bound divides by lambda min(w_x, w_y): with
     w_x != w_y the compiled loop's diameters and tree are the reference's
