@@ -279,9 +279,13 @@ def test_compiled_and_python_loops_fill_the_result_alike(case):
         assert dut.algorithm == "rrt_star" and dut.cost_history.shape == (options["iterations"],)
         assert dut.near_radius_mode == "fixed" and dut.optimized == (case == "found, optimised")
         if case == "not found":
-            assert not dut.success and dut.first_solution_iteration is None and dut.raw_cost == np.inf
+            assert dut.success is False and dut.first_solution_iteration is None and dut.raw_cost == np.inf
+            assert dut.cost == np.inf and dut.waypoints.shape == (0, 4)
+            assert dut.message == (f"no collision-free connection to the goal after 8 iterations; tree of "
+                                   f"{dut.tree_size} nodes, closest node {by_hand:.3g} from the goal (near radius 0.5)")
         else:
-            assert dut.success and type(dut.first_solution_iteration) is int and dut.first_solution_iteration >= 1
+            assert dut.success is True and dut.message == "path found"
+            assert type(dut.first_solution_iteration) is int and dut.first_solution_iteration >= 1
             assert dut.raw_cost == dut.cost_history[-1] and dut.cost <= dut.raw_cost
             if not dut.optimized:
                 assert dut.cost == dut.raw_cost
