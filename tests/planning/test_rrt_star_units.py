@@ -293,3 +293,65 @@ def test_compiled_and_python_loops_fill_the_result_alike(case):
                  "num_motion_checks", "num_cost_evaluations"):
         assert getattr(compiled, name) == getattr(python, name), name
     np.testing.assert_array_equal(compiled.tree_nodes, python.tree_nodes)
+
+
+def test_options_from_scenario_copy_every_planner_field():
+    """Every field of the scenario's planner section lands in its own
+    option (distinct values, none a default); the loop switches stay on."""
+    from drake_social.scenario import PlannerOptions
+
+    p = PlannerOptions(iterations=77, planning_range=0.7, near_radius=1.9, goal_bias=0.11, informed_mode="admissible",
+                       near_radius_mode="shrinking", near_radius_gamma=3.3, optimize=True)
+    for informed in (False, True):
+        dut = RrtStarOptions.from_scenario(p, informed=informed)
+        assert dc.astuple(dut) == (77, 0.7, 1.9, 0.11, informed, "admissible", "shrinking", 3.3, True, True, True,
+                                   True)
+    assert RrtStarOptions.from_scenario(p).informed is False
+
+
+def rrt_star_with(**options):
+    scenario = room()
+    return RrtStar(ConfigurationSpace.from_scenario(scenario), GeometricChecker(scenario),
+                   make_objective(scenario, "rrt_star"), dc.replace(RrtStarOptions(), **options), name="named")
+
+
+@pytest.mark.parametrize("options, error, message", [
+    (dict(iterations=0), ValueError, "planner.iterations must be in [1, 10000000], got 0"),
+    (dict(iterations=10_000_001), ValueError, "planner.iterations must be in [1, 10000000], got 10000001"),
+    (dict(near_radius_mode="fix"), ValueError, "unknown near_radius_mode 'fix'; allowed: fixed, shrinking"),
+    (dict(near_radius_gamma=-0.5), ValueError, "near_radius_gamma must be >= 0, got -0.5"),
+    (dict(near_radius_gamma=math.nan), ValueError, "near_radius_gamma must be >= 0, got nan"),
+    (dict(near_radius_gamma=math.inf), ValueError, "near_radius_gamma must be >= 0, got inf"),
+    (dict(planning_range=0.0), ValueError, "planning_range and near_radius must be > 0"),
+    (dict(near_radius=0.0), ValueError, "planning_range and near_radius must be > 0"),
+    (dict(near_radius=math.nan), ValueError, "planning_range and near_radius must be > 0"),
+    (dict(goal_bias=1.0), ValueError, "goal_bias must be in [0, 1), got 1.0"),
+    (dict(goal_bias=-0.01), ValueError, "goal_bias must be in [0, 1), got -0.01"),
+    (dict(informed=True, informed_mode="papers"), ValueError,
+     "unknown informed mode 'papers'; allowed: paper, admissible"),
+])
+def test_planner_options_are_refused_with_the_field_and_the_allowed_values(options, error, message):
+    with pytest.raises(error) as info:
+        rrt_star_with(**options)
+    assert str(info.value) == message
+
+
+def test_planner_accepts_the_edges_of_its_option_ranges_and_keeps_its_parts():
+    for options in (dict(iterations=1), dict(iterations=10_000_000), dict(near_radius_gamma=0.0),
+                    dict(goal_bias=0.0), dict(near_radius_mode="shrinking"),
+                    dict(informed=True, informed_mode="admissible"), dict(informed=True, informed_mode="paper")):
+        dut = rrt_star_with(**options)
+        assert dut.name == "named" and dut.options == dc.replace(RrtStarOptions(), **options)
+    scenario = room()
+    space, checker, objective = (ConfigurationSpace.from_scenario(scenario), GeometricChecker(scenario),
+                                 make_objective(scenario, "rrt_star"))
+    dut = RrtStar(space, checker, objective)
+    assert (dut.space, dut.checker, dut.objective, dut.name) == (space, checker, objective, "rrt_star")
+    assert dut.options == RrtStarOptions()
+    scenario.social.length_weight = 0.0  # a social objective with no length term bounds no path length
+    with pytest.raises(PlanningInputError) as info:
+        RrtStar(space, checker, make_objective(scenario, "social_rrt_star"),
+                RrtStarOptions(informed=True, informed_mode="admissible"))
+    assert str(info.value) == ("informed_mode 'admissible' needs an objective that bounds the path length "
+                               "(social.length_weight > 0); without it the ellipse would never shrink")
+    RrtStar(space, checker, make_objective(scenario, "social_rrt_star"), RrtStarOptions(informed=True))  # paper: fine
