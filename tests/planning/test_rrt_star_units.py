@@ -355,3 +355,56 @@ def test_planner_accepts_the_edges_of_its_option_ranges_and_keeps_its_parts():
     assert str(info.value) == ("informed_mode 'admissible' needs an objective that bounds the path length "
                                "(social.length_weight > 0); without it the ellipse would never shrink")
     RrtStar(space, checker, make_objective(scenario, "social_rrt_star"), RrtStarOptions(informed=True))  # paper: fine
+
+
+def brute_nearest(q_nodes, w, x):
+    d = [math.sqrt(sum((wi * (a - b)) ** 2 for wi, a, b in zip(w, q, x))) for q in q_nodes]
+    best = min(d)
+    return d.index(best), best  # the lowest index on ties
+
+
+def test_neighbours_through_the_kd_tree_equal_a_plain_scan_ties_included():
+    """_Neighbors with the KD-tree on from 8 nodes against a plainly written
+    scan: nodes on a lattice (many exact ties, some nodes exactly at the
+    radius) plus random ones, queried at lattice points, midpoints and
+    random points; and the rebuild rule (more than max(256, n / 16) nodes
+    added since the last build)."""
+    from drake_social.planning.rrt_star import _Neighbors
+
+    rng = np.random.default_rng(3)
+    w = np.array([1.0, 2.0, 0.5, 0.25])
+    lattice = np.array([[i, j, 2 * k, 4 * m] for i in range(3) for j in range(2) for k in range(2) for m in range(2)],
+                       float) * 0.5
+    nodes = np.vstack([lattice, rng.uniform(-1, 2, (40, 4))])
+    tree = _Tree(8)
+    for q in nodes:
+        tree.add(q, -1 if tree.n == 0 else 0, 0.0)
+    dut = _Neighbors(w, True, min_nodes=8)
+    scan = _Neighbors(w, False)
+    queries = np.vstack([lattice[:10], (lattice[:-1] + lattice[1:]) / 2, rng.uniform(-1, 2, (30, 4))])
+    ties = 0
+    for x in queries:
+        i, d = dut.nearest(tree, x)
+        j, e = brute_nearest(tree.q[: tree.n], w, x)
+        assert (i, d) == scan.nearest(tree, x) and i == j and d == pytest.approx(e, rel=1e-12)
+        dd = np.array([math.sqrt(sum((wi * (a - b)) ** 2 for wi, a, b in zip(w, q, x))) for q in tree.q[: tree.n]])
+        ties += int(np.sum(dd == dd.min()) > 1)
+        for r in (0.5, 0.75, 1.0):
+            expected = np.flatnonzero(np.einsum("ij,ij->i", (tree.q[: tree.n] - x) * w, (tree.q[: tree.n] - x) * w)
+                                      <= r * r)
+            np.testing.assert_array_equal(dut.within(tree, x, r), expected)
+            np.testing.assert_array_equal(scan.within(tree, x, r), expected)
+    assert ties >= 5 and dut.kd is not None and dut.kd_n == tree.n
+    # Rebuilds: not before max(256, kd_n / 16) nodes more, then at once.
+    built = dut.kd
+    for _ in range(256):
+        tree.add(rng.uniform(-1, 2, 4), 0, 0.0)
+    assert dut._update(tree) and dut.kd is built and dut.kd_n == 64
+    tree.add(rng.uniform(-1, 2, 4), 0, 0.0)
+    assert dut._update(tree) and dut.kd is not built and dut.kd_n == tree.n == 321
+    x = rng.uniform(-1, 2, 4)
+    assert dut.nearest(tree, x) == scan.nearest(tree, x)
+    assert not _Neighbors(w, True, min_nodes=tree.n + 1)._update(tree)  # too few nodes
+    assert not _Neighbors(w, False, min_nodes=1)._update(tree)  # off
+    small = _Neighbors(w, True, min_nodes=tree.n)
+    assert small._update(tree) and small.kd_n == tree.n
