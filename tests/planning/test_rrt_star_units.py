@@ -52,6 +52,36 @@ def test_tree_doubles_its_arrays_and_keeps_unused_parents_at_minus_one():
     assert tree.cost[:5].tolist() == [1.0, 2.0, 3.0, 3.5, 4.0]
 
 
+def test_tree_starts_empty_and_reparents_whole_subtrees_by_hand():
+    """A new tree: the capacity asked for (at least 1), no nodes, parents -1,
+    float arrays. Reparenting moves the child lists, sets the edge and
+    recomputes every descendant's cost as parent cost + edge; a cycle is
+    refused with the nodes named."""
+    for asked, capacity in ((5, 5), (0, 1), (-3, 1), (2.7, 2)):
+        tree = _Tree(asked)
+        assert tree.capacity == capacity and tree.n == 0 and tree.children == []
+        assert tree.q.shape == (capacity, 4) and tree.q.dtype == np.float64
+        assert tree.cost.shape == tree.edge.shape == (capacity,) and tree.cost.dtype == tree.edge.dtype == np.float64
+        assert tree.parent.tolist() == [-1] * capacity and tree.parent.dtype == np.int64
+    assert _Tree().capacity == 256
+    tree = _Tree(8)
+    assert tree.add(np.zeros(4), -1, 0.25) == 0 and tree.cost[0] == 0.25  # a root costs its edge
+    a = tree.add(np.ones(4), 0, 1.0)
+    b = tree.add(np.full(4, 2.0), a, 0.5)
+    c = tree.add(np.full(4, 3.0), b, 0.125)
+    d = tree.add(np.full(4, 4.0), 0, 0.5)
+    assert (a, b, c, d, tree.n) == (1, 2, 3, 4, 5)
+    assert tree.children == [[a, d], [b], [c], [], []]
+    assert tree.cost[:5].tolist() == [0.25, 1.25, 1.75, 1.875, 0.75]
+    tree.reparent(b, d, 0.375)
+    assert tree.children == [[a, d], [], [c], [], [b]] and tree.parent[: tree.n].tolist() == [-1, 0, 4, 2, 0]
+    assert tree.edge[b] == 0.375 and tree.cost[:5].tolist() == [0.25, 1.25, 1.125, 1.25, 0.75]
+    np.testing.assert_array_equal(tree.q[b], np.full(4, 2.0))
+    with pytest.raises(RuntimeError) as info:
+        tree.reparent(d, c, 0.0)
+    assert str(info.value) == "rewiring node 4 under its descendant 3"
+
+
 def test_path_to_runs_from_the_root():
     tree = _Tree(4)
     tree.add(np.zeros(4), -1, 0.0)
@@ -366,8 +396,8 @@ def brute_nearest(q_nodes, w, x):
 def test_neighbours_through_the_kd_tree_equal_a_plain_scan_ties_included():
     """_Neighbors with the KD-tree on from 8 nodes against a plainly written
     scan: nodes on a lattice (many exact ties, some nodes exactly at the
-    radius) plus random ones, queried at lattice points, midpoints and
-    random points; and the rebuild rule (more than max(256, n / 16) nodes
+    radius) plus random ones and four lattice nodes again, queried at
+    lattice points, midpoints, random points and nodes; and the rebuild rule (more than max(256, n / 16) nodes
     added since the last build)."""
     from drake_social.planning.rrt_star import _Neighbors
 
@@ -375,13 +405,13 @@ def test_neighbours_through_the_kd_tree_equal_a_plain_scan_ties_included():
     w = np.array([1.0, 2.0, 0.5, 0.25])
     lattice = np.array([[i, j, 2 * k, 4 * m] for i in range(3) for j in range(2) for k in range(2) for m in range(2)],
                        float) * 0.5
-    nodes = np.vstack([lattice, rng.uniform(-1, 2, (40, 4))])
+    nodes = np.vstack([lattice, rng.uniform(-1, 2, (36, 4)), lattice[:4]])  # the last four: duplicates
     tree = _Tree(8)
     for q in nodes:
         tree.add(q, -1 if tree.n == 0 else 0, 0.0)
     dut = _Neighbors(w, True, min_nodes=8)
     scan = _Neighbors(w, False)
-    queries = np.vstack([lattice[:10], (lattice[:-1] + lattice[1:]) / 2, rng.uniform(-1, 2, (30, 4))])
+    queries = np.vstack([lattice[:10], (lattice[:-1] + lattice[1:]) / 2, rng.uniform(-1, 2, (30, 4)), nodes[30:40]])
     ties = 0
     for x in queries:
         i, d = dut.nearest(tree, x)
@@ -408,3 +438,31 @@ def test_neighbours_through_the_kd_tree_equal_a_plain_scan_ties_included():
     assert not _Neighbors(w, False, min_nodes=1)._update(tree)  # off
     small = _Neighbors(w, True, min_nodes=tree.n)
     assert small._update(tree) and small.kd_n == tree.n
+
+
+def test_the_compiled_loop_applies_to_the_planar_checker_and_known_objectives_only(tiny_scenario):
+    """Compiled: the planar checker with the path length or the numba social
+    objective. The Python loop: the numpy checker, the numpy social backend,
+    any other objective class (even a subclass)."""
+    from drake_social.model.planar_checker import PlanarChecker
+    from drake_social.planning import tree_kernel
+    from drake_social.planning.objective import PathLengthObjective, SocialObjective
+
+    if not tree_kernel.AVAILABLE:
+        pytest.skip("numba is not importable")
+    scenario = tiny_scenario
+    space, planar, numpy_checker = (ConfigurationSpace.from_scenario(scenario), PlanarChecker(scenario),
+                                    GeometricChecker(scenario))
+    social = make_objective(scenario, "social_rrt_star")
+    assert type(social) is SocialObjective and social.social.backend == "numba"
+
+    class Longer(PathLengthObjective):
+        pass
+
+    slow = copy.deepcopy(social)
+    slow.social.backend = "numpy"
+    for objective, checker, applies in ((make_objective(scenario, "rrt_star"), planar, True), (social, planar, True),
+                                        (social, numpy_checker, False), (slow, planar, False),
+                                        (Longer(), planar, False)):
+        planner = RrtStar(space, checker, objective)
+        assert planner._compiled_applies() is applies
