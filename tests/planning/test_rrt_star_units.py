@@ -368,7 +368,8 @@ def test_planner_options_are_refused_with_the_field_and_the_allowed_values(optio
 
 def test_planner_accepts_the_edges_of_its_option_ranges_and_keeps_its_parts():
     for options in (dict(iterations=1), dict(iterations=10_000_000), dict(near_radius_gamma=0.0),
-                    dict(goal_bias=0.0), dict(near_radius_mode="shrinking"),
+                    dict(goal_bias=0.0), dict(near_radius_mode="shrinking"), dict(planning_range=0.5),
+                    dict(near_radius=0.5),
                     dict(informed=True, informed_mode="admissible"), dict(informed=True, informed_mode="paper")):
         dut = rrt_star_with(**options)
         assert dut.name == "named" and dut.options == dc.replace(RrtStarOptions(), **options)
