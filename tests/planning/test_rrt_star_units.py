@@ -467,3 +467,48 @@ def test_the_compiled_loop_applies_to_the_planar_checker_and_known_objectives_on
                                         (Longer(), planar, False)):
         planner = RrtStar(space, checker, objective)
         assert planner._compiled_applies() is applies
+
+
+def test_near_radius_by_hand():
+    """Fixed: r_near for any tree. Shrinking: min(r_near, gamma (ln n / n)^(1/4)),
+    r_near itself for a single node."""
+    fixed = rrt_star_with(near_radius=2.0)
+    assert [fixed.near_radius(n) for n in (1, 2, 50, 10**6)] == [2.0] * 4
+    dut = rrt_star_with(near_radius=2.0, near_radius_mode="shrinking", near_radius_gamma=3.0)
+    assert dut.near_radius(1) == 2.0
+    for n in (2, 3, 50, 5000, 10**6):
+        by_hand = min(2.0, 3.0 * (math.log(n) / n) ** 0.25)
+        assert dut.near_radius(n) == pytest.approx(by_hand, rel=1e-15)
+    assert dut.near_radius(2) == 2.0 and dut.near_radius(5000) < 1.0  # 3 (ln 2 / 2)^0.25 > 2, then smaller
+    default = rrt_star_with(near_radius=9.0, near_radius_mode="shrinking")  # gamma 0: OMPL's default
+    assert default.near_radius(100) == pytest.approx(default_gamma(default.space) * (math.log(100) / 100) ** 0.25)
+
+
+def test_near_set_is_the_nodes_within_the_radius_of_the_grown_tree_then_the_nearest():
+    """_near: the ascending indices within near_radius(n + 1) (the tree with
+    the new node), inclusive, then the nearest node when it is not among
+    them; with or without a neighbour structure."""
+    from drake_social.planning.rrt_star import _Neighbors
+
+    dut = rrt_star_with(near_radius=1.0)
+    tree = _Tree(4)
+    for x in (0.0, 3.0, 1.5, 2.5, 6.0):  # along x, weights 1
+        tree.add(np.array([1.0 + x, 1.0, 0.0, 0.0]), -1 if tree.n == 0 else 0, 0.0)
+    q_new = np.array([3.5, 1.0, 0.0, 0.0])  # 2.5 from node 0, 0.5 from 1, 1.0 from 2, 0.0 from 3, 3.5 from 4
+    for neighbors in (None, _Neighbors(dut.space.weights, False), _Neighbors(dut.space.weights, True, 2)):
+        np.testing.assert_array_equal(dut._near(tree, q_new, 1, neighbors), [1, 2, 3])
+        np.testing.assert_array_equal(dut._near(tree, q_new, 4, neighbors), [1, 2, 3, 4])  # the nearest, appended
+    far = np.array([7.0, 1.0, 0.0, 0.0])  # 1.0 from node 4 only (x = 7.0)
+    np.testing.assert_array_equal(dut._near(tree, far, 4), [4])
+    np.testing.assert_array_equal(dut._near(tree, far, 0), [4, 0])
+    # Shrinking: the radius of the tree with the new node, n + 1 = 5 here, min(1, gamma (ln 5 / 5)^(1/4)) =
+    # 0.995 for this gamma: nodes 0.5 and 0.99 away are in, the one 1.0 away is out (r(4) would take it in,
+    # r(6) = 0.977 would leave the 0.99 one out).
+    tree = _Tree(4)
+    for x in (1.0, 4.0, 4.49, 4.5):
+        tree.add(np.array([x, 1.0, 0.0, 0.0]), -1 if tree.n == 0 else 0, 0.0)
+    gamma = 0.995 / (math.log(5) / 5) ** 0.25
+    shrink = rrt_star_with(near_radius=1.0, near_radius_mode="shrinking", near_radius_gamma=gamma)
+    assert shrink.near_radius(5) == pytest.approx(0.995) and shrink.near_radius(4) == 1.0
+    assert shrink.near_radius(6) < 0.98
+    np.testing.assert_array_equal(shrink._near(tree, q_new, 1), [1, 2])
