@@ -439,6 +439,25 @@ def test_neighbours_through_the_kd_tree_equal_a_plain_scan_ties_included():
     assert not _Neighbors(w, False, min_nodes=1)._update(tree)  # off
     small = _Neighbors(w, True, min_nodes=tree.n)
     assert small._update(tree) and small.kd_n == tree.n
+    # A large tree waits for a sixteenth more: built at 4,800 nodes, not rebuilt at 5,100, rebuilt at 5,101.
+    big = _Tree(8192)
+    for k, q in enumerate(rng.uniform(-1, 2, (4800, 4))):
+        big.add(q, -1 if k == 0 else 0, 0.0)
+    many = _Neighbors(w, True, min_nodes=8)
+    assert many._update(big) and many.kd_n == 4800
+    for q in rng.uniform(-1, 2, (300, 4)):
+        big.add(q, 0, 0.0)
+    assert many._update(big) and many.kd_n == 4800
+    big.add(rng.uniform(-1, 2, 4), 0, 0.0)
+    assert many._update(big) and many.kd_n == 5101
+    # A radius below a millimetre: a node exactly at it (2^-13 along x) is within, through the KD-tree too.
+    tiny_tree = _Tree(16)
+    x0 = np.array([0.5, 0.5, 0.5, 0.5])
+    for k in range(12):
+        tiny_tree.add(x0 + np.array([2.0 ** -13, 0.0, 0.0, 0.0]) * k, -1 if k == 0 else 0, 0.0)
+    near = _Neighbors(np.ones(4), True, min_nodes=8)
+    np.testing.assert_array_equal(near.within(tiny_tree, x0, 2.0 ** -13), [0, 1])
+    np.testing.assert_array_equal(near.within(tiny_tree, x0 + np.array([2.0 ** -12, 0, 0, 0]), 2.0 ** -13), [1, 2, 3])
 
 
 def test_the_compiled_loop_applies_to_the_planar_checker_and_known_objectives_only(tiny_scenario):
@@ -480,6 +499,8 @@ def test_near_radius_by_hand():
         by_hand = min(2.0, 3.0 * (math.log(n) / n) ** 0.25)
         assert dut.near_radius(n) == pytest.approx(by_hand, rel=1e-15)
     assert dut.near_radius(2) == 2.0 and dut.near_radius(5000) < 1.0  # 3 (ln 2 / 2)^0.25 > 2, then smaller
+    small = rrt_star_with(near_radius=2.0, near_radius_mode="shrinking", near_radius_gamma=1.0)
+    assert small.near_radius(2) == pytest.approx((math.log(2) / 2) ** 0.25)  # shrinks from the second node on
     default = rrt_star_with(near_radius=9.0, near_radius_mode="shrinking")  # gamma 0: OMPL's default
     assert default.near_radius(100) == pytest.approx(default_gamma(default.space) * (math.log(100) / 100) ** 0.25)
 
