@@ -458,6 +458,8 @@ def test_neighbours_through_the_kd_tree_equal_a_plain_scan_ties_included():
     near = _Neighbors(np.ones(4), True, min_nodes=8)
     np.testing.assert_array_equal(near.within(tiny_tree, x0, 2.0 ** -13), [0, 1])
     np.testing.assert_array_equal(near.within(tiny_tree, x0 + np.array([2.0 ** -12, 0, 0, 0]), 2.0 ** -13), [1, 2, 3])
+    # ... and a nearest tie below a millimetre: nodes 0 and 1 both 2^-14 from the query, the lower index wins.
+    assert near.nearest(tiny_tree, x0 + np.array([2.0 ** -14, 0, 0, 0])) == (0, 2.0 ** -14)
 
 
 def test_the_compiled_loop_applies_to_the_planar_checker_and_known_objectives_only(tiny_scenario):
