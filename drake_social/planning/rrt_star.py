@@ -378,16 +378,18 @@ class RrtStar:
             i_new = self._extend(tree, q_rand, counts, neighbors)
             if i_new >= 0:
                 connect_to_goal(i_new)
-                if goal_nodes:
-                    totals = tree.cost[goal_nodes] + np.asarray(goal_edge_costs)
-                    g = int(np.argmin(totals))  # rewiring only lowers costs: never worse
-                    best_cost, best_node = float(totals[g]), goal_nodes[g]
-                    if first_iteration is None:
-                        first_iteration = k + 1
-                    if sampler is not None:
-                        ellipse_c = transverse_diameter(
-                            opt.informed_mode, best_cost, self._xy_length(tree, best_node, goal), objective
-                        )
+            # The best goal connection, when the tree changed, or when the start's
+            # own connection (made before the first sample) is not yet reported.
+            if goal_nodes and (i_new >= 0 or best_node < 0):
+                totals = tree.cost[goal_nodes] + np.asarray(goal_edge_costs)
+                g = int(np.argmin(totals))  # rewiring only lowers costs: never worse
+                best_cost, best_node = float(totals[g]), goal_nodes[g]
+                if first_iteration is None:
+                    first_iteration = k + 1
+                if sampler is not None:
+                    ellipse_c = transverse_diameter(
+                        opt.informed_mode, best_cost, self._xy_length(tree, best_node, goal), objective
+                    )
             history[k] = best_cost
             if sampler is not None:
                 diameters[k] = ellipse_c

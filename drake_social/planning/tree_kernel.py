@@ -296,20 +296,22 @@ def grow(rng, it_start, it_stop, goal, lower, upper, w, delta, r_near, goal_bias
                     goal_nodes[n_goal] = i_new
                     goal_edges[n_goal] = c_goal
                     n_goal += 1
-            if it >= 0 and n_goal > 0:
-                g_best, g = np.inf, -1
-                for t in range(n_goal):
-                    tot = cost[goal_nodes[t]] + goal_edges[t]
-                    if tot < g_best:
-                        g_best, g = tot, t
-                best_cost, best_node = g_best, goal_nodes[g]
-                if first_iteration < 0:
-                    first_iteration = it + 1
-                if informed:
-                    if mode == 0:  # "paper": the XY length of the best path's base
-                        ellipse_c = _xy_length(q, parent, best_node, goal)
-                    else:  # "admissible": best cost / (lambda min(w_x, w_y))
-                        ellipse_c = best_cost / xy_scale if xy_scale > 0 else np.inf
+        # The best goal connection, when the tree changed, or when the start's own
+        # connection (made before the first sample) is not yet reported.
+        if it >= 0 and n_goal > 0 and (i_new >= 0 or best_node < 0):
+            g_best, g = np.inf, -1
+            for t in range(n_goal):
+                tot = cost[goal_nodes[t]] + goal_edges[t]
+                if tot < g_best:
+                    g_best, g = tot, t
+            best_cost, best_node = g_best, goal_nodes[g]
+            if first_iteration < 0:
+                first_iteration = it + 1
+            if informed:
+                if mode == 0:  # "paper": the XY length of the best path's base
+                    ellipse_c = _xy_length(q, parent, best_node, goal)
+                else:  # "admissible": best cost / (lambda min(w_x, w_y))
+                    ellipse_c = best_cost / xy_scale if xy_scale > 0 else np.inf
         if it >= 0:
             history[it] = best_cost
             if informed:
