@@ -391,18 +391,17 @@ def test_planner_accepts_the_edges_of_its_option_ranges_and_keeps_its_parts():
     RrtStar(space, checker, make_objective(scenario, "social_rrt_star"), RrtStarOptions(informed=True))  # paper: fine
 
 
-def brute_nearest(q_nodes, w, x):
-    d = [math.sqrt(sum((wi * (a - b)) ** 2 for wi, a, b in zip(w, q, x))) for q in q_nodes]
-    best = min(d)
-    return d.index(best), best  # the lowest index on ties
+def plain_distances(q_nodes, w, x):
+    """Weighted distances from x, one node at a time in plain Python."""
+    return [math.sqrt(sum((wi * (a - b)) ** 2 for wi, a, b in zip(w, q, x))) for q in q_nodes]
 
 
 def test_neighbours_through_the_kd_tree_equal_a_plain_scan_ties_included():
     """_Neighbors with the KD-tree on from 8 nodes against a plainly written
     scan: nodes on a lattice (many exact ties, some nodes exactly at the
     radius) plus random ones and four lattice nodes again, queried at
-    lattice points, midpoints, random points and nodes; and the rebuild rule (more than max(256, n / 16) nodes
-    added since the last build)."""
+    lattice points, midpoints, random points and nodes; and the rebuild
+    rule (more than max(256, n / 16) nodes added since the last build)."""
     from drake_social.planning.rrt_star import _Neighbors
 
     rng = np.random.default_rng(3)
@@ -419,13 +418,12 @@ def test_neighbours_through_the_kd_tree_equal_a_plain_scan_ties_included():
     ties = 0
     for x in queries:
         i, d = dut.nearest(tree, x)
-        j, e = brute_nearest(tree.q[: tree.n], w, x)
-        assert (i, d) == scan.nearest(tree, x) and i == j and d == pytest.approx(e, rel=1e-12)
-        dd = np.array([math.sqrt(sum((wi * (a - b)) ** 2 for wi, a, b in zip(w, q, x))) for q in tree.q[: tree.n]])
-        ties += int(np.sum(dd == dd.min()) > 1)
+        plain = plain_distances(tree.q[: tree.n], w, x)
+        assert (i, d) == scan.nearest(tree, x) and i == plain.index(min(plain))  # the lowest index on ties
+        assert d == pytest.approx(min(plain), rel=1e-12)
+        ties += int(plain.count(min(plain)) > 1)
         for r in (0.5, 0.75, 1.0):
-            expected = np.flatnonzero(np.einsum("ij,ij->i", (tree.q[: tree.n] - x) * w, (tree.q[: tree.n] - x) * w)
-                                      <= r * r)
+            expected = [k for k, v in enumerate(plain) if v <= r]
             np.testing.assert_array_equal(dut.within(tree, x, r), expected)
             np.testing.assert_array_equal(scan.within(tree, x, r), expected)
     assert ties >= 5 and dut.kd is not None and dut.kd_n == tree.n

@@ -206,53 +206,35 @@ def test_grid_neighbour_queries_equal_the_direct_scan(rng):
             np.testing.assert_array_equal(out[:m], np.flatnonzero(d2 <= r * r))
 
 
-def test_compiled_loop_culls_people_in_a_wider_than_tall_grid(tiny):
-    """People 7 m apart along x (the kernel's people grid is then 2 cells by
-    1, its cell side being reach + point reach, about 6 m): the compiled loop
-    reads the grid's shape right and finds every person near a motion, as
-    the reference's cost does (a mutation run let nx = ny pass)."""
-    from drake_social.cost import SocialCost
-    from drake_social.scenario import Person
-
-    scenario, _ = tiny
-    scenario = copy.deepcopy(scenario)
-    scenario.people = [Person(x=0.5, y=0.4, theta=0.0), Person(x=7.5, y=0.4, theta=math.pi)]
-    grid = SocialCost.from_scenario(scenario)._people_grid()
-    assert (grid[4], grid[5]) == (2, 1)  # nx, ny of the people grid
-    checker = PlanarChecker(scenario)
-    reference = run(scenario, checker, "social_rrt_star", 6, False)
-    assert_same(reference, run(scenario, checker, "social_rrt_star", 6, True))
-    # The person in the second cell costs something: without it the tree differs.
-    alone = copy.deepcopy(scenario)
-    alone.people = alone.people[:1]
-    without = run(alone, checker, "social_rrt_star", 6, False)  # the same checks, one person costed
-    assert not np.array_equal(without.tree_costs[:50], reference.tree_costs[:50])
-
-
-def test_compiled_loop_culls_people_in_a_two_by_two_grid(tiny):
-    """Two people by the south wall 7 m apart and one 5.3 m north of them,
-    facing the robot's corridor (the people grid is 2 x 2 cells of about 5 m
-    from (0.5, 0.3)): the compiled loop reads the grid's origin and shape
-    right and costs every person as the reference does (a mutation run let
-    the origin's y be read from the grid's nx, which drops the north person
-    for motions that stay below y = 2)."""
+@pytest.mark.parametrize("bounds, people, grid_shape", [
+    # People 7 m apart along x: 2 cells by 1 (the cell side is reach + point reach, about 5 m).
+    (None, [(0.5, 0.4, 0.0), (7.5, 0.4, math.pi)], (0.5, 0.4, 2, 1)),
+    # Two people by the south wall and one 5.3 m north of them, facing the corridor: 2 x 2.
+    ([0.0, 0.0, 8.0, 10.0], [(0.5, 0.3, 0.0), (7.5, 0.3, math.pi), (4.0, 5.6, -math.pi / 2)], (0.5, 0.3, 2, 2)),
+])
+def test_compiled_loop_culls_people_in_a_people_grid(tiny, bounds, people, grid_shape):
+    """The compiled loop reads the people grid's origin and shape right and
+    costs every person near a motion as the reference does; the last person,
+    in a cell of their own, changes the tree (mutation runs let nx = ny pass,
+    and the origin's y read from nx, which drops the north person for
+    motions that stay below y = 2)."""
     from drake_social.cost import SocialCost
     from drake_social.scenario import Person, validate_scenario
 
     scenario, _ = tiny
     scenario = copy.deepcopy(scenario)
-    scenario.world.bounds = [0.0, 0.0, 8.0, 10.0]
-    scenario.people = [Person(x=0.5, y=0.3, theta=0.0), Person(x=7.5, y=0.3, theta=math.pi),
-                       Person(x=4.0, y=5.6, theta=-math.pi / 2)]
+    if bounds is not None:
+        scenario.world.bounds = bounds
+    scenario.people = [Person(x=x, y=y, theta=theta) for x, y, theta in people]
     validate_scenario(scenario)
     grid = SocialCost.from_scenario(scenario)._people_grid()
-    assert (grid[2], grid[3], grid[4], grid[5]) == (0.5, 0.3, 2, 2)  # x0, y0, nx, ny of the people grid
+    assert (grid[2], grid[3], grid[4], grid[5]) == grid_shape  # x0, y0, nx, ny of the people grid
     checker = PlanarChecker(scenario)
     reference = run(scenario, checker, "social_rrt_star", 6, False)
     assert_same(reference, run(scenario, checker, "social_rrt_star", 6, True))
-    alone = copy.deepcopy(scenario)
-    alone.people = alone.people[:2]
-    without = run(alone, checker, "social_rrt_star", 6, False)  # the north person costs something
+    without_last = copy.deepcopy(scenario)
+    without_last.people = without_last.people[:-1]
+    without = run(without_last, checker, "social_rrt_star", 6, False)  # the same checks, one person fewer
     assert not np.array_equal(without.tree_costs[:50], reference.tree_costs[:50])
 
 
