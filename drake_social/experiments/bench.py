@@ -182,6 +182,29 @@ def _plan_ompl_runs(scenario: Scenario, key: str, iterations: int, seeds: int, c
             "summary": summarize(runs)}
 
 
+def cpu_model(cpuinfo: str | Path = "/proc/cpuinfo") -> str | None:
+    """The processor's model name (Linux's ``/proc/cpuinfo``), else
+    ``platform.processor()``, else None: times from different processors
+    are not comparable, so the bench says which one it ran on."""
+    try:
+        for line in Path(cpuinfo).read_text(errors="replace").splitlines():
+            key, sep, value = line.partition(":")
+            if sep and key.strip() == "model name" and value.strip():
+                return value.strip()
+    except OSError:
+        pass
+    return platform.processor() or None
+
+
+def _load_average() -> list[float] | None:
+    """The 1, 5 and 15 minute load averages (None where the OS has none):
+    a load near the CPU count means the times were shared with other work."""
+    try:
+        return [round(x, 2) for x in os.getloadavg()]
+    except (AttributeError, OSError):
+        return None
+
+
 def _machine() -> dict:
     def version(name: str) -> str | None:
         try:
@@ -190,6 +213,7 @@ def _machine() -> dict:
             return None
 
     return {"platform": platform.platform(), "machine": platform.machine(), "processor": platform.processor(),
+            "cpu_model": cpu_model(), "load_average_start": _load_average(),
             "python": platform.python_version(), "cpu_count": os.cpu_count(),
             "numpy": version("numpy"), "drake": version("drake"), "ompl": version("ompl")}
 
@@ -279,6 +303,7 @@ def run_bench(
         if progress:
             progress(done, total, label)
 
+    machine = _machine()  # the load average before this run's own work
     scenarios = {}
     for path in paths:
         scenario = load_scenario(path)
@@ -342,7 +367,7 @@ def run_bench(
         "settings": {"scenario_paths": [str(p) for p in paths], "algorithms": algorithms, "iterations": iterations,
                      "seeds": list(range(seeds)), "checker": checker, "ompl_checker": ompl_checker,
                      "sim_runs": sim_runs, "repeats": repeats},
-        "machine": _machine(),
+        "machine": {**machine, "load_average_end": _load_average()},
         "ompl": {"requested": include_ompl, "available": ompl_available(), "objectives": keys},
         "scenarios": scenarios,
         "checker_bench": checker_bench,
@@ -378,6 +403,21 @@ def _num(x, fmt: str = ".3g") -> str:
     return "n/a" if x is None else format(x, fmt)
 
 
+def _machine_line(m: dict) -> list[str]:
+    """The processor and the load averages around the run (absolute times
+    hold for that processor and load only; ratios in one run are robust)."""
+    parts = []
+    if m.get("cpu_model"):
+        parts.append(f"processor: {m['cpu_model']}")
+    for label, key in (("start", "load_average_start"), ("end", "load_average_end")):
+        if m.get(key):
+            parts.append(f"load average (1, 5, 15 min) at the {label}: " + ", ".join(f"{x:.2f}" for x in m[key]))
+    if not parts:
+        return []
+    line = "; ".join(parts)
+    return [line[0].upper() + line[1:] + ".", ""]
+
+
 def _markdown(out: dict) -> str:
     s, m = out["settings"], out["machine"]
     lines = [
@@ -387,6 +427,7 @@ def _markdown(out: dict) -> str:
         f"(OMPL: `{s.get('ompl_checker', s['checker'])}`); "
         f"{m['platform']}, {m['cpu_count']} CPUs, numpy {m['numpy']}, drake {m['drake']}, ompl {m['ompl']}.",
         "",
+        *_machine_line(m),
         "Planner options: " + "; ".join(
             f"{name}: near radius {e['planner_options']['near_radius_mode']}, "
             f"optimize {'on' if e['planner_options']['optimize'] else 'off'}"

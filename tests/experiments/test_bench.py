@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import math
+import platform
 
 import numpy as np
 import pytest
@@ -38,6 +39,11 @@ def test_small_bench_reports_its_runs(tiny_scenario_path, tiny_scenario, tmp_pat
                                    "iterations": 200, "seeds": [0, 1], "checker": "numpy", "ompl_checker": "drake",
                                    "sim_runs": 0, "repeats": 1}
     assert on_disk["machine"]["cpu_count"] >= 1 and on_disk["machine"]["numpy"] == np.__version__
+    for key in ("load_average_start", "load_average_end"):  # what os.getloadavg gives here
+        assert len(on_disk["machine"][key]) == 3 and min(on_disk["machine"][key]) >= 0.0
+    from drake_social.experiments import bench
+
+    assert on_disk["machine"]["cpu_model"] == bench.cpu_model()
     assert on_disk["checker_bench"]["scenarios"]["tiny.yaml"]["configs_per_s"]["numpy_batched"] > 0
     md = (tmp_path / "a" / "bench.md").read_text()
     assert "## Checkers" in md
@@ -289,3 +295,25 @@ def test_repeats_pool_only_identical_runs():
     assert times == [0.3, 0.1, 0.2] and result.wall_time == 0.2 and extra == "x"
     with pytest.raises(RuntimeError, match="a: a repeat of seed 3 returned another path .cost 1.5, first 1.0."):
         bench._repeated(run([0.3, 0.1], [1.0, 1.5]), 2)
+
+
+def test_cpu_model_and_the_machine_line(tmp_path):
+    """The processor is read from cpuinfo's first non-empty "model name"; the
+    Markdown says it and the load averages around the run."""
+    from drake_social.experiments import bench
+
+    info = tmp_path / "cpuinfo"
+    info.write_text("processor\t: 0\nvendor_id\t: X\nmodel name\t:   \nmodel name\t: AMD EPYC 9B45\n"
+                    "model name\t: other\n")
+    assert bench.cpu_model(info) == "AMD EPYC 9B45"
+    info.write_text("processor\t: 0\n")
+    assert bench.cpu_model(info) == (platform.processor() or None)
+    assert bench.cpu_model(tmp_path / "missing") == (platform.processor() or None)
+
+    m = {"cpu_model": "AMD EPYC", "load_average_start": [0.5, 0.25, 0.125], "load_average_end": [1.0, 0.5, 0.0]}
+    assert bench._machine_line(m) == [
+        "Processor: AMD EPYC; load average (1, 5, 15 min) at the start: 0.50, 0.25, 0.12; "
+        "load average (1, 5, 15 min) at the end: 1.00, 0.50, 0.00.", ""]
+    assert bench._machine_line({"cpu_model": None, "load_average_start": [2.0, 1.0, 1.0]}) == [
+        "Load average (1, 5, 15 min) at the start: 2.00, 1.00, 1.00.", ""]
+    assert bench._machine_line({"cpu_model": None}) == []
