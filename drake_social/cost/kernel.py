@@ -3,11 +3,14 @@
 :meth:`drake_social.cost.social.SocialCost.motion_cost` batches the same
 computation with numpy; in the planner that batch is small (about 25 motions
 of about 30 samples each) and numpy's per-operation overhead dominates. This
-kernel does exactly the same arithmetic in one pass: for every motion, the
-step count from the displacement bound, every person's window from the
-distance bound at the motion's ends, and the threshold-aware trapezoid areas
-of every (sample step, point) inside it. ``SocialCost`` uses it when numba is
-importable and keeps the numpy path as the reference it is tested against.
+kernel does the same computation in one pass: for every motion, the step
+count from the displacement bound, every (person, point) window from
+distance bounds at the motion's ends, and the threshold-aware trapezoid
+areas of every (sample step, point) inside it. The exponentials and the
+trapezoids of a motion's windows run as two long loops that LLVM vectorises
+(:func:`exp_neg` is a polynomial exp within 4 ulp of libm's). ``SocialCost``
+uses it when numba is importable and keeps the numpy path as the reference
+it is tested against.
 """
 
 from __future__ import annotations
@@ -120,6 +123,95 @@ def _segment_distance(px, py, ax, ay, bx, by):
     return math.sqrt(ex * ex + ey * ey)  # not hypot: slower, and a culling bound has margin
 
 
+#: exp_neg's largest argument: exp(-708) is still a normal double.
+EXP_CAP = 708.0
+_EXP_HALF = 0.6065306597126334  # exp(-0.5)
+#: LLVM flags of the vector loops: FMA contraction, and reassociation for the
+#: trapezoids' sum (a vectorised reduction: its order follows the vector width).
+_VEC = {"contract", "reassoc"}
+
+
+@njit(fastmath=_VEC, error_model="numpy", cache=True)
+def exp_neg(x, count):
+    """``x[:count] = exp(-x[:count])`` in place, for ``x >= 0``, within 4 ulp
+    of ``math.exp`` (tested); x above :data:`EXP_CAP` gives exp(-EXP_CAP).
+
+    Written so that LLVM vectorises it (libm's exp is a call, which a vector
+    loop cannot hold): a's binary digits 512 .. 1 are taken out by exact
+    subtractions, each multiplying in its correctly rounded exp(-2^b), and
+    the rest r in [0, 1) is exp(-0.5) exp(0.5 - r) by a Taylor polynomial.
+    """
+    for t in range(count):
+        r = min(x[t], EXP_CAP)
+        m = _EXP_HALF
+        f = m * 4.377491037053051e-223  # exp(-512)
+        m = f if r >= 512.0 else m
+        r = r - 512.0 if r >= 512.0 else r
+        f = m * 6.616261056709485e-112  # exp(-256)
+        m = f if r >= 256.0 else m
+        r = r - 256.0 if r >= 256.0 else r
+        f = m * 2.572209372642415e-56  # exp(-128)
+        m = f if r >= 128.0 else m
+        r = r - 128.0 if r >= 128.0 else r
+        f = m * 1.603810890548638e-28  # exp(-64)
+        m = f if r >= 64.0 else m
+        r = r - 64.0 if r >= 64.0 else r
+        f = m * 1.2664165549094176e-14  # exp(-32)
+        m = f if r >= 32.0 else m
+        r = r - 32.0 if r >= 32.0 else r
+        f = m * 1.1253517471925912e-07  # exp(-16)
+        m = f if r >= 16.0 else m
+        r = r - 16.0 if r >= 16.0 else r
+        f = m * 0.00033546262790251185  # exp(-8)
+        m = f if r >= 8.0 else m
+        r = r - 8.0 if r >= 8.0 else r
+        f = m * 0.01831563888873418  # exp(-4)
+        m = f if r >= 4.0 else m
+        r = r - 4.0 if r >= 4.0 else r
+        f = m * 0.1353352832366127  # exp(-2)
+        m = f if r >= 2.0 else m
+        r = r - 2.0 if r >= 2.0 else r
+        f = m * 0.36787944117144233  # exp(-1)
+        m = f if r >= 1.0 else m
+        r = r - 1.0 if r >= 1.0 else r
+        y = 0.5 - r
+        p = 4.779477332387385e-14  # exp(y) by Taylor to degree 16: the remainder is below 1e-19 for |y| <= 0.5
+        p = p * y + 7.647163731819816e-13
+        p = p * y + 1.1470745597729725e-11
+        p = p * y + 1.6059043836821613e-10
+        p = p * y + 2.08767569878681e-09
+        p = p * y + 2.505210838544172e-08
+        p = p * y + 2.755731922398589e-07
+        p = p * y + 2.7557319223985893e-06
+        p = p * y + 2.48015873015873e-05
+        p = p * y + 0.0001984126984126984
+        p = p * y + 0.001388888888888889
+        p = p * y + 0.008333333333333333
+        p = p * y + 0.041666666666666664
+        p = p * y + 0.16666666666666666
+        p = p * y + 0.5
+        p = p * y + 1.0
+        p = p * y + 1.0
+        x[t] = m * p
+
+
+@njit(fastmath=_VEC, error_model="numpy", cache=True)
+def _trapezoids(g, w, count, tau):
+    """sum_k w[k] * (the threshold-aware trapezoid area of samples g[k], g[k + 1])."""
+    acc = 0.0
+    for k in range(count):
+        g0 = g[k]
+        g1 = g[k + 1]
+        hi = g0 if g0 > g1 else g1
+        lo = g1 if g0 > g1 else g0
+        both = 0.5 * (g0 + g1)
+        cross = 0.5 * (hi + tau) * (hi - tau) / (hi - lo)  # one end above the threshold: hi > lo
+        area = cross if hi > tau else 0.0
+        area = both if lo > tau else area
+        acc += w[k] * area
+    return acc
+
+
 @njit(cache=True)
 def msc_sums(
     q_a, q_b, people, l1, l2, obj, active, weights, lever, resolution, reach, inv_front, inv_rear, inv_side, tau,
@@ -140,9 +232,19 @@ def msc_sums(
     itself has every term <= threshold (every weighted point stays within
     point_reach of the base), so it adds exactly nothing. The interest
     points of a motion's samples are computed once and shared by its people.
-    The arm's angles along a motion come from rotation steps, so the sums
-    equal the numpy path's to about 1e-13 relative, not bit for bit; every
-    culling, window and skip only leaves out terms that are exactly 0.
+    Each (person, point) is then sampled only inside its window: outside it
+    the point is farther than reach from the person (a Euclidean bound), or
+    the exponent's square root, a norm of the offset with Lipschitz constant
+    ``lip``, is above the threshold's (a bound in the AGF's own metric,
+    tighter beside and behind a person), so both ends of every step there
+    are below the threshold and it adds exactly 0.
+
+    The sums equal the numpy path's to about 1e-13 relative, not bit for bit:
+    the arm's angles along a motion come from rotation steps, exp is
+    :func:`exp_neg`, and the steps are summed in the order of a vectorised
+    reduction. The order depends on the processor's vector width, so two
+    processors may differ in the last bits (so do numpy's own SIMD loops); on
+    one machine the sums are deterministic.
     """
     e_count, h_count, k_count = q_a.shape[0], people.shape[0], active.shape[0]
     sums = np.zeros(e_count)
@@ -160,6 +262,7 @@ def msc_sums(
     # sqrt of the exponent is a norm of the offset, Lipschitz with constant lip.
     lip = math.sqrt(max(inv_front, inv_rear, inv_side))
     root_cut = math.sqrt(a_cut) * (1.0 + 1e-9) + 1e-12 if math.isfinite(a_cut) else math.inf
+    bounded = math.isfinite(root_cut) and lip > 0.0
     cand = np.empty(h_count, dtype=np.int64)
     k0s = np.empty((h_count, k_count), dtype=np.int64)
     k1s = np.empty((h_count, k_count), dtype=np.int64)
@@ -173,6 +276,8 @@ def msc_sums(
         steps[e] = max(1, int(math.ceil(span / resolution - 1e-9)))
         n_max = max(n_max, steps[e])
     xs = np.empty((k_count, n_max + 1))
+    g_buf = np.empty(256)  # exponents, then AGF values, of the flat run
+    w_buf = np.empty(256)  # the weight of the step from each sample to the next (0: none)
     ys = np.empty((k_count, n_max + 1))
     for e in range(e_count):
         d0, d1 = q_b[e, 0] - q_a[e, 0], q_b[e, 1] - q_a[e, 1]
@@ -224,7 +329,7 @@ def msc_sums(
         k_lo, k_hi = n + 1, -1
         for i in range(m):
             h = cand[i]
-            px, py = people[h, 0], people[h, 1]
+            px, py, c_t, s_t = people[h, 0], people[h, 1], cos_t[h], sin_t[h]
             for j in range(k_count):
                 ax_, ay_, bx_, by_ = xa[j] - px, ya[j] - py, xb[j] - px, yb[j] - py
                 da = math.sqrt(ax_ * ax_ + ay_ * ay_) - reach - 1e-9
@@ -233,8 +338,20 @@ def msc_sums(
                     if da + db > spans[j]:
                         k0s[i, j], k1s[i, j] = 0, -1
                         continue
-                    t0 = min(max(da / spans[j], 0.0), 1.0)
-                    t1 = min(max(1.0 - db / spans[j], 0.0), 1.0)
+                    t0 = da / spans[j]
+                    t1 = 1.0 - db / spans[j]
+                    if bounded:
+                        # sqrt(a) moves at most lip * spans[j] along the motion
+                        # (per unit of t): above root_cut outside [t0, t1].
+                        ls = lip * spans[j]
+                        ra = math.sqrt(_exponent(ax_, ay_, c_t, s_t, inv_front, inv_rear, inv_side)) - root_cut
+                        rb = math.sqrt(_exponent(bx_, by_, c_t, s_t, inv_front, inv_rear, inv_side)) - root_cut
+                        if ra + rb > ls:
+                            k0s[i, j], k1s[i, j] = 0, -1
+                            continue
+                        t0, t1 = max(t0, ra / ls), min(t1, 1.0 - rb / ls)
+                    t0 = min(max(t0, 0.0), 1.0)
+                    t1 = min(max(t1, 0.0), 1.0)
                 elif da <= 0.0:  # a point that does not move, within reach (or no culling)
                     t0, t1 = 0.0, 1.0
                 else:
@@ -274,51 +391,29 @@ def msc_sums(
                     ys[j, k] = gy + s12 * ox + c12 * oy
             c1, s1 = c1 * cd1 - s1 * sd1, s1 * cd1 + c1 * sd1
             c12, s12 = c12 * cd12 - s12 * sd12, s12 * cd12 + c12 * sd12
-        total = 0.0
+        # The samples of every (candidate, point) window in one run: their
+        # exponents, then exp and the trapezoids in two long vector loops.
+        count = 0
+        for i in range(m):
+            for j in range(k_count):
+                if k1s[i, j] >= k0s[i, j]:
+                    count += k1s[i, j] - k0s[i, j] + 1
+        if count > g_buf.shape[0]:
+            g_buf = np.empty(2 * count)
+            w_buf = np.empty(2 * count)
+        t = 0
         for i in range(m):
             h = cand[i]
             px, py, c, s = people[h, 0], people[h, 1], cos_t[h], sin_t[h]
             for j in range(k_count):
                 k0, k1 = k0s[i, j], k1s[i, j]
                 w = weights[j]
-                # sqrt(a) changes by at most lip * (spans[j] / n) from one sample to the next.
-                skip_rate = lip * spans[j] / n
-                g0, a0, up0 = -1.0, 0.0, False
-                k = k0
-                pred_skipped = False  # sample k - 1 was skipped: below the threshold, not evaluated
-                while k <= k1:
-                    # The exponent first: where it shows the term below the
-                    # threshold, exp is taken only if a neighbour needs it.
-                    a = _exponent(xs[j, k] - px, ys[j, k] - py, c, s, inv_front, inv_rear, inv_side)
-                    up = a < a_cut
-                    g = -1.0
-                    if up:
-                        g = math.exp(-a)
-                        up = g > tau
-                    if k > k0:
-                        if pred_skipped:
-                            g0, up0 = -1.0, False
-                            a0 = _exponent(xs[j, k - 1] - px, ys[j, k - 1] - py, c, s, inv_front, inv_rear, inv_side)
-                        if up0 and up:
-                            total += w * 0.5 * (g0 + g)
-                        elif up0 or up:
-                            if g0 < 0.0:
-                                g0 = math.exp(-a0)
-                            if g < 0.0:
-                                g = math.exp(-a)
-                            hi, lo = max(g0, g), min(g0, g)
-                            total += w * 0.5 * (hi + tau) * (hi - tau) / (hi - lo)
-                    g0, a0, up0 = g, a, up
-                    pred_skipped = False
-                    k += 1
-                    if not up and skip_rate > 0.0:
-                        # Samples k .. k + jump - 1 are certainly below the threshold too.
-                        span_k = (math.sqrt(a) - root_cut) / skip_rate
-                        jump = 0  # as a float first: no integer overflow, nothing skipped on NaN
-                        if span_k >= 2.0:
-                            jump = int(min(span_k, k1 - k + 2.0))
-                        if jump >= 2:
-                            k += jump - 1
-                            pred_skipped = True
-        sums[e] = total
+                for k in range(k0, k1 + 1):
+                    g_buf[t] = _exponent(xs[j, k] - px, ys[j, k] - py, c, s, inv_front, inv_rear, inv_side)
+                    w_buf[t] = w
+                    t += 1
+                if k1 >= k0:
+                    w_buf[t - 1] = 0.0  # no step from a window's last sample to the next window's first
+        exp_neg(g_buf, count)
+        sums[e] = _trapezoids(g_buf, w_buf, count - 1, tau)
     return sums, steps

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from drake_social.cost import PersonalSpace, SocialCost, kernel
-from drake_social.kinematics import ArmGeometry
+from drake_social.kinematics import ArmGeometry, config_distance
 from drake_social.scenario import Bar, LShape, Polyline, Robot, Scenario
 
 pytestmark = pytest.mark.skipif(not kernel.AVAILABLE, reason="numba is not importable")
@@ -78,3 +78,52 @@ def test_kernel_edge_cases(rng):
     assert np.all(fast == 0) and np.all(reference == 0)
     single = both(dut, q[0], q[1])
     assert np.ndim(single[0]) == 0 and single[0] == pytest.approx(single[1], rel=1e-12)
+
+
+def test_exp_neg_is_within_4_ulp_of_libm(rng):
+    """The vectorisable exp against math.exp: a dense grid over [0, 710], random
+    arguments, the digits' edges; above EXP_CAP it gives exp(-EXP_CAP); only
+    the first ``count`` entries change."""
+    x = np.concatenate([np.linspace(0.0, 710.0, 400_001), rng.uniform(0.0, 2.0, 100_000),
+                        [0.0, 0.5, 1.0, 2.0 - 1e-15, 2.0, 512.0, 707.5, 708.0, 708.5, 1e9, np.inf]])
+    got = np.append(x, 3.0)
+    kernel.exp_neg(got, len(x))
+    assert got[-1] == 3.0
+    got = got[:-1]
+    want = np.array([math.exp(-v) for v in np.minimum(x, kernel.EXP_CAP)])
+    ulp = np.abs(got - want) / np.spacing(want)
+    assert ulp.max() <= 4.0 and ulp[x < 2.0].max() <= 2.0, (ulp.max(), x[np.argmax(ulp)])
+    assert np.all(got[x >= kernel.EXP_CAP] == got[x == kernel.EXP_CAP][0]) and 0.0 < got[-1] < 1e-307
+
+
+def _all_samples(dut: SocialCost, q_a, q_b) -> np.ndarray:
+    """The numpy path's trapezoid sums (times h) on every sample of every
+    motion, for every person: no culling, no windows."""
+    q_a, q_b = np.atleast_2d(q_a), np.atleast_2d(q_b)
+    e, h = len(q_a), len(dut.people)
+    n = dut.segments(q_a, q_b)
+    length = config_distance(q_a, q_b, dut.distance_weights)
+    every = np.ones((e, h), dtype=bool)
+    return dut._integrate(q_a, q_b - q_a, n, every, np.zeros((e, h)), np.ones((e, h))) * (length / n)
+
+
+@pytest.mark.parametrize("kind", list(OBJECTS))
+def test_windows_leave_out_only_terms_that_are_zero(kind, rng):
+    """Motions that pass beside and behind people, inside the AGF's front
+    reach but outside its narrower side and rear level sets (where the
+    window in the exponent's own metric is the tighter one): the kernel
+    equals every sample evaluated, with a narrow and a wide personal space."""
+    geometry = ArmGeometry.from_scenario(Scenario(robot=Robot(), object=OBJECTS[kind]))
+    people = np.array([[0.0, 0.0, 0.0], [0.0, 2.5, math.pi / 2]])
+    for space in (PersonalSpace(), dc.replace(PersonalSpace(), sigma_s=0.5, sigma_r=0.4)):
+        dut = SocialCost(geometry, people, space=space)
+        # Base segments behind (x < 0) and beside the first person, arm turning.
+        q_a = np.column_stack([rng.uniform(-3.5, -0.8, 300), rng.uniform(-3.0, 3.0, 300),
+                               rng.uniform(-math.pi, math.pi, (300, 2))])
+        q_b = q_a + np.column_stack([rng.uniform(-0.5, 0.5, 300), rng.uniform(-3.0, 3.0, 300),
+                                     rng.uniform(-1.0, 1.0, (300, 2))])
+        dut.backend = "numba"
+        fast = dut.motion_cost(q_a, q_b)
+        every = _all_samples(dut, q_a, q_b)
+        assert (every > 0).sum() > 30 and (every == 0).sum() > 30, ((every > 0).sum(), (every == 0).sum())
+        np.testing.assert_allclose(fast, every, rtol=1e-12, atol=1e-15)
