@@ -125,7 +125,13 @@ def _segment_distance(px, py, ax, ay, bx, by):
 
 #: exp_neg flushes exp(-x) to 0 from here on (exp(-64) = 1.6e-28).
 EXP_CAP = 64.0
-_EXP_HALF = 0.6065306597126334  # exp(-0.5)
+#: exp_neg's binary digits of x and their correctly rounded exp(-digit).
+_DIGITS = np.array([32.0, 16.0, 8.0, 4.0, 2.0, 1.0])
+_DIGIT_EXP = np.array([math.exp(-d) for d in _DIGITS])
+_EXP_HALF = math.exp(-0.5)
+#: Taylor coefficients 1 / i! of exp(y), highest first: degree 15 leaves a
+#: remainder below 2e-18 for |y| <= 0.5.
+_TAYLOR = np.array([1.0 / math.factorial(i) for i in range(15, -1, -1)])
 #: LLVM flags of the vector loops: FMA contraction, and reassociation for the
 #: trapezoids' sum (a vectorised reduction: its order follows the vector width).
 _VEC = {"contract", "reassoc"}
@@ -138,49 +144,23 @@ def exp_neg(x, count):
     flush to zero: no AGF term that small can matter, and none is overstated).
 
     Written so that LLVM vectorises it (libm's exp is a call, which a vector
-    loop cannot hold): x's binary digits 32 .. 1 are taken out by exact
-    subtractions, each multiplying in its correctly rounded exp(-2^b), and
-    the rest r in [0, 1) is exp(-0.5) exp(0.5 - r) by a Taylor polynomial.
+    loop cannot hold; the inner loops have constant trip counts and unroll):
+    x's binary digits 32 .. 1 are taken out by exact subtractions, each
+    multiplying in its correctly rounded exp(-digit), and the rest r in
+    [0, 1) is exp(-0.5) exp(0.5 - r) by a Taylor polynomial.
     """
     for t in range(count):
         a = x[t]
         r = min(a, EXP_CAP)
         m = _EXP_HALF
-        f = m * 1.2664165549094176e-14  # exp(-32)
-        m = f if r >= 32.0 else m
-        r = r - 32.0 if r >= 32.0 else r
-        f = m * 1.1253517471925912e-07  # exp(-16)
-        m = f if r >= 16.0 else m
-        r = r - 16.0 if r >= 16.0 else r
-        f = m * 0.00033546262790251185  # exp(-8)
-        m = f if r >= 8.0 else m
-        r = r - 8.0 if r >= 8.0 else r
-        f = m * 0.01831563888873418  # exp(-4)
-        m = f if r >= 4.0 else m
-        r = r - 4.0 if r >= 4.0 else r
-        f = m * 0.1353352832366127  # exp(-2)
-        m = f if r >= 2.0 else m
-        r = r - 2.0 if r >= 2.0 else r
-        f = m * 0.36787944117144233  # exp(-1)
-        m = f if r >= 1.0 else m
-        r = r - 1.0 if r >= 1.0 else r
+        for d in range(_DIGITS.shape[0]):
+            take = r >= _DIGITS[d]
+            m = m * _DIGIT_EXP[d] if take else m
+            r = r - _DIGITS[d] if take else r
         y = 0.5 - r
-        p = 7.647163731819816e-13  # exp(y) by Taylor to degree 15: the remainder is below 2e-18 for |y| <= 0.5
-        p = p * y + 1.1470745597729725e-11
-        p = p * y + 1.6059043836821613e-10
-        p = p * y + 2.08767569878681e-09
-        p = p * y + 2.505210838544172e-08
-        p = p * y + 2.755731922398589e-07
-        p = p * y + 2.7557319223985893e-06
-        p = p * y + 2.48015873015873e-05
-        p = p * y + 0.0001984126984126984
-        p = p * y + 0.001388888888888889
-        p = p * y + 0.008333333333333333
-        p = p * y + 0.041666666666666664
-        p = p * y + 0.16666666666666666
-        p = p * y + 0.5
-        p = p * y + 1.0
-        p = p * y + 1.0
+        p = _TAYLOR[0]
+        for i in range(1, _TAYLOR.shape[0]):
+            p = p * y + _TAYLOR[i]
         x[t] = m * p if a < EXP_CAP else 0.0
 
 
