@@ -475,8 +475,8 @@ def _run_simulate(args: argparse.Namespace) -> int:
             from drake_social.sim.replay import draw_overlays, set_top_view, write_replay_html
 
             draw_overlays(meshcat, scenario, run.waypoints if len(run.waypoints) else None)
-            set_top_view(meshcat, scenario)
-            size = write_replay_html(meshcat, outputs.path("replay.html"))
+            fit = set_top_view(meshcat, scenario)
+            size = write_replay_html(meshcat, outputs.path("replay.html"), fit=fit)
             names.append(f"replay.html ({size / 1e6:.2f} MB)")
         _write_executed_csv(outputs.path("executed.csv"), run)
         e = scenario.execution

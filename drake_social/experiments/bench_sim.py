@@ -91,9 +91,9 @@ def run_sim_bench(
                     run = simulate(scenario, mode=mode, execution=execution, waypoints=waypoints, meshcat=meshcat,
                                    analyze=False)
                     draw_overlays(meshcat, scenario, waypoints)
-                    set_top_view(meshcat, scenario)
+                    fit = set_top_view(meshcat, scenario)
                     with tempfile.TemporaryDirectory() as folder:
-                        size = write_replay_html(meshcat, Path(folder) / "replay.html")
+                        size = write_replay_html(meshcat, Path(folder) / "replay.html", fit=fit)
                     entry["recorded_realtime_factor"] = run.realtime_factor
                     entry["replay_bytes"] = size
                     if progress:

@@ -284,34 +284,45 @@ def draw_overlays(
             _log.warning("path of %d waypoint(s) has fewer than 2 distinct points: not drawn", len(xy))
 
 
-def top_view_frame(scenario: Scenario, *, aspect: float = 16 / 9, margin: float | None = None) -> tuple[float, float, float, float]:
+def top_view_frame(scenario: Scenario, *, aspect: float | None = 16 / 9,
+                   margin: float | None = None) -> tuple[float, float, float, float]:
     """The region the top view shows: centre x, y and half width, half height, metres.
 
     It holds the walls plus ``margin`` metres (None: the larger of
     :data:`~drake_social.viz.world.VIEW_MARGIN` and 3 % of the map's longer
-    side, which keeps the viewer's controls bar off the north wall) with the
-    width / height ``aspect`` of the window.
+    side, which keeps the viewer's controls bar off the north wall), widened
+    or heightened to the width / height ``aspect`` of the window (None: not,
+    the walls and margin alone).
     """
-    if not aspect > 0:
+    if aspect is not None and not aspect > 0:
         raise ValueError(f"aspect must be > 0 (width / height), got {aspect}")
     x0, y0, x1, y1 = (float(v) for v in scenario.world.bounds)
     if margin is None:
         margin = max(VIEW_MARGIN, 0.03 * max(x1 - x0, y1 - y0))
     pad = float(scenario.world.wall_thickness) + margin
     width, height = x1 - x0 + 2 * pad, y1 - y0 + 2 * pad
+    if aspect is None:
+        return (x0 + x1) / 2, (y0 + y1) / 2, width / 2, height / 2
     half_h = max(height, width / aspect) / 2
     return (x0 + x1) / 2, (y0 + y1) / 2, half_h * aspect, half_h
 
 
-def set_top_view(meshcat: Meshcat, scenario: Scenario, *, aspect: float = 16 / 9, margin: float | None = None) -> None:
+def set_top_view(meshcat: Meshcat, scenario: Scenario, *, aspect: float = 16 / 9,
+                 margin: float | None = None) -> tuple[float, float]:
     """Makes the first view a top-down map of the whole room, north up.
 
     An orthographic camera frames :func:`top_view_frame` for a window of
-    width / height ``aspect``; the viewer keeps the frame's height and west
-    edge when the window has another aspect, so a narrower window crops the
-    east side. Lights are set for a map (ambient plus a light straight above,
-    no side lights); the floor grid and axes are hidden and the background
-    is white.
+    width / height ``aspect``. Meshcat itself keeps the frame's height and
+    west edge when the window has another aspect (a narrower window would
+    crop the east side); pass the returned extents to
+    :func:`write_replay_html` (``fit``) and the page refits the whole room,
+    centred, to any window size. Lights are set for a map (ambient plus a
+    light straight above, no side lights); the floor grid and axes are
+    hidden and the background is white.
+
+    Returns:
+        The half width and half height (metres, about the camera's axis) of
+        the walls and the margin: what must stay in view.
     """
     cx, cy, half_w, half_h = top_view_frame(scenario, aspect=aspect, margin=margin)
     camera = Meshcat.OrthographicCamera()
@@ -334,19 +345,67 @@ def set_top_view(meshcat: Meshcat, scenario: Scenario, *, aspect: float = 16 / 9
     meshcat.SetProperty("/Lights/FillLight/<object>", "intensity", 1.6)
     # The fill light is directional (towards the origin): put it straight above.
     meshcat.SetProperty("/Lights/FillLight/<object>", "position", [0.0, 0.0, elevation])
+    return top_view_frame(scenario, aspect=None, margin=margin)[2:]
 
 
-def write_replay_html(meshcat: Meshcat, path: str | os.PathLike) -> int:
+#: Appended to a replay page by write_replay_html(fit=...): whenever the
+#: viewer's camera is orthographic, on load, on a new camera and on every
+#: resize (after meshcat's own handler, which keeps the height and the west
+#: edge), it frames the region ``FIT`` (half width, half height about the
+#: camera's axis) centred in the window, as large as it fits.
+_FIT_SCRIPT = """
+<script>
+(function () {
+  const FIT = [__HALF_W__, __HALF_H__];
+  let framed = null;
+  function fit() {
+    if (typeof viewer === "undefined" || !viewer.camera || viewer.camera.type !== "OrthographicCamera") return;
+    const w = viewer.dom_element.offsetWidth, h = viewer.dom_element.offsetHeight;
+    if (!(w > 0 && h > 0)) return;
+    const aspect = w / h;
+    const half_h = Math.max(FIT[1], FIT[0] / aspect), half_w = half_h * aspect;
+    const camera = viewer.camera;
+    camera.left = -half_w; camera.right = half_w; camera.top = half_h; camera.bottom = -half_h;
+    camera.updateProjectionMatrix();
+    viewer.set_dirty();
+    framed = camera;
+  }
+  window.addEventListener("resize", fit);
+  let ticks = 0;
+  (function watch() {  // the camera arrives with the page's recorded commands
+    if (typeof viewer !== "undefined" && viewer.camera && viewer.camera !== framed) fit();
+    if (++ticks < 600) setTimeout(watch, 50);
+  })();
+})();
+</script>
+"""
+
+
+def write_replay_html(meshcat: Meshcat, path: str | os.PathLike, *, fit: tuple[float, float] | None = None) -> int:
     """Writes the standalone replay page ``meshcat.StaticHtml()`` to ``path``.
 
-    The file is written to a temporary file in the same folder and renamed
-    into place, so a reader never sees half a page.
+    With ``fit`` (half width, half height in metres, as
+    :func:`set_top_view` returns them) the page keeps that region, centred,
+    in view at any window size (a small script appended to the page; it
+    acts on orthographic cameras only, so a perspective view chosen in the
+    viewer is left alone). The file is written to a temporary file in the
+    same folder and renamed into place, so a reader never sees half a page.
 
     Returns:
         The size of the page, bytes.
     """
     path = Path(path)
-    data = meshcat.StaticHtml().encode("utf-8")
+    text = meshcat.StaticHtml()
+    if fit is not None:
+        half_w, half_h = (float(v) for v in fit)
+        if not (math.isfinite(half_w) and math.isfinite(half_h) and half_w > 0 and half_h > 0):
+            raise ValueError(f"fit must be two finite half extents > 0 (metres), got {fit}")
+        end = text.rfind("</body>")
+        if end < 0:
+            raise RuntimeError("Meshcat's StaticHtml() has no </body>: cannot add the fit script")
+        script = _FIT_SCRIPT.replace("__HALF_W__", repr(half_w)).replace("__HALF_H__", repr(half_h))
+        text = text[:end] + script + text[end:]
+    data = text.encode("utf-8")
     path.parent.mkdir(parents=True, exist_ok=True)
     fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
     try:

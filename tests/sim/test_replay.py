@@ -72,12 +72,12 @@ def record(scenario, trajectory: PiecewisePolynomial, html: Path, waypoints: np.
     replay.add_visualizer(builder, scene_graph, meshcat, fps=fps)
     simulator = Simulator(builder.Build())
     replay.draw_overlays(meshcat, scenario, waypoints)
-    replay.set_top_view(meshcat, scenario)
+    fit = replay.set_top_view(meshcat, scenario)
     replay.start_recording(meshcat, fps)
     simulator.Initialize()
     simulator.AdvanceTo(trajectory.end_time())
     replay.finish_recording(meshcat)
-    return replay.write_replay_html(meshcat, html)
+    return replay.write_replay_html(meshcat, html, fit=fit)
 
 
 @pytest.fixture(scope="module")
@@ -218,13 +218,13 @@ def test_seek_positions_returns_xyz_by_time(tiny_replay):
     np.testing.assert_allclose(dut[TIMES[-1]], [*KNOTS[-1, :2], 0.0], atol=0.003)
 
 
-def _to_pixel(scenario, x: float, y: float) -> tuple[int, int]:
-    """The screenshot pixel (column, row) of a world point (the window has
-    the aspect that set_top_view framed)."""
-    cx, cy, half_w, half_h = replay.top_view_frame(scenario)
-    metres_per_pixel = 2 * half_h / SHOT_SIZE[1]
-    assert 2 * half_w / SHOT_SIZE[0] == pytest.approx(metres_per_pixel)
-    return int(round(SHOT_SIZE[0] / 2 + (x - cx) / metres_per_pixel)), int(round(SHOT_SIZE[1] / 2 - (y - cy) / metres_per_pixel))
+def _to_pixel(scenario, x: float, y: float, size: tuple[int, int] = SHOT_SIZE) -> tuple[int, int]:
+    """The screenshot pixel (column, row) of a world point in a window of
+    ``size`` where the page fits the walls and margin, centred."""
+    cx, cy, half_w, half_h = replay.top_view_frame(scenario, aspect=size[0] / size[1])
+    metres_per_pixel = 2 * half_h / size[1]
+    assert 2 * half_w / size[0] == pytest.approx(metres_per_pixel)
+    return int(round(size[0] / 2 + (x - cx) / metres_per_pixel)), int(round(size[1] / 2 - (y - cy) / metres_per_pixel))
 
 
 def test_top_view_frame_holds_the_walls_and_a_margin():
@@ -237,6 +237,8 @@ def test_top_view_frame_holds_the_walls_and_a_margin():
     scenario.world.bounds = [0.0, 0.0, 1000.0, 10.0]  # a corridor: the width decides
     cx, cy, half_w, half_h = replay.top_view_frame(scenario, aspect=2.0, margin=1.0)
     assert half_w == pytest.approx(1000 / 2 + 1.1) and half_h == pytest.approx(half_w / 2)
+    # Without an aspect: the walls and the margin alone, as set_top_view returns them.
+    assert replay.top_view_frame(scenario, aspect=None, margin=1.0) == pytest.approx((500.0, 5.0, 501.1, 6.1))
 
 
 def test_first_view_is_a_top_down_map(tiny_replay, tmp_path):
@@ -278,6 +280,51 @@ def test_first_view_is_a_top_down_map(tiny_replay, tmp_path):
     assert ribbon[2] > ribbon[0] + 80, f"no path ribbon: {ribbon}"
     base = at(*KNOTS[0, :2] + [0.0, -0.2])
     assert base[2] > base[0] + 40 and base.mean() < 100, f"no robot base: {base}"
+
+
+@pytest.mark.parametrize("size", [(480, 480), (1200, 400)], ids=["square", "wide"])
+def test_the_whole_room_stays_in_view_at_any_window_size(tiny_replay, tmp_path, size):
+    """Meshcat alone keeps the frame's height and west edge (a square window
+    would crop the east wall); the page's fit script frames walls and margin
+    centred instead: all four walls where the fit puts them, background
+    beyond them, in a square and in a wide window."""
+    browser.require_chromium()
+    s = tiny_replay.scenario
+    png = browser.screenshot(tiny_replay.html, tmp_path / f"view_{size[0]}x{size[1]}.png", size)
+    image = np.round(imread(png)[:, :, :3] * 255).astype(int)
+    assert image.shape == (size[1], size[0], 3)
+    x0, y0, x1, y1 = s.world.bounds
+    t = s.world.wall_thickness
+    cx, cy = (x0 + x1) / 2, (y0 + y1) / 2
+
+    def at(x, y):
+        col, row = _to_pixel(s, x, y, size)
+        return image[row, col]
+
+    walls = [at(cx, y0 - t / 2), at(cx, y1 + t / 2), at(x0 - t / 2, cy), at(x1 + t / 2, cy)]
+    for wall in walls:
+        assert np.ptp(wall) <= 6 and 100 < wall.mean() < 230, f"not wall grey: {wall}"
+    for outside in (at(cx, y0 - t - 0.2), at(cx, y1 + t + 0.2), at(x0 - t - 0.2, cy), at(x1 + t + 0.2, cy)):
+        assert np.all(outside >= 250), f"not background: {outside}"
+    # The walls and margin fill the window's narrower direction: the room is centred.
+    _, _, half_w, half_h = replay.top_view_frame(s, aspect=None)
+    col_w, _ = _to_pixel(s, cx - half_w, cy, size)
+    _, row_n = _to_pixel(s, cx, cy + half_h, size)
+    assert min(col_w, row_n) in (0, 1) and abs(col_w - (size[0] - _to_pixel(s, cx + half_w, cy, size)[0])) <= 1
+
+
+def test_write_replay_html_fit_script(tmp_path):
+    meshcat = replay.make_meshcat()
+    plain = replay.write_replay_html(meshcat, tmp_path / "plain.html")
+    fitted = replay.write_replay_html(meshcat, tmp_path / "fitted.html", fit=(12.5, 7.25))
+    text = (tmp_path / "fitted.html").read_text(encoding="utf-8")
+    assert fitted > plain and text.count("const FIT = [12.5, 7.25];") == 1
+    assert text.rstrip().endswith("</html>") and text.index("const FIT") < text.rindex("</body>")
+    assert "const FIT" not in (tmp_path / "plain.html").read_text(encoding="utf-8")
+    for bad in ((0.0, 1.0), (1.0, -2.0), (float("nan"), 1.0), (1.0, float("inf"))):
+        with pytest.raises(ValueError, match="fit must be two finite half extents > 0"):
+            replay.write_replay_html(meshcat, tmp_path / "bad.html", fit=bad)
+    assert not (tmp_path / "bad.html").exists()
 
 
 def test_office_replay_of_a_minute_stays_under_5_mb(tmp_path):
