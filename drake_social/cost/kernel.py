@@ -8,7 +8,7 @@ count from the displacement bound, every (person, point) window from
 distance bounds at the motion's ends, and the threshold-aware trapezoid
 areas of every (sample step, point) inside it. The exponentials and the
 trapezoids of a motion's windows run as two long loops that LLVM vectorises
-(:func:`exp_neg` is a polynomial exp within 4 ulp of libm's). ``SocialCost``
+(:func:`exp_neg` is a polynomial exp within 3 ulp of libm's). ``SocialCost``
 uses it when numba is importable and keeps the numpy path as the reference
 it is tested against.
 """
@@ -132,6 +132,11 @@ _EXP_HALF = math.exp(-0.5)
 #: Taylor coefficients 1 / i! of exp(y), highest first: degree 15 leaves a
 #: remainder below 2e-18 for |y| <= 0.5.
 _TAYLOR = np.array([1.0 / math.factorial(i) for i in range(15, -1, -1)])
+#: The least threshold for exp_neg in msc_sums: its values are exact to 3 ulp
+#: or flushed from exp(-64) = 1.6e-28 on, and a flushed value (the low end of
+#: a threshold crossing) then moves a step's area by at most 1.6e-28 /
+#: threshold < 2e-17 relative. Lower thresholds (0 included) take libm's exp.
+VECTOR_EXP_MIN_THRESHOLD = 1e-11
 #: LLVM flags of the vector loops: FMA contraction, and reassociation for the
 #: trapezoids' sum (a vectorised reduction: its order follows the vector width).
 _VEC = {"contract", "reassoc"}
@@ -208,12 +213,16 @@ def msc_sums(
     tighter beside and behind a person), so both ends of every step there
     are below the threshold and it adds exactly 0.
 
-    The sums equal the numpy path's to about 1e-13 relative, not bit for bit:
-    the arm's angles along a motion come from rotation steps, exp is
-    :func:`exp_neg`, and the steps are summed in the order of a vectorised
-    reduction. The order depends on the processor's vector width, so two
-    processors may differ in the last bits (so do numpy's own SIMD loops); on
-    one machine the sums are deterministic.
+    The sums equal the numpy path's to about 1e-13 relative, not bit for bit
+    (more where a term grazes the threshold: a crossing's interpolation is
+    ill-conditioned there, up to 2e-10 on adversarial motions, as with
+    libm's exp): the arm's angles along a motion come from rotation steps,
+    exp is :func:`exp_neg` (libm's for thresholds below
+    :data:`VECTOR_EXP_MIN_THRESHOLD`, where its flush to zero could matter),
+    and the steps are summed in the order of a vectorised reduction. The
+    order depends on the processor's vector width, so two processors may
+    differ in the last bits (so do numpy's own SIMD loops); on one machine
+    the sums are deterministic.
     """
     e_count, h_count, k_count = q_a.shape[0], people.shape[0], active.shape[0]
     sums = np.zeros(e_count)
@@ -232,6 +241,7 @@ def msc_sums(
     lip = math.sqrt(max(inv_front, inv_rear, inv_side))
     root_cut = math.sqrt(a_cut) * (1.0 + 1e-9) + 1e-12 if math.isfinite(a_cut) else math.inf
     bounded = math.isfinite(root_cut) and lip > 0.0
+    vector_exp = tau >= VECTOR_EXP_MIN_THRESHOLD
     cand = np.empty(h_count, dtype=np.int64)
     k0s = np.empty((h_count, k_count), dtype=np.int64)
     k1s = np.empty((h_count, k_count), dtype=np.int64)
@@ -309,10 +319,10 @@ def msc_sums(
                         continue
                     t0 = da / spans[j]
                     t1 = 1.0 - db / spans[j]
-                    if bounded:
+                    ls = lip * spans[j]  # 0 for a span so small that it underflows
+                    if bounded and ls > 0.0:
                         # sqrt(a) moves at most lip * spans[j] along the motion
                         # (per unit of t): above root_cut outside [t0, t1].
-                        ls = lip * spans[j]
                         ra = math.sqrt(_exponent(ax_, ay_, c_t, s_t, inv_front, inv_rear, inv_side)) - root_cut
                         rb = math.sqrt(_exponent(bx_, by_, c_t, s_t, inv_front, inv_rear, inv_side)) - root_cut
                         if ra + rb > ls:
@@ -383,6 +393,10 @@ def msc_sums(
                     t += 1
                 if k1 >= k0:
                     w_buf[t - 1] = 0.0  # no step from a window's last sample to the next window's first
-        exp_neg(g_buf, count)
+        if vector_exp:
+            exp_neg(g_buf, count)
+        else:
+            for t in range(count):
+                g_buf[t] = math.exp(-g_buf[t])
         sums[e] = _trapezoids(g_buf, w_buf, count - 1, tau)
     return sums, steps

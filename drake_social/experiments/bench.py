@@ -197,8 +197,9 @@ def cpu_model(cpuinfo: str | Path = "/proc/cpuinfo") -> str | None:
 
 
 def _load_average() -> list[float] | None:
-    """The 1, 5 and 15 minute load averages (None where the OS has none):
-    a load near the CPU count means the times were shared with other work."""
+    """The 1, 5 and 15 minute load averages (None where the OS has none).
+    The bench itself keeps about one CPU busy: a load well above 1 at its
+    end, or above 0 at its start, means other work shared the machine."""
     try:
         return [round(x, 2) for x in os.getloadavg()]
     except (AttributeError, OSError):
@@ -303,7 +304,7 @@ def run_bench(
         if progress:
             progress(done, total, label)
 
-    machine = _machine()  # the load average before this run's own work
+    machine = _machine()  # the load average before this run's planning
     scenarios = {}
     for path in paths:
         scenario = load_scenario(path)

@@ -129,3 +129,32 @@ def test_windows_leave_out_only_terms_that_are_zero(kind, rng):
         every = _all_samples(dut, q_a, q_b)
         assert (every > 0).sum() > 30 and (every == 0).sum() > 30, ((every > 0).sum(), (every == 0).sum())
         np.testing.assert_allclose(fast, every, rtol=1e-12, atol=1e-15)
+
+
+def test_thresholds_below_the_vector_exps_range_keep_libms_exp():
+    """exp_neg flushes exp(-a) to 0 from a = 64: with a threshold of 0 or
+    below VECTOR_EXP_MIN_THRESHOLD the kernel takes libm's exp, so a motion
+    25 m from the only person still costs what the numpy path says (1e-34),
+    not 0; at the threshold itself the vector exp is used, to the same result."""
+    geometry = ArmGeometry.from_scenario(Scenario())
+    for threshold, x in ((0.0, 25.0), (1e-40, 25.0), (kernel.VECTOR_EXP_MIN_THRESHOLD / 2, 14.0),
+                         (kernel.VECTOR_EXP_MIN_THRESHOLD, 14.0)):
+        q_a = np.array([[x, 0.0, 0.0, 0.0]])  # in front of the person, x m away
+        q_b = q_a + [0.0, 1.0, 0.5, 0.0]
+        dut = SocialCost(geometry, np.zeros((1, 3)), space=dc.replace(PersonalSpace(), threshold=threshold))
+        fast, reference = both(dut, q_a, q_b)
+        assert 0.0 < reference[0] < (1e-20 if x == 25.0 else 1e-9)
+        np.testing.assert_allclose(fast, reference, rtol=1e-12)
+
+
+@pytest.mark.filterwarnings("ignore:overflow encountered in divide:RuntimeWarning")  # the numpy path's window
+def test_a_motion_too_short_for_its_span_to_survive_the_lipschitz_product():
+    """lip * span underflows to 0 for a denormal arm motion: the metric window
+    is skipped (no division by 0) and the cost equals the numpy path's."""
+    geometry = ArmGeometry.from_scenario(Scenario())
+    dut = SocialCost(geometry, np.array([[0.3, 0.0, 0.0]]), space=PersonalSpace(3.0, 3.0, 3.0))
+    for k in (2, 3):
+        q_b = np.zeros((1, 4))
+        q_b[0, k] = 5e-324
+        fast, reference = both(dut, np.zeros((1, 4)), q_b)
+        np.testing.assert_array_equal(fast, reference)
