@@ -34,7 +34,7 @@ except ImportError:  # pragma: no cover - exercised only where numba is missing
         return lambda f: f
 
 
-__all__ = ["AVAILABLE", "msc_sums", "people_grid"]
+__all__ = ["AVAILABLE", "MAX_MOTION_STEPS", "exp_neg", "msc_sums", "people_grid"]
 
 
 @njit(cache=True)
@@ -123,6 +123,9 @@ def _segment_distance(px, py, ax, ay, bx, by):
     return math.sqrt(ex * ex + ey * ey)  # not hypot: slower, and a culling bound has margin
 
 
+#: The most trapezoid steps one motion may take (its samples are held in
+#: memory): 100 km at the default 0.1 m resolution, far beyond any room.
+MAX_MOTION_STEPS = 1_000_000
 #: exp_neg flushes exp(-x) to 0 from here on (exp(-64) = 1.6e-28).
 EXP_CAP = 64.0
 #: exp_neg's binary digits of x and their correctly rounded exp(-digit).
@@ -248,10 +251,13 @@ def msc_sums(
     cull = math.isfinite(reach)
     radius = reach + point_reach + 1e-9
     n_max = 1
+    max_span = MAX_MOTION_STEPS * resolution
     for e in range(e_count):
         d0, d1 = q_b[e, 0] - q_a[e, 0], q_b[e, 1] - q_a[e, 1]
         d2, d3 = q_b[e, 2] - q_a[e, 2], q_b[e, 3] - q_a[e, 3]
         span = math.hypot(d0, d1) + lever[0] * abs(d2) + lever[1] * abs(d2 + d3)
+        if not span <= max_span:  # SocialCost.motion_cost says which motion and why
+            raise ValueError("a motion's displacement bound is not finite or needs more than MAX_MOTION_STEPS steps")
         steps[e] = max(1, int(math.ceil(span / resolution - 1e-9)))
         n_max = max(n_max, steps[e])
     xs = np.empty((k_count, n_max + 1))

@@ -16,11 +16,22 @@ def interpolation_segments(max_displacement: np.ndarray, resolution: float) -> n
     ``resolution`` metres per step, given a bound on its total displacement.
 
     Raises:
-        ValueError: a bound is NaN or infinite (a non-finite configuration).
+        ValueError: a bound is NaN or infinite (a non-finite configuration,
+            or ends so far apart that their difference overflows), or a
+            motion would need more than ``kernel.MAX_MOTION_STEPS`` steps
+            (its samples are held in memory).
     """
     bound = np.asarray(max_displacement, dtype=float)
     if not np.all(np.isfinite(bound)):
         raise ValueError(f"motions need finite configurations; displacement bounds: {bound[~np.isfinite(bound)]}")
+    too_long = bound > kernel.MAX_MOTION_STEPS * resolution
+    if np.any(too_long):
+        index = np.flatnonzero(too_long.ravel())
+        raise ValueError(
+            f"motion {int(index[0])} ({len(index)} in all) is too long to sample: its displacement bound "
+            f"{bound.ravel()[index[0]]:.6g} m needs more than {kernel.MAX_MOTION_STEPS:,} steps of {resolution} m; "
+            "split it into shorter motions"
+        )
     return np.maximum(1, np.ceil(bound / resolution - 1e-9)).astype(np.int64)
 
 
@@ -174,7 +185,8 @@ class SocialCost:
             (E,) costs (a 0-d value for a single motion).
 
         Raises:
-            ValueError: a configuration is not finite.
+            ValueError: a configuration is not finite, or a motion is too
+                long to sample (see :func:`interpolation_segments`).
         """
         q_a = np.asarray(q_a, dtype=float)
         q_b = np.asarray(q_b, dtype=float)
@@ -187,22 +199,31 @@ class SocialCost:
             return out[0] if single else out
         length = config_distance(q_a, q_b, self.distance_weights)
         if self.backend == "numba":
-            sums, n = kernel.msc_sums(
-                np.ascontiguousarray(q_a), np.ascontiguousarray(q_b), self.people,
-                *self.geometry.link_lengths, self.geometry.object_interest, self._active, self._active_weights,
-                self._lever, self.resolution, self.space.max_reach, *self._inverse_variances, self.space.threshold,
-                *self._people_grid(),
-            )  # fmt: skip
+            try:
+                sums, n = self._msc_sums(q_a, q_b)
+            except ValueError:
+                self.segments(q_a, q_b)  # raises, naming the motion and its bound
+                raise
             out += sums * (length / n)
             return out[0] if single else out
         dq = q_b - q_a
         span = displacement_bound(dq, self._lever)
+        interpolation_segments(span, self.resolution)  # every motion can be sampled
         relevant, t0, t1 = self._window(q_a, q_b, span)
         relevant &= (length > 0)[:, None]
         if relevant.any():
             n = interpolation_segments(span, self.resolution)
             out += self._integrate(q_a, dq, n, relevant, t0, t1) * (length / n)
         return out[0] if single else out
+
+    def _msc_sums(self, q_a: np.ndarray, q_b: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The compiled kernel's per-motion sums and step counts."""
+        return kernel.msc_sums(
+            np.ascontiguousarray(q_a), np.ascontiguousarray(q_b), self.people,
+            *self.geometry.link_lengths, self.geometry.object_interest, self._active, self._active_weights,
+            self._lever, self.resolution, self.space.max_reach, *self._inverse_variances, self.space.threshold,
+            *self._people_grid(),
+        )  # fmt: skip
 
     def _integrate(self, q_a, dq, n, relevant, t0, t1) -> np.ndarray:
         """Sums over steps of the threshold-aware trapezoid areas (E,), in one

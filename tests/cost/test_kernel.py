@@ -158,3 +158,28 @@ def test_a_motion_too_short_for_its_span_to_survive_the_lipschitz_product():
         q_b[0, k] = 5e-324
         fast, reference = both(dut, np.zeros((1, 4)), q_b)
         np.testing.assert_array_equal(fast, reference)
+
+
+@pytest.mark.filterwarnings("ignore:overflow encountered in subtract:RuntimeWarning")  # numpy's, for 1e308 - -1e308
+@pytest.mark.parametrize("backend", ["numba", "numpy"])
+def test_a_motion_too_long_to_sample_is_refused_by_name(backend):
+    """A motion whose samples would not fit (more than MAX_MOTION_STEPS steps),
+    or whose ends are so far apart that their difference overflows, is a
+    ValueError naming the motion, from either backend; the step limit
+    itself is allowed."""
+    geometry = ArmGeometry.from_scenario(Scenario())
+    dut = SocialCost(geometry, PEOPLE)
+    dut.backend = backend
+    limit = kernel.MAX_MOTION_STEPS * dut.resolution
+    q_a = np.zeros((3, 4))
+    q_b = np.array([[1.0, 0, 0, 0], [limit * 1.001, 0, 0, 0], [2.0, 0, 0, 0]])
+    with pytest.raises(ValueError, match=r"motion 1 \(1 in all\) is too long to sample: its displacement bound "
+                                         r"100100 m needs more than 1,000,000 steps of 0\.1 m; split it"):
+        dut.motion_cost(q_a, q_b)
+    with pytest.raises(ValueError, match="motions need finite configurations; displacement bounds: .inf"):
+        dut.motion_cost(np.array([-1e308, 0, 0, 0]), np.array([1e308, 0, 0, 0]))
+    if backend == "numba":  # the kernel's own guard, before it allocates the samples
+        with pytest.raises(ValueError, match="not finite or needs more than MAX_MOTION_STEPS steps"):
+            dut._msc_sums(q_a, q_b)
+    # Exactly at the limit (a base motion far from everyone): allowed, and free.
+    assert dut.motion_cost(np.array([100.0, 0, 0, 0]), np.array([100.0 + limit * (1 - 1e-12), 0, 0, 0])) >= 0.0
