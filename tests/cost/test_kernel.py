@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 from drake_social.cost import PersonalSpace, SocialCost, kernel
+from drake_social.cost.social import interpolation_segments
 from drake_social.kinematics import ArmGeometry, config_distance
 from drake_social.scenario import Bar, LShape, Polyline, Robot, Scenario
 
@@ -181,5 +182,7 @@ def test_a_motion_too_long_to_sample_is_refused_by_name(backend):
     if backend == "numba":  # the kernel's own guard, before it allocates the samples
         with pytest.raises(ValueError, match="not finite or needs more than MAX_MOTION_STEPS steps"):
             dut._msc_sums(q_a, q_b)
-    # Exactly at the limit (a base motion far from everyone): allowed, and free.
+    # The limit itself is allowed: MAX_MOTION_STEPS steps exactly.
+    np.testing.assert_array_equal(interpolation_segments(np.array([limit]), dut.resolution), [kernel.MAX_MOTION_STEPS])
+    # Just below the limit (a base motion far from everyone): allowed, and free.
     assert dut.motion_cost(np.array([100.0, 0, 0, 0]), np.array([100.0 + limit * (1 - 1e-12), 0, 0, 0])) >= 0.0
