@@ -22,8 +22,9 @@ from pathlib import Path
 __all__ = ["KERNEL_SOURCES", "ensure_fresh", "sources_hash"]
 
 _PACKAGE = Path(__file__).resolve().parent
-#: The kernel modules, which call each other's compiled functions.
-KERNEL_SOURCES = ("cost/kernel.py", "planning/planar_kernel.py", "planning/tree_kernel.py")
+#: The kernel modules, which call each other's compiled functions, and the
+#: limits they compile in.
+KERNEL_SOURCES = ("cost/kernel.py", "planning/planar_kernel.py", "planning/tree_kernel.py", "limits.py")
 _STAMP = "drake_social_kernels.stamp"
 _done = False
 

@@ -24,6 +24,8 @@ from typing import Optional, Sequence, Union
 
 import numpy as np
 
+from drake_social.limits import MAX_MOTION_STEPS
+
 __all__ = [
     "ALGORITHMS",
     "EXECUTIONS",
@@ -558,6 +560,26 @@ def interest_point_count(obj: Union[Bar, LShape, Polyline]) -> int:
     return 3 if isinstance(obj, LShape) else 2
 
 
+def _longest_motion_bound(scenario: Scenario) -> float:
+    """An upper bound of any motion's displacement bound in the scenario's
+    configuration space (metres): the room's diagonal plus the farthest
+    object or arm point from the shoulder times the joints' turns."""
+    x_min, y_min, x_max, y_max = scenario.world.bounds
+    o = scenario.object
+    if isinstance(o, Bar):
+        points = [[0.0, -o.length / 2], [0.0, o.length / 2]]
+    elif isinstance(o, LShape):
+        points = [[0.0, -o.lengths[0] / 2], [0.0, o.lengths[0] / 2], [o.lengths[1], o.lengths[0] / 2]]
+    else:
+        points = list(o.points)
+    points += list(o.interest_points or [])
+    r = scenario.robot
+    reach = sum(r.link_lengths) + max(math.hypot(x, y) for x, y in points)
+    turn_1 = r.joint_upper[0] - r.joint_lower[0]
+    turn_2 = r.joint_upper[1] - r.joint_lower[1]
+    return math.hypot(x_max - x_min, y_max - y_min) + reach * (2 * turn_1 + turn_2)
+
+
 def validate_scenario(scenario: Scenario, source: str = "<scenario>") -> None:
     """Checks values that the schema's types cannot express.
 
@@ -638,6 +660,14 @@ def validate_scenario(scenario: Scenario, source: str = "<scenario>") -> None:
         c.nonnegative("social.weights", s.weights)
     c.nonnegative("social.length_weight", s.length_weight)
     c.positive("social.resolution", s.resolution)
+    # The longest motion in the room must be sampleable: its displacement
+    # bound (the base across the room's diagonal, every arm and object point
+    # turning through both joints' ranges) in at most MAX_MOTION_STEPS steps.
+    longest = _longest_motion_bound(scenario)
+    if longest > MAX_MOTION_STEPS * s.resolution:
+        c.fail("social.resolution", f"must be >= {longest / MAX_MOTION_STEPS:.3g} m for this world and robot "
+                                    f"(a motion may move a point {longest:.4g} m, sampled in at most "
+                                    f"{MAX_MOTION_STEPS:,} steps), got {s.resolution}")
 
     p = scenario.planner
     if p.algorithm not in ALGORITHMS:

@@ -146,3 +146,20 @@ def test_a_path_csv_error_names_the_line_and_column(tmp_path, tiny_scenario):
         read_path_csv(tmp_path, tiny_scenario)
     dut.write_text("x,y,psi1,psi2\n1,2.5,0,1.5708\n6.5,2.5,0,1.5708\n")
     np.testing.assert_array_equal(read_path_csv(dut, tiny_scenario), [[1, 2.5, 0, 1.5708], [6.5, 2.5, 0, 1.5708]])
+
+
+def test_a_resolution_too_fine_for_the_room_names_the_least_allowed():
+    """Every motion's social cost is sampled in at most MAX_MOTION_STEPS steps:
+    the least resolution is the longest displacement bound in the room (by
+    hand for tiny: its 8 x 5 m diagonal plus, for the arm and bar reaching
+    0.6 + 0.5 + 0.75 m, psi1's 2 pi turn twice and psi2's once) over that."""
+    import math
+
+    from drake_social.limits import MAX_MOTION_STEPS
+
+    longest = math.hypot(8.0, 5.0) + (0.6 + 0.5 + 0.75) * (2 * 2 * math.pi + 2 * math.pi)
+    least = longest / MAX_MOTION_STEPS
+    assert _message(TINY, ["social: {resolution: 0.000001}"]) == (
+        f"{TINY} (--set 'social: {{resolution: 0.000001}}'): social.resolution: must be >= {least:.3g} m for this "
+        f"world and robot (a motion may move a point {longest:.4g} m, sampled in at most 1,000,000 steps), got 1e-06")
+    assert load_with_overrides(TINY, [f"social: {{resolution: {least * 1.0001}}}"]).social.resolution > least

@@ -20,6 +20,7 @@ import math
 import numpy as np
 
 from drake_social import _kernel_cache
+from drake_social.limits import MAX_MOTION_STEPS  # validate_scenario keeps every room's motions within it
 
 _kernel_cache.ensure_fresh()  # before any cached kernel is loaded
 
@@ -123,9 +124,6 @@ def _segment_distance(px, py, ax, ay, bx, by):
     return math.sqrt(ex * ex + ey * ey)  # not hypot: slower, and a culling bound has margin
 
 
-#: The most trapezoid steps one motion may take (its samples are held in
-#: memory): 100 km at the default 0.1 m resolution, far beyond any room.
-MAX_MOTION_STEPS = 1_000_000
 #: exp_neg flushes exp(-x) to 0 from here on (exp(-64) = 1.6e-28).
 EXP_CAP = 64.0
 #: exp_neg's binary digits of x and their correctly rounded exp(-digit).
@@ -256,7 +254,7 @@ def msc_sums(
         d0, d1 = q_b[e, 0] - q_a[e, 0], q_b[e, 1] - q_a[e, 1]
         d2, d3 = q_b[e, 2] - q_a[e, 2], q_b[e, 3] - q_a[e, 3]
         span = math.hypot(d0, d1) + lever[0] * abs(d2) + lever[1] * abs(d2 + d3)
-        if not span <= max_span:  # SocialCost.motion_cost says which motion and why
+        if not span <= max_span:  # SocialCost.motion_cost names the motion (the scenario check keeps planners clear)
             raise ValueError("a motion's displacement bound is not finite or needs more than MAX_MOTION_STEPS steps")
         steps[e] = max(1, int(math.ceil(span / resolution - 1e-9)))
         n_max = max(n_max, steps[e])

@@ -7,6 +7,7 @@ import numpy as np
 from drake_social.cost import kernel
 from drake_social.cost.agf import PersonalSpace, agf, agf_xy, gaussian, people_array
 from drake_social.kinematics import ArmGeometry, config_distance, displacement_bound
+from drake_social.limits import MAX_MOTION_STEPS
 
 __all__ = ["SocialCost", "interpolation_segments"]
 
@@ -18,18 +19,19 @@ def interpolation_segments(max_displacement: np.ndarray, resolution: float) -> n
     Raises:
         ValueError: a bound is NaN or infinite (a non-finite configuration,
             or ends so far apart that their difference overflows), or a
-            motion would need more than ``kernel.MAX_MOTION_STEPS`` steps
+            motion would need more than ``MAX_MOTION_STEPS`` steps
             (its samples are held in memory).
     """
     bound = np.asarray(max_displacement, dtype=float)
     if not np.all(np.isfinite(bound)):
-        raise ValueError(f"motions need finite configurations; displacement bounds: {bound[~np.isfinite(bound)]}")
-    too_long = bound > kernel.MAX_MOTION_STEPS * resolution
+        raise ValueError(f"motions need finite configurations (and ends whose difference does not overflow); "
+                         f"displacement bounds: {bound[~np.isfinite(bound)]}")
+    too_long = bound > MAX_MOTION_STEPS * resolution
     if np.any(too_long):
         index = np.flatnonzero(too_long.ravel())
         raise ValueError(
             f"motion {int(index[0])} ({len(index)} in all) is too long to sample: its displacement bound "
-            f"{bound.ravel()[index[0]]:.6g} m needs more than {kernel.MAX_MOTION_STEPS:,} steps of {resolution} m; "
+            f"{bound.ravel()[index[0]]:.6g} m needs more than {MAX_MOTION_STEPS:,} steps of {resolution} m; "
             "split it into shorter motions"
         )
     return np.maximum(1, np.ceil(bound / resolution - 1e-9)).astype(np.int64)
@@ -185,8 +187,10 @@ class SocialCost:
             (E,) costs (a 0-d value for a single motion).
 
         Raises:
-            ValueError: a configuration is not finite, or a motion is too
-                long to sample (see :func:`interpolation_segments`).
+            ValueError: a configuration is not finite, or (where anyone's
+                terms are weighted) a motion is too long to sample (see
+                :func:`interpolation_segments`; a validated scenario's
+                motions never are).
         """
         q_a = np.asarray(q_a, dtype=float)
         q_b = np.asarray(q_b, dtype=float)
@@ -201,9 +205,12 @@ class SocialCost:
         if self.backend == "numba":
             try:
                 sums, n = self._msc_sums(q_a, q_b)
-            except ValueError:
-                self.segments(q_a, q_b)  # raises, naming the motion and its bound
-                raise
+            except ValueError as kernel_error:
+                try:
+                    self.segments(q_a, q_b)  # raises, naming the motion and its bound
+                except ValueError as named:
+                    raise named from None
+                raise kernel_error
             out += sums * (length / n)
             return out[0] if single else out
         dq = q_b - q_a

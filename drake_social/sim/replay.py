@@ -348,34 +348,34 @@ def set_top_view(meshcat: Meshcat, scenario: Scenario, *, aspect: float = 16 / 9
     return top_view_frame(scenario, aspect=None, margin=margin)[2:]
 
 
-#: Appended to a replay page by write_replay_html(fit=...): whenever the
-#: viewer's camera is orthographic, on load, on a new camera and on every
-#: resize (after meshcat's own handler, which keeps the height and the west
-#: edge), it frames the region ``FIT`` (half width, half height about the
-#: camera's axis) centred in the window, as large as it fits.
+#: Appended to a replay page by write_replay_html(fit=...): it wraps the
+#: viewer's ``set_camera`` and ``set_3d_pane_size`` (meshcat calls the latter
+#: on load and on every resize, keeping an orthographic frame's height and
+#: west edge) so that, after each, an orthographic camera frames the region
+#: ``FIT`` (half width, half height about the camera's axis) centred in the
+#: window, as large as it fits. The user's zoom and pan are kept (they are the
+#: camera's zoom and the controls' target, not its frame).
 _FIT_SCRIPT = """
 <script>
 (function () {
   const FIT = [__HALF_W__, __HALF_H__];
-  let framed = null;
+  if (typeof viewer === "undefined") return;
   function fit() {
-    if (typeof viewer === "undefined" || !viewer.camera || viewer.camera.type !== "OrthographicCamera") return;
+    const camera = viewer.camera;
+    if (!camera || camera.type !== "OrthographicCamera") return;
     const w = viewer.dom_element.offsetWidth, h = viewer.dom_element.offsetHeight;
     if (!(w > 0 && h > 0)) return;
     const aspect = w / h;
     const half_h = Math.max(FIT[1], FIT[0] / aspect), half_w = half_h * aspect;
-    const camera = viewer.camera;
     camera.left = -half_w; camera.right = half_w; camera.top = half_h; camera.bottom = -half_h;
     camera.updateProjectionMatrix();
     viewer.set_dirty();
-    framed = camera;
   }
-  window.addEventListener("resize", fit);
-  let ticks = 0;
-  (function watch() {  // the camera arrives with the page's recorded commands
-    if (typeof viewer !== "undefined" && viewer.camera && viewer.camera !== framed) fit();
-    if (++ticks < 600) setTimeout(watch, 50);
-  })();
+  for (const name of ["set_camera", "set_3d_pane_size"]) {
+    const own = viewer[name].bind(viewer);
+    viewer[name] = function (...args) { const out = own(...args); fit(); return out; };
+  }
+  fit();
 })();
 </script>
 """
@@ -386,9 +386,9 @@ def write_replay_html(meshcat: Meshcat, path: str | os.PathLike, *, fit: tuple[f
 
     With ``fit`` (half width, half height in metres, as
     :func:`set_top_view` returns them) the page keeps that region, centred,
-    in view at any window size (a small script appended to the page; it
-    acts on orthographic cameras only, so a perspective view chosen in the
-    viewer is left alone). The file is written to a temporary file in the
+    in view at any window size (:data:`_FIT_SCRIPT`, appended to the page;
+    it acts on orthographic cameras only, so a perspective camera loaded
+    into the viewer is left alone). The file is written to a temporary file in the
     same folder and renamed into place, so a reader never sees half a page.
 
     Returns:
@@ -400,10 +400,11 @@ def write_replay_html(meshcat: Meshcat, path: str | os.PathLike, *, fit: tuple[f
         half_w, half_h = (float(v) for v in fit)
         if not (math.isfinite(half_w) and math.isfinite(half_h) and half_w > 0 and half_h > 0):
             raise ValueError(f"fit must be two finite half extents > 0 (metres), got {fit}")
-        end = text.rfind("</body>")
-        if end < 0:
-            raise RuntimeError("Meshcat's StaticHtml() has no </body>: cannot add the fit script")
         script = _FIT_SCRIPT.replace("__HALF_W__", repr(half_w)).replace("__HALF_H__", repr(half_h))
+        end = text.rfind("</body>")
+        if end < 0:  # a page of another shape: the script still runs at its end
+            _log.warning("Meshcat's StaticHtml() has no </body>: the fit script is appended at the end")
+            end = len(text)
         text = text[:end] + script + text[end:]
     data = text.encode("utf-8")
     path.parent.mkdir(parents=True, exist_ok=True)

@@ -177,7 +177,8 @@ def test_a_motion_too_long_to_sample_is_refused_by_name(backend):
     with pytest.raises(ValueError, match=r"motion 1 \(1 in all\) is too long to sample: its displacement bound "
                                          r"100100 m needs more than 1,000,000 steps of 0\.1 m; split it"):
         dut.motion_cost(q_a, q_b)
-    with pytest.raises(ValueError, match="motions need finite configurations; displacement bounds: .inf"):
+    with pytest.raises(ValueError, match=r"motions need finite configurations \(and ends whose difference does not "
+                                         r"overflow\); displacement bounds: .inf"):
         dut.motion_cost(np.array([-1e308, 0, 0, 0]), np.array([1e308, 0, 0, 0]))
     if backend == "numba":  # the kernel's own guard, before it allocates the samples
         with pytest.raises(ValueError, match="not finite or needs more than MAX_MOTION_STEPS steps"):

@@ -273,7 +273,8 @@ def test_early_returns_keep_the_shapes(bar):
 def test_non_finite_messages_name_the_culprits(bar):
     """interpolation_segments lists the non-finite bounds (mutants 9, 10, 11);
     motion_cost says what it needs (31)."""
-    with pytest.raises(ValueError, match=r"^motions need finite configurations; displacement bounds: \[nan inf\]$"):
+    with pytest.raises(ValueError, match=r"^motions need finite configurations \(and ends whose difference does "
+                                         r"not overflow\); displacement bounds: \[nan inf\]$"):
         interpolation_segments(np.array([0.3, np.nan, 2.0, np.inf]), 0.1)
     np.testing.assert_array_equal(interpolation_segments(np.array([0.0, 0.3, 0.31]), 0.1), [1, 3, 4])
     dut = SocialCost(bar, np.array([[0.0, 0.0, 0.0]]))

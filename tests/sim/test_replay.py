@@ -327,6 +327,19 @@ def test_write_replay_html_fit_script(tmp_path):
     assert not (tmp_path / "bad.html").exists()
 
 
+def test_a_page_without_a_body_end_gets_the_fit_script_at_its_end(tmp_path, caplog):
+    class Page:  # what write_replay_html uses of a Meshcat
+        @staticmethod
+        def StaticHtml():
+            return "<html><script>var viewer;</script></html>"
+
+    with caplog.at_level("WARNING", logger="drake_social.sim.replay"):
+        replay.write_replay_html(Page(), tmp_path / "page.html", fit=(3.0, 2.0))
+    text = (tmp_path / "page.html").read_text(encoding="utf-8")
+    assert text.startswith(Page.StaticHtml()) and text.rstrip().endswith("</script>")
+    assert "const FIT = [3.0, 2.0];" in text and "has no </body>" in caplog.text
+
+
 def test_office_replay_of_a_minute_stays_under_5_mb(tmp_path):
     scenario = load_scenario(Path(__file__).parents[2] / "scenarios" / "office_bar.yaml")
     assert scenario.execution.replay_fps == 30.0
