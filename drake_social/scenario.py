@@ -561,23 +561,16 @@ def interest_point_count(obj: Union[Bar, LShape, Polyline]) -> int:
 
 
 def _longest_motion_bound(scenario: Scenario) -> float:
-    """An upper bound of any motion's displacement bound in the scenario's
-    configuration space (metres): the room's diagonal plus the farthest
-    object or arm point from the shoulder times the joints' turns."""
+    """The largest displacement bound of any motion in the scenario's
+    configuration space (metres): :func:`~drake_social.kinematics.displacement_bound`
+    with every interest point's lever, the room's extent and both joints'
+    full turns (the social cost's own bound never exceeds it)."""
+    from drake_social.kinematics import ArmGeometry, displacement_bound  # kinematics imports this module
+
     x_min, y_min, x_max, y_max = scenario.world.bounds
-    o = scenario.object
-    if isinstance(o, Bar):
-        points = [[0.0, -o.length / 2], [0.0, o.length / 2]]
-    elif isinstance(o, LShape):
-        points = [[0.0, -o.lengths[0] / 2], [0.0, o.lengths[0] / 2], [o.lengths[1], o.lengths[0] / 2]]
-    else:
-        points = list(o.points)
-    points += list(o.interest_points or [])
-    r = scenario.robot
-    reach = sum(r.link_lengths) + max(math.hypot(x, y) for x, y in points)
-    turn_1 = r.joint_upper[0] - r.joint_lower[0]
-    turn_2 = r.joint_upper[1] - r.joint_lower[1]
-    return math.hypot(x_max - x_min, y_max - y_min) + reach * (2 * turn_1 + turn_2)
+    lower, upper = scenario.robot.joint_lower, scenario.robot.joint_upper
+    extent = np.array([x_max - x_min, y_max - y_min, upper[0] - lower[0], upper[1] - lower[1]])
+    return float(displacement_bound(extent, ArmGeometry.from_scenario(scenario).lever()))
 
 
 def validate_scenario(scenario: Scenario, source: str = "<scenario>") -> None:
@@ -660,9 +653,8 @@ def validate_scenario(scenario: Scenario, source: str = "<scenario>") -> None:
         c.nonnegative("social.weights", s.weights)
     c.nonnegative("social.length_weight", s.length_weight)
     c.positive("social.resolution", s.resolution)
-    # The longest motion in the room must be sampleable: its displacement
-    # bound (the base across the room's diagonal, every arm and object point
-    # turning through both joints' ranges) in at most MAX_MOTION_STEPS steps.
+    # The longest motion in the room must be sampleable in at most
+    # MAX_MOTION_STEPS steps (the object and robot are checked above).
     longest = _longest_motion_bound(scenario)
     if longest > MAX_MOTION_STEPS * s.resolution:
         c.fail("social.resolution", f"must be >= {longest / MAX_MOTION_STEPS:.3g} m for this world and robot "

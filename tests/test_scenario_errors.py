@@ -150,14 +150,15 @@ def test_a_path_csv_error_names_the_line_and_column(tmp_path, tiny_scenario):
 
 def test_a_resolution_too_fine_for_the_room_names_the_least_allowed():
     """Every motion's social cost is sampled in at most MAX_MOTION_STEPS steps:
-    the least resolution is the longest displacement bound in the room (by
-    hand for tiny: its 8 x 5 m diagonal plus, for the arm and bar reaching
-    0.6 + 0.5 + 0.75 m, psi1's 2 pi turn twice and psi2's once) over that."""
+    the least resolution is the longest displacement bound in the room over
+    that. By hand for tiny: its 8 x 5 m diagonal, the elbow 0.6 m from the
+    shoulder turning 2 pi with psi1, and the bar's ends (0.5, +-0.75) m from
+    the elbow turning 4 pi with psi1 + psi2."""
     import math
 
     from drake_social.limits import MAX_MOTION_STEPS
 
-    longest = math.hypot(8.0, 5.0) + (0.6 + 0.5 + 0.75) * (2 * 2 * math.pi + 2 * math.pi)
+    longest = math.hypot(8.0, 5.0) + 0.6 * 2 * math.pi + math.hypot(0.5, 0.75) * 4 * math.pi
     least = longest / MAX_MOTION_STEPS
     assert _message(TINY, ["social: {resolution: 0.000001}"]) == (
         f"{TINY} (--set 'social: {{resolution: 0.000001}}'): social.resolution: must be >= {least:.3g} m for this "

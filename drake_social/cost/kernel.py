@@ -259,9 +259,9 @@ def msc_sums(
         steps[e] = max(1, int(math.ceil(span / resolution - 1e-9)))
         n_max = max(n_max, steps[e])
     xs = np.empty((k_count, n_max + 1))
+    ys = np.empty((k_count, n_max + 1))
     g_buf = np.empty(256)  # exponents, then AGF values, of the flat run
     w_buf = np.empty(256)  # the weight of the step from each sample to the next (0: none)
-    ys = np.empty((k_count, n_max + 1))
     for e in range(e_count):
         d0, d1 = q_b[e, 0] - q_a[e, 0], q_b[e, 1] - q_a[e, 1]
         d2, d3 = q_b[e, 2] - q_a[e, 2], q_b[e, 3] - q_a[e, 3]

@@ -215,11 +215,10 @@ class SocialCost:
             return out[0] if single else out
         dq = q_b - q_a
         span = displacement_bound(dq, self._lever)
-        interpolation_segments(span, self.resolution)  # every motion can be sampled
+        n = interpolation_segments(span, self.resolution)  # raises for a motion that cannot be sampled
         relevant, t0, t1 = self._window(q_a, q_b, span)
         relevant &= (length > 0)[:, None]
         if relevant.any():
-            n = interpolation_segments(span, self.resolution)
             out += self._integrate(q_a, dq, n, relevant, t0, t1) * (length / n)
         return out[0] if single else out
 
