@@ -371,22 +371,38 @@ def _add_simulate(subparsers) -> None:
                         "segment) or paper (independent base P-control and arm trajectory, the paper's); "
                         "default: the scenario's execution.execution")
     p.add_argument("--path", type=Path, metavar="CSV",
-                   help="follow this path (a path.csv of 'drake-social plan': header x,y,psi1,psi2) "
-                        "instead of planning")
+                   help="follow this path (a path.csv of 'drake-social plan': header x,y,psi1,psi2, from the "
+                        "scenario's start to its goal, at most 10,000 rows; every waypoint and segment is checked "
+                        "with --checker before anything runs) instead of planning; --algorithm, --iterations and "
+                        "--seed are then refused")
     _add_planner_arguments(p)
     p.add_argument("--no-replay", action="store_true", help="do not record nor write replay.html (faster)")
     _add_output_arguments(p)
     p.set_defaults(run=_run_simulate)
 
 
-def read_path_csv(path: Path, scenario: Scenario) -> np.ndarray:
-    """Reads a ``path.csv`` (header ``x,y,psi1,psi2``) for ``scenario``.
+def read_path_csv(path: Path, scenario: Scenario, checker=None) -> np.ndarray:
+    """Reads a ``path.csv`` (header ``x,y,psi1,psi2``) for ``scenario`` and
+    checks it as every path to execute is checked
+    (:func:`drake_social.waypoints.check_waypoints`).
+
+    Args:
+        path: the CSV file.
+        scenario: the scenario the path is for.
+        checker: the validity checker of the run; None = the exact planar checker.
 
     Raises:
-        ScenarioError: the file is missing or malformed, a value is not
-            finite, or its first and last rows are not the scenario's start
-            and goal (to 1e-9); the message names the file and the row.
+        ScenarioError: the file is missing or malformed, has fewer than 2 or
+            more than :data:`~drake_social.limits.MAX_WAYPOINTS` rows (refused
+            at the first row too many), a value is not finite, a waypoint is
+            outside the room or the joint limits or in collision, a segment
+            collides, or its first and last rows are not the scenario's start
+            and goal (to ``waypoints.ENDPOINT_TOLERANCE``); the message names
+            the file and the line.
     """
+    from drake_social.limits import MAX_WAYPOINTS
+    from drake_social.waypoints import check_waypoints
+
     if path.is_dir():
         raise ScenarioError(f"{path}: is a directory, not a path file (--path)")
     try:
@@ -398,9 +414,13 @@ def read_path_csv(path: Path, scenario: Scenario) -> np.ndarray:
     if not lines or lines[0].replace(" ", "") != "x,y,psi1,psi2":
         raise ScenarioError(f"{path}: line 1: the header must be 'x,y,psi1,psi2', got {lines[0] if lines else ''!r}")
     rows = []
+    numbers = []  # the file line of each row
     for i, line in enumerate(lines[1:], start=2):
         if not line.strip():
             continue
+        if len(rows) == MAX_WAYPOINTS:
+            raise ScenarioError(f"{path}: line {i}: more than {MAX_WAYPOINTS:,} waypoints; a path may have at most "
+                                f"{MAX_WAYPOINTS:,} (drake_social.limits.MAX_WAYPOINTS) (--path)")
         cells = line.split(",")
         if len(cells) != 4:
             raise ScenarioError(f"{path}: line {i}: needs 4 numbers x,y,psi1,psi2, got {len(cells)} values: {line!r}")
@@ -415,14 +435,14 @@ def read_path_csv(path: Path, scenario: Scenario) -> np.ndarray:
                                     f"(--path)")
             values.append(value)
         rows.append(values)
+        numbers.append(i)
     if len(rows) < 2:
         raise ScenarioError(f"{path}: needs at least 2 waypoints (start and goal), got {len(rows)}")
-    waypoints = np.array(rows)
-    for name, row, q in (("start", 0, scenario.start), ("goal", -1, scenario.goal)):
-        if not np.allclose(waypoints[row], q, rtol=0, atol=1e-9):
-            raise ScenarioError(f"{path}: the {'first' if row == 0 else 'last'} waypoint "
-                                f"{waypoints[row].tolist()} is not the scenario's {name} {list(q)}")
-    return waypoints
+    if checker is None:
+        from drake_social.model.checker import make_checker
+
+        checker = make_checker(scenario, "planar")
+    return check_waypoints(scenario, np.array(rows), checker, source=f"{path} (--path)", lines=numbers)
 
 
 def _write_executed_csv(path: Path, run) -> None:
@@ -436,17 +456,22 @@ def _run_simulate(args: argparse.Namespace) -> int:
     from drake_social.sim.run import simulate
     from drake_social.viz.tracking import tracking_figure
 
+    planning_only = [f"--{name}" for name in ("algorithm", "iterations", "seed") if getattr(args, name) is not None]
+    if args.path is not None and planning_only:
+        raise ScenarioError(f"{' and '.join(planning_only)}: only for planning; with --path {args.path} nothing is "
+                            f"planned (the path is executed as given): leave {'it' if len(planning_only) == 1 else 'them'}"
+                            " out, or leave out --path to plan")
     scenario = load_with_overrides(args.scenario, args.set)
-    if args.iterations is not None or args.algorithm is not None or args.seed is not None:
+    if planning_only:
         import copy
 
         scenario = copy.deepcopy(scenario)
         scenario.planner.iterations = args.iterations or scenario.planner.iterations
         scenario.planner.algorithm = args.algorithm or scenario.planner.algorithm
         scenario.random_seed = scenario.random_seed if args.seed is None else args.seed
-    waypoints = read_path_csv(args.path, scenario) if args.path is not None else None
     out = args.out if args.out is not None else _default_out(args.scenario)
     checker = _make_checker(scenario, args.checker, str(args.scenario))
+    waypoints = read_path_csv(args.path, scenario, checker) if args.path is not None else None
     meshcat = None
     if not args.no_replay:
         from drake_social.sim.replay import make_meshcat

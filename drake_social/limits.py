@@ -10,3 +10,10 @@ changes (it hashes this file with the kernel sources). No imports.
 #: ``validate_scenario`` refuses a resolution that a motion in the room could
 #: need more steps of.
 MAX_MOTION_STEPS = 1_000_000
+
+#: The most waypoints a path to execute may have (``simulate --path``, the
+#: ``waypoints`` of ``simulate`` and ``build_diagram``). The sequencer moves
+#: on at most once per control period and stops at every waypoint of a
+#: synchronized run, so even 10,000 waypoints take minutes to execute; the
+#: analysis of a run grows with the path's length.
+MAX_WAYPOINTS = 10_000

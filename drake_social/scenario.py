@@ -639,6 +639,9 @@ def validate_scenario(scenario: Scenario, source: str = "<scenario>") -> None:
                     f"psi{j + 1} = {q[2 + j]} is outside the joint range "
                     f"[{r.joint_lower[j]}, {r.joint_upper[j]}]",
                 )
+    if np.array_equal(np.asarray(scenario.start, float), np.asarray(scenario.goal, float)):
+        c.fail("goal", f"must differ from start (both are {list(scenario.goal)}): a transport from a "
+                       "configuration to itself has nothing to plan or execute")
 
     s = scenario.social
     c.positive("social.sigma_h", s.sigma_h)
@@ -701,5 +704,14 @@ def validate_scenario(scenario: Scenario, source: str = "<scenario>") -> None:
     if e.plant_time_step > e.control_period:
         c.fail("execution.plant_time_step",
                f"must be <= execution.control_period {e.control_period}, got {e.plant_time_step}")
+    if e.control_period >= e.time_limit:
+        c.fail("execution.control_period",
+               f"must be < execution.time_limit {e.time_limit} (the sequencer decides once per control period: "
+               f"a run must last several), got {e.control_period}")
+    if e.kp * e.control_period >= 2.0:
+        c.fail("execution.kp",
+               f"execution.kp * execution.control_period must be < 2 (the base's sampled P-controller "
+               f"multiplies its error by 1 - kp * control_period each period and converges only then), got "
+               f"{e.kp} * {e.control_period} = {e.kp * e.control_period:.6g}")
     if scenario.random_seed < 0:
         c.fail("random_seed", f"must be >= 0, got {scenario.random_seed}")

@@ -38,6 +38,7 @@ import numpy as np
 from pydrake.systems.framework import BasicVector, Context, Diagram, DiagramBuilder, LeafSystem
 from pydrake.systems.primitives import MatrixGain
 
+from drake_social.arguments import require_execution_options
 from drake_social.scenario import ExecutionOptions
 
 __all__ = [
@@ -150,6 +151,7 @@ class HolonomicPController(LeafSystem):
     @classmethod
     def from_options(cls, execution_options: ExecutionOptions, feedforward: bool = False) -> "HolonomicPController":
         """A controller with the gain and limits of a scenario's ``execution`` section."""
+        require_execution_options(execution_options, "HolonomicPController.from_options")
         return cls(
             kp=execution_options.kp,
             max_base_speed=execution_options.max_base_speed,

@@ -30,11 +30,12 @@ from pydrake.common.value import AbstractValue
 from pydrake.systems.framework import Context, LeafSystem, State
 from pydrake.trajectories import PiecewisePolynomial
 
+from drake_social.arguments import require_checker, require_choice, require_int, require_scenario
 from drake_social.kinematics import cumulative_distance
 from drake_social.planning.result import PlannerResult
 from drake_social.planning.validity import ValidityChecker
 from drake_social.planning.variants import plan
-from drake_social.scenario import Scenario
+from drake_social.scenario import ALGORITHMS, MAX_ITERATIONS, Scenario
 
 __all__ = ["PlannerSystem", "path_parameter", "waypoint_trajectory"]
 
@@ -84,6 +85,9 @@ class PlannerSystem(LeafSystem):
         iterations: K; None = ``scenario.planner.iterations``.
         seed: the planner's seed; None = ``scenario.random_seed``.
 
+    Raises:
+        TypeError, ValueError: an argument of the wrong kind or value (named).
+
     The planning itself (which may take seconds) happens in the
     initialization event, never in an output calculation. An output
     evaluated before initialization raises a ``RuntimeError`` saying so.
@@ -101,6 +105,11 @@ class PlannerSystem(LeafSystem):
         seed: int | None = None,
     ):
         super().__init__()
+        require_scenario(scenario, "PlannerSystem")
+        require_checker(checker, "PlannerSystem", optional=True)
+        require_choice(algorithm, "PlannerSystem", "algorithm", ALGORITHMS, optional=True)
+        require_int(iterations, "PlannerSystem", "iterations", minimum=1, maximum=MAX_ITERATIONS, optional=True)
+        require_int(seed, "PlannerSystem", "seed", minimum=0, optional=True)
         if checker is None:
             from drake_social.model.checker import make_checker
 

@@ -53,6 +53,7 @@ import ruckig
 from pydrake.common.value import AbstractValue
 from pydrake.systems.framework import EventStatus, BasicVector, Context, LeafSystem, State
 
+from drake_social.arguments import require_execution_options
 from drake_social.scenario import ExecutionOptions
 
 __all__ = [
@@ -351,6 +352,20 @@ class RuckigTrajectorySource(LeafSystem):
         output.SetAtIndex(0, 1.0 if context.get_time() - segment.t0 >= segment.duration else 0.0)
 
 
+def _finite_vector(value, n: int, who: str, argument: str, layout: str) -> np.ndarray:
+    """``value`` as a finite (n,) float array (never reshaped), or a TypeError/ValueError naming it."""
+    try:
+        a = np.asarray(value)
+    except (TypeError, ValueError) as e:
+        raise ValueError(f"{who}: {argument} must be {n} finite numbers {layout} ({e})") from None
+    if a.dtype.kind not in "iuf":
+        raise TypeError(f"{who}: {argument} must be {n} finite numbers {layout}, got {type(value).__name__} "
+                        f"{value!r:.60}")
+    if a.shape != (n,) or not np.all(np.isfinite(a)):
+        raise ValueError(f"{who}: {argument} must be {n} finite numbers {layout}, got shape {a.shape}: {value!r:.80}")
+    return np.array(a, float)
+
+
 def arm_source_from_options(execution_options: ExecutionOptions, initial_arm: Sequence[float]) -> RuckigTrajectorySource:
     """The arm's reference (2 DoFs ``[psi1, psi2]``, radians) with the scenario's arm limits.
 
@@ -358,8 +373,9 @@ def arm_source_from_options(execution_options: ExecutionOptions, initial_arm: Se
         execution_options: a scenario's ``execution`` section.
         initial_arm: (2,) initial joint angles, radians.
     """
+    require_execution_options(execution_options, "arm_source_from_options")
     return RuckigTrajectorySource(
-        initial_position=initial_arm,
+        initial_position=_finite_vector(initial_arm, 2, "arm_source_from_options", "initial_arm", "[psi1, psi2]"),
         max_velocity=execution_options.arm_max_velocity,
         max_acceleration=execution_options.arm_max_acceleration,
         max_jerk=execution_options.arm_max_jerk,
@@ -382,9 +398,11 @@ def reference_source_from_options(
         execution_options: a scenario's ``execution`` section.
         initial_q: (4,) initial configuration (metres, radians).
     """
+    require_execution_options(execution_options, "reference_source_from_options")
     e = execution_options
     return RuckigTrajectorySource(
-        initial_position=initial_q,
+        initial_position=_finite_vector(initial_q, 4, "reference_source_from_options", "initial_q",
+                                        "[x, y, psi1, psi2]"),
         max_velocity=[e.max_base_speed, e.max_base_speed, *e.arm_max_velocity],
         max_acceleration=[e.max_base_acceleration, e.max_base_acceleration, *e.arm_max_acceleration],
         max_jerk=[e.max_base_jerk, e.max_base_jerk, *e.arm_max_jerk],

@@ -45,6 +45,7 @@ import numpy as np
 from pydrake.common.value import AbstractValue
 from pydrake.systems.framework import EventStatus, BasicVector, Context, DiscreteValues, LeafSystem
 
+from drake_social.arguments import require_execution_options
 from drake_social.scenario import ExecutionOptions
 
 __all__ = ["WaypointSequencer"]
@@ -137,6 +138,7 @@ class WaypointSequencer(LeafSystem):
         wait_for_reference: bool = False,
     ) -> "WaypointSequencer":
         """A sequencer with the tolerances and period of a scenario's ``execution`` section."""
+        require_execution_options(execution_options, "WaypointSequencer.from_options")
         return cls(
             waypoints,
             base_tolerance=execution_options.base_tolerance,

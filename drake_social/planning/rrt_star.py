@@ -40,6 +40,7 @@ from typing import Callable
 
 import numpy as np
 
+from drake_social.arguments import require_callable, require_checker, require_instance
 from drake_social.planning.objective import Objective
 from drake_social.planning.result import PlannerResult, PlanningInputError
 from drake_social.planning.sampling import EllipseSampler, transverse_diameter
@@ -269,6 +270,7 @@ class RrtStar:
         options: RrtStarOptions = RrtStarOptions(),
         name: str = "rrt_star",
     ):
+        require_instance(options, RrtStarOptions, "RrtStar", "options", "an RrtStarOptions")
         if not 1 <= options.iterations <= MAX_ITERATIONS:
             raise ValueError(f"planner.iterations must be in [1, {MAX_ITERATIONS}], got {options.iterations}")
         if options.near_radius_mode not in NEAR_RADIUS_MODES:
@@ -281,6 +283,10 @@ class RrtStar:
             raise ValueError("planning_range and near_radius must be > 0")
         if not 0 <= options.goal_bias < 1:
             raise ValueError(f"goal_bias must be in [0, 1), got {options.goal_bias}")
+        require_instance(space, ConfigurationSpace, "RrtStar", "space", "a ConfigurationSpace")
+        require_checker(checker, "RrtStar")
+        require_instance(objective, Objective, "RrtStar", "objective",
+                         "an Objective (PathLengthObjective or SocialObjective)")
         if options.informed:
             transverse_diameter(options.informed_mode, 1.0, 1.0, objective)  # validates the mode
             if options.informed_mode == "admissible" and not np.isfinite(objective.xy_length_bound(1.0)):
@@ -307,6 +313,9 @@ class RrtStar:
                 )
             if not self.checker.is_valid(q):
                 raise PlanningInputError(f"{label} configuration {q.tolist()} is in collision")
+        if np.array_equal(start, goal):
+            raise PlanningInputError(f"start and goal are the same configuration {start.tolist()}: "
+                                     "nothing to plan (give a goal different from the start)")
 
     def solve(
         self,
@@ -333,8 +342,14 @@ class RrtStar:
         """
         t0 = time.perf_counter()
         opt = self.options
-        start = np.asarray(start, dtype=float)
-        goal = np.asarray(goal, dtype=float)
+        require_instance(rng, np.random.Generator, "RrtStar.solve", "rng",
+                         "a numpy.random.Generator (numpy.random.default_rng(seed))")
+        require_callable(progress, "RrtStar.solve", "progress")
+        try:
+            start = np.asarray(start, dtype=float)
+            goal = np.asarray(goal, dtype=float)
+        except (TypeError, ValueError) as e:
+            raise PlanningInputError(f"start and goal must be 4 finite numbers each ({e})") from None
         self._check_endpoints(start, goal)
         space, checker, objective = self.space, self.checker, self.objective
 

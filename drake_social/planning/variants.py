@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from drake_social.arguments import require_callable, require_checker, require_choice, require_int, require_scenario
 from drake_social.cost.social import SocialCost
 from drake_social.kinematics import config_distance
 from drake_social.planning.objective import Objective, PathLengthObjective, SocialObjective
@@ -49,7 +50,14 @@ def make_objective(scenario, algorithm: str) -> Objective:
 
 
 def make_planner(scenario, checker: ValidityChecker, algorithm: str | None = None) -> RrtStar:
-    """An :class:`RrtStar` configured as ``algorithm`` (default: the scenario's)."""
+    """An :class:`RrtStar` configured as ``algorithm`` (default: the scenario's).
+
+    Raises:
+        TypeError, ValueError: an argument is not what is allowed (named).
+    """
+    require_scenario(scenario, "make_planner")
+    require_checker(checker, "make_planner")
+    require_choice(algorithm, "make_planner", "algorithm", ALGORITHMS, optional=True)
     algorithm = algorithm or scenario.planner.algorithm
     objective = make_objective(scenario, algorithm)
     options = RrtStarOptions.from_scenario(scenario.planner, informed=algorithm.startswith("informed"))
@@ -99,10 +107,29 @@ def plan(
         seed: overrides ``scenario.random_seed``; the planner's generator is
             ``numpy.random.default_rng(seed)``.
         progress: optional ``progress(iteration, best_cost)`` callback.
+
+    Raises:
+        TypeError: an argument of the wrong kind (a checker's name instead
+            of a checker, a file name instead of a Scenario, ...), named.
+        ValueError: an unknown algorithm or a negative seed.
+        ScenarioError: iterations outside [1, MAX_ITERATIONS].
+        PlanningInputError: the start or goal is unusable (from the planner).
     """
     import copy
 
+    require_scenario(scenario, "plan")
+    require_checker(checker, "plan")
+    require_choice(algorithm, "plan", "algorithm", ALGORITHMS, optional=True)
+    require_int(seed, "plan", "seed", minimum=0, optional=True)
+    require_callable(progress, "plan", "progress")
     if iterations is not None:
+        try:
+            if isinstance(iterations, bool) or (isinstance(iterations, float) and not iterations.is_integer()):
+                raise TypeError
+            iterations = int(iterations)
+        except (TypeError, ValueError, OverflowError):
+            raise TypeError(f"plan: iterations must be an integer in [1, {MAX_ITERATIONS}] or None, "
+                            f"got {type(iterations).__name__} {iterations!r:.60}") from None
         if not 1 <= int(iterations) <= MAX_ITERATIONS:
             raise ScenarioError(f"planner.iterations: must be in [1, {MAX_ITERATIONS}], got {iterations}")
         scenario = copy.deepcopy(scenario)

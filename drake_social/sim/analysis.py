@@ -200,21 +200,33 @@ def point_deviation(
     return out
 
 
-def config_deviation(planned: np.ndarray, executed: np.ndarray) -> float:
+def config_deviation(planned: np.ndarray, executed: np.ndarray, block: int = 1 << 16) -> float:
     """Largest Euclidean configuration-space distance (metres and radians
     mixed, as the planner's plain norm) of an executed configuration from the
-    polyline through the planned waypoints; exact, point to segment."""
+    polyline through the planned waypoints; exact, point to segment.
+
+    The (executed, segment) pairs are visited in blocks of at most ``block``
+    pairs, so memory stays a few megabytes whatever the lengths (each pair's
+    arithmetic is the same in any block, so the result does not depend on it).
+    """
     p = np.asarray(planned, float).reshape(-1, 4)
     x = np.asarray(executed, float).reshape(-1, 4)
+    if len(x) == 0:
+        return 0.0
     if len(p) == 1:
-        return float(np.max(np.linalg.norm(x - p[0], axis=1))) if len(x) else 0.0
+        return float(np.max(np.linalg.norm(x - p[0], axis=1)))
     a, d = p[:-1], np.diff(p, axis=0)  # (S, 4)
     dd = np.einsum("sk,sk->s", d, d)
+    safe = np.where(dd > 0, dd, 1.0)
+    columns = min(len(a), max(1, int(block)))
+    rows = max(1, int(block) // columns)
     best = np.full(len(x), np.inf)
-    for start in range(0, len(x), 2048):  # bounded memory: (chunk, S, 4)
-        xc = x[start:start + 2048, None, :]
-        t = np.einsum("tsk,sk->ts", xc - a, d) / np.where(dd > 0, dd, 1.0)
-        t = np.clip(np.where(dd > 0, t, 0.0), 0.0, 1.0)
-        dist = np.linalg.norm(xc - (a + t[..., None] * d), axis=-1)
-        best[start:start + 2048] = dist.min(axis=1)
-    return float(best.max()) if len(best) else 0.0
+    for s0 in range(0, len(a), columns):
+        a_s, d_s, dd_s, safe_s = a[s0:s0 + columns], d[s0:s0 + columns], dd[s0:s0 + columns], safe[s0:s0 + columns]
+        for t0 in range(0, len(x), rows):
+            xc = x[t0:t0 + rows, None, :]
+            t = np.einsum("tsk,sk->ts", xc - a_s, d_s) / safe_s
+            t = np.clip(np.where(dd_s > 0, t, 0.0), 0.0, 1.0)
+            dist = np.linalg.norm(xc - (a_s + t[..., None] * d_s), axis=-1)
+            np.minimum(best[t0:t0 + rows], dist.min(axis=1), out=best[t0:t0 + rows])
+    return float(best.max())

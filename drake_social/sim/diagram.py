@@ -71,6 +71,7 @@ from pydrake.systems.primitives import (
 )
 from pydrake.systems.rendering import MultibodyPositionToGeometryPose
 
+from drake_social.arguments import require_checker, require_choice, require_instance, require_scenario
 from drake_social.control import (
     HolonomicPController,
     MecanumDrive,
@@ -82,8 +83,9 @@ from drake_social.control import (
 from drake_social.model.plant import ACTUATED_JOINTS, add_environment, add_robot
 from drake_social.planning.validity import ValidityChecker
 from drake_social.scenario import EXECUTIONS, SIM_MODES, Scenario
+from drake_social.waypoints import check_waypoints
 
-__all__ = ["TransportDiagram", "build_diagram", "dynamic_gains"]
+__all__ = ["DiagramArguments", "TransportDiagram", "build_diagram", "check_diagram_arguments", "dynamic_gains"]
 
 
 @dc.dataclass
@@ -165,11 +167,6 @@ def _populate(plant: MultibodyPlant, scenario: Scenario) -> ModelInstanceIndex:
     return robot
 
 
-def _check_choice(name: str, value: str, allowed) -> None:
-    if value not in allowed:
-        raise ValueError(f"unknown {name} {value!r}; allowed: {', '.join(allowed)}")
-
-
 def build_diagram(
     scenario: Scenario,
     *,
@@ -186,26 +183,83 @@ def build_diagram(
             limits, tolerances and periods).
         mode: ``"kinematic"`` or ``"dynamic"``; None = ``scenario.execution.mode``.
         execution: ``"synchronized"`` or ``"paper"``; None = ``scenario.execution.execution``.
-        waypoints: (N, 4) configurations to follow, from the start; None =
-            plan them with a ``planner`` (:class:`PlannerSystem`) at
+        waypoints: (N, 4) configurations to follow from the scenario's start
+            to its goal, checked first (:func:`~drake_social.waypoints.check_waypoints`);
+            None = plan them with a ``planner`` (:class:`PlannerSystem`) at
             initialization.
-        checker: the planner's validity checker (None = its default).
+        checker: the planner's validity checker, which also checks given
+            waypoints (None = the exact planar checker).
         meshcat: when given, a ``MeshcatVisualizer`` draws the scene to it at
             ``execution.replay_fps``.
 
     Returns:
         The :class:`TransportDiagram`.
+
+    Raises:
+        TypeError: an argument of the wrong kind (named).
+        ValueError: an unknown mode or execution.
+        ScenarioError: ``waypoints`` that must not be executed
+            (:func:`~drake_social.waypoints.check_waypoints`: shape, limits,
+            start and goal, collisions).
     """
+    checked = check_diagram_arguments(scenario, mode=mode, execution=execution, waypoints=waypoints, checker=checker,
+                                      meshcat=meshcat, who="build_diagram")
+    return _build(scenario, checked.mode, checked.execution, checked.waypoints, checker, meshcat)
+
+
+@dc.dataclass(frozen=True)
+class DiagramArguments:
+    """:func:`check_diagram_arguments`' verdict: the mode and execution in
+    force and the checked waypoints (None: planned)."""
+
+    mode: str
+    execution: str
+    waypoints: np.ndarray | None
+
+
+def check_diagram_arguments(
+    scenario: Scenario,
+    *,
+    mode: str | None,
+    execution: str | None,
+    waypoints: np.ndarray | None,
+    checker: ValidityChecker | None,
+    meshcat: Meshcat | None,
+    who: str,
+) -> DiagramArguments:
+    """Checks :func:`build_diagram`'s arguments (also :func:`~drake_social.sim.run.simulate`'s).
+
+    The waypoints are checked with ``checker``, or the exact planar checker
+    when it is None (the planner's default: the checker of the run).
+
+    Args:
+        who: the public function, named in the errors.
+
+    Raises:
+        See :func:`build_diagram`.
+    """
+    require_scenario(scenario, who)
+    require_choice(mode, who, "mode", SIM_MODES, optional=True)
+    require_choice(execution, who, "execution", EXECUTIONS, optional=True)
+    require_checker(checker, who, optional=True)
+    require_instance(meshcat, Meshcat, who, "meshcat", "a pydrake.geometry.Meshcat", optional=True)
+    if waypoints is not None:
+        if checker is None:
+            from drake_social.model.checker import make_checker
+
+            checker = make_checker(scenario, "planar")
+        waypoints = check_waypoints(scenario, waypoints, checker, source=f"{who}: waypoints")
+    return DiagramArguments(mode or scenario.execution.mode, execution or scenario.execution.execution, waypoints)
+
+
+def _build(
+    scenario: Scenario, mode: str, execution: str, waypoints: np.ndarray | None, checker: ValidityChecker | None,
+    meshcat: Meshcat | None,
+) -> TransportDiagram:
+    """:func:`build_diagram` with its arguments checked."""
     opts = scenario.execution
-    mode = mode or opts.mode
-    execution = execution or opts.execution
-    _check_choice("mode", mode, SIM_MODES)
-    _check_choice("execution", execution, EXECUTIONS)
     start = np.asarray(scenario.start, float)
     if waypoints is not None:
-        waypoints = np.asarray(waypoints, float).reshape(-1, 4)
-        if len(waypoints) == 0:
-            raise ValueError("waypoints: empty; give at least one configuration (N, 4)")
         start = waypoints[0].copy()
     synchronized = execution == "synchronized"
     period = float(opts.control_period)

@@ -31,13 +31,21 @@ import numpy as np
 from pydrake.geometry import Meshcat
 from pydrake.systems.analysis import InitializeParams, Simulator
 
+from drake_social.arguments import (
+    require_callable,
+    require_checker,
+    require_instance,
+    require_number,
+    require_scenario,
+)
 from drake_social.cost.social import SocialCost
 from drake_social.kinematics import ArmGeometry
 from drake_social.planning.result import PlannerResult
 from drake_social.planning.validity import ValidityChecker
-from drake_social.scenario import Scenario
+from drake_social.scenario import Scenario, ScenarioError
 from drake_social.sim.analysis import config_deviation, densify, point_deviation
-from drake_social.sim.diagram import TransportDiagram, build_diagram
+from drake_social.sim.diagram import TransportDiagram, _build, check_diagram_arguments
+from drake_social.waypoints import waypoint_array
 
 __all__ = ["ExecutionReport", "SimulationResult", "analyze_execution", "simulate"]
 
@@ -178,9 +186,18 @@ def analyze_execution(
             None = Drake's (:class:`~drake_social.model.checker.SceneGraphChecker`),
             independent of the planar checker that planned. The minimum
             clearance is the exact planar checker's.
+
+    Raises:
+        TypeError: an argument of the wrong kind (named).
+        ScenarioError: ``waypoints`` not an (N, 4) array with 2 <= N <=
+            MAX_WAYPOINTS; ``times`` and ``q`` not (T,) and (T, 4) finite.
     """
     from drake_social.model.checker import make_checker
 
+    require_scenario(scenario, "analyze_execution")
+    require_checker(checker, "analyze_execution", optional=True)
+    waypoints = waypoint_array(waypoints, "analyze_execution: waypoints")
+    times, q = _trajectory(times, q, "analyze_execution")
     if checker is None:
         checker = make_checker(scenario, "drake")
     # Clearances from the exact planar checker: Drake's cylinder-box distance
@@ -188,8 +205,7 @@ def analyze_execution(
     planar = make_checker(scenario, "planar")
     geometry = ArmGeometry.from_scenario(scenario)
     social = SocialCost.from_scenario(scenario)
-    wp = np.asarray(waypoints, float).reshape(-1, 4)
-    q = np.asarray(q, float).reshape(-1, 4)
+    wp = waypoints
     planned = float(social.motion_cost(wp[:-1], wp[1:]).sum()) if len(wp) > 1 else 0.0
     executed = float(social.motion_cost(q[:-1], q[1:]).sum()) if len(q) > 1 else 0.0
 
@@ -210,6 +226,26 @@ def analyze_execution(
         checked_configurations=int(len(dense)),
         collision_resolution=resolution,
     )
+
+
+def _trajectory(times, q, who: str) -> tuple[np.ndarray, np.ndarray]:
+    """``times`` (T,) and ``q`` (T, 4) as finite float arrays, or the error naming them."""
+    arrays = []
+    for name, value, shape in (("times", times, "(T,)"), ("q", q, "(T, 4)")):
+        try:
+            a = np.asarray(value)
+        except (TypeError, ValueError) as e:
+            raise ScenarioError(f"{who}: {name}: must be a {shape} array of real numbers ({e})") from None
+        if a.dtype.kind not in "iuf":
+            raise TypeError(f"{who}: {name}: must be a {shape} array of real numbers, got an array of {a.dtype}")
+        if a.ndim != (1 if name == "times" else 2) or (name == "q" and a.shape[1] != 4):
+            raise ScenarioError(f"{who}: {name}: must be a {shape} array, got shape {a.shape}")
+        if not np.all(np.isfinite(a)):
+            raise ScenarioError(f"{who}: {name}: must hold finite numbers only")
+        arrays.append(np.asarray(a, float))
+    if len(arrays[0]) != len(arrays[1]):
+        raise ScenarioError(f"{who}: times and q must have the same T rows, got {len(arrays[0])} and {len(arrays[1])}")
+    return arrays[0], arrays[1]
 
 
 def simulate(
@@ -245,13 +281,21 @@ def simulate(
         found or the goal was not reached in time (``message`` says which).
 
     Raises:
+        TypeError: an argument of the wrong kind (named).
+        ValueError: an unknown mode or execution, a time limit <= 0.
+        ScenarioError: ``waypoints`` that must not be executed
+            (:func:`~drake_social.waypoints.check_waypoints`: shape, limits,
+            start and goal, collisions).
         PlanningInputError: the start or goal is unusable (from the planner).
     """
-    built = build_diagram(scenario, mode=mode, execution=execution, waypoints=waypoints, checker=checker,
-                          meshcat=meshcat)
+    checked = check_diagram_arguments(scenario, mode=mode, execution=execution, waypoints=waypoints,
+                                      checker=checker, meshcat=meshcat, who="simulate")
+    require_number(time_limit, "simulate", "time_limit", positive=True, optional=True, unit="seconds")
+    require_instance(analyze, bool, "simulate", "analyze", "True or False")
+    require_checker(analysis_checker, "simulate", "analysis_checker", optional=True)
+    require_callable(progress, "simulate", "progress")
     limit = float(scenario.execution.time_limit if time_limit is None else time_limit)
-    if not limit > 0:
-        raise ValueError(f"time_limit must be > 0 seconds, got {limit}")
+    built = _build(scenario, checked.mode, checked.execution, checked.waypoints, checker, meshcat)
     root = built.diagram.CreateDefaultContext()
     if built.visualizer is not None:
         from drake_social.sim.replay import start_recording

@@ -212,13 +212,14 @@ def test_plan_accepts_exactly_the_allowed_iterations(short, monkeypatch):
         raise RuntimeError("stop here")
 
     monkeypatch.setattr(variants, "make_planner", fake_make_planner)
+    checker = GeometricChecker(short)
     for n in (1, MAX_ITERATIONS, "17"):
         with pytest.raises(RuntimeError, match="stop here"):
-            plan(short, None, iterations=n)
+            plan(short, checker, iterations=n)
     assert seen == [1, MAX_ITERATIONS, 17]
     for n in (0, MAX_ITERATIONS + 1):
         with pytest.raises(ScenarioError, match=rf"^planner.iterations: must be in \[1, {MAX_ITERATIONS}\], got {n}$"):
-            plan(short, None, iterations=n)
+            plan(short, checker, iterations=n)
     assert len(seen) == 3
 
 

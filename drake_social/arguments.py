@@ -1,0 +1,169 @@
+"""Checks of the public functions' arguments, at the door.
+
+Each helper raises a ``TypeError`` (the wrong kind of object) or a
+``ValueError`` (the right kind with a value outside what is allowed) whose
+message names the function, the argument and what is allowed, so that a
+caller never meets an ``AttributeError`` from deep inside the library. No
+Drake here: the pure-numpy core uses these too.
+
+Example::
+
+    from drake_social.arguments import require_checker, require_scenario
+
+    def plan(scenario, checker):
+        require_scenario(scenario, "plan", "scenario")
+        require_checker(checker, "plan", "checker")
+"""
+
+from __future__ import annotations
+
+import numbers
+from typing import Any
+
+from drake_social.planning.validity import ValidityChecker
+from drake_social.scenario import ExecutionOptions, Scenario
+
+__all__ = [
+    "require_callable",
+    "require_checker",
+    "require_choice",
+    "require_execution_options",
+    "require_instance",
+    "require_int",
+    "require_number",
+    "require_scenario",
+]
+
+
+def _shown(value: Any) -> str:
+    text = repr(value)
+    return f"{type(value).__name__} {text[:60] + '...' if len(text) > 60 else text}"
+
+
+def require_instance(value: Any, kind: type | tuple[type, ...], who: str, argument: str, allowed: str, *,
+                     optional: bool = False) -> None:
+    """Refuses ``value`` unless it is an instance of ``kind`` (or None when ``optional``).
+
+    Args:
+        value: the argument's value.
+        kind: the accepted type(s).
+        who: the public function or class, e.g. ``"simulate"``.
+        argument: the argument's name, e.g. ``"scenario"``.
+        allowed: what is allowed, in words (``"a Scenario (load_scenario(path))"``).
+        optional: None is allowed too.
+
+    Raises:
+        TypeError: ``<who>: <argument> must be <allowed>, got <type> <value>``.
+    """
+    if value is None and optional:
+        return
+    if not isinstance(value, kind):
+        raise TypeError(f"{who}: {argument} must be {allowed}{' or None' if optional else ''}, got {_shown(value)}")
+
+
+def require_scenario(value: Any, who: str, argument: str = "scenario") -> None:
+    """Refuses anything but a :class:`~drake_social.scenario.Scenario` (a file
+    name is told to be loaded first).
+
+    Raises:
+        TypeError: naming ``who``, ``argument`` and what was given.
+    """
+    if isinstance(value, Scenario):
+        return
+    hint = " (load the file first: drake_social.scenario.load_scenario(path))" if isinstance(value, (str, bytes)) or \
+        type(value).__name__.endswith("Path") else ""
+    raise TypeError(f"{who}: {argument} must be a drake_social.scenario.Scenario, got {_shown(value)}{hint}")
+
+
+def require_execution_options(value: Any, who: str, argument: str = "execution_options") -> None:
+    """Refuses anything but an :class:`~drake_social.scenario.ExecutionOptions`
+    (a scenario's ``execution`` section).
+
+    Raises:
+        TypeError: naming ``who``, ``argument`` and what was given.
+    """
+    require_instance(value, ExecutionOptions, who, argument,
+                     "a drake_social.scenario.ExecutionOptions (a scenario's execution section, scenario.execution)")
+
+
+def require_checker(value: Any, who: str, argument: str = "checker", *, optional: bool = False) -> None:
+    """Refuses anything but a validity checker (an object with the methods of
+    :class:`~drake_social.planning.validity.ValidityChecker`); a checker's
+    name such as ``"planar"`` is told how to build one.
+
+    Raises:
+        TypeError: naming ``who``, ``argument``, the missing methods and what was given.
+    """
+    if (value is None and optional) or isinstance(value, ValidityChecker):
+        return
+    allowed = ("a validity checker object (drake_social.model.checker.make_checker(scenario, kind), "
+               "with is_valid, are_valid, is_motion_valid, are_motions_valid and clearance)")
+    hint = ""
+    if isinstance(value, str):
+        hint = f" (a checker's name: build the checker with make_checker(scenario, {value!r}))"
+    raise TypeError(f"{who}: {argument} must be {allowed}{' or None' if optional else ''}, got {_shown(value)}{hint}")
+
+
+def require_choice(value: Any, who: str, argument: str, allowed: tuple[str, ...], *, optional: bool = False) -> None:
+    """Refuses a value that is not one of the strings ``allowed`` (None too when ``optional``).
+
+    Raises:
+        TypeError: not a string; ValueError: not one of ``allowed``.
+    """
+    if value is None and optional:
+        return
+    if not isinstance(value, str):
+        raise TypeError(f"{who}: {argument} must be one of {', '.join(allowed)}{' or None' if optional else ''}, "
+                        f"got {_shown(value)}")
+    if value not in allowed:
+        raise ValueError(f"{who}: unknown {argument} {value!r}; allowed: {', '.join(allowed)}")
+
+
+def require_number(value: Any, who: str, argument: str, *, positive: bool = False, optional: bool = False,
+                   unit: str = "") -> None:
+    """Refuses anything but a finite real number (> 0 when ``positive``).
+
+    Raises:
+        TypeError: not a real number (booleans are refused); ValueError: not
+            finite, or not > 0 when ``positive``.
+    """
+    if value is None and optional:
+        return
+    unit = f" {unit}" if unit else ""
+    what = f"a finite number{' > 0' if positive else ''}{unit}"
+    if isinstance(value, bool) or not isinstance(value, numbers.Real):
+        raise TypeError(f"{who}: {argument} must be {what}{' or None' if optional else ''}, got {_shown(value)}")
+    if not (float(value) == float(value) and abs(float(value)) != float("inf")) or (positive and not value > 0):
+        raise ValueError(f"{who}: {argument} must be {what}, got {value}")
+
+
+def require_int(value: Any, who: str, argument: str, *, minimum: int | None = None, maximum: int | None = None,
+                optional: bool = False) -> None:
+    """Refuses anything but an integer in ``[minimum, maximum]``.
+
+    Raises:
+        TypeError: not an integer (booleans and floats are refused);
+            ValueError: out of range.
+    """
+    if value is None and optional:
+        return
+    low = "" if minimum is None else f" >= {minimum}"
+    high = "" if maximum is None else f" <= {maximum:,}"
+    what = f"an integer{low}{' and' if low and high else ''}{high}"
+    if isinstance(value, bool) or not isinstance(value, numbers.Integral):
+        raise TypeError(f"{who}: {argument} must be {what}{' or None' if optional else ''}, got {_shown(value)}")
+    if (minimum is not None and value < minimum) or (maximum is not None and value > maximum):
+        raise ValueError(f"{who}: {argument} must be {what}, got {value}")
+
+
+def require_callable(value: Any, who: str, argument: str, *, optional: bool = True) -> None:
+    """Refuses a value that cannot be called (None is allowed when ``optional``).
+
+    Raises:
+        TypeError: naming ``who`` and ``argument``.
+    """
+    if value is None and optional:
+        return
+    if not callable(value):
+        raise TypeError(f"{who}: {argument} must be a callable{' or None' if optional else ''}, got {_shown(value)}")
+

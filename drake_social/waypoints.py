@@ -1,0 +1,172 @@
+"""The one check of a path given to be executed (no Drake here).
+
+A path to execute is an (N, 4) array of configurations ``[x, y, psi1,
+psi2]`` (metres, radians), 2 <= N <= :data:`~drake_social.limits.MAX_WAYPOINTS`,
+from the scenario's start to its goal. :func:`check_waypoints` refuses,
+before anything runs, a path that
+
+* is not such an array (a wrong shape is never reshaped),
+* holds a value that is not a finite number,
+* puts the base centre outside ``world.bounds`` or a joint outside
+  ``robot.joint_lower`` / ``robot.joint_upper``,
+* does not start at the scenario's start and end at its goal (each
+  coordinate within :data:`ENDPOINT_TOLERANCE`),
+* has a configuration in collision, or a straight segment between two
+  waypoints that collides (the validity checker of the run decides).
+
+The error (:class:`~drake_social.scenario.ScenarioError`) names the source
+(the file and line of a CSV, the function and argument of the API), the
+waypoint, the field and what is allowed. ``simulate --path``
+(:func:`drake_social.cli.read_path_csv`), :func:`drake_social.sim.run.simulate`
+and :func:`drake_social.sim.diagram.build_diagram` all use it.
+
+Example::
+
+    from drake_social.model.checker import make_checker
+    from drake_social.waypoints import check_waypoints
+
+    checker = make_checker(scenario, "planar")
+    path = check_waypoints(scenario, [scenario.start, scenario.goal], checker, source="my script")
+"""
+
+from __future__ import annotations
+
+from typing import Any, Sequence
+
+import numpy as np
+
+from drake_social.arguments import require_checker, require_scenario
+from drake_social.limits import MAX_WAYPOINTS
+from drake_social.planning.validity import ValidityChecker
+from drake_social.scenario import Scenario, ScenarioError
+
+__all__ = ["ENDPOINT_TOLERANCE", "FIELDS", "check_waypoints", "waypoint_array"]
+
+#: Largest difference (metres for x, y; radians for psi1, psi2) between the
+#: first waypoint and the scenario's start, and the last and its goal. The
+#: planner's paths start and end there exactly and ``path.csv`` holds them to
+#: 17 digits, so this only forgives a hand-written file's rounding.
+ENDPOINT_TOLERANCE = 1e-9
+
+#: The names of a waypoint's four values, in order.
+FIELDS = ("x", "y", "psi1", "psi2")
+
+_SHAPE = f"an (N, 4) array of rows [x, y, psi1, psi2] with 2 <= N <= {MAX_WAYPOINTS:,}"
+
+
+def waypoint_array(waypoints: Any, source: str) -> np.ndarray:
+    """``waypoints`` as a new (N, 4) float array, 2 <= N <= MAX_WAYPOINTS, refused otherwise.
+
+    Args:
+        waypoints: an array or nested sequence of real numbers.
+        source: who passed it, for the message (``"simulate: waypoints"``).
+
+    Raises:
+        TypeError: not an array of real numbers (strings, booleans, complex,
+            None, objects).
+        ScenarioError: the wrong shape (never reshaped) or number of rows.
+    """
+    if waypoints is None or isinstance(waypoints, (str, bytes)):
+        raise TypeError(f"{source}: must be {_SHAPE}, got {type(waypoints).__name__} {waypoints!r:.60}")
+    try:
+        raw = np.asarray(waypoints)
+    except (ValueError, TypeError) as e:  # ragged rows
+        raise ScenarioError(f"{source}: must be {_SHAPE}; its rows differ in length ({e})") from None
+    if raw.dtype.kind not in "iuf":
+        if raw.dtype.kind == "O":
+            kinds = sorted({type(v).__name__ for v in raw.ravel()[:1000]})
+            raise TypeError(f"{source}: must be {_SHAPE} of real numbers, got values of type {', '.join(kinds)}")
+        raise TypeError(f"{source}: must be {_SHAPE} of real numbers, got an array of {raw.dtype}")
+    if raw.ndim != 2 or raw.shape[1] != 4:
+        raise ScenarioError(f"{source}: must be {_SHAPE}, got shape {raw.shape}")
+    if not 2 <= len(raw) <= MAX_WAYPOINTS:
+        raise ScenarioError(f"{source}: must be {_SHAPE} (the start, ..., the goal; limits.MAX_WAYPOINTS), "
+                            f"got {len(raw):,} waypoints")
+    return np.array(raw, dtype=float)
+
+
+def check_waypoints(
+    scenario: Scenario,
+    waypoints: Any,
+    checker: ValidityChecker,
+    *,
+    source: str,
+    lines: Sequence[int] | None = None,
+    check_segments: bool = True,
+) -> np.ndarray:
+    """Refuses a path that must not be executed in ``scenario``; returns it as an (N, 4) float array.
+
+    Args:
+        scenario: the scenario the path is for.
+        waypoints: (N, 4) configurations ``[x, y, psi1, psi2]`` (metres, radians).
+        checker: the validity checker of the run (collisions of the
+            configurations and of the straight segments between them).
+        source: who gave the path, for the message: a file (``"path.csv
+            (--path)"``) or a function and argument (``"simulate: waypoints"``).
+        lines: the file line of each waypoint, to name it (a CSV's rows).
+        check_segments: also check every straight motion between consecutive
+            waypoints (``checker.are_motions_valid``).
+
+    Returns:
+        The waypoints as a new (N, 4) float array.
+
+    Raises:
+        TypeError: ``scenario`` or ``checker`` is not one, or the waypoints
+            are not real numbers.
+        ScenarioError: ``<source>: <waypoint>: <field>: <what is allowed>``
+            for the first waypoint (or segment) at fault; see the module
+            docstring for the rules.
+    """
+    require_scenario(scenario, "check_waypoints")
+    require_checker(checker, "check_waypoints")
+    wp = waypoint_array(waypoints, source)
+    if lines is not None and len(lines) != len(wp):
+        raise ValueError(f"check_waypoints: {len(lines)} line numbers for {len(wp)} waypoints")
+
+    def where(i: int) -> str:
+        i = int(i)
+        return f"waypoint {i}" if lines is None else f"line {lines[i]} (waypoint {i})"
+
+    def fail(i: int, message: str):
+        raise ScenarioError(f"{source}: {where(i)}: {message}")
+
+    bad = ~np.isfinite(wp)
+    if bad.any():
+        i, j = np.argwhere(bad)[0]
+        fail(i, f"{FIELDS[j]}: must be a finite number, got {wp[i, j]}")
+
+    x_min, y_min, x_max, y_max = (float(b) for b in scenario.world.bounds)
+    r = scenario.robot
+    lower = np.array([x_min, y_min, *r.joint_lower], float)
+    upper = np.array([x_max, y_max, *r.joint_upper], float)
+    where_limit = ("world.bounds", "world.bounds", "robot.joint_lower/joint_upper", "robot.joint_lower/joint_upper")
+    outside = (wp < lower) | (wp > upper)
+    if outside.any():
+        i, j = np.argwhere(outside)[0]
+        what = "the room" if j < 2 else "the joint range"
+        fail(i, f"{FIELDS[j]}: {wp[i, j]!r} is outside {what} [{lower[j]!r}, {upper[j]!r}] ({where_limit[j]})")
+
+    for row, name, ordinal in ((0, "start", "first"), (len(wp) - 1, "goal", "last")):
+        q = np.asarray(getattr(scenario, name), float)
+        if not np.all(np.abs(wp[row] - q) <= ENDPOINT_TOLERANCE):
+            fail(row, f"the {ordinal} waypoint {wp[row].tolist()} is not the scenario's {name} {q.tolist()} "
+                      f"(to within {ENDPOINT_TOLERANCE:g} per coordinate): a path runs from the scenario's start "
+                      f"to its goal; make this row the {name}, or set the scenario's {name} to it "
+                      f"(e.g. --set \"{name}: {wp[row].tolist()}\")")
+
+    kind = type(checker).__name__
+    valid = np.asarray(checker.are_valid(wp), bool).reshape(len(wp))
+    if not valid.all():
+        i = int(np.argmin(valid))
+        contacts = getattr(checker, "contacts", None)
+        touching = "; ".join(str(c) for c in contacts(wp[i])) if callable(contacts) else ""
+        fail(i, f"configuration {wp[i].tolist()} is in collision ({kind}){': ' + touching if touching else ''}; "
+                "every waypoint must be collision-free")
+    if check_segments:
+        moves = np.asarray(checker.are_motions_valid(wp[:-1], wp[1:]), bool).reshape(len(wp) - 1)
+        if not moves.all():
+            i = int(np.argmin(moves))
+            to = f"waypoint {i + 1}" if lines is None else f"line {lines[i + 1]}"
+            fail(i, f"the straight motion to {to} collides ({kind}, at planner.collision_resolution "
+                    f"{scenario.planner.collision_resolution} m); every segment must be collision-free")
+    return wp
