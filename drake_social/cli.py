@@ -451,6 +451,11 @@ def _write_executed_csv(path: Path, run) -> None:
     np.savetxt(path, table, delimiter=",", header="t,x,y,psi1,psi2,vx,vy,dpsi1,dpsi2", comments="", fmt="%.17g")
 
 
+def _listed(names: Sequence[str]) -> str:
+    """``a``, ``a and b``, ``a, b and c``."""
+    return names[0] if len(names) == 1 else f"{', '.join(names[:-1])} and {names[-1]}"
+
+
 def _run_simulate(args: argparse.Namespace) -> int:
     from drake_social.outputs import OutputSet
     from drake_social.sim.run import simulate
@@ -458,7 +463,7 @@ def _run_simulate(args: argparse.Namespace) -> int:
 
     planning_only = [f"--{name}" for name in ("algorithm", "iterations", "seed") if getattr(args, name) is not None]
     if args.path is not None and planning_only:
-        raise ScenarioError(f"{' and '.join(planning_only)}: only for planning; with --path {args.path} nothing is "
+        raise ScenarioError(f"{_listed(planning_only)}: only for planning; with --path {args.path} nothing is "
                             f"planned (the path is executed as given): leave {'it' if len(planning_only) == 1 else 'them'}"
                             " out, or leave out --path to plan")
     scenario = load_with_overrides(args.scenario, args.set)

@@ -133,7 +133,7 @@ def check_waypoints(
     bad = ~np.isfinite(wp)
     if bad.any():
         i, j = np.argwhere(bad)[0]
-        fail(i, f"{FIELDS[j]}: must be a finite number, got {wp[i, j]}")
+        fail(i, f"{FIELDS[j]}: must be a finite number, got {float(wp[i, j])!r}")
 
     x_min, y_min, x_max, y_max = (float(b) for b in scenario.world.bounds)
     r = scenario.robot
@@ -144,7 +144,8 @@ def check_waypoints(
     if outside.any():
         i, j = np.argwhere(outside)[0]
         what = "the room" if j < 2 else "the joint range"
-        fail(i, f"{FIELDS[j]}: {wp[i, j]!r} is outside {what} [{lower[j]!r}, {upper[j]!r}] ({where_limit[j]})")
+        fail(i, f"{FIELDS[j]}: {float(wp[i, j])!r} is outside {what} [{float(lower[j])!r}, {float(upper[j])!r}] "
+                f"({where_limit[j]})")
 
     for row, name, ordinal in ((0, "start", "first"), (len(wp) - 1, "goal", "last")):
         q = np.asarray(getattr(scenario, name), float)

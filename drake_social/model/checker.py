@@ -44,6 +44,7 @@ import numpy as np
 from pydrake.common import Parallelism
 from pydrake.planning import LinearDistanceAndInterpolationProvider, SceneGraphCollisionChecker
 
+from drake_social.arguments import require_choice, require_scenario
 from drake_social.kinematics import displacement_bound
 from drake_social.model.plant import ScenarioDiagram, build_robot_diagram
 from drake_social.planning.geometric import CheckerBase
@@ -304,8 +305,11 @@ def make_checker(
             bodies (:func:`check_start_goal`).
 
     Raises:
+        TypeError: ``scenario`` is not a Scenario, ``kind`` not a string.
         ValueError: an unknown ``kind``.
     """
+    require_scenario(scenario, "make_checker")
+    require_choice(kind, "make_checker", "kind", CHECKERS)
     if kind == "numpy":
         from drake_social.planning.geometric import GeometricChecker
 

@@ -200,14 +200,28 @@ def point_deviation(
     return out
 
 
+def _segment_distances(x: np.ndarray, a: np.ndarray, d: np.ndarray, dd: np.ndarray) -> np.ndarray:
+    """Distance of each point ``x`` (P, 4) from its segment ``a + t d``, t in
+    [0, 1] (P, 4 each; ``dd = |d|^2``): the clamped projection."""
+    t = np.einsum("pk,pk->p", x - a, d) / np.where(dd > 0, dd, 1.0)
+    t = np.clip(np.where(dd > 0, t, 0.0), 0.0, 1.0)
+    return np.linalg.norm(x - (a + t[:, None] * d), axis=-1)
+
+
 def config_deviation(planned: np.ndarray, executed: np.ndarray, block: int = 1 << 16) -> float:
     """Largest Euclidean configuration-space distance (metres and radians
     mixed, as the planner's plain norm) of an executed configuration from the
     polyline through the planned waypoints; exact, point to segment.
 
-    The (executed, segment) pairs are visited in blocks of at most ``block``
-    pairs, so memory stays a few megabytes whatever the lengths (each pair's
-    arithmetic is the same in any block, so the result does not depend on it).
+    Not every (configuration, segment) pair is measured: points are sampled
+    along the segments (at most ``h`` apart) into a KD-tree; the segment
+    owning a configuration's nearest sample gives an upper bound ``u`` of its
+    distance, and only segments with a sample within ``u + h / 2`` (every
+    point of a segment lies within ``h / 2`` of one of its samples) can be
+    nearer. Those pairs are measured with the point-to-segment formula, in
+    blocks of at most ``block`` pairs, so memory stays a few megabytes
+    whatever the lengths; in the worst case (every segment a candidate) it is
+    the full comparison, never more.
     """
     p = np.asarray(planned, float).reshape(-1, 4)
     x = np.asarray(executed, float).reshape(-1, 4)
@@ -217,16 +231,38 @@ def config_deviation(planned: np.ndarray, executed: np.ndarray, block: int = 1 <
         return float(np.max(np.linalg.norm(x - p[0], axis=1)))
     a, d = p[:-1], np.diff(p, axis=0)  # (S, 4)
     dd = np.einsum("sk,sk->s", d, d)
-    safe = np.where(dd > 0, dd, 1.0)
-    columns = min(len(a), max(1, int(block)))
-    rows = max(1, int(block) // columns)
-    best = np.full(len(x), np.inf)
-    for s0 in range(0, len(a), columns):
-        a_s, d_s, dd_s, safe_s = a[s0:s0 + columns], d[s0:s0 + columns], dd[s0:s0 + columns], safe[s0:s0 + columns]
-        for t0 in range(0, len(x), rows):
-            xc = x[t0:t0 + rows, None, :]
-            t = np.einsum("tsk,sk->ts", xc - a_s, d_s) / safe_s
-            t = np.clip(np.where(dd_s > 0, t, 0.0), 0.0, 1.0)
-            dist = np.linalg.norm(xc - (a_s + t[..., None] * d_s), axis=-1)
-            np.minimum(best[t0:t0 + rows], dist.min(axis=1), out=best[t0:t0 + rows])
+    length = np.sqrt(dd)
+    # Samples along the segments, about 4 per segment on average, each
+    # segment cut into n equal pieces of at most h.
+    h = max(float(length.sum()) / (4 * len(a)), 1e-12)
+    n = np.maximum(1, np.ceil(length / h)).astype(np.int64)
+    owner = np.repeat(np.arange(len(a)), n + 1)
+    frac = (np.arange(len(owner)) - np.repeat(np.cumsum(n + 1) - (n + 1), n + 1)) / np.repeat(n, n + 1)
+    samples = a[owner] + frac[:, None] * d[owner]
+    half = float(np.max(length / n)) / 2  # every segment point is this near one of its samples
+    tree = cKDTree(samples)
+    block = max(1, int(block))
+    best = np.empty(len(x))
+    for t0 in range(0, len(x), block):
+        xc = x[t0:t0 + block]
+        _, nearest = tree.query(xc)
+        s_near = owner[nearest]
+        upper = _segment_distances(xc, a[s_near], d[s_near], dd[s_near])
+        # Margin for the rounding of the samples' positions and the bound.
+        radius = upper + half + 1e-9 * (1.0 + upper + half + np.abs(xc).max(axis=1))
+        counts = np.asarray(tree.query_ball_point(xc, radius, return_length=True), np.int64)
+        local = upper.copy()
+        # Groups of configurations with at most `block` candidate samples in all (at least one configuration).
+        ends = np.cumsum(counts)
+        g0 = 0
+        while g0 < len(xc):
+            g1 = max(g0 + 1, int(np.searchsorted(ends, (ends[g0 - 1] if g0 else 0) + block, side="right")))
+            hits = tree.query_ball_point(xc[g0:g1], radius[g0:g1])
+            point = g0 + np.repeat(np.arange(g1 - g0), counts[g0:g1])
+            segment = owner[np.fromiter((i for h_ in hits for i in h_), np.int64, int(counts[g0:g1].sum()))]
+            pairs = np.unique(point * len(a) + segment)  # each (configuration, segment) once
+            i, j = pairs // len(a), pairs % len(a)
+            np.minimum.at(local, i, _segment_distances(xc[i], a[j], d[j], dd[j]))
+            g0 = g1
+        best[t0:t0 + block] = local
     return float(best.max())

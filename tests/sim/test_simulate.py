@@ -144,7 +144,7 @@ def test_subsystems_are_named(tiny_scenario, mode, execution, names):
 def test_bad_choices_are_refused(tiny_scenario):
     with pytest.raises(ValueError, match="unknown mode 'fast'"):
         build_diagram(tiny_scenario, mode="fast")
-    with pytest.raises(ValueError, match="waypoints: empty"):
+    with pytest.raises(ValueError, match=r"build_diagram: waypoints: must be an \(N, 4\) array .* got 0 waypoints"):
         build_diagram(tiny_scenario, waypoints=np.zeros((0, 4)))
 
 
@@ -157,6 +157,51 @@ def test_config_deviation_point_to_segment_by_hand():
     # Distances: 0.5 to the first segment; 0.3 to the second; (3,-1) is sqrt(2) from the corner; 0.2.
     assert config_deviation(planned, executed) == pytest.approx(np.sqrt(2), abs=1e-12)
     assert config_deviation(planned, executed[:2]) == pytest.approx(0.5, abs=1e-12)
+
+
+def _config_deviation_by_every_pair(planned, executed):
+    """The full comparison of every (executed, segment) pair, as a reference."""
+    p = np.asarray(planned, float).reshape(-1, 4)
+    x = np.asarray(executed, float).reshape(-1, 4)
+    if len(p) == 1:
+        return float(np.max(np.linalg.norm(x - p[0], axis=1))) if len(x) else 0.0
+    a, d = p[:-1], np.diff(p, axis=0)
+    dd = np.einsum("sk,sk->s", d, d)
+    xc = x[:, None, :]
+    t = np.einsum("tsk,sk->ts", xc - a, d) / np.where(dd > 0, dd, 1.0)
+    t = np.clip(np.where(dd > 0, t, 0.0), 0.0, 1.0)
+    return float(np.linalg.norm(xc - (a + t[..., None] * d), axis=-1).min(axis=1).max())
+
+
+def test_config_deviation_is_the_full_comparison_bit_for_bit(rng):
+    for trial in range(300):
+        s, t = int(rng.integers(1, 40)), int(rng.integers(1, 200))
+        planned = rng.normal(size=(s, 4)) * rng.choice([0.01, 1.0, 100.0], size=(1, 4))
+        if trial % 4 == 0:
+            planned[1::2] = planned[::2][: len(planned[1::2])]  # zero-length segments
+        # Executed points near the path (the usual case) and far from it.
+        executed = planned[rng.integers(0, s, size=t)] + rng.normal(size=(t, 4)) * rng.choice([1e-3, 10.0])
+        for block in (1, 5, 1 << 16):
+            assert config_deviation(planned, executed, block=block) == _config_deviation_by_every_pair(
+                planned, executed), (trial, block)
+
+
+def test_config_deviation_memory_does_not_grow_with_the_pairs(rng):
+    """2000 executed configurations against 2000 segments: the full comparison
+    holds 4 x 10^6 pairs x 4 coordinates (128 MB per temporary); the blocked
+    search stays within a few megabytes."""
+    import tracemalloc
+
+    planned = np.cumsum(rng.normal(size=(2001, 4)) * 0.05, axis=0)
+    executed = planned[rng.integers(0, 2001, size=2000)] + rng.normal(size=(2000, 4)) * 0.01
+    tracemalloc.start()
+    try:
+        dut = config_deviation(planned, executed)
+        _, peak = tracemalloc.get_traced_memory()
+    finally:
+        tracemalloc.stop()
+    assert peak < 16e6, peak
+    assert dut == _config_deviation_by_every_pair(planned, executed)
 
 
 def test_point_deviation_of_the_path_itself_is_within_half_the_spacing(tiny_scenario, tiny_path):
