@@ -400,8 +400,24 @@ def read_path_csv(path: Path, scenario: Scenario, checker=None) -> np.ndarray:
             and goal (to ``waypoints.ENDPOINT_TOLERANCE``); the message names
             the file and the line.
     """
-    from drake_social.limits import MAX_WAYPOINTS
+    return _checked_path(path, _parse_path_csv(path), scenario, checker)
+
+
+def _checked_path(path: Path, parsed: tuple[np.ndarray, list[int]], scenario: Scenario, checker=None) -> np.ndarray:
+    """The rows of :func:`_parse_path_csv` checked by :func:`~drake_social.waypoints.check_waypoints`."""
     from drake_social.waypoints import check_waypoints
+
+    if checker is None:
+        from drake_social.model.checker import make_checker
+
+        checker = make_checker(scenario, "planar")
+    rows, numbers = parsed
+    return check_waypoints(scenario, rows, checker, source=f"{path} (--path)", lines=numbers)
+
+
+def _parse_path_csv(path: Path) -> tuple[np.ndarray, list[int]]:
+    """The rows (N, 4) of a ``path.csv`` and the file line of each (see :func:`read_path_csv`)."""
+    from drake_social.limits import MAX_WAYPOINTS
 
     if path.is_dir():
         raise ScenarioError(f"{path}: is a directory, not a path file (--path)")
@@ -438,11 +454,7 @@ def read_path_csv(path: Path, scenario: Scenario, checker=None) -> np.ndarray:
         numbers.append(i)
     if len(rows) < 2:
         raise ScenarioError(f"{path}: needs at least 2 waypoints (start and goal), got {len(rows)}")
-    if checker is None:
-        from drake_social.model.checker import make_checker
-
-        checker = make_checker(scenario, "planar")
-    return check_waypoints(scenario, np.array(rows), checker, source=f"{path} (--path)", lines=numbers)
+    return np.array(rows), numbers
 
 
 def _write_executed_csv(path: Path, run) -> None:
@@ -475,8 +487,9 @@ def _run_simulate(args: argparse.Namespace) -> int:
         scenario.planner.algorithm = args.algorithm or scenario.planner.algorithm
         scenario.random_seed = scenario.random_seed if args.seed is None else args.seed
     out = args.out if args.out is not None else _default_out(args.scenario)
+    parsed = _parse_path_csv(args.path) if args.path is not None else None  # a malformed file before the checker
     checker = _make_checker(scenario, args.checker, str(args.scenario))
-    waypoints = read_path_csv(args.path, scenario, checker) if args.path is not None else None
+    waypoints = _checked_path(args.path, parsed, scenario, checker) if parsed is not None else None
     meshcat = None
     if not args.no_replay:
         from drake_social.sim.replay import make_meshcat

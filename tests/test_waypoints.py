@@ -356,3 +356,13 @@ def test_public_functions_check_their_arguments_at_the_door(tiny_scenario):
         with pytest.raises(kind) as info:
             call()
         assert str(info.value).startswith(message), (k, str(info.value))
+
+
+def test_simulate_validates_a_scenario_changed_in_code(tiny_scenario):
+    import dataclasses as dc
+
+    changed = copy.deepcopy(tiny_scenario)
+    changed.execution = dc.replace(changed.execution, control_period=10.0, time_limit=5.0)
+    with pytest.raises(ScenarioError, match=r"^simulate: scenario: execution.control_period: must be < "
+                                            r"execution.time_limit 5.0"):
+        simulate(changed, waypoints=[changed.start, changed.goal])

@@ -260,6 +260,11 @@ class RrtStar:
         objective: state and motion costs (path length or social).
         options: iterations, ranges, goal bias, informed sampling.
         name: reported as ``PlannerResult.algorithm``.
+
+    Raises:
+        TypeError: an argument of the wrong kind (a checker's name instead of
+            a checker, ...), named.
+        ValueError: an option outside its range.
     """
 
     def __init__(
@@ -337,7 +342,9 @@ class RrtStar:
                 chunks are ``CHUNK`` long. Ctrl-C is noticed between chunks.
 
         Raises:
-            PlanningInputError: start or goal invalid. A goal that cannot be
+            TypeError: ``rng`` is not a numpy Generator, ``progress`` not callable.
+            PlanningInputError: start or goal invalid, or the same
+                configuration (nothing to plan). A goal that cannot be
                 reached is *not* an error: the result says ``success=False``.
         """
         t0 = time.perf_counter()

@@ -82,7 +82,7 @@ from drake_social.control import (
 )
 from drake_social.model.plant import ACTUATED_JOINTS, add_environment, add_robot
 from drake_social.planning.validity import ValidityChecker
-from drake_social.scenario import EXECUTIONS, SIM_MODES, Scenario
+from drake_social.scenario import EXECUTIONS, SIM_MODES, Scenario, validate_scenario
 from drake_social.waypoints import check_waypoints
 
 __all__ = ["DiagramArguments", "TransportDiagram", "build_diagram", "check_diagram_arguments", "dynamic_gains"]
@@ -198,7 +198,8 @@ def build_diagram(
     Raises:
         TypeError: an argument of the wrong kind (named).
         ValueError: an unknown mode or execution.
-        ScenarioError: ``waypoints`` that must not be executed
+        ScenarioError: an invalid scenario (:func:`~drake_social.scenario.validate_scenario`:
+            e.g. contradictory execution options), or ``waypoints`` that must not be executed
             (:func:`~drake_social.waypoints.check_waypoints`: shape, limits,
             start and goal, collisions).
     """
@@ -239,6 +240,7 @@ def check_diagram_arguments(
         See :func:`build_diagram`.
     """
     require_scenario(scenario, who)
+    validate_scenario(scenario, source=f"{who}: scenario")  # also one changed in code after loading
     require_choice(mode, who, "mode", SIM_MODES, optional=True)
     require_choice(execution, who, "execution", EXECUTIONS, optional=True)
     require_checker(checker, who, optional=True)

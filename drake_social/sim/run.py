@@ -283,7 +283,8 @@ def simulate(
     Raises:
         TypeError: an argument of the wrong kind (named).
         ValueError: an unknown mode or execution, a time limit <= 0.
-        ScenarioError: ``waypoints`` that must not be executed
+        ScenarioError: an invalid scenario (e.g. contradictory execution
+            options), or ``waypoints`` that must not be executed
             (:func:`~drake_social.waypoints.check_waypoints`: shape, limits,
             start and goal, collisions).
         PlanningInputError: the start or goal is unusable (from the planner).

@@ -17,7 +17,7 @@ from drake_social.planning.objective import PathLengthObjective, SocialObjective
 from drake_social.planning.result import PlanningInputError
 from drake_social.planning.rrt_star import RrtStar, RrtStarOptions
 from drake_social.planning.space import ConfigurationSpace
-from drake_social.planning.variants import evaluate_path, make_planner, plan
+from drake_social.planning.variants import evaluate_path, make_objective, make_planner, plan
 from drake_social.scenario import ALGORITHMS, Bar, Box, Person, Scenario, World, validate_scenario
 
 PI = math.pi
@@ -343,12 +343,13 @@ def test_start_outside_the_space_raises(tiny, tiny_checker):
         planner.solve(np.array([np.nan, 2.5, 0.0, 0.0]), np.array(tiny.goal), np.random.default_rng(0))
 
 
-def test_start_equal_to_goal_is_a_zero_cost_path(tiny, tiny_checker):
+def test_start_equal_to_goal_is_refused(tiny, tiny_checker):
+    """Nothing to plan: refused like the scenario check refuses it (a one-row
+    path would be no path that simulate can execute)."""
     same = copy.deepcopy(tiny)
     same.goal = list(same.start)
-    dut = plan(same, tiny_checker, iterations=5)
-    assert dut.success and dut.cost == 0.0
-    np.testing.assert_array_equal(dut.waypoints, [same.start])
+    with pytest.raises(PlanningInputError, match=r"^start and goal are the same configuration"):
+        plan(same, tiny_checker, iterations=5)
 
 
 # ---- configuration, not copies ---------------------------------------------------------------
@@ -367,9 +368,9 @@ def test_variants_are_configurations_of_one_core(tiny, tiny_checker):
 
 def test_length_weight_adds_lambda_times_length(tiny, rng):
     scenario = copy.deepcopy(tiny)
-    plain = make_planner(scenario, None, "social_rrt_star").objective
+    plain = make_objective(scenario, "social_rrt_star")
     scenario.social.length_weight = 0.7
-    dut = make_planner(scenario, None, "social_rrt_star").objective
+    dut = make_objective(scenario, "social_rrt_star")
     space = ConfigurationSpace.from_scenario(scenario)
     a, b = space.sample_uniform(rng, 30), space.sample_uniform(rng, 30)
     np.testing.assert_allclose(dut.motion_cost(a, b), plain.motion_cost(a, b) + 0.7 * config_distance(a, b))
@@ -458,7 +459,7 @@ def test_paper_ellipse_can_shut_out_a_cheaper_detour_the_admissible_one_keeps():
 
     scenario = corridor_scenario()
     scenario.social.length_weight = 0.5
-    objective = make_planner(scenario, None, "informed_social_rrt_star").objective
+    objective = make_objective(scenario, "informed_social_rrt_star")
     start, goal = np.array(scenario.start), np.array(scenario.goal)
     straight = np.array([start, goal])
     detour = np.array([start, [3.0, 6.4, 0.0, PI / 2], [10.5, 6.4, 0.0, PI / 2], goal])
