@@ -58,7 +58,8 @@ def run_sim_bench(
     out = {}
     for path in map(Path, scenario_paths):
         scenario = load_scenario(path)
-        result = plan(scenario, make_checker(scenario, checker, source=str(path)))
+        planning_checker = make_checker(scenario, checker, source=str(path))
+        result = plan(scenario, planning_checker)
         if not result.success:
             out[path.name] = {"path": {"success": False, "message": result.message}, "pairs": {}}
             continue
@@ -68,7 +69,8 @@ def run_sim_bench(
             for execution in executions:
                 factors = []
                 for i in range(runs):  # the first run is also analysed
-                    run = simulate(scenario, mode=mode, execution=execution, waypoints=waypoints, analyze=i == 0)
+                    run = simulate(scenario, mode=mode, execution=execution, waypoints=waypoints,
+                                   checker=planning_checker, analyze=i == 0)
                     factors.append(run.realtime_factor)
                     if i == 0:
                         report, reached, time_to_goal = run.report, run.reached, run.time_to_goal
@@ -89,7 +91,7 @@ def run_sim_bench(
                 if record:
                     meshcat = make_meshcat()
                     run = simulate(scenario, mode=mode, execution=execution, waypoints=waypoints, meshcat=meshcat,
-                                   analyze=False)
+                                   checker=planning_checker, analyze=False)
                     draw_overlays(meshcat, scenario, waypoints)
                     fit = set_top_view(meshcat, scenario)
                     with tempfile.TemporaryDirectory() as folder:

@@ -316,7 +316,7 @@ def run_task(task: dict) -> dict:
 def _execute(scenario, waypoints, checker, executed_metrics) -> dict:
     from drake_social.sim.run import simulate
 
-    run = simulate(scenario, mode="kinematic", waypoints=np.asarray(waypoints, float), analyze=True,
+    run = simulate(scenario, mode="kinematic", waypoints=np.asarray(waypoints, float), checker=checker, analyze=True,
                    analysis_checker=checker)
     r = run.report
     out = {
