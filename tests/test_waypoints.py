@@ -306,6 +306,9 @@ def _cases(s):
          "simulate: time_limit must be a finite number > 0 seconds or None, got str '5'"),
         (lambda: simulate(s, waypoints=wp, time_limit=-1.0), ValueError,
          "simulate: time_limit must be a finite number > 0 seconds, got -1.0"),
+        (lambda: simulate(s, waypoints=wp, time_limit=0.01), ValueError,
+         "simulate: time_limit must be > execution.control_period 0.01 seconds (the sequencer decides once per "
+         "control period), got 0.01"),
         (lambda: simulate(s, waypoints=wp, analysis_checker="drake"), TypeError,
          f"simulate: analysis_checker {CHECKER}"),
         (lambda: simulate(s, waypoints=wp, progress=3), TypeError, "simulate: progress must be a callable or None"),

@@ -282,7 +282,8 @@ def simulate(
 
     Raises:
         TypeError: an argument of the wrong kind (named).
-        ValueError: an unknown mode or execution, a time limit <= 0.
+        ValueError: an unknown mode or execution, a time limit <= 0 or not
+            above ``execution.control_period``.
         ScenarioError: an invalid scenario (e.g. contradictory execution
             options), or ``waypoints`` that must not be executed
             (:func:`~drake_social.waypoints.check_waypoints`: shape, limits,
@@ -296,6 +297,9 @@ def simulate(
     require_checker(analysis_checker, "simulate", "analysis_checker", optional=True)
     require_callable(progress, "simulate", "progress")
     limit = float(scenario.execution.time_limit if time_limit is None else time_limit)
+    if limit <= scenario.execution.control_period:
+        raise ValueError(f"simulate: time_limit must be > execution.control_period {scenario.execution.control_period} "
+                         f"seconds (the sequencer decides once per control period), got {limit}")
     built = _build(scenario, checked.mode, checked.execution, checked.waypoints, checker, meshcat)
     root = built.diagram.CreateDefaultContext()
     if built.visualizer is not None:
