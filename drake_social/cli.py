@@ -475,9 +475,9 @@ def _run_simulate(args: argparse.Namespace) -> int:
 
     planning_only = [f"--{name}" for name in ("algorithm", "iterations", "seed") if getattr(args, name) is not None]
     if args.path is not None and planning_only:
+        pronoun = "it" if len(planning_only) == 1 else "them"
         raise ScenarioError(f"{_listed(planning_only)}: only for planning; with --path {args.path} nothing is "
-                            f"planned (the path is executed as given): leave {'it' if len(planning_only) == 1 else 'them'}"
-                            " out, or leave out --path to plan")
+                            f"planned (the path is executed as given): leave {pronoun} out, or leave out --path to plan")
     scenario = load_with_overrides(args.scenario, args.set)
     if planning_only:
         import copy

@@ -229,6 +229,8 @@ def config_deviation(planned: np.ndarray, executed: np.ndarray, block: int = 1 <
         return 0.0
     if len(p) == 1:
         return float(np.max(np.linalg.norm(x - p[0], axis=1)))
+    if not (np.all(np.isfinite(p)) and np.all(np.isfinite(x))):
+        return float("nan")  # as the full comparison: a NaN or inf makes some distance NaN
     a, d = p[:-1], np.diff(p, axis=0)  # (S, 4)
     dd = np.einsum("sk,sk->s", d, d)
     length = np.sqrt(dd)
