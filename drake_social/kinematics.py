@@ -89,6 +89,9 @@ class ArmGeometry:
 
     @classmethod
     def from_scenario(cls, scenario: Scenario) -> "ArmGeometry":
+        from drake_social.arguments import require_scenario  # it imports the planning package
+
+        require_scenario(scenario, "ArmGeometry.from_scenario")
         r, o = scenario.robot, scenario.object
         return cls(
             base_radius=float(r.base_radius),

@@ -88,6 +88,9 @@ class SocialCost:
     @classmethod
     def from_scenario(cls, scenario, weights: np.ndarray | None = None) -> "SocialCost":
         """The scenario's cost; ``weights`` overrides ``scenario.social.weights``."""
+        from drake_social.arguments import require_scenario
+
+        require_scenario(scenario, "SocialCost.from_scenario")
         s = scenario.social
         return cls(
             ArmGeometry.from_scenario(scenario),

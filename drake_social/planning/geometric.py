@@ -113,6 +113,9 @@ class CheckerBase:
     """
 
     def __init__(self, scenario: Scenario, resolution: float | None = None):
+        from drake_social.arguments import require_scenario
+
+        require_scenario(scenario, type(self).__name__)
         self.scenario = scenario
         self.geometry = ArmGeometry.from_scenario(scenario)
         self.resolution = float(scenario.planner.collision_resolution if resolution is None else resolution)

@@ -36,6 +36,9 @@ class ConfigurationSpace:
     @classmethod
     def from_scenario(cls, scenario) -> "ConfigurationSpace":
         """Base positions keep the base disc inside the room; joints in their limits."""
+        from drake_social.arguments import require_scenario
+
+        require_scenario(scenario, "ConfigurationSpace.from_scenario")
         x0, y0, x1, y1 = scenario.world.bounds
         r = scenario.robot.base_radius
         lower = [x0 + r, y0 + r, *scenario.robot.joint_lower]

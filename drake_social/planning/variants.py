@@ -17,7 +17,14 @@ from __future__ import annotations
 
 import numpy as np
 
-from drake_social.arguments import require_callable, require_checker, require_choice, require_int, require_scenario
+from drake_social.arguments import (
+    require_callable,
+    require_checker,
+    require_choice,
+    require_instance,
+    require_int,
+    require_scenario,
+)
 from drake_social.cost.social import SocialCost
 from drake_social.kinematics import config_distance
 from drake_social.planning.objective import Objective, PathLengthObjective, SocialObjective
@@ -38,7 +45,14 @@ def base_only_weights(num_points: int) -> np.ndarray:
 
 
 def make_objective(scenario, algorithm: str) -> Objective:
-    """The objective of ``algorithm`` for ``scenario``."""
+    """The objective of ``algorithm`` for ``scenario``.
+
+    Raises:
+        TypeError: ``scenario`` is not a Scenario, ``algorithm`` not a string.
+        ValueError: an unknown algorithm.
+    """
+    require_scenario(scenario, "make_objective")
+    require_instance(algorithm, str, "make_objective", "algorithm", f"one of {', '.join(ALGORITHMS)}")
     if algorithm not in ALGORITHMS:
         raise ValueError(f"unknown algorithm {algorithm!r}; allowed: {', '.join(ALGORITHMS)}")
     if algorithm == "rrt_star":
@@ -73,6 +87,7 @@ def evaluate_path(scenario, waypoints: np.ndarray, objective: Objective | None =
         ``objective`` (when given), ``path_length`` (plain configuration
         norm) and ``base_length`` (metres).
     """
+    require_scenario(scenario, "evaluate_path")
     wp = np.asarray(waypoints, float)
     a, b = wp[:-1], wp[1:]
     full = SocialCost.from_scenario(scenario)
