@@ -42,7 +42,8 @@ import numpy as np
 
 from drake_social import __version__
 from drake_social.planning.result import PlanningInputError
-from drake_social.scenario import ALGORITHMS, Scenario, ScenarioError, load_scenario
+from drake_social.scenario import ALGORITHMS, Scenario, ScenarioError, compose_yaml, load_scenario
+from drake_social.textfile import check_regular_file, read_text_file
 
 __all__ = ["EXIT_NO_PATH", "ProgressBar", "main", "build_parser", "load_with_overrides"]
 
@@ -72,10 +73,7 @@ def load_with_overrides(path: str | Path, sets: Sequence[str] | None) -> Scenari
 
     texts = list(sets or [])
     for text in texts:
-        try:
-            node = yaml.compose(text)
-        except yaml.YAMLError as e:
-            raise ScenarioError(f"{path} (--set {text!r}): not valid YAML: {e}") from e
+        node = compose_yaml(text, f"{path} (--set {text!r})")
         if not isinstance(node, yaml.MappingNode):
             raise ScenarioError(f"{path} (--set {text!r}): must be a YAML mapping such as 'random_seed: 3'")
     return load_scenario(path, texts, overrides_name="--set")
@@ -387,14 +385,7 @@ def read_path_csv(path: Path, scenario: Scenario) -> np.ndarray:
             finite, or its first and last rows are not the scenario's start
             and goal (to 1e-9); the message names the file and the row.
     """
-    if path.is_dir():
-        raise ScenarioError(f"{path}: is a directory, not a path file (--path)")
-    try:
-        lines = path.read_text().splitlines()
-    except FileNotFoundError:
-        raise ScenarioError(f"{path}: no such path file (--path)") from None
-    except UnicodeDecodeError as e:
-        raise ScenarioError(f"{path}: not a text file ({e})") from None
+    lines = read_text_file(path, "path", "--path").splitlines()
     if not lines or lines[0].replace(" ", "") != "x,y,psi1,psi2":
         raise ScenarioError(f"{path}: line 1: the header must be 'x,y,psi1,psi2', got {lines[0] if lines else ''!r}")
     rows = []
@@ -555,10 +546,7 @@ def _run_bench(args: argparse.Namespace) -> int:
     from drake_social.outputs import OutputSet
 
     for path in args.scenarios:
-        if path.is_dir():
-            raise ScenarioError(f"{path}: is a directory, not a scenario file (--scenarios)")
-        if not path.is_file():
-            raise ScenarioError(f"{path}: no such scenario file (--scenarios)")
+        check_regular_file(path, "scenario", "--scenarios")
     bar = ProgressBar(1, sys.stderr, label="bench", interval=0.0) if _show_progress(args) else None
 
     def progress(done: int, total: int, label: str) -> None:
@@ -645,8 +633,7 @@ def _run_experiment(args: argparse.Namespace) -> int:
         raise ScenarioError("--scheduler needs --executor dask")
     if args.study == "paper":
         for name in ("office_bar.yaml", "generic_L.yaml"):
-            if not (args.scenario_dir / name).is_file():
-                raise ScenarioError(f"{args.scenario_dir / name}: no such scenario file (--scenario-dir)")
+            check_regular_file(args.scenario_dir / name, "scenario", "--scenario-dir")
         study = paper_study(runs=args.runs, iterations=args.iterations, seed=args.seed, simulate=args.simulate,
                             scenario_dir=args.scenario_dir)
     else:

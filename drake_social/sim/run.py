@@ -35,7 +35,7 @@ from drake_social.cost.social import SocialCost
 from drake_social.kinematics import ArmGeometry
 from drake_social.planning.result import PlannerResult
 from drake_social.planning.validity import ValidityChecker
-from drake_social.scenario import Scenario
+from drake_social.scenario import MAX_TIME_LIMIT, Scenario
 from drake_social.sim.analysis import config_deviation, densify, point_deviation
 from drake_social.sim.diagram import TransportDiagram, build_diagram
 
@@ -233,7 +233,7 @@ def simulate(
             :func:`~drake_social.sim.diagram.build_diagram`. With ``meshcat``
             the run is recorded (``execution.replay_fps``); publish or export
             it afterwards (:mod:`drake_social.sim.replay`).
-        time_limit: simulated seconds before giving up; None =
+        time_limit: simulated seconds before giving up, in (0, MAX_TIME_LIMIT]; None =
             ``scenario.execution.time_limit``.
         analyze: check and measure the executed trajectory (:func:`analyze_execution`).
         analysis_checker: the checker of that analysis (None = Drake's).
@@ -250,8 +250,8 @@ def simulate(
     built = build_diagram(scenario, mode=mode, execution=execution, waypoints=waypoints, checker=checker,
                           meshcat=meshcat)
     limit = float(scenario.execution.time_limit if time_limit is None else time_limit)
-    if not limit > 0:
-        raise ValueError(f"time_limit must be > 0 seconds, got {limit}")
+    if not 0 < limit <= MAX_TIME_LIMIT:
+        raise ValueError(f"time_limit must be in (0, {MAX_TIME_LIMIT:g}] seconds, got {limit}")
     root = built.diagram.CreateDefaultContext()
     if built.visualizer is not None:
         from drake_social.sim.replay import start_recording
