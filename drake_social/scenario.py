@@ -629,7 +629,8 @@ def _check_node(tp, node, field: str, source: str, yaml) -> None:
     if dc.is_dataclass(tp):
         if not isinstance(node, yaml.MappingNode):
             fail(f"must be {_describe(tp)}, got {shown(node)}")
-        types = {f.name: f.type for f in dc.fields(tp)}
+        hints = typing.get_type_hints(tp)  # resolves string annotations (from __future__ import annotations)
+        types = {f.name: hints[f.name] for f in dc.fields(tp)}
         seen: dict[str, int] = {}
         for key_node, value_node in node.value:
             key = key_node.value
