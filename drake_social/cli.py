@@ -198,14 +198,16 @@ class _LineEnd:
         return getattr(self._stream, name)
 
 
-def _int_at_least(minimum: int) -> Callable[[str], int]:
+def _int_at_least(minimum: int, maximum: int | None = None) -> Callable[[str], int]:
+    allowed = f"an integer >= {minimum}" if maximum is None else f"an integer in [{minimum}, {maximum:,}]"
+
     def parse(text: str) -> int:
         try:
             value = int(text)
         except ValueError:
-            raise argparse.ArgumentTypeError(f"must be an integer >= {minimum}, got {text!r}") from None
-        if value < minimum:
-            raise argparse.ArgumentTypeError(f"must be an integer >= {minimum}, got {text}")
+            raise argparse.ArgumentTypeError(f"must be {allowed}, got {text!r}") from None
+        if value < minimum or (maximum is not None and value > maximum):
+            raise argparse.ArgumentTypeError(f"must be {allowed}, got {text}")
         return value
 
     return parse
@@ -585,6 +587,8 @@ def _run_bench(args: argparse.Namespace) -> int:
 
 def _add_experiment(subparsers) -> None:
     from drake_social.experiments.executors import EXECUTORS
+    from drake_social.experiments.study import MAX_RUNS
+    from drake_social.scenario import MAX_ITERATIONS
 
     p = subparsers.add_parser(
         "experiment",
@@ -599,8 +603,10 @@ def _add_experiment(subparsers) -> None:
                              description="A: office_bar (bar) and B: generic_L (L object) with RRT*, Social "
                              "Risk-RRT* multi-point and base-only, Informed multi-point and base-only; D: generic_L "
                              "with the 1.5 m bar, Social Risk-RRT* with object, base and equal weights.")
-    paper.add_argument("--runs", type=_positive_int, default=10, metavar="N", help="runs per algorithm (default 10)")
-    paper.add_argument("--iterations", type=_positive_int, default=2000, metavar="K", help="K (default 2000)")
+    paper.add_argument("--runs", type=_int_at_least(1, MAX_RUNS), default=10, metavar="N",
+                       help=f"runs per algorithm, at most {MAX_RUNS:,} (default 10)")
+    paper.add_argument("--iterations", type=_int_at_least(1, MAX_ITERATIONS), default=2000, metavar="K",
+                       help=f"K, at most {MAX_ITERATIONS:,} (default 2000)")
     paper.add_argument("--seed", type=_nonnegative_int, default=0, metavar="S",
                        help="study seed; run seeds are drawn from it with SeedSequence (default 0)")
     paper.add_argument("--scenario-dir", type=Path, default=Path("scenarios"), metavar="DIR",

@@ -25,7 +25,7 @@ from typing import Optional, Sequence, Union
 import numpy as np
 
 from drake_social.limits import MAX_MOTION_STEPS
-from drake_social.textfile import read_text_file
+from drake_social.textfile import read_yaml_file
 
 __all__ = [
     "ALGORITHMS",
@@ -363,12 +363,12 @@ def load_scenario(path: str | Path, overrides: str | Sequence[str] | None = None
 
     Raises:
         ScenarioError: the file is missing, not a regular file, larger than
-            :data:`~drake_social.textfile.MAX_TEXT_FILE_BYTES`, malformed, has
+            :data:`~drake_social.textfile.MAX_YAML_FILE_BYTES` (4 MiB), malformed, has
             duplicate or unknown keys or invalid values; the message names
             the file (or the override at fault), the line and the field.
     """
     path = Path(path)
-    return load_scenario_text(read_text_file(path, "scenario"), str(path), overrides,
+    return load_scenario_text(read_yaml_file(path, "scenario"), str(path), overrides,
                               overrides_name=overrides_name)
 
 
@@ -455,8 +455,9 @@ def _plural(tp) -> str:
 MAX_YAML_DEPTH = 32
 #: Most nodes (mappings, lists, keys and values) of one YAML document, an
 #: alias counted as the nodes it stands for: a "billion laughs" of nested
-#: aliases is refused while it is read. A 2,000-obstacle room has about 25,000.
-MAX_YAML_NODES = 200_000
+#: aliases is refused while it is read. A 2,000-obstacle room has about 25,000;
+#: PyYAML composes about 15,000 nodes a second.
+MAX_YAML_NODES = 100_000
 
 
 class _YamlLimit(Exception):

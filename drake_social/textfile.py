@@ -7,8 +7,9 @@ through :func:`read_text_file`, so all of them are refused the same way:
   FIFO, a character or block device, a socket), found with ``stat`` before the
   file is opened, so a FIFO is never opened for reading (that would block
   until a writer appears) and ``/dev/zero`` is never read (it never ends);
-* a file larger than :data:`MAX_TEXT_FILE_BYTES` is refused with the limit
-  stated, before anything is read;
+* a file larger than its limit (:data:`MAX_YAML_FILE_BYTES` for scenario
+  and sweep files, :data:`MAX_TEXT_FILE_BYTES` for the others) is refused
+  with the limit stated, before anything is read;
 * the text must be UTF-8; the error names the byte offset at fault.
 
 Errors are :class:`~drake_social.scenario.ScenarioError` (invalid input: the
@@ -22,11 +23,15 @@ import os
 import stat
 from pathlib import Path
 
-__all__ = ["MAX_TEXT_FILE_BYTES", "check_regular_file", "read_text_file"]
+__all__ = ["MAX_TEXT_FILE_BYTES", "MAX_YAML_FILE_BYTES", "check_regular_file", "read_text_file", "read_yaml_file"]
 
-#: Largest file read, bytes (64 MiB). Scenario and sweep files are a few
-#: kilobytes; a path CSV of 100,000 waypoints is about 7 MB.
+#: Largest text file read by default (path CSVs), bytes: 64 MiB (a path CSV
+#: of 100,000 waypoints is about 7 MB).
 MAX_TEXT_FILE_BYTES = 64 * 1024 * 1024
+#: Largest scenario or sweep file, bytes: 4 MiB. The shipped ones are a few
+#: kilobytes, a room with 2,000 obstacles about 120 kB; PyYAML reads about
+#: 2 MB/s, so this also bounds the time spent parsing.
+MAX_YAML_FILE_BYTES = 4 * 1024 * 1024
 
 _KINDS = (
     (stat.S_ISDIR, "a directory"),
@@ -130,3 +135,14 @@ def read_text_file(path: str | Path, what: str, option: str | None = None, *,
     except UnicodeDecodeError as e:
         raise _error(path, f"not a text (UTF-8) file: byte {e.start} ({data[e.start:e.start + 1]!r}) is not "
                            f"valid UTF-8", option) from None
+
+
+def read_yaml_file(path: str | Path, what: str, option: str | None = None) -> str:
+    """:func:`read_text_file` with the limit of YAML files, :data:`MAX_YAML_FILE_BYTES`.
+
+    Args:
+        path: the file.
+        what: ``"scenario"`` or ``"sweep"``, for messages.
+        option: the command-line option that named it, or None.
+    """
+    return read_text_file(path, what, option, limit=MAX_YAML_FILE_BYTES)

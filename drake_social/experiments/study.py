@@ -35,7 +35,7 @@ from typing import Callable, Optional, Sequence
 import numpy as np
 
 from drake_social.scenario import ALGORITHMS, Scenario, ScenarioError
-from drake_social.textfile import check_regular_file, read_text_file
+from drake_social.textfile import check_regular_file, read_yaml_file
 
 __all__ = [
     "MAX_RUNS",
@@ -291,7 +291,7 @@ def load_sweep(path: str | Path) -> Study:
     from drake_social.scenario import MAX_ITERATIONS, check_node, compose_yaml
 
     path = Path(path)
-    root = compose_yaml(read_text_file(path, "sweep"), str(path))
+    root = compose_yaml(read_yaml_file(path, "sweep"), str(path))
     if root is None:
         raise ScenarioError(f"{path}: empty; a sweep is a mapping ({', '.join(f.name for f in dc.fields(Sweep))})")
     check_node(Sweep, root, str(path))
@@ -325,10 +325,11 @@ def load_sweep(path: str | Path) -> Study:
     if not algorithms:
         fail("algorithms", f"needs at least one of {', '.join(ALGORITHMS)}")
     for i, a in enumerate(algorithms):
+        at = nodes["algorithms"].value[i] if "algorithms" in nodes else None
         if a not in ALGORITHMS:
-            fail(f"algorithms[{i}]", f"unknown algorithm {a!r}; allowed: {', '.join(ALGORITHMS)}")
+            fail(f"algorithms[{i}]", f"unknown algorithm {a!r}; allowed: {', '.join(ALGORITHMS)}", at)
         if a in algorithms[:i]:
-            fail(f"algorithms[{i}]", f"{a} is listed twice (its runs would be recorded twice)")
+            fail(f"algorithms[{i}]", f"{a} is listed twice (its runs would be recorded twice)", at)
 
     scenarios = value("scenarios")
     if not scenarios:
@@ -365,7 +366,7 @@ def load_sweep(path: str | Path) -> Study:
 
     groups = []
     for i, f in enumerate(files):
-        text = read_text_file(f, "scenario")
+        text = read_yaml_file(f, "scenario")
         try:
             _load(str(f), text, ())
         except ScenarioError as e:
@@ -374,7 +375,7 @@ def load_sweep(path: str | Path) -> Study:
             try:  # every override is checked before any run
                 _load(str(f), text, texts, f"variants.{vname}")
             except ScenarioError as e:
-                raise ScenarioError(f"{path}: variants.{vname}: {e}") from None
+                raise ScenarioError(f"{path}: {e}") from None
             group = f"{f.stem}-{vname}"
             if not _valid_name(group):
                 fail(f"scenarios[{i}]", f"the group name {group!r} (<scenario file name>-<variant>) {_NAME_RULE}: "
@@ -397,7 +398,7 @@ def study_tasks(study: Study) -> list[dict]:
     check_study(study)
     texts = {}
     for group in study.groups:  # every scenario loads (and names its file) before any task exists
-        texts[group.name] = read_text_file(group.scenario, "scenario")
+        texts[group.name] = read_yaml_file(group.scenario, "scenario")
         _load(group.scenario, texts[group.name], tuple(group.overrides), f"group {group.name}")
     seeds = study.run_seeds()
     tasks = []
