@@ -442,6 +442,9 @@ def _describe(tp) -> str:
 
 
 def _plural(tp) -> str:
+    if typing.get_origin(tp) is Union:
+        alts = [a for a in typing.get_args(tp) if a is not type(None)]
+        return " or ".join(_plural(a) for a in alts) + (" or nulls" if len(alts) < len(typing.get_args(tp)) else "")
     if typing.get_origin(tp) is list:
         return "lists of " + _plural(typing.get_args(tp)[0])
     if dc.is_dataclass(tp):

@@ -198,14 +198,16 @@ def _valid_name(name: str) -> bool:
 
 
 def check_study(study: Study, source: str = "study") -> None:
-    """Checks a study before any run: its limits, names and planners.
+    """Checks a study before any run: its limits, names and planners, and
+    that every group's scenario file reads and loads with its overrides.
 
     Args:
         study: the study.
         source: how errors name it (the sweep file, or the command).
 
     Raises:
-        ScenarioError: ``<source>: <field>: <what is allowed>, got <value>``.
+        ScenarioError: ``<source>: <field>: <what is allowed>, got <value>``,
+            or the scenario error of a group (naming its file and overrides).
     """
     from drake_social.scenario import MAX_ITERATIONS
 
@@ -247,6 +249,14 @@ def check_study(study: Study, source: str = "study") -> None:
     if tasks > MAX_STUDY_TASKS:
         fail("runs", f"{len(study.groups)} groups x their algorithms x {study.runs} runs = {tasks:,} runs; a study "
                      f"may have at most {MAX_STUDY_TASKS:,}")
+    for g in study.groups:
+        _group_scenario(g)
+
+
+def _group_scenario(group: Group):
+    """A group's scenario text and loaded scenario (errors name its file and the group)."""
+    text = read_yaml_file(group.scenario, "scenario")
+    return text, _load(group.scenario, text, tuple(group.overrides), f"group {group.name}")
 
 
 def _flow(node, yaml, seen=None) -> None:
@@ -396,10 +406,7 @@ def study_tasks(study: Study) -> list[dict]:
             scenario or overrides are: nothing has run yet.
     """
     check_study(study)
-    texts = {}
-    for group in study.groups:  # every scenario loads (and names its file) before any task exists
-        texts[group.name] = read_yaml_file(group.scenario, "scenario")
-        _load(group.scenario, texts[group.name], tuple(group.overrides), f"group {group.name}")
+    texts = {group.name: _group_scenario(group)[0] for group in study.groups}
     seeds = study.run_seeds()
     tasks = []
     for group in study.groups:
