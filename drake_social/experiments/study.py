@@ -74,10 +74,10 @@ class Group:
     """One scenario (with overrides) and the algorithms planned on it.
 
     Attributes:
-        name: the group's name in tables and file names (letters, digits, _ -).
+        name: the group's name in tables and file names (:data:`NAME_PATTERN`), unique in its study.
         scenario: the scenario file.
         overrides: YAML mappings applied over the file in turn (as ``--set``).
-        algorithms: planners of :data:`drake_social.scenario.ALGORITHMS`.
+        algorithms: planners of :data:`drake_social.scenario.ALGORITHMS`, each at most once.
         label: a human description (tables, figure titles).
     """
 
@@ -93,13 +93,15 @@ class Study:
     """What to run.
 
     Attributes:
-        name: "paper" or the sweep's name.
+        name: "paper" or the sweep's name (:data:`NAME_PATTERN`).
         groups: the groups.
-        runs: runs per (group, algorithm), >= 1.
-        iterations: K, samples per run, >= 1.
+        runs: runs per (group, algorithm), in [1, :data:`MAX_RUNS`]; groups x
+            algorithms x runs is at most :data:`MAX_STUDY_TASKS`.
+        iterations: K, samples per run, in [1, ``MAX_ITERATIONS``].
         seed: the study seed; run r's seed is the r-th spawned SeedSequence's first word.
         simulate: also execute each path in the Drake diagram (kinematic mode).
-        checker: validity checker of the planner (``planar``: the fast exact one).
+        checker: validity checker of the planner: ``planar`` (the fast exact one), ``drake`` or ``numpy``.
+        (:func:`check_study` checks all of it before any run.)
     """
 
     name: str
@@ -153,6 +155,8 @@ def paper_study(*, runs: int = 10, iterations: int = 2000, seed: int = 0, simula
     return study
 
 
+#: Validity checkers of a study (= ``drake_social.model.checker.CHECKERS``; that module imports Drake).
+CHECKERS = ("planar", "drake", "numpy")
 #: Most runs per (group, algorithm) of a study (each run's seed is drawn up front).
 MAX_RUNS = 10_000
 #: Most tasks of a study (groups x algorithms x runs): every run's record is
@@ -214,7 +218,6 @@ def check_study(study: Study, source: str = "study") -> None:
     def fail(field: str, message: str):
         raise ScenarioError(f"{source}: {field}: {message}")
 
-    checkers = ("planar", "drake", "numpy")  # = drake_social.model.checker.CHECKERS (imports Drake)
     for field, value, low, high in (("runs", study.runs, 1, MAX_RUNS),
                                     ("iterations", study.iterations, 1, MAX_ITERATIONS)):
         if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or not low <= value <= high:
@@ -223,8 +226,8 @@ def check_study(study: Study, source: str = "study") -> None:
         fail("seed", f"must be an integer >= 0, got {study.seed!r}")
     if not isinstance(study.simulate, bool):
         fail("simulate", f"must be true or false, got {study.simulate!r}")
-    if study.checker not in checkers:
-        fail("checker", f"unknown checker {study.checker!r}; allowed: {', '.join(checkers)}")
+    if study.checker not in CHECKERS:
+        fail("checker", f"unknown checker {study.checker!r}; allowed: {', '.join(CHECKERS)}")
     if not isinstance(study.name, str) or not _valid_name(study.name):
         fail("name", f"{study.name!r}: a study name {_NAME_RULE}")
     if not study.groups:
@@ -315,7 +318,10 @@ def load_sweep(path: str | Path) -> Study:
     def value(key: str):
         if key not in nodes:
             return getattr(Sweep(), key)
-        return yaml.SafeLoader("").construct_object(nodes[key], deep=True)
+        try:
+            return yaml.SafeLoader("").construct_object(nodes[key], deep=True)
+        except yaml.YAMLError as e:  # a tag of no YAML type, e.g. `name: !Bar x`
+            fail(key, f"{e.problem}")
 
     runs, iterations, seed = int(value("runs")), int(value("iterations")), int(value("seed"))
     if not 1 <= runs <= MAX_RUNS:
@@ -325,8 +331,8 @@ def load_sweep(path: str | Path) -> Study:
     if seed < 0:
         fail("seed", f"must be >= 0, got {seed}")
     checker = value("checker")
-    if checker not in ("planar", "drake", "numpy"):
-        fail("checker", f"unknown checker {checker!r}; allowed: planar, drake, numpy")
+    if checker not in CHECKERS:
+        fail("checker", f"unknown checker {checker!r}; allowed: {', '.join(CHECKERS)}")
     name = value("name") or path.stem
     if not _valid_name(name):
         fail("name", f"{name!r}: a study name {_NAME_RULE}" + ("" if "name" in nodes else

@@ -216,3 +216,11 @@ def test_paper_scenario_dir_errors_name_the_folder(tmp_path, capsys):
     assert main(["experiment", "paper", "--scenario-dir", str(tmp_path)]) == 2
     assert capsys.readouterr().err == (f"drake-social: error: {tmp_path / 'generic_L.yaml'}: is a directory, not a "
                                        f"scenario file (--scenario-dir)\n")
+
+
+def test_a_tag_of_no_yaml_type_and_a_bad_file_stem_are_named(tmp_path):
+    dut = _sweep(tmp_path, "name: !Foo x\n")
+    assert _error(dut) == f"{dut}: line 4: name: could not determine a constructor for the tag '!Foo'"
+    dut = tmp_path / "my sweep.yaml"
+    dut.write_text(f"scenarios: [{TINY}]\n")
+    assert _error(dut) == f"{dut}: name: 'my sweep': a study name {NAME_RULE} (it is the file's stem: set name:)"
