@@ -63,7 +63,7 @@ __all__ = [
 MAX_ITERATIONS = 10_000_000
 #: Largest ``execution.time_limit``, seconds: twice the default (300 s) and
 #: eight times the longest run of the shipped scenarios (office_bar reaches
-#: its goal at 75 s). Logs and the replay grow with it (a 1,200 s run held
+#: its goal at 73-76 s in both modes and executions). Logs and the replay grow with it (a 1,200 s run held
 #: 0.75 GB and wrote a 19.7 MB replay).
 MAX_TIME_LIMIT = 600.0
 #: Most control periods in one run (``time_limit / control_period``): the logs
