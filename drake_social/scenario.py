@@ -66,12 +66,14 @@ MAX_ITERATIONS = 10_000_000
 #: its goal at 73-76 s in both modes and executions). Logs and the replay grow with it (a 1,200 s run held
 #: 0.75 GB and wrote a 19.7 MB replay).
 MAX_TIME_LIMIT = 600.0
-#: Most control periods in one run (``time_limit / control_period``): the logs
-#: keep one sample per period (the default 300 s / 0.01 s is 30,000).
-MAX_CONTROL_STEPS = 600_000
-#: Most plant steps in one dynamic run (``time_limit / plant_time_step``;
-#: the default 300 s / 0.002 s is 150,000).
-MAX_PLANT_STEPS = 3_000_000
+#: Most control periods in one run (``time_limit / control_period``): the
+#: logs keep one sample per period, about 3 kB each (the default 300 s /
+#: 0.01 s is 30,000; this is MAX_TIME_LIMIT at the default period, a run that
+#: peaked at 0.55 GB).
+MAX_CONTROL_STEPS = 60_000
+#: Most plant steps in one dynamic run (``time_limit / plant_time_step``):
+#: MAX_TIME_LIMIT at the default 0.002 s step.
+MAX_PLANT_STEPS = 300_000
 #: Largest ``execution.replay_fps``, frames per second (the replay keeps every frame).
 MAX_REPLAY_FPS = 60.0
 #: Values of ``planner.near_radius_mode``.

@@ -272,21 +272,26 @@ def test_the_limits_leave_real_scenarios_alone(tmp_path):
     ("execution: {time_limit: 1200}", "execution.time_limit: must be <= 600 s, got 1200.0"),
     ("execution: {time_limit: .inf}", "execution.time_limit: must be finite numbers, got inf"),
     ("execution: {replay_fps: 1000}", "execution.replay_fps: must be <= 60 frames per second, got 1000.0"),
-    ("execution: {control_period: 0.0002, plant_time_step: 0.0001}",
-     "execution.control_period: must be >= execution.time_limit / 600,000 = 0.0005 s (a run may take at most "
-     "600,000 control periods), got 0.0002"),
-    ("execution: {plant_time_step: 0.00001}",
-     "execution.plant_time_step: must be >= execution.time_limit / 3,000,000 = 0.0001 s (a run may take at most "
-     "3,000,000 plant steps), got 1e-05"),
+    ("execution: {control_period: 0.002, plant_time_step: 0.001}",
+     "execution.control_period: must be >= execution.time_limit / 60,000 = 0.005 s (a run may take at most "
+     "60,000 control periods), got 0.002"),
+    ("execution: {time_limit: 600, control_period: 0.009}",
+     "execution.control_period: must be >= execution.time_limit / 60,000 = 0.01 s (a run may take at most "
+     "60,000 control periods), got 0.009"),
+    ("execution: {plant_time_step: 0.0005}",
+     "execution.plant_time_step: must be >= execution.time_limit / 300,000 = 0.001 s (a run may take at most "
+     "300,000 plant steps), got 0.0005"),
 ])
 def test_execution_numbers_that_grow_a_run_are_bounded(override, message):
     assert _message(TINY, [override]) == f"{TINY} (--set {override!r}): {message}"
 
 
 def test_the_bounds_themselves_are_accepted():
-    dut = load_scenario(TINY, ["execution: {time_limit: 600, replay_fps: 60, control_period: 0.001, "
-                               "plant_time_step: 0.0002}"])
+    dut = load_scenario(TINY, ["execution: {time_limit: 600, replay_fps: 60, control_period: 0.01, "
+                               "plant_time_step: 0.002}"])
     assert (dut.execution.time_limit, dut.execution.replay_fps) == (600.0, 60.0)
+    dut = load_scenario(TINY, ["execution: {time_limit: 60, control_period: 0.001, plant_time_step: 0.0002}"])
+    assert (dut.execution.control_period, dut.execution.plant_time_step) == (0.001, 0.0002)
 
 
 def test_simulate_refuses_a_time_limit_beyond_the_bound(tiny_scenario):
@@ -295,3 +300,7 @@ def test_simulate_refuses_a_time_limit_beyond_the_bound(tiny_scenario):
     with pytest.raises(ValueError, match=r"time_limit must be in \(0, 600\] seconds, got 1200.0"):
         simulate(tiny_scenario, waypoints=np.array([tiny_scenario.start, tiny_scenario.goal]), time_limit=1200.0,
                  analyze=False)
+    fine = load_scenario(TINY, ["execution: {control_period: 0.005, plant_time_step: 0.001}"])
+    with pytest.raises(ValueError, match=r"^time_limit 600.0 s is more than 60,000 control periods of 0.005 s or "
+                                         r"300,000 plant steps of 0.001 s$"):
+        simulate(fine, waypoints=np.array([fine.start, fine.goal]), time_limit=600.0, analyze=False)
