@@ -17,6 +17,7 @@ pure-numpy core may use the dataclasses without importing Drake.
 
 
 import dataclasses as dc
+import functools
 import math
 import typing
 from pathlib import Path
@@ -471,6 +472,7 @@ class _YamlLimit(Exception):
         self.mark = mark
 
 
+@functools.lru_cache(maxsize=1)
 def _limited_loader(yaml):
     """PyYAML's SafeLoader with :data:`MAX_YAML_DEPTH` and :data:`MAX_YAML_NODES` enforced while composing."""
 
