@@ -42,7 +42,7 @@ from drake_social.cost.social import SocialCost
 from drake_social.kinematics import ArmGeometry
 from drake_social.planning.result import PlannerResult
 from drake_social.planning.validity import ValidityChecker
-from drake_social.scenario import Scenario, ScenarioError
+from drake_social.scenario import MAX_CONTROL_STEPS, MAX_PLANT_STEPS, MAX_TIME_LIMIT, Scenario, ScenarioError
 from drake_social.sim.analysis import config_deviation, densify, point_deviation
 from drake_social.sim.diagram import TransportDiagram, _build, check_diagram_arguments
 from drake_social.waypoints import waypoint_array
@@ -269,8 +269,9 @@ def simulate(
             :func:`~drake_social.sim.diagram.build_diagram`. With ``meshcat``
             the run is recorded (``execution.replay_fps``); publish or export
             it afterwards (:mod:`drake_social.sim.replay`).
-        time_limit: simulated seconds before giving up; None =
-            ``scenario.execution.time_limit``.
+        time_limit: simulated seconds before giving up, in (0, MAX_TIME_LIMIT] and at
+            most MAX_CONTROL_STEPS control periods and MAX_PLANT_STEPS plant
+            steps; None = ``scenario.execution.time_limit``.
         analyze: check and measure the executed trajectory (:func:`analyze_execution`).
         analysis_checker: the checker of that analysis (None = Drake's).
         progress: optional ``progress(t)`` callback with the simulated time,
@@ -297,8 +298,14 @@ def simulate(
     require_checker(analysis_checker, "simulate", "analysis_checker", optional=True)
     require_callable(progress, "simulate", "progress")
     limit = float(scenario.execution.time_limit if time_limit is None else time_limit)
-    if limit <= scenario.execution.control_period:
-        raise ValueError(f"simulate: time_limit must be > execution.control_period {scenario.execution.control_period} "
+    if not 0 < limit <= MAX_TIME_LIMIT:
+        raise ValueError(f"time_limit must be in (0, {MAX_TIME_LIMIT:g}] seconds, got {limit}")
+    e = scenario.execution
+    if limit / e.control_period > MAX_CONTROL_STEPS or limit / e.plant_time_step > MAX_PLANT_STEPS:
+        raise ValueError(f"time_limit {limit} s is more than {MAX_CONTROL_STEPS:,} control periods of "
+                         f"{e.control_period} s or {MAX_PLANT_STEPS:,} plant steps of {e.plant_time_step} s")
+    if limit <= e.control_period:
+        raise ValueError(f"simulate: time_limit must be > execution.control_period {e.control_period} "
                          f"seconds (the sequencer decides once per control period), got {limit}")
     built = _build(scenario, checked.mode, checked.execution, checked.waypoints, checker, meshcat)
     root = built.diagram.CreateDefaultContext()
