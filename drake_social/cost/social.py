@@ -9,7 +9,11 @@ from drake_social.cost.agf import PersonalSpace, agf, agf_xy, gaussian, people_a
 from drake_social.kinematics import ArmGeometry, config_distance, displacement_bound
 from drake_social.limits import MAX_MOTION_STEPS
 
-__all__ = ["SocialCost", "interpolation_segments"]
+__all__ = ["FIELD_CHUNK_ELEMENTS", "SocialCost", "interpolation_segments"]
+
+#: Largest number of (point, person) values :meth:`SocialCost.field` holds at
+#: once (about 2 MB per temporary array); larger grids are evaluated in chunks.
+FIELD_CHUNK_ELEMENTS = 1 << 18
 
 
 def interpolation_segments(max_displacement: np.ndarray, resolution: float) -> np.ndarray:
@@ -269,6 +273,40 @@ class SocialCost:
     # ---- for figures ----------------------------------------------------------
 
     def field(self, x: np.ndarray, y: np.ndarray) -> np.ndarray:
-        """``G(x, y) = sum_i AGF_i(x, y)`` (thresholded), broadcast over x and y."""
+        """``G(x, y) = sum_i AGF_i(x, y)`` (thresholded), broadcast over x and y.
+
+        Evaluated in chunks of consecutive points, each against only the
+        people within the AGF's reach of the chunk's bounding box (the others
+        add exactly 0), so the temporary (points, people) arrays hold at most
+        about :data:`FIELD_CHUNK_ELEMENTS` values whatever the number of
+        points and people: a 512 x 512 heat map of a crowd costs megabytes,
+        not gigabytes.
+        """
         x, y = np.broadcast_arrays(np.asarray(x, float), np.asarray(y, float))
-        return agf(np.stack([x, y], -1), self.people, self.space).sum(-1)
+        shape = x.shape
+        x, y = x.ravel(), y.ravel()
+        out = np.zeros(x.size)
+        h = len(self.people)
+        if h == 0 or x.size == 0:
+            return out.reshape(shape)
+        # Beyond the reach every AGF is <= threshold, hence 0; the relative
+        # margin keeps a person whose value rounds just above the threshold.
+        reach = self.space.max_reach * (1.0 + 1e-9) + 1e-9
+        chunk = max(1, FIELD_CHUNK_ELEMENTS // h)
+        px, py = self.people[:, 0], self.people[:, 1]
+        for start in range(0, x.size, chunk):
+            cx, cy = x[start : start + chunk], y[start : start + chunk]
+            near = np.ones(h, dtype=bool)
+            if np.isfinite(reach):
+                # Distance from each person to the chunk's bounding box (NaN keeps the person).
+                gap_x = np.maximum(np.maximum(cx.min() - px, px - cx.max()), 0.0)
+                gap_y = np.maximum(np.maximum(cy.min() - py, py - cy.max()), 0.0)
+                near = ~(np.hypot(gap_x, gap_y) > reach)
+            if near.any():
+                # The far people's exact zeros stay in their columns, so each
+                # point's sum runs over the same H values in the same order as
+                # one unchunked evaluation would: the same bits.
+                values = np.zeros((len(cx), h))
+                values[:, near] = agf_xy(cx, cy, self.people[near], self.space)
+                out[start : start + chunk] = values.sum(-1)
+        return out.reshape(shape)
