@@ -50,8 +50,8 @@ from pydrake.common import Parallelism
 from pydrake.planning import LinearDistanceAndInterpolationProvider, SceneGraphCollisionChecker
 
 from drake_social.kinematics import displacement_bound
+from drake_social.model import plant
 from drake_social.model.plant import (
-    ENVIRONMENT_PART,
     ScenarioDiagram,
     build_robot_diagram,
     environment_discs,
@@ -453,7 +453,7 @@ def _segment_groups(scenario: Scenario, wp: np.ndarray) -> list[tuple[int, int]]
     first, shapes = 0, set()
     for i in range(len(wp) - 1):
         near = set(near_environment(scenario, wp[i : i + 1, :2], wp[i + 1 : i + 2, :2]).tolist())
-        if i > first and len(shapes | near) > ENVIRONMENT_PART:
+        if i > first and len(shapes | near) > plant.ENVIRONMENT_PART:
             groups.append((first, i))
             first, shapes = i, set()
         shapes |= near

@@ -91,9 +91,11 @@ def registration_order(scenario: Scenario) -> list[int]:
     return [*range(n_obstacles), *range(n_obstacles + n_people, n), *range(n_obstacles, n_obstacles + n_people)]
 
 
-def environment_parts(indices: Sequence[int], size: int = ENVIRONMENT_PART) -> list[list[int]]:
-    """``indices`` in consecutive parts of at most ``size`` (>= 1); one empty part when there are none."""
+def environment_parts(indices: Sequence[int], size: int | None = None) -> list[list[int]]:
+    """``indices`` in consecutive parts of at most ``size`` (>= 1; None =
+    :data:`ENVIRONMENT_PART`); one empty part when there are none."""
     indices = [int(i) for i in indices]
+    size = ENVIRONMENT_PART if size is None else size
     if size < 1:
         raise ValueError(f"size must be >= 1, got {size}")
     return [indices[k : k + size] for k in range(0, len(indices), size)] or [[]]

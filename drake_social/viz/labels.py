@@ -39,10 +39,11 @@ def fit_text(text: str, max_chars: int = MAX_TITLE_CHARS, max_lines: int = MAX_T
     if max_chars < 1 or max_lines < 1:
         raise ValueError(f"max_chars and max_lines must be >= 1, got {max_chars} and {max_lines}")
     head = text[: max_lines * (max_chars + 1) + 1]
-    if len(head) == len(text):
+    cut = len(head) < len(text)
+    if not cut:
         head = head.rstrip("\n")
     lines = head.split("\n")
-    more = len(lines) > max_lines or len(head) < len(text)
+    more = len(lines) > max_lines or cut
     lines = lines[:max_lines]
     out = []
     for k, line in enumerate(lines):
