@@ -39,8 +39,10 @@ def crowd_scenario_text(size: float = 100.0, people: int = 300, obstacles: int =
     start = (3.0, 3.0)
     goal = (size - 3.0, size - 3.0)
     taken: list[tuple[float, float, float]] = [(start[0], start[1], clearance), (goal[0], goal[1], clearance)]
-    # Occupied discs (x, y, radius) hashed on a coarse grid for the overlap tests.
-    cell = 2.0
+    # Occupied discs (x, y, radius) hashed on a grid of cells no smaller than
+    # the largest gap tested (two box discs of 0.5 * hypot(1.6, 1.6) m and the
+    # 0.05 m spacing), so that a clash is always in a neighbouring cell.
+    cell = 2.0 * 0.5 * math.hypot(1.6, 1.6) + 0.05
     grid: dict[tuple[int, int], list[tuple[float, float, float]]] = {}
 
     def add(x: float, y: float, r: float) -> None:

@@ -18,7 +18,7 @@ import pytest
 
 from crowd_scenarios import crowd_scenario_text
 from drake_social.cost import SocialCost
-from drake_social.cost.agf import agf
+from drake_social.cost.agf import agf, agf_xy
 from drake_social.scenario import load_scenario
 from drake_social.viz.labels import ELLIPSIS, MAX_LABEL_CHARS, MAX_TITLE_CHARS, MAX_TITLE_LINES, fit_text
 from drake_social.viz.world import field_grid, field_resolution
@@ -53,6 +53,28 @@ def test_field_of_a_crowd_holds_bounded_temporaries(crowd):
         row = agf(np.stack([xs, np.full_like(xs, ys[j])], -1), cost.people, cost.space).sum(-1)
         assert np.array_equal(values[j], row)
     assert values.max() > 0.2 and (values == 0).mean() > 0.1  # people are there, and far from everywhere
+
+
+def test_cost_along_many_configurations_holds_bounded_temporaries(crowd):
+    """S(q) of 20,000 configurations among 300 people (a long path's cost
+    profile): 30 million (point, person) values, 240 MB per temporary array if
+    held at once; bounded now, and equal to the direct formula bit for bit."""
+    cost = SocialCost.from_scenario(crowd)
+    rng = np.random.default_rng(1)
+    q = np.column_stack([rng.uniform(0, 100, (20_000, 2)), rng.uniform(-np.pi, np.pi, (20_000, 2))])
+    tracemalloc.start()
+    try:
+        values = cost(q)
+        points = cost.point_costs(q)
+        _, peak = tracemalloc.get_traced_memory()
+    finally:
+        tracemalloc.stop()
+    assert peak < 64e6, f"S(q) peaked at {peak / 1e6:.0f} MB"
+    part = q[:700]
+    x, y = cost.geometry.interest_xy(part, cost._active)
+    assert np.array_equal(values[:700], agf_xy(x, y, cost.people, cost.space).sum(-1) @ cost._active_weights)
+    assert np.array_equal(points[:700], agf(cost.geometry.interest_points(part), cost.people, cost.space).sum(-1))
+    assert (values > 0).mean() > 0.05
 
 
 def test_fit_text_cuts_lines_and_length():

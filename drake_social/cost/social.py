@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from drake_social.cost import kernel
-from drake_social.cost.agf import PersonalSpace, agf, agf_xy, gaussian, people_array
+from drake_social.cost.agf import PersonalSpace, agf_xy, gaussian, people_array
 from drake_social.kinematics import ArmGeometry, config_distance, displacement_bound
 from drake_social.limits import MAX_MOTION_STEPS
 
@@ -110,15 +110,23 @@ class SocialCost:
 
     def point_costs(self, q: np.ndarray) -> np.ndarray:
         """Unweighted ``sum_i AGF_i(p_j(q))`` for every interest point, (..., 3 + P)."""
-        return agf(self.geometry.interest_points(q), self.people, self.space).sum(-1)
+        points = self.geometry.interest_points(q)
+        return self._people_sum(points[..., 0], points[..., 1])
 
     def __call__(self, q: np.ndarray) -> np.ndarray:
-        """S(q) for q of shape (..., 4); returns shape (...)."""
+        """S(q) for q of shape (..., 4); returns shape (...).
+
+        The people's sums are taken as in :meth:`field` (in chunks of
+        bounded memory), so a long path's profile in a crowd costs megabytes."""
         q = np.asarray(q, dtype=float)
         if len(self.people) == 0 or len(self._active) == 0:
             return np.zeros(q.shape[:-1])
         x, y = self.geometry.interest_xy(q, self._active)
-        return agf_xy(x, y, self.people, self.space).sum(-1) @ self._active_weights
+        # In the memory layout of x, as the sums of one (..., K, H) array
+        # would be: the weighted sum over K then runs the same BLAS path.
+        sums = np.empty_like(x)
+        sums[...] = self._people_sum(x, y)
+        return sums @ self._active_weights
 
     # ---- along motions --------------------------------------------------------
 
@@ -280,8 +288,13 @@ class SocialCost:
         add exactly 0), so the temporary (points, people) arrays hold at most
         about :data:`FIELD_CHUNK_ELEMENTS` values whatever the number of
         points and people: a 512 x 512 heat map of a crowd costs megabytes,
-        not gigabytes.
+        not gigabytes. Each point's sum is that of ``agf(...).sum(-1)`` of all
+        points at once, bit for bit.
         """
+        return self._people_sum(x, y)
+
+    def _people_sum(self, x: np.ndarray, y: np.ndarray) -> np.ndarray:
+        """:meth:`field` (also the people's sums of :meth:`__call__` and :meth:`point_costs`)."""
         x, y = np.broadcast_arrays(np.asarray(x, float), np.asarray(y, float))
         shape = x.shape
         x, y = x.ravel(), y.ravel()
