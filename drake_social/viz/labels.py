@@ -10,11 +10,12 @@ from __future__ import annotations
 
 __all__ = ["MAX_LABEL_CHARS", "MAX_TITLE_CHARS", "MAX_TITLE_LINES", "ELLIPSIS", "fit_text"]
 
-#: Longest line of a figure title, characters (a title of the default
-#: 11-inch figure holds about 120 at its font size).
-MAX_TITLE_CHARS = 160
-#: Most lines of a figure title.
-MAX_TITLE_LINES = 3
+#: Longest line of a figure title, characters (the narrowest figure with a
+#: title, a square map's 10.4 inches, holds about 110 at the title's 12 pt).
+MAX_TITLE_CHARS = 100
+#: Most lines of a figure title (the map figures have room for one, the
+#: tracking figure for two).
+MAX_TITLE_LINES = 2
 #: Longest label next to a person on the map, characters.
 MAX_LABEL_CHARS = 40
 #: Marks where a text was cut.
@@ -22,8 +23,10 @@ ELLIPSIS = "\u2026"
 
 
 def fit_text(text: str, max_chars: int = MAX_TITLE_CHARS, max_lines: int = MAX_TITLE_LINES) -> str:
-    """``text`` with at most ``max_lines`` lines of at most ``max_chars``
-    characters each; a cut line or a dropped rest ends in :data:`ELLIPSIS`.
+    """The first ``max_lines`` lines of ``text``, each cut to ``max_chars``
+    characters; a cut line, or the last line when lines were left out, ends
+    in :data:`ELLIPSIS`. Lines are not wrapped: the figures' layouts are
+    fixed, with room for a known number of title lines.
 
     Only the first ``max_lines * (max_chars + 1) + 1`` characters are
     looked at, so the cost does not depend on the length of ``text``.
@@ -47,8 +50,7 @@ def fit_text(text: str, max_chars: int = MAX_TITLE_CHARS, max_lines: int = MAX_T
     lines = lines[:max_lines]
     out = []
     for k, line in enumerate(lines):
-        last = k == len(lines) - 1
-        if len(line) > max_chars or (last and more):
+        if len(line) > max_chars or (k == len(lines) - 1 and more):
             line = line[: max_chars - 1] + ELLIPSIS
         out.append(line)
     return "\n".join(out)

@@ -234,7 +234,7 @@ def path_figure(
         result: the planner's result; without a path, the map shows start,
             goal and the tree explored.
         title: the figure title; None = the scenario's description (either
-            cut by :func:`~drake_social.viz.labels.fit_text`).
+            cut to one line by :func:`~drake_social.viz.labels.fit_text`).
         poses: see :func:`draw_path`.
         tree: draw the tree's base edges; None = only when there is no path.
         resolution: heat-map cell size, metres; None = picked from the
@@ -255,7 +255,7 @@ def path_figure(
         draw_robot(ax, geometry, np.asarray(scenario.goal, float))
         ax.set_title(f"{result.algorithm}: no path found; {result.tree_size} tree nodes", fontsize=9,
                      color="#b00000")
-    fig.suptitle(fit_text(title if title is not None else scenario.description or "scenario"))
+    fig.suptitle(fit_text(title if title is not None else scenario.description or "scenario", max_lines=1))
     fig.legend(loc="lower center", bbox_to_anchor=(0.5, 0.0), ncol=5, fontsize=8, frameon=False)
     return fig
 

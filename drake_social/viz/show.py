@@ -88,7 +88,7 @@ def show_figure(scenario: Scenario, *, title: str | None = None, resolution: flo
     Args:
         scenario: a validated scenario.
         title: the figure title; None = the scenario's description (either
-            cut by :func:`~drake_social.viz.labels.fit_text`).
+            cut to one line by :func:`~drake_social.viz.labels.fit_text`).
         resolution: heat-map cell size, metres; None = picked from the
             world's size (a bounded number of cells).
 
@@ -99,7 +99,7 @@ def show_figure(scenario: Scenario, *, title: str | None = None, resolution: flo
     draw_robot(ax, geometry, np.asarray(scenario.start, float), labels=True)
     draw_robot(ax, geometry, np.asarray(scenario.goal, float))
     s_start, s_goal = cost(np.array([scenario.start, scenario.goal], float))
-    fig.suptitle(fit_text(title if title is not None else scenario.description or "scenario"))
+    fig.suptitle(fit_text(title if title is not None else scenario.description or "scenario", max_lines=1))
     n = len(scenario.people)
     people = "1 person" if n == 1 else f"{n} people"
     ax.set_title(f"{people}; social cost S(start) = {s_start:.2f}, S(goal) = {s_goal:.2f}", fontsize=9)
