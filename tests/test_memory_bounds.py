@@ -143,6 +143,7 @@ def test_local_drake_checks_answer_as_the_whole_room(boxes, monkeypatch):
         _segment_groups,
         check_start_goal,
         near_environment,
+        valid_configurations,
         verify_path,
     )
     from drake_social.model.planar_checker import PlanarChecker
@@ -182,6 +183,10 @@ def test_local_drake_checks_answer_as_the_whole_room(boxes, monkeypatch):
             walk.append(q)
     walk = np.array(walk)
     assert len(_segment_groups(boxes, walk)) > 1
+    samples = np.vstack([walk[:10], rng.uniform(lo, hi, (40, 4))])  # a run, then scattered (many collide)
+    verdicts = valid_configurations(boxes, samples)
+    assert np.array_equal(verdicts, whole.are_valid(samples)) and verdicts[:10].all() and not verdicts.all()
+    assert np.array_equal(valid_configurations(boxes, samples[12:13]), whole.are_valid(samples[12:13]))
     assert verify_path(planar, walk) is None is verify_path(whole, walk)
     walk[20] = np.array([*boxes.world.obstacles[0].center, 0.0, 0.0])  # on a box
     assert verify_path(planar, walk) == verify_path(whole, walk) == 19

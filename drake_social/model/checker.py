@@ -62,7 +62,7 @@ from drake_social.planning.geometric import CheckerBase
 from drake_social.scenario import Scenario, ScenarioError
 
 __all__ = ["CHECKERS", "Contact", "SceneGraphChecker", "check_start_goal", "local_checkers", "make_checker",
-           "near_environment", "verify_path"]
+           "near_environment", "valid_configurations", "verify_path"]
 
 #: Names of the validity checkers :func:`make_checker` builds; the first is the default.
 CHECKERS = ("planar", "drake", "numpy")
@@ -288,22 +288,32 @@ def near_environment(scenario: Scenario, a_xy: np.ndarray, b_xy: np.ndarray, mar
     of a track: every other shape is farther than any robot point at any
     configuration on the tracks, whatever the arm angles.
     """
+    return _near_function(scenario, margin)(a_xy, b_xy)
+
+
+def _near_function(scenario: Scenario, margin: float = 0.01):
+    """:func:`near_environment` of ``scenario`` as a function of the tracks
+    (the room's discs and the robot's extent computed once)."""
     from drake_social.kinematics import ArmGeometry
 
     geometry = ArmGeometry.from_scenario(scenario)
     extent = max(float(scenario.robot.base_radius), float(np.sum(geometry.lever(include_body=True))))
     discs = environment_discs(scenario)
     order = np.asarray(registration_order(scenario), int)
-    a = np.asarray(a_xy, float).reshape(-1, 2)
-    d = np.asarray(b_xy, float).reshape(-1, 2) - a
-    near = np.zeros(len(discs), dtype=bool)
-    for start, step in zip(a, d):
-        rel = discs[:, :2] - start
-        length2 = float(step @ step)
-        t = np.clip(rel @ step / length2, 0.0, 1.0) if length2 > 0 else np.zeros(len(discs))
-        gap = np.hypot(*(rel - t[:, None] * step).T) - discs[:, 2]
-        near |= ~(gap > extent + margin)  # NaN keeps the shape
-    return order[near[order]]
+
+    def near(a_xy: np.ndarray, b_xy: np.ndarray) -> np.ndarray:
+        a = np.asarray(a_xy, float).reshape(-1, 2)
+        d = np.asarray(b_xy, float).reshape(-1, 2) - a
+        hit = np.zeros(len(discs), dtype=bool)
+        for start, step in zip(a, d):
+            rel = discs[:, :2] - start
+            length2 = float(step @ step)
+            t = np.clip(rel @ step / length2, 0.0, 1.0) if length2 > 0 else np.zeros(len(discs))
+            gap = np.hypot(*(rel - t[:, None] * step).T) - discs[:, 2]
+            hit |= ~(gap > extent + margin)  # NaN keeps the shape
+        return order[hit[order]]
+
+    return near
 
 
 def local_checkers(scenario: Scenario, a_xy: np.ndarray, b_xy: np.ndarray, resolution: float | None = None,
@@ -443,6 +453,23 @@ def verify_path(scenario_or_checker, waypoints: np.ndarray) -> int | None:
     return None
 
 
+def valid_configurations(scenario: Scenario, qs: np.ndarray, resolution: float | None = None) -> np.ndarray:
+    """Drake's verdicts on configurations (N, 4) -> (N,) bool (within the
+    limits and collision-free, :meth:`SceneGraphChecker.are_valid`), from
+    SceneGraphs of the shapes near runs of consecutive configurations (a
+    trajectory's samples): the same answers as one checker of the whole room,
+    in memory that does not grow with the room (see :func:`verify_path`)."""
+    qs = np.asarray(qs, float).reshape(-1, 4)
+    ok = np.ones(len(qs), dtype=bool)
+    groups = _segment_groups(scenario, qs) if len(qs) > 1 else [(0, len(qs) - 1)] if len(qs) else []
+    for first, stop in groups:
+        run = qs[first : stop + 1]
+        a, b = (run[:-1, :2], run[1:, :2]) if len(run) > 1 else (run[:, :2], run[:, :2])
+        for part in local_checkers(scenario, a, b, resolution):
+            ok[first : stop + 1] &= np.asarray(part.are_valid(run), bool)
+    return ok
+
+
 def _segment_groups(scenario: Scenario, wp: np.ndarray) -> list[tuple[int, int]]:
     """Consecutive segments ``[first, stop)`` of the path ``wp`` grouped so
     that the shapes near a group fit in one part
@@ -451,8 +478,9 @@ def _segment_groups(scenario: Scenario, wp: np.ndarray) -> list[tuple[int, int]]
     alone (checked in several parts)."""
     groups: list[tuple[int, int]] = []
     first, shapes = 0, set()
+    near_of = _near_function(scenario)
     for i in range(len(wp) - 1):
-        near = set(near_environment(scenario, wp[i : i + 1, :2], wp[i + 1 : i + 2, :2]).tolist())
+        near = set(near_of(wp[i : i + 1, :2], wp[i + 1 : i + 2, :2]).tolist())
         if i > first and len(shapes | near) > plant.ENVIRONMENT_PART:
             groups.append((first, i))
             first, shapes = i, set()
