@@ -68,8 +68,9 @@ def crowd_scenario_text(size: float = 100.0, people: int = 300, obstacles: int =
                 return float(x), float(y)
         raise ValueError(f"no room for another disc of radius {r} m in a {size} m room")
 
-    lines = [f"description: {_quoted(description if description is not None else f'crowd: {size:g} m room, {people} people, {obstacles} boxes')}",
-             "world:", f"  bounds: [0.0, 0.0, {size}, {size}]"]
+    if description is None:
+        description = f"crowd: {size:g} m room, {people} people, {obstacles} boxes"
+    lines = [f"description: {_quoted(description)}", "world:", f"  bounds: [0.0, 0.0, {size}, {size}]"]
     if obstacles:
         lines.append("  obstacles:")
     for _ in range(obstacles):
