@@ -183,8 +183,9 @@ def analyze_execution(
         waypoints: (N, 4) planned path.
         times, q: (T,), (T, 4) executed configurations over time.
         checker: the collision checker of the executed configurations;
-            None = Drake's (:class:`~drake_social.model.checker.SceneGraphChecker`),
-            independent of the planar checker that planned. The minimum
+            None = Drake's (:func:`~drake_social.model.checker.valid_configurations`:
+            SceneGraphCollisionChecker answers from the shapes near the
+            trajectory), independent of the planar checker that planned. The minimum
             clearance is the exact planar checker's.
 
     Raises:
@@ -192,14 +193,12 @@ def analyze_execution(
         ScenarioError: ``waypoints`` not an (N, 4) array with 2 <= N <=
             MAX_WAYPOINTS; ``times`` and ``q`` not (T,) and (T, 4) finite.
     """
-    from drake_social.model.checker import make_checker
+    from drake_social.model.checker import make_checker, valid_configurations
 
     require_scenario(scenario, "analyze_execution")
     require_checker(checker, "analyze_execution", optional=True)
     waypoints = waypoint_array(waypoints, "analyze_execution: waypoints")
     times, q = _trajectory(times, q, "analyze_execution")
-    if checker is None:
-        checker = make_checker(scenario, "drake")
     # Clearances from the exact planar checker: Drake's cylinder-box distance
     # can exceed the true one (see drake_social.model.checker).
     planar = make_checker(scenario, "planar")
@@ -212,7 +211,10 @@ def analyze_execution(
     resolution = float(scenario.planner.collision_resolution)
     # Which executed sample each densified configuration follows (for the collision time).
     dense, owner = densify(geometry, q, resolution, return_owner=True)
-    valid = np.asarray(checker.are_valid(dense), bool)
+    if checker is None:  # Drake's, from SceneGraphs of the shapes near the trajectory (bounded memory)
+        valid = valid_configurations(scenario, dense)
+    else:
+        valid = np.asarray(checker.are_valid(dense), bool)
     clearance = float(np.min(planar.clearances(dense))) if len(dense) else math.inf
     first = None if valid.all() else float(times[owner[int(np.argmin(valid))]])
     return ExecutionReport(
