@@ -20,11 +20,17 @@ duration``).
 
 Ruckig is only ever given a current and a target state, never intermediate
 positions: the community version would otherwise call a remote web service.
+Nor does it take position limits (a feature of Ruckig Pro); with
+``position_limits`` the source itself keeps the reference within them: it
+checks each new segment's position extrema and, when a segment would leave
+the limits, heads for the new target only once at rest (a rest-to-rest
+segment between two positions within the limits stays within them).
 
 Factories: :func:`arm_source_from_options` (the two arm joints) and
 :func:`reference_source_from_options` (the synchronized 4-DoF reference
 ``[x, y, psi1, psi2]``, phase-synchronized so that the base moves on the
-straight segment, with the base speed limit on the *norm* of ``[vx, vy]``).
+straight segment, with the base speed limit on the *norm* of ``[vx, vy]``
+and the wheels' limit on ``|vx| + |vy|``).
 
 Example::
 
@@ -73,6 +79,12 @@ _SYNCHRONIZATIONS = {
 # DoF that does not move still has a valid (positive) limit.
 _SHARE_FLOOR = 1e-6
 
+# Ruckig's position extrema and at_time() are exact up to rounding; a segment
+# whose extrema pass a position limit by at most this much (in the DoF's
+# units, relative to max(1, |limit|)) is within it, and its outputs are
+# clipped to the limits, which removes only that rounding.
+_LIMIT_ROUNDING = 1e-9
+
 _SERIALS = itertools.count()
 
 
@@ -89,11 +101,14 @@ class RuckigSegment:
         rest: (n,) position held when ``trajectory`` is None.
         target: (n,) target this segment heads for, or None when no target
             has been seen yet (any target then starts a segment).
+        clip: (lower, upper) position limits the segment's extrema respect up
+            to rounding; positions are clipped to them, or None.
     """
 
-    __slots__ = ("t0", "trajectory", "rest", "target", "target_list", "serial")
+    __slots__ = ("t0", "trajectory", "rest", "target", "target_list", "serial", "clip")
 
-    def __init__(self, t0: float, trajectory, rest: np.ndarray, target: np.ndarray | None):
+    def __init__(self, t0: float, trajectory, rest: np.ndarray, target: np.ndarray | None,
+                 clip: tuple[np.ndarray, np.ndarray] | None = None):
         object.__setattr__(self, "serial", next(_SERIALS))  # identifies the segment in caches
         object.__setattr__(self, "t0", float(t0))
         object.__setattr__(self, "trajectory", trajectory)
@@ -105,6 +120,7 @@ class RuckigSegment:
             target.flags.writeable = False
         object.__setattr__(self, "target", target)
         object.__setattr__(self, "target_list", None if target is None else target.tolist())
+        object.__setattr__(self, "clip", clip)
 
     def __setattr__(self, name, value):
         raise AttributeError("RuckigSegment is immutable")
@@ -137,7 +153,10 @@ class RuckigSegment:
             return self.target.copy(), zero, zero.copy()
         # at_time extrapolates for t < t0: clamp.
         p, v, a = self.trajectory.at_time(max(t - self.t0, 0.0))
-        return np.array(p, float), np.array(v, float), np.array(a, float)
+        p = np.array(p, float)
+        if self.clip is not None:
+            np.clip(p, self.clip[0], self.clip[1], out=p)  # rounding only: see _LIMIT_ROUNDING
+        return p, np.array(v, float), np.array(a, float)
 
 
 def _limit_vector(name: str, value, n: int) -> np.ndarray:
@@ -191,8 +210,10 @@ class RuckigTrajectorySource(LeafSystem):
 
     Raises:
         ValueError: limits not positive or of the wrong length, unknown
-            synchronization, bad ``xy_norm_dofs``.
-        RuntimeError: (from an update) Ruckig cannot compute a segment.
+            synchronization, bad ``xy_norm_dofs``, ``xy_max_abs_sum`` or
+            ``position_limits``.
+        RuntimeError: (from an update) Ruckig cannot compute a segment, or
+            the target lies outside ``position_limits``.
     """
 
     def __init__(
@@ -205,6 +226,8 @@ class RuckigTrajectorySource(LeafSystem):
         period: float,
         synchronization: str | ruckig.Synchronization = "time",
         xy_norm_dofs: Sequence[int] | None = None,
+        xy_max_abs_sum: float | None = None,
+        position_limits: tuple[Sequence[float], Sequence[float]] | None = None,
         preview: float | None = None,
     ):
         super().__init__()
@@ -236,6 +259,32 @@ class RuckigTrajectorySource(LeafSystem):
                     f"got {xy_norm_dofs!r}"
                 )
             self._norm_dofs = np.array(dofs)
+        self._max_abs_sum = None
+        if xy_max_abs_sum is not None:
+            if self._norm_dofs is None or not (np.isfinite(xy_max_abs_sum) and xy_max_abs_sum > 0):
+                raise ValueError(
+                    f"RuckigTrajectorySource: xy_max_abs_sum must be a finite number > 0 and needs xy_norm_dofs, "
+                    f"got {xy_max_abs_sum!r}"
+                )
+            self._max_abs_sum = float(xy_max_abs_sum)
+        self._position_limits = None
+        if position_limits is not None:
+            try:
+                lower, upper = (np.array(v, float).reshape(-1) for v in position_limits)
+            except (TypeError, ValueError):
+                lower = upper = np.zeros(0)
+            if (lower.shape != (n,) or upper.shape != (n,) or not np.all(np.isfinite(lower))
+                    or not np.all(np.isfinite(upper)) or not np.all(lower < upper)):
+                raise ValueError(
+                    f"RuckigTrajectorySource: position_limits must be (lower, upper) of {n} finite numbers each "
+                    f"with lower < upper, got {position_limits!r}"
+                )
+            if not np.all((initial >= lower) & (initial <= upper)):
+                raise ValueError(f"RuckigTrajectorySource: initial_position {initial.tolist()} is outside "
+                                 f"position_limits [{lower.tolist()}, {upper.tolist()}]")
+            lower.flags.writeable = False
+            upper.flags.writeable = False
+            self._position_limits = (lower, upper)
 
         self._target_port = self.DeclareVectorInputPort("target", n)
         self._segment_index = self.DeclareAbstractState(AbstractValue.Make(self._RestSegment(0.0, initial)))
@@ -268,6 +317,10 @@ class RuckigTrajectorySource(LeafSystem):
         q = np.array(q, float).reshape(-1)
         if q.shape != (self._n,) or not np.all(np.isfinite(q)):
             raise ValueError(f"{self.get_name()}: SetInitialPosition needs {self._n} finite numbers, got {q!r}")
+        limits = self._position_limits
+        if limits is not None and not np.all((q >= limits[0]) & (q <= limits[1])):
+            raise ValueError(f"{self.get_name()}: SetInitialPosition: {q.tolist()} is outside the position limits "
+                             f"[{limits[0].tolist()}, {limits[1].tolist()}]")
         context.get_mutable_abstract_state(self._segment_index).set_value(self._RestSegment(context.get_time(), q))
 
     # ---- event -----------------------------------------------------------------
@@ -280,6 +333,10 @@ class RuckigTrajectorySource(LeafSystem):
         if self._norm_dofs is not None:
             g = self._norm_dofs
             share = _direction_share(d[g], v[g], a[g])
+            if self._max_abs_sum is not None:
+                # Along the segment v_i = s share_i, so sum |v_i| <= xy_max_abs_sum
+                # when the group's speed s <= xy_max_abs_sum / sum(share).
+                vmax[g] = np.minimum(vmax[g], self._max_abs_sum / share.sum())
             vmax[g] *= share
             amax[g] *= share
             jmax[g] *= share
@@ -297,8 +354,27 @@ class RuckigTrajectorySource(LeafSystem):
             raise RuntimeError(f"{self.get_name()}: the target input must be finite, got {target}")
         t = context.get_time()
         p, v, a = segment.at(t)
-        vmax, amax, jmax = self._Limits(target - p, v, a)
+        limits = self._position_limits
+        if limits is not None and not np.all((target >= limits[0]) & (target <= limits[1])):
+            raise RuntimeError(f"{self.get_name()}: the target {target.tolist()} at t = {t} s is outside the "
+                               f"position limits [{limits[0].tolist()}, {limits[1].tolist()}]")
+        at_rest = not (np.any(v) or np.any(a))
+        trajectory = self._Calculate(t, p, v, a, target, self._synchronization)
+        if limits is not None and not self._WithinLimits(trajectory):
+            if not at_rest:
+                # The current segment stays within the limits and ends at rest;
+                # the next update after that starts a rest-to-rest segment.
+                return EventStatus.DidNothing()
+            trajectory = self._Calculate(t, p, v, a, target, ruckig.Synchronization.Phase)
+            if not self._WithinLimits(trajectory):
+                raise RuntimeError(f"{self.get_name()}: the straight segment from {p.tolist()} to "
+                                   f"{target.tolist()} leaves the position limits (a bug)")
+        state.get_mutable_abstract_state(self._segment_index).set_value(
+            RuckigSegment(t, trajectory, p, target, clip=limits))
 
+    def _Calculate(self, t: float, p: np.ndarray, v: np.ndarray, a: np.ndarray, target: np.ndarray,
+                   synchronization: ruckig.Synchronization):
+        vmax, amax, jmax = self._Limits(target - p, v, a)
         inp = ruckig.InputParameter(self._n)
         inp.current_position = p.tolist()
         inp.current_velocity = v.tolist()
@@ -309,7 +385,7 @@ class RuckigTrajectorySource(LeafSystem):
         inp.max_velocity = vmax.tolist()
         inp.max_acceleration = amax.tolist()
         inp.max_jerk = jmax.tolist()
-        inp.synchronization = self._synchronization
+        inp.synchronization = synchronization
         # Never set inp.intermediate_positions (see the module docstring).
         trajectory = ruckig.Trajectory(self._n)
         try:
@@ -319,7 +395,16 @@ class RuckigTrajectorySource(LeafSystem):
             raise RuntimeError(f"{self.get_name()}: Ruckig failed at t = {t} s: {error}") from error
         if result != ruckig.Result.Working:
             raise RuntimeError(f"{self.get_name()}: Ruckig failed at t = {t} s with {result}; input:\n{inp}")
-        state.get_mutable_abstract_state(self._segment_index).set_value(RuckigSegment(t, trajectory, p, target))
+        return trajectory
+
+    def _WithinLimits(self, trajectory) -> bool:
+        lower, upper = self._position_limits
+        extrema = trajectory.position_extrema
+        low = np.array([e.min for e in extrema])
+        high = np.array([e.max for e in extrema])
+        slack_low = _LIMIT_ROUNDING * np.maximum(1.0, np.abs(lower))
+        slack_high = _LIMIT_ROUNDING * np.maximum(1.0, np.abs(upper))
+        return bool(np.all(low >= lower - slack_low) and np.all(high <= upper + slack_high))
 
     # ---- outputs ---------------------------------------------------------------
 
@@ -351,14 +436,20 @@ class RuckigTrajectorySource(LeafSystem):
         output.SetAtIndex(0, 1.0 if context.get_time() - segment.t0 >= segment.duration else 0.0)
 
 
-def arm_source_from_options(execution_options: ExecutionOptions, initial_arm: Sequence[float]) -> RuckigTrajectorySource:
+def arm_source_from_options(
+    execution_options: ExecutionOptions, initial_arm: Sequence[float],
+    position_limits: tuple[Sequence[float], Sequence[float]] | None = None,
+) -> RuckigTrajectorySource:
     """The arm's reference (2 DoFs ``[psi1, psi2]``, radians) with the scenario's arm limits.
 
     Args:
         execution_options: a scenario's ``execution`` section.
         initial_arm: (2,) initial joint angles, radians.
+        position_limits: (lower, upper) joint limits the reference keeps
+            to (``robot.joint_lower``, ``robot.joint_upper``), radians, or None.
     """
     return RuckigTrajectorySource(
+        position_limits=position_limits,
         initial_position=initial_arm,
         max_velocity=execution_options.arm_max_velocity,
         max_acceleration=execution_options.arm_max_acceleration,
@@ -368,22 +459,32 @@ def arm_source_from_options(execution_options: ExecutionOptions, initial_arm: Se
 
 
 def reference_source_from_options(
-    execution_options: ExecutionOptions, initial_q: Sequence[float]
+    execution_options: ExecutionOptions, initial_q: Sequence[float],
+    position_limits: tuple[Sequence[float], Sequence[float]] | None = None,
 ) -> RuckigTrajectorySource:
     """The synchronized reference of the whole configuration ``[x, y, psi1, psi2]``.
 
     Phase-synchronized, so base and arm start and arrive together and (from
     rest) move proportionally: the base on the straight segment. The base
     limits bound the norm of ``[vx, vy]`` (and of the acceleration and jerk)
-    through ``xy_norm_dofs=(0, 1)``. Its ``mean_velocity`` previews one
-    ``control_period``, the feed-forward of the sampled base controller.
+    through ``xy_norm_dofs=(0, 1)``, and the wheels' limit bounds ``|vx| +
+    |vy|`` by ``max_wheel_speed * wheel_radius`` (``xy_max_abs_sum``), so the
+    base's speed on a segment is at most
+    :func:`~drake_social.control.holonomic.wheel_limited_speed` and the
+    wheels are never asked for more than they give. Its ``mean_velocity``
+    previews one ``control_period``, the feed-forward of the sampled base
+    controller.
 
     Args:
         execution_options: a scenario's ``execution`` section.
         initial_q: (4,) initial configuration (metres, radians).
+        position_limits: (lower, upper) limits of ``[x, y, psi1, psi2]`` the
+            reference keeps to (the room bounds and the joint limits), or None.
     """
     e = execution_options
     return RuckigTrajectorySource(
+        xy_max_abs_sum=e.max_wheel_speed * e.wheel_radius,
+        position_limits=position_limits,
         initial_position=initial_q,
         max_velocity=[e.max_base_speed, e.max_base_speed, *e.arm_max_velocity],
         max_acceleration=[e.max_base_acceleration, e.max_base_acceleration, *e.arm_max_acceleration],
