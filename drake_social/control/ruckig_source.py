@@ -83,7 +83,7 @@ _SHARE_FLOOR = 1e-6
 # whose extrema pass a position limit by at most this much (in the DoF's
 # units, relative to max(1, |limit|)) is within it, and its outputs are
 # clipped to the limits, which removes only that rounding.
-_LIMIT_ROUNDING = 1e-9
+_LIMIT_ROUNDING = 1e-12
 
 _SERIALS = itertools.count()
 
