@@ -15,8 +15,9 @@ direct feedthrough from ``target``).
 
 Ports: input ``target`` (n; while it has no value, the reference stays
 where it is); outputs ``position``, ``velocity``,
-``acceleration`` (n each) and ``finished`` (1: 1.0 once ``t - t0 >=
-duration``).
+``acceleration`` (n each), ``state`` (3n: the three in one evaluation, for
+a consumer that reads them at every step of a fast plant) and ``finished``
+(1: 1.0 once ``t - t0 >= duration``).
 
 Ruckig is only ever given a current and a target state, never intermediate
 positions: the community version would otherwise call a remote web service.
@@ -101,8 +102,8 @@ class RuckigSegment:
         rest: (n,) position held when ``trajectory`` is None.
         target: (n,) target this segment heads for, or None when no target
             has been seen yet (any target then starts a segment).
-        clip: (lower, upper) position limits the segment's extrema respect up
-            to rounding; positions are clipped to them, or None.
+        clip: (lower, upper) position limits (lists of floats) the segment's
+            extrema respect up to rounding; positions are clipped to them, or None.
     """
 
     __slots__ = ("t0", "trajectory", "rest", "target", "target_list", "serial", "clip")
@@ -153,10 +154,9 @@ class RuckigSegment:
             return self.target.copy(), zero, zero.copy()
         # at_time extrapolates for t < t0: clamp.
         p, v, a = self.trajectory.at_time(max(t - self.t0, 0.0))
-        p = np.array(p, float)
-        if self.clip is not None:
-            np.clip(p, self.clip[0], self.clip[1], out=p)  # rounding only: see _LIMIT_ROUNDING
-        return p, np.array(v, float), np.array(a, float)
+        if self.clip is not None:  # rounding only: see _LIMIT_ROUNDING (plain floats: this runs every step)
+            p = [lo if x < lo else hi if x > hi else x for x, lo, hi in zip(p, *self.clip)]
+        return np.array(p, float), np.array(v, float), np.array(a, float)
 
 
 def _limit_vector(name: str, value, n: int) -> np.ndarray:
@@ -285,6 +285,7 @@ class RuckigTrajectorySource(LeafSystem):
             lower.flags.writeable = False
             upper.flags.writeable = False
             self._position_limits = (lower, upper)
+            self._limit_lists = (lower.tolist(), upper.tolist())
 
         self._target_port = self.DeclareVectorInputPort("target", n)
         self._segment_index = self.DeclareAbstractState(AbstractValue.Make(self._RestSegment(0.0, initial)))
@@ -296,6 +297,7 @@ class RuckigTrajectorySource(LeafSystem):
         self.DeclareVectorOutputPort("position", n, self._CalcPosition, prerequisites_of_calc=prereqs)
         self.DeclareVectorOutputPort("velocity", n, self._CalcVelocity, prerequisites_of_calc=prereqs)
         self.DeclareVectorOutputPort("acceleration", n, self._CalcAcceleration, prerequisites_of_calc=prereqs)
+        self.DeclareVectorOutputPort("state", 3 * n, self._CalcState, prerequisites_of_calc=prereqs)
         self.DeclareVectorOutputPort("finished", 1, self._CalcFinished, prerequisites_of_calc=prereqs)
         self._preview = None
         if preview is not None:
@@ -370,7 +372,7 @@ class RuckigTrajectorySource(LeafSystem):
                 raise RuntimeError(f"{self.get_name()}: the straight segment from {p.tolist()} to "
                                    f"{target.tolist()} leaves the position limits (a bug)")
         state.get_mutable_abstract_state(self._segment_index).set_value(
-            RuckigSegment(t, trajectory, p, target, clip=limits))
+            RuckigSegment(t, trajectory, p, target, clip=None if limits is None else self._limit_lists))
 
     def _Calculate(self, t: float, p: np.ndarray, v: np.ndarray, a: np.ndarray, target: np.ndarray,
                    synchronization: ruckig.Synchronization):
@@ -425,6 +427,10 @@ class RuckigTrajectorySource(LeafSystem):
 
     def _CalcAcceleration(self, context: Context, output: BasicVector) -> None:
         output.SetFromVector(self._At(context)[2])
+
+    def _CalcState(self, context: Context, output: BasicVector) -> None:
+        p, v, a = self._At(context)
+        output.SetFromVector(np.concatenate([p, v, a]))
 
     def _CalcMeanVelocity(self, context: Context, output: BasicVector) -> None:
         segment, t = self._Segment(context), context.get_time()

@@ -38,12 +38,13 @@ plant is not simulated (it stays outside the diagram and only turns
 positions into SceneGraph poses, :attr:`TransportDiagram.plant`).
 ``dynamic`` mode: the ``MultibodyPlant`` is a discrete system
 (``execution.plant_time_step``, TAMSI) whose joint actuators are driven at
-every plant step by Drake's ``InverseDynamicsController`` (``servo``, C++):
-``u = M(q) (a_d + Kp (q_d - q) + Kd (v_d - v)) + C(q, v) v`` on a control
-plant of the robot alone (:func:`control_plant`), with the gains of
-:func:`servo_gains`. The arm joints follow the reference's position,
-velocity and acceleration, evaluated at the plant's rate like a servo
-drive's interpolation of its trajectory: with the acceleration fed forward
+every plant step by a computed-torque servo in C++ blocks: the commanded
+acceleration ``a = a_d + Kp (q_d - q) + Kd (v_d - v)`` (gain blocks
+``servo_*``, the gains of :func:`servo_gains`), then Drake's
+``InverseDynamics`` (``servo``) ``u = M(q) a + C(q, v) v`` of the plant.
+The arm joints follow the reference's position, velocity and acceleration,
+evaluated at the plant's rate like a servo drive's interpolation of its
+trajectory: with the acceleration fed forward
 and the inertia and coupling compensated, the error obeys ``e'' + Kd e' +
 Kp e = 0`` (critically damped) in every configuration, so the arm lands on
 the reference's end instead of passing it (a PD law on the joint error alone
@@ -66,13 +67,15 @@ import numpy as np
 from pydrake.geometry import Meshcat, SceneGraph
 from pydrake.multibody.plant import AddMultibodyPlantSceneGraph, DiscreteContactApproximation, MultibodyPlant
 from pydrake.multibody.tree import ModelInstanceIndex
-from pydrake.systems.controllers import InverseDynamicsController
+from pydrake.systems.controllers import InverseDynamics
 from pydrake.systems.framework import Diagram, DiagramBuilder, OutputPort
 from pydrake.systems.primitives import (
+    Adder,
     ConstantVectorSource,
     Demultiplexer,
     Integrator,
     LogVectorOutput,
+    MatrixGain,
     Multiplexer,
     VectorLogSink,
     ZeroOrderHold,
@@ -91,7 +94,7 @@ from drake_social.model.plant import add_environment, add_robot
 from drake_social.planning.validity import ValidityChecker
 from drake_social.scenario import EXECUTIONS, SIM_MODES, Scenario
 
-__all__ = ["TransportDiagram", "build_diagram", "control_plant", "servo_gains"]
+__all__ = ["TransportDiagram", "build_diagram", "servo_gains"]
 
 
 @dc.dataclass
@@ -145,21 +148,6 @@ def servo_gains(*, bandwidth: float = 60.0, base_time_constant: float = 0.02) ->
     """
     w, tau = float(bandwidth), float(base_time_constant)
     return np.array([0.0, 0.0, w * w, w * w]), np.array([1.0 / tau, 1.0 / tau, 2.0 * w, 2.0 * w])
-
-
-def control_plant(scenario: Scenario) -> MultibodyPlant:
-    """The robot (and its welded object) alone, finalized: the servo's model.
-
-    Its positions and velocities are the robot's ``[x, y, psi1, psi2]``, as
-    in the simulated plant; without the room's geometry its inverse dynamics
-    costs a fraction of the full plant's.
-    """
-    plant = MultibodyPlant(time_step=0.0)
-    add_robot(plant, scenario)
-    plant.Finalize()
-    if plant.num_positions() != 4 or plant.num_velocities() != 4:  # our own model: a bug if it fails
-        raise RuntimeError(f"unexpected control plant: {plant.num_positions()} positions")
-    return plant
 
 
 def _populate(plant: MultibodyPlant, scenario: Scenario) -> ModelInstanceIndex:
@@ -277,9 +265,10 @@ def build_diagram(
         builder.Connect(ref_ff.get_output_port(0), controller.GetInputPort("base_velocity_ff"))
         arm_position: OutputPort = ref_pos.get_output_port(1)
         arm_velocity: OutputPort = ref_vel.get_output_port(1)
-        ref_acc = builder.AddNamedSystem("reference_acceleration_split", Demultiplexer([2, 2]))
-        builder.Connect(reference.GetOutputPort("acceleration"), ref_acc.get_input_port())
-        arm_acceleration: OutputPort = ref_acc.get_output_port(1)
+        # [xy, arm] x (position, velocity, acceleration) in one evaluation (the servo's, every plant step).
+        ref_state = builder.AddNamedSystem("reference_state_split", Demultiplexer([2] * 6))
+        builder.Connect(reference.GetOutputPort("state"), ref_state.get_input_port())
+        arm_state = [ref_state.get_output_port(k) for k in (1, 3, 5)]
         reference_out: OutputPort = reference.GetOutputPort("position")
     else:
         split = builder.AddNamedSystem("target_split", Demultiplexer([2, 2]))
@@ -289,7 +278,9 @@ def build_diagram(
         builder.Connect(split.get_output_port(0), controller.GetInputPort("base_target"))
         arm_position = arm.GetOutputPort("position")
         arm_velocity = arm.GetOutputPort("velocity")
-        arm_acceleration = arm.GetOutputPort("acceleration")
+        arm_split = builder.AddNamedSystem("arm_state_split", Demultiplexer([2, 2, 2]))
+        builder.Connect(arm.GetOutputPort("state"), arm_split.get_input_port())
+        arm_state = [arm_split.get_output_port(k) for k in range(3)]
         tracked = builder.AddNamedSystem("reference_config", Multiplexer([2, 2]))
         builder.Connect(split.get_output_port(0), tracked.get_input_port(0))
         builder.Connect(arm_position, tracked.get_input_port(1))
@@ -309,21 +300,34 @@ def build_diagram(
         # q_d is unused (velocity servo, Kp = 0) and its acceleration is 0.
         desired = builder.AddNamedSystem("desired_state", Multiplexer([2, 2, 2, 2]))
         builder.Connect(q_split.get_output_port(0), desired.get_input_port(0))
-        builder.Connect(arm_position, desired.get_input_port(1))
+        builder.Connect(arm_state[0], desired.get_input_port(1))
         builder.Connect(hold.get_output_port(), desired.get_input_port(2))
-        builder.Connect(arm_velocity, desired.get_input_port(3))
+        builder.Connect(arm_state[1], desired.get_input_port(3))
         base_acceleration = builder.AddNamedSystem("base_acceleration", ConstantVectorSource(np.zeros(2)))
         acceleration = builder.AddNamedSystem("desired_acceleration", Multiplexer([2, 2]))
         builder.Connect(base_acceleration.get_output_port(), acceleration.get_input_port(0))
-        builder.Connect(arm_acceleration, acceleration.get_input_port(1))
+        builder.Connect(arm_state[2], acceleration.get_input_port(1))
+        # The commanded acceleration a_d + K (x_d - x), K = [diag(Kp) diag(Kd)],
+        # in stateless C++ blocks (Drake's InverseDynamicsController adds a
+        # PID integrator: continuous state, which makes the simulator take
+        # variable sub-steps between the plant's, 3x the evaluations), then
+        # u = M(q) a + C(q, v) v of the plant itself (the room is welded to
+        # the world: the plant's velocities are the robot's).
         kp, kd = servo_gains()
-        servo = builder.AddNamedSystem("servo", InverseDynamicsController(
-            control_plant(scenario), kp=kp, ki=np.zeros(4), kd=kd, has_reference_acceleration=True))
+        K = np.hstack([np.diag(kp), np.diag(kd)])
+        gain_desired = builder.AddNamedSystem("servo_desired", MatrixGain(K))
+        gain_state = builder.AddNamedSystem("servo_state", MatrixGain(-K))
+        commanded = builder.AddNamedSystem("servo_acceleration", Adder(3, 4))
+        builder.Connect(desired.get_output_port(), gain_desired.get_input_port())
+        builder.Connect(plant.get_state_output_port(robot), gain_state.get_input_port())
+        builder.Connect(gain_desired.get_output_port(), commanded.get_input_port(0))
+        builder.Connect(gain_state.get_output_port(), commanded.get_input_port(1))
+        builder.Connect(acceleration.get_output_port(), commanded.get_input_port(2))
+        servo = builder.AddNamedSystem("servo", InverseDynamics(plant))
         builder.Connect(plant.get_state_output_port(robot), servo.get_input_port_estimated_state())
-        builder.Connect(desired.get_output_port(), servo.get_input_port_desired_state())
-        builder.Connect(acceleration.get_output_port(), servo.get_input_port_desired_acceleration())
+        builder.Connect(commanded.get_output_port(), servo.get_input_port_desired_acceleration())
         # The actuation input is [u_x, u_y, u_1, u_2] (see _populate).
-        builder.Connect(servo.get_output_port_control(), plant.get_actuation_input_port(robot))
+        builder.Connect(servo.get_output_port_generalized_force(), plant.get_actuation_input_port(robot))
     else:
         base = builder.AddNamedSystem("base", Integrator(2))
         base.set_default_integral_value(start[:2])

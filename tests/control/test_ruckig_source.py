@@ -91,10 +91,11 @@ def test_ports_default_context_and_no_feedthrough():
     dut = _source(initial=(0.3, -0.2))
     assert [dut.get_input_port(i).get_name() for i in range(dut.num_input_ports())] == ["target"]
     assert [dut.get_output_port(i).get_name() for i in range(dut.num_output_ports())] == [
-        "position", "velocity", "acceleration", "finished"]
+        "position", "velocity", "acceleration", "state", "finished"]
     assert not dut.HasAnyDirectFeedthrough()
     context = dut.CreateDefaultContext()
     p, v, a, f = _outputs(dut, context)
+    np.testing.assert_array_equal(dut.GetOutputPort("state").Eval(context), np.concatenate([p, v, a]))
     np.testing.assert_array_equal(p, [0.3, -0.2])
     np.testing.assert_array_equal(v, [0.0, 0.0])
     np.testing.assert_array_equal(a, [0.0, 0.0])
@@ -213,7 +214,8 @@ def test_reference_base_speed_by_hand():
     _force_update(dut, context)
     assert context.get_abstract_state(0).get_value().duration == pytest.approx(10.7, abs=1e-9)
     context.SetTime(5.35)
-    p, v, _, _ = _outputs(dut, context)
+    p, v, a, _ = _outputs(dut, context)
+    np.testing.assert_array_equal(dut.GetOutputPort("state").Eval(context), np.concatenate([p, v, a]))
     np.testing.assert_allclose(v[:2], [0.3, 0.4], atol=1e-9)  # norm 0.5, along (3, 4)
     np.testing.assert_allclose(p, [1.5, 2.0, 0.1, -0.05], atol=1e-9)  # halfway, all DoFs
 
