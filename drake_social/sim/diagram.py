@@ -15,7 +15,8 @@ Blocks (all named; ``[p]`` only with ``execution="paper"``, ``[s]`` only with
                           │            [p] arm (2-DoF Ruckig) ◀─psi─┘
                           │  controller ─wheel_speeds─▶ drive (mecanum forward kinematics)
     [k] base (Integrator of the drive's velocity) + arm position ─▶ configuration ─▶ to_pose ─▶ scene_graph
-    [d] drive velocity ─▶ hold (ZOH) ─▶ desired_state ◀─ arm references; ─▶ servo (inverse dynamics) ─▶ plant
+    [d] drive velocity ─▶ hold (ZOH) ─▶ desired_state ◀─ arm reference state (position, velocity, acceleration)
+        desired_state, plant state ─▶ servo_* (commanded acceleration) ─▶ servo (inverse dynamics) ─▶ plant
 
 The planner is left out when ``waypoints`` are given. In ``synchronized``
 execution each segment's reference is one phase-synchronized Ruckig
