@@ -401,7 +401,7 @@ def read_path_csv(path: Path, scenario: Scenario) -> np.ndarray:
         raise ScenarioError(f"{path}: not a text file ({e})") from None
     if not lines or lines[0].replace(" ", "") != "x,y,psi1,psi2":
         raise ScenarioError(f"{path}: line 1: the header must be 'x,y,psi1,psi2', got {lines[0] if lines else ''!r}")
-    rows = []
+    rows, lines_of_rows = [], []
     for i, line in enumerate(lines[1:], start=2):
         if not line.strip():
             continue
@@ -419,9 +419,20 @@ def read_path_csv(path: Path, scenario: Scenario) -> np.ndarray:
                                     f"(--path)")
             values.append(value)
         rows.append(values)
+        lines_of_rows.append(i)
     if len(rows) < 2:
         raise ScenarioError(f"{path}: needs at least 2 waypoints (start and goal), got {len(rows)}")
     waypoints = np.array(rows)
+    # The executed references keep to the limits of a valid configuration.
+    x_min, y_min, x_max, y_max = scenario.world.bounds
+    ranges = {"x": (x_min, x_max, "world.bounds"), "y": (y_min, y_max, "world.bounds"),
+              "psi1": (scenario.robot.joint_lower[0], scenario.robot.joint_upper[0], "the joint range"),
+              "psi2": (scenario.robot.joint_lower[1], scenario.robot.joint_upper[1], "the joint range")}
+    for row, line in zip(waypoints, lines_of_rows):
+        for value, (column, (low, high, what)) in zip(row, ranges.items()):
+            if not low <= value <= high:
+                raise ScenarioError(f"{path}: line {line}: {column} = {value:g} is outside {what} "
+                                    f"[{low:g}, {high:g}] (--path)")
     for name, row, q in (("start", 0, scenario.start), ("goal", -1, scenario.goal)):
         if not np.allclose(waypoints[row], q, rtol=0, atol=1e-9):
             raise ScenarioError(f"{path}: the {'first' if row == 0 else 'last'} waypoint "

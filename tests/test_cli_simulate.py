@@ -97,6 +97,10 @@ def test_time_limit_gives_exit_5(tmp_path, tiny_scenario_path, planned, capsys):
     ("x,y,psi1,psi2\n1.0,2.5,0.0,1.5708\n", "at least 2 waypoints"),
     ("x,y,psi1,psi2\n1.0,2.5,0.0,1.5708\n6.5,2.5,0.0,nan\n", "line 3"),
     ("x,y,psi1,psi2\n2.0,2.5,0.0,1.5708\n6.5,2.5,0.0,1.5708\n", "is not the scenario's start"),
+    ("x,y,psi1,psi2\n1.0,2.5,0.0,1.5708\n100,2.5,0,0\n6.5,2.5,0.0,1.5708\n",
+     "line 3: x = 100 is outside world.bounds [0, 8] (--path)"),
+    ("x,y,psi1,psi2\n1.0,2.5,0.0,1.5708\n\n2,2.5,0,10\n6.5,2.5,0.0,1.5708\n",
+     "line 4: psi2 = 10 is outside the joint range [-3.14159, 3.14159] (--path)"),
 ])
 def test_bad_path_file_names_file_and_line(tmp_path, tiny_scenario_path, capsys, text, message):
     path = tmp_path / "path.csv"

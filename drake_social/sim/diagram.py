@@ -184,15 +184,20 @@ def build_diagram(
             limits, tolerances and periods).
         mode: ``"kinematic"`` or ``"dynamic"``; None = ``scenario.execution.mode``.
         execution: ``"synchronized"`` or ``"paper"``; None = ``scenario.execution.execution``.
-        waypoints: (N, 4) configurations to follow, from the start; None =
-            plan them with a ``planner`` (:class:`PlannerSystem`) at
-            initialization.
+        waypoints: (N, 4) configurations to follow, from the start, each
+            within the room bounds and the joint limits; None = plan them
+            with a ``planner`` (:class:`PlannerSystem`) at initialization.
         checker: the planner's validity checker (None = its default).
         meshcat: when given, a ``MeshcatVisualizer`` draws the scene to it at
             ``execution.replay_fps``.
 
     Returns:
         The :class:`TransportDiagram`.
+
+    Raises:
+        ValueError: an unknown mode or execution; empty waypoints, or one
+            outside the room bounds or the joint limits (the references keep
+            to them).
     """
     opts = scenario.execution
     mode = mode or opts.mode
@@ -212,6 +217,13 @@ def build_diagram(
     x_min, y_min, x_max, y_max = (float(v) for v in scenario.world.bounds)
     lower = np.array([x_min, y_min, *scenario.robot.joint_lower], float)
     upper = np.array([x_max, y_max, *scenario.robot.joint_upper], float)
+    if waypoints is not None:
+        outside = np.flatnonzero(~np.all((waypoints >= lower) & (waypoints <= upper), axis=1))
+        if len(outside):
+            k = int(outside[0])
+            raise ValueError(f"waypoints[{k}] = {waypoints[k].tolist()} is outside the limits of a valid "
+                             f"configuration (world.bounds, robot.joint_lower/upper): "
+                             f"[{lower.tolist()}, {upper.tolist()}]")
 
     builder = DiagramBuilder()
     if mode == "dynamic":

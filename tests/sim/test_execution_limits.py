@@ -15,6 +15,7 @@ import numpy as np
 import pytest
 
 from drake_social.model.checker import make_checker
+from drake_social.sim.diagram import build_diagram
 from drake_social.planning.variants import plan
 from drake_social.sim.run import LimitViolation, analyze_execution, limit_violations, simulate
 
@@ -129,3 +130,12 @@ def test_synchronized_execution_stays_on_the_checked_segments_at_the_wheels_limi
         assert np.max(np.abs(dut.wheel_speeds)) <= e.max_wheel_speed * (1 + 1e-9)
         # Faster than the default 0.5 m/s: the wheels' limit, not a lower cap, holds the speed.
         assert np.max(np.hypot(dut.v[:, 0], dut.v[:, 1])) > 0.7
+
+
+def test_fixed_waypoints_outside_the_limits_are_refused_before_execution(tiny_scenario):
+    start, goal = tiny_scenario.start, tiny_scenario.goal
+    with pytest.raises(ValueError, match=r"waypoints\[1\] = \[3.0, 2.5, 0.0, 3.5\] is outside the limits of a valid "
+                                         r"configuration \(world.bounds, robot.joint_lower/upper\)"):
+        build_diagram(tiny_scenario, waypoints=np.array([start, [3.0, 2.5, 0.0, 3.5], goal]))
+    with pytest.raises(ValueError, match=r"waypoints\[1\] = \[8.5, "):
+        build_diagram(tiny_scenario, waypoints=np.array([start, [8.5, 2.5, 0.0, 0.0], goal]))
