@@ -179,6 +179,25 @@ def _direction_share(*vectors: np.ndarray) -> np.ndarray:
     return share
 
 
+class _LineTrajectory:
+    """A motion on a straight segment: a 1-DoF ``ruckig.Trajectory`` of the
+    distance s (0 to ``length``) along the unit vector ``u`` from ``start``;
+    the part of ``ruckig.Trajectory`` that :class:`RuckigSegment` uses."""
+
+    __slots__ = ("_trajectory", "_start", "_u", "duration")
+
+    def __init__(self, trajectory, start: np.ndarray, u: np.ndarray, length: float):
+        self._trajectory = trajectory
+        self._start = [float(x) for x in start]
+        self._u = [float(x) for x in u]
+        self.duration = float(trajectory.duration)
+
+    def at_time(self, t: float) -> tuple[list[float], list[float], list[float]]:
+        (s,), (sd,), (sdd,) = self._trajectory.at_time(t)
+        return ([p + s * u for p, u in zip(self._start, self._u)], [sd * u for u in self._u],
+                [sdd * u for u in self._u])
+
+
 class RuckigTrajectorySource(LeafSystem):
     """A jerk-limited reference that heads for its ``target`` input.
 
@@ -361,18 +380,69 @@ class RuckigTrajectorySource(LeafSystem):
             raise RuntimeError(f"{self.get_name()}: the target {target.tolist()} at t = {t} s is outside the "
                                f"position limits [{limits[0].tolist()}, {limits[1].tolist()}]")
         at_rest = not (np.any(v) or np.any(a))
-        trajectory = self._Calculate(t, p, v, a, target, self._synchronization)
-        if limits is not None and not self._WithinLimits(trajectory):
-            if not at_rest:
-                # The current segment stays within the limits and ends at rest;
-                # the next update after that starts a rest-to-rest segment.
-                return EventStatus.DidNothing()
-            trajectory = self._Calculate(t, p, v, a, target, ruckig.Synchronization.Phase)
-            if not self._WithinLimits(trajectory):
-                raise RuntimeError(f"{self.get_name()}: the straight segment from {p.tolist()} to "
-                                   f"{target.tolist()} leaves the position limits (a bug)")
+        if at_rest and self._synchronization == ruckig.Synchronization.Phase:
+            trajectory = self._Line(t, p, target)
+        else:
+            trajectory = self._Calculate(t, p, v, a, target, self._synchronization)
+            if limits is not None and not self._WithinLimits(trajectory):
+                if not at_rest:
+                    # The current segment stays within the limits and ends at rest;
+                    # the next update after that starts a rest-to-rest segment.
+                    return EventStatus.DidNothing()
+                trajectory = self._Line(t, p, target)  # between two points of the box: within it
+        if trajectory is None:  # already there
+            state.get_mutable_abstract_state(self._segment_index).set_value(RuckigSegment(t, None, target, target))
+            return None
         state.get_mutable_abstract_state(self._segment_index).set_value(
             RuckigSegment(t, trajectory, p, target, clip=None if limits is None else self._limit_lists))
+
+    def _Line(self, t: float, p: np.ndarray, target: np.ndarray) -> "_LineTrajectory | None":
+        """The time-optimal rest-to-rest motion on the straight segment p -> target (None if p == target).
+
+        A 1-DoF Ruckig profile of the distance s along the unit direction u,
+        with each limit the tightest of the DoFs': ``max_i / |u_i|`` for a
+        per-DoF limit, ``max / |u_g|`` for the norm of the ``xy_norm_dofs``
+        group g and ``xy_max_abs_sum / sum_g |u_i|``. Unlike an n-DoF phase
+        synchronization, which Ruckig silently turns into a time
+        synchronization off the segment when the DoFs' profiles differ in
+        shape, it exists for every pair of limits.
+        """
+        d = target - p
+        length = float(np.linalg.norm(d))
+        if length == 0.0:
+            return None
+        u = d / length
+        scale = np.abs(u)
+        free = np.ones(self._n, bool)
+        limits = []
+        for per_dof in (self._max_velocity, self._max_acceleration, self._max_jerk):
+            bounds = []
+            if self._norm_dofs is not None:
+                g = self._norm_dofs
+                free[g] = False
+                norm = float(np.linalg.norm(u[g]))
+                if norm > 0:
+                    # The group's limits bound its norm (the per-DoF values of the group are equal).
+                    bounds.append(float(np.min(per_dof[g])) / norm)
+            moving = free & (scale > 0)
+            bounds.extend((per_dof[moving] / scale[moving]).tolist())
+            limits.append(min(bounds))
+        if self._max_abs_sum is not None:
+            l1 = float(np.sum(scale[self._norm_dofs]))
+            if l1 > 0:
+                limits[0] = min(limits[0], self._max_abs_sum / l1)
+        inp = ruckig.InputParameter(1)
+        inp.current_position, inp.current_velocity, inp.current_acceleration = [0.0], [0.0], [0.0]
+        inp.target_position, inp.target_velocity, inp.target_acceleration = [length], [0.0], [0.0]
+        inp.max_velocity, inp.max_acceleration, inp.max_jerk = [limits[0]], [limits[1]], [limits[2]]
+        trajectory = ruckig.Trajectory(1)
+        try:
+            result = ruckig.Ruckig(1).calculate(inp, trajectory)
+        except ruckig.RuckigError as error:
+            raise RuntimeError(f"{self.get_name()}: Ruckig failed at t = {t} s: {error}") from error
+        if result != ruckig.Result.Working:
+            raise RuntimeError(f"{self.get_name()}: Ruckig failed at t = {t} s with {result}; input:\n{inp}")
+        return _LineTrajectory(trajectory, p, u, length)
 
     def _Calculate(self, t: float, p: np.ndarray, v: np.ndarray, a: np.ndarray, target: np.ndarray,
                    synchronization: ruckig.Synchronization):
