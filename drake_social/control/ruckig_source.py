@@ -29,8 +29,8 @@ segment between two positions within the limits stays within them).
 
 Factories: :func:`arm_source_from_options` (the two arm joints) and
 :func:`reference_source_from_options` (the synchronized 4-DoF reference
-``[x, y, psi1, psi2]``, phase-synchronized so that the base moves on the
-straight segment, with the base speed limit on the *norm* of ``[vx, vy]``
+``[x, y, psi1, psi2]``, phase-synchronized so that each segment from rest is
+a motion on the straight segment, with the base speed limit on the *norm* of ``[vx, vy]``
 and the wheels' limit on ``|vx| + |vy|``).
 
 Example::
@@ -209,18 +209,21 @@ class RuckigTrajectorySource(LeafSystem):
         max_jerk: (n,) jerk limits, units/s^3 (> 0).
         period: period of the update that reads the target, seconds (> 0).
         synchronization: "time", "phase", "time_if_necessary", "none" or a
-            ``ruckig.Synchronization``.
+            ``ruckig.Synchronization``. With "phase", a segment from rest is
+            the time-optimal motion *on the straight segment* (a 1-DoF
+            Ruckig profile of the distance along it, each limit the tightest
+            the DoFs allow); Ruckig's own n-DoF phase synchronization falls
+            back to time synchronization, off the segment, when the DoFs'
+            profiles differ in shape.
         xy_norm_dofs: indices of DoFs (e.g. ``(0, 1)`` for the base x, y)
             whose limits bound the *norm* of their velocity, acceleration and
-            jerk instead of each component. For each new segment their limits
-            are scaled by ``|d_i| / |d|`` (d the displacement of those DoFs),
-            which with phase synchronization and a start at rest keeps the
-            group on the straight segment with its norm within the limit. When
-            a target changes mid-motion, each share is also at least the
-            share of the current velocity and acceleration, so the current
-            state stays within the per-DoF limits (that transition is then
-            not on a straight line and its norm may exceed the limit by up
-            to sqrt(2)).
+            jerk instead of each component (on a straight segment from rest:
+            exactly). When a target changes mid-motion, their limits are
+            scaled by ``|d_i| / |d|`` (d the displacement of those DoFs), each
+            share at least the share of the current velocity and
+            acceleration, so the current state stays within the per-DoF
+            limits (that transition is not on a straight line and its norm
+            may exceed the limit by up to sqrt(2)).
         preview: when given (seconds, > 0), an extra output port
             ``mean_velocity`` = ``(position(t + preview) - position(t)) /
             preview`` along the current segment: the feed-forward that makes
