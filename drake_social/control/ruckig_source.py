@@ -224,6 +224,21 @@ class RuckigTrajectorySource(LeafSystem):
             acceleration, so the current state stays within the per-DoF
             limits (that transition is not on a straight line and its norm
             may exceed the limit by up to sqrt(2)).
+        xy_max_abs_sum: when given (units/s, > 0; needs ``xy_norm_dofs``),
+            also bounds the *sum* of the group's absolute velocities: the
+            group's speed limit on a segment of direction d is
+            ``min(max_velocity, xy_max_abs_sum |d| / sum_i |d_i|)``
+            (mecanum wheels at ``max_wheel_speed`` reach exactly
+            ``|vx| + |vy| = max_wheel_speed * wheel_radius``).
+        position_limits: when given, ``(lower, upper)`` (n each, lower <
+            upper): the reference stays within them. A target outside them
+            is an error; a new segment whose position extrema (Ruckig's
+            ``position_extrema``) would leave them is not started while the
+            reference moves (the current segment, within the limits,
+            finishes first), and from rest it is the straight segment
+            (between two points of the box, within it). Positions are
+            clipped to the limits, which removes only rounding (see
+            ``_LIMIT_ROUNDING``).
         preview: when given (seconds, > 0), an extra output port
             ``mean_velocity`` = ``(position(t + preview) - position(t)) /
             preview`` along the current segment: the feed-forward that makes
