@@ -22,8 +22,10 @@ goal in collision), 3 ``plan`` found no path (its outputs are still written),
 4 ``plan`` returned a path that Drake's independent check rejects (a bug in
 the checker that planned it; the outputs are still written, and one line on
 stderr names the segment), 5 ``simulate`` did not reach the goal within
-``execution.time_limit``, 6 ``simulate``'s executed trajectory collides
-(``simulate`` writes its files in every case), 130 interrupted (Ctrl-C): one
+``execution.time_limit``, 6 ``simulate``'s executed trajectory collides,
+7 it reached the goal collision-free but passed a joint limit (or left the
+room bounds; ``simulate`` writes its files in every case and names each
+finding on stderr), 130 interrupted (Ctrl-C): one
 line says what, and no file of the interrupted run is left (outputs are
 written as one set, see :mod:`drake_social.outputs`).
 """
@@ -345,6 +347,8 @@ def _run_plan(args: argparse.Namespace) -> int:
 EXIT_NOT_REACHED = 5
 #: Exit code of ``simulate`` when the executed trajectory collides.
 EXIT_COLLISION = 6
+#: Exit code of ``simulate`` when the executed trajectory, collision-free, passes a joint limit (or a room bound).
+EXIT_LIMIT = 7
 
 
 def _add_simulate(subparsers) -> None:
@@ -359,8 +363,8 @@ def _add_simulate(subparsers) -> None:
         "the plan. Writes DIR/replay.html (a standalone Meshcat replay: open it in a browser, no server), "
         "DIR/executed.csv (t,x,y,psi1,psi2 and velocities), DIR/tracking.png (references against actual "
         f"over time) and DIR/sim.json. Exit code {EXIT_NO_PATH} no path, {EXIT_NOT_REACHED} goal not reached "
-        f"within execution.time_limit, {EXIT_COLLISION} the executed trajectory collides (files are written "
-        "in every case).",
+        f"within execution.time_limit, {EXIT_COLLISION} the executed trajectory collides, {EXIT_LIMIT} it "
+        "passes a joint limit (files are written in every case; stderr names each finding).",
     )
     _add_scenario_arguments(p)
     p.add_argument("--mode", choices=SIM_MODES,
@@ -532,14 +536,21 @@ def _run_simulate(args: argparse.Namespace) -> int:
         print(f"drake-social: no path from start to goal ({run.planner.message}); nothing was executed",
               file=sys.stderr)
         return EXIT_NO_PATH
+    # Every finding is named; the exit code is the first of: not reached,
+    # collision, limit.
+    codes = []
     if not run.reached:
         print(f"drake-social: {run.message}", file=sys.stderr)
-        return EXIT_NOT_REACHED
+        codes.append(EXIT_NOT_REACHED)
     if run.report is not None and not run.report.collision_free:
         print(f"drake-social: the executed trajectory collides (first at t = {run.report.first_collision_time:.2f} s)",
               file=sys.stderr)
-        return EXIT_COLLISION
-    return 0
+        codes.append(EXIT_COLLISION)
+    if run.report is not None and not run.report.within_limits:
+        for violation in run.report.limit_violations:
+            print(f"drake-social: the executed trajectory passes a joint limit: {violation}", file=sys.stderr)
+        codes.append(EXIT_LIMIT)
+    return codes[0] if codes else 0
 
 
 # ---- bench -------------------------------------------------------------------

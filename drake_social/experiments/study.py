@@ -516,6 +516,7 @@ def _execute(scenario, waypoints, checker, executed_metrics) -> dict:
                             if r and r.planned_social_cost > 0 else None),
         "exec_max_deviation": r.max_point_deviation["max"] if r else None,
         "exec_collision_free": bool(r.collision_free) if r else None,
+        "exec_within_limits": bool(r.within_limits) if r else None,
     }
     if len(run.times) > 1:
         out.update(executed_metrics(scenario, run.times, run.q))
