@@ -26,6 +26,14 @@ def _hidden(folder: Path) -> list[str]:
     return sorted(p.name for p in folder.iterdir() if p.name.startswith("."))
 
 
+def _tidy_hidden(folder: Path, command: str = "plan") -> list[str]:
+    """The hidden entries of a folder holding one committed set of ``command``:
+    its lock, manifest link, current link and the one generation it names."""
+    generation = os.readlink(folder / f".{command}.current")
+    assert generation.startswith(f".{command}.gen-")
+    return sorted([f".{command}.current", generation, f".{command}.lock", f".{command}.manifest"])
+
+
 def _write_set(folder: Path, files: dict[str, str], command: str = "plan") -> OutputSet:
     with OutputSet(folder, command) as dut:
         for name, text in files.items():
@@ -39,8 +47,11 @@ def test_a_new_set_replaces_the_previous_one_as_a_whole(tmp_path):
     dut = _write_set(tmp_path, {"path.csv": "new", "path.png": "new png"})
     assert _listing(tmp_path) == {"notes.txt": b"the user's", "path.csv": b"new", "path.png": b"new png"}
     assert dut.committed == [tmp_path / "path.csv", tmp_path / "path.png"]
-    assert _hidden(tmp_path) == [".plan.lock", ".plan.manifest"]  # the staging folder is gone
+    assert _hidden(tmp_path) == _tidy_hidden(tmp_path)  # the staging folder and the old generation are gone
     assert (tmp_path / ".plan.manifest").read_text() == "path.csv\npath.png\n"
+    # Every file reads through the one link that a commit swaps.
+    for name, target in (("path.csv", "path.csv"), ("path.png", "path.png"), (".plan.manifest", ".manifest")):
+        assert os.readlink(tmp_path / name) == f".plan.current/{target}"
 
 
 def test_sets_of_different_commands_are_independent(tmp_path):
@@ -60,7 +71,7 @@ def test_an_exception_or_ctrl_c_inside_the_block_leaves_the_old_set_untouched(tm
             dut.write_text("result.json", "new")
             raise error
     assert _listing(tmp_path) == before
-    assert _hidden(tmp_path) == [".plan.lock", ".plan.manifest"]
+    assert _hidden(tmp_path) == _tidy_hidden(tmp_path)
     # The lock was released: the next run goes ahead.
     _write_set(tmp_path, {"path.csv": "next"})
     assert _listing(tmp_path) == {"path.csv": b"next"}
@@ -82,6 +93,7 @@ def test_committed_files_have_normal_permissions(tmp_path):
         os.umask(old)
     for name in ("replay.html", "sim.json", ".simulate.manifest"):
         assert stat.S_IMODE((tmp_path / name).stat().st_mode) == 0o644, name
+    assert stat.S_IMODE((tmp_path / ".simulate.current").stat().st_mode) == 0o755  # the generation folder
 
 
 _HOLDER = textwrap.dedent("""
@@ -120,7 +132,7 @@ def test_a_killed_run_leaves_a_staging_folder_that_the_next_run_removes(tmp_path
     holder.stdin.close()
     assert [n for n in _hidden(tmp_path) if n.startswith(".staging-plan-")]
     _write_set(tmp_path, {"path.csv": "next"})
-    assert _hidden(tmp_path) == [".plan.lock", ".plan.manifest"]
+    assert _hidden(tmp_path) == _tidy_hidden(tmp_path)
     assert _listing(tmp_path) == {"path.csv": b"next"}
 
 
@@ -139,11 +151,12 @@ def test_ctrl_c_while_moving_the_set_into_place_completes_it_first(tmp_path, mon
 
     monkeypatch.setattr(outputs_module.os, "replace", interrupted_replace)
     with pytest.raises(InterruptedAfterCommit) as info:
-        _write_set(tmp_path, {"path.csv": "new", "path.png": "new png"})
+        _write_set(tmp_path, {"path.csv": "new", "path.png": "new png", "extra.png": "new extra"})
     assert isinstance(info.value, KeyboardInterrupt)
-    assert info.value.committed == [tmp_path / "path.csv", tmp_path / "path.png"]
-    assert calls == ["path.csv", "path.png", ".plan.manifest"]
-    assert _listing(tmp_path) == {"path.csv": b"new", "path.png": b"new png"}
+    assert info.value.committed == [tmp_path / "extra.png", tmp_path / "path.csv", tmp_path / "path.png"]
+    # The interrupted step links the new name; the swap of the generation still follows.
+    assert calls == ["extra.png", ".plan.current"]
+    assert _listing(tmp_path) == {"path.csv": b"new", "path.png": b"new png", "extra.png": b"new extra"}
     assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
 
 
