@@ -10,25 +10,66 @@ the number of workers (each task carries its own seed).
   freshly spawned interpreters (``spawn``: no state inherited from the
   caller's Drake or numba threads).
 * ``"dask"`` (the ``distributed`` package): the tasks go to the scheduler at
-  ``scheduler`` (e.g. ``tcp://10.0.0.5:8786``), or to a
+  ``scheduler`` (``[tcp://|tls://]HOST:PORT``, e.g. ``tcp://10.0.0.5:8786``,
+  checked by :func:`check_scheduler_address` before anything starts), or to a
   :class:`distributed.LocalCluster` of ``workers`` single-threaded worker
-  processes started for the study and closed after it.
+  processes started for the study and closed after it. Its workers never see
+  Ctrl-C (SIGINT stays blocked in them: a terminal sends it to every process
+  of the group), and the connections an interruption cuts short are closed
+  without logging: Ctrl-C ends the study as quietly as with ``"process"``.
 """
 
 from __future__ import annotations
 
+import contextlib
 import logging
 import multiprocessing
+import re
 import signal
 from concurrent.futures import ProcessPoolExecutor, as_completed
-from typing import Callable, Sequence
+from typing import Callable, Iterator, Sequence
 
-__all__ = ["EXECUTORS", "map_tasks"]
+__all__ = ["EXECUTORS", "SCHEDULER_SCHEMES", "check_scheduler_address", "map_tasks"]
 
 #: Backends of :func:`map_tasks`.
 EXECUTORS = ("process", "dask")
+#: Protocols of a Dask scheduler address (the plain TCP of ``dask scheduler``, and TLS).
+SCHEDULER_SCHEMES = ("tcp", "tls")
 
 _log = logging.getLogger(__name__)
+
+#: HOST (a name, an IPv4 address or a bracketed IPv6 address) and PORT.
+_HOST_PORT = re.compile(r"(\[[0-9A-Fa-f:.]+\]|[A-Za-z0-9](?:[A-Za-z0-9.-]*[A-Za-z0-9])?):([0-9]+)")
+
+
+def check_scheduler_address(address: str) -> str:
+    """Checks the address of a running Dask scheduler; returns it unchanged.
+
+    The form is ``[tcp://|tls://]HOST:PORT`` with PORT in 1..65535, e.g.
+    ``tcp://10.0.0.5:8786``, ``localhost:8786`` or ``tls://[::1]:8786``.
+
+    Raises:
+        ValueError: the address has another form; the message states the
+            allowed one.
+    """
+    form = (f"the form is [{'|'.join(s + '://' for s in SCHEDULER_SCHEMES)}]HOST:PORT with PORT in 1..65535, "
+            "e.g. tcp://10.0.0.5:8786")
+    if not isinstance(address, str):
+        raise ValueError(f"scheduler address must be a string, got {type(address).__name__}; {form}")
+    rest = address
+    if "://" in address:
+        scheme, rest = address.split("://", 1)
+        if scheme not in SCHEDULER_SCHEMES:
+            raise ValueError(f"scheduler address {address!r}: unknown protocol {scheme!r}; {form}")
+    match = _HOST_PORT.fullmatch(rest)
+    if match is None:
+        what = "is empty" if not rest else ("has no port" if ":" not in rest.strip("[]") or rest.endswith("]")
+                                            else "is not HOST:PORT")
+        raise ValueError(f"scheduler address {address!r} {what}; {form}")
+    port = int(match.group(2))
+    if not 1 <= port <= 65535:
+        raise ValueError(f"scheduler address {address!r}: port {port} is out of range; {form}")
+    return address
 
 
 def map_tasks(
@@ -53,8 +94,9 @@ def map_tasks(
             (in completion order).
 
     Raises:
-        ValueError: an unknown executor, workers < 1, or a scheduler address
-            for the process pool.
+        ValueError: an unknown executor, workers < 1, a scheduler address
+            for the process pool, or one not of the form of
+            :func:`check_scheduler_address`.
     """
     if executor not in EXECUTORS:
         raise ValueError(f"unknown executor {executor!r}; allowed: {', '.join(EXECUTORS)}")
@@ -62,6 +104,8 @@ def map_tasks(
         raise ValueError(f"workers must be >= 1, got {workers}")
     if scheduler is not None and executor != "dask":
         raise ValueError("a scheduler address needs executor 'dask'")
+    if scheduler is not None:
+        check_scheduler_address(scheduler)
     total = len(tasks)
     results: list[dict | None] = [None] * total
 
@@ -104,17 +148,54 @@ def _map_dask(fn, tasks, workers: int, scheduler: str | None, done) -> None:
         from distributed import Client, LocalCluster, as_completed as dask_completed
     except ImportError as e:  # pragma: no cover - the bench extra installs it
         raise RuntimeError("--executor dask needs the 'distributed' package (pip install 'drake-social[bench]')") from e
-    cluster = None
-    if scheduler is None:
-        cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=None)
-        _log.info("started a Dask LocalCluster of %d workers at %s", workers, cluster.scheduler_address)
-    client = Client(cluster if cluster is not None else scheduler)
+    held: dict = {}  # what to close; filled before any Ctrl-C can be delivered
     try:
-        futures = client.map(fn, list(tasks), pure=False)
+        if scheduler is None:
+            # Threads and processes inherit the signal mask: the cluster's
+            # threads, and the workers they spawn, keep SIGINT blocked. Here
+            # a Ctrl-C waits until the cluster is up, then arrives.
+            blocked = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+            try:
+                # No dashboard; the scheduler's HTTP server on a free local
+                # port (its default, 8787, may be another cluster's).
+                held["cluster"] = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
+                                               dashboard_address=None, silence_logs=logging.ERROR,
+                                               scheduler_kwargs={"dashboard_address": "127.0.0.1:0"})
+            finally:
+                signal.pthread_sigmask(signal.SIG_SETMASK, blocked)
+            _log.info("started a Dask LocalCluster of %d workers at %s", workers, held["cluster"].scheduler_address)
+        held["client"] = Client(held.get("cluster", scheduler))
+        futures = held["client"].map(fn, list(tasks), pure=False)
         index = {f.key: k for k, f in enumerate(futures)}
         for count, future in enumerate(dask_completed(futures), start=1):
             done(index[future.key], future.result(), count)
+    except BaseException:
+        with _silenced("distributed"):  # connections cut short: expected, not news
+            _close(held)
+        raise
+    _close(held)
+
+
+def _close(held: dict) -> None:
+    if "client" in held:
+        held["client"].close()
+    if "cluster" in held:
+        held["cluster"].close()
+
+
+@contextlib.contextmanager
+def _silenced(logger: str) -> Iterator[None]:
+    """No record of ``logger`` (and its children) is emitted in the block."""
+    log = logging.getLogger(logger)
+    disabled = log.disabled
+    children = [child for name, child in logging.Logger.manager.loggerDict.items()
+                if name.startswith(logger + ".") and isinstance(child, logging.Logger) and not child.disabled]
+    log.disabled = True
+    for child in children:
+        child.disabled = True
+    try:
+        yield
     finally:
-        client.close()
-        if cluster is not None:
-            cluster.close()
+        log.disabled = disabled
+        for child in children:
+            child.disabled = False
