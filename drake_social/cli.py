@@ -699,25 +699,31 @@ def _run_experiment(args: argparse.Namespace) -> int:
         if result is None:
             raise
         # Not even the records could be committed into --out: they go elsewhere.
-        cause = f"writing the study's outputs into {out} failed: {failure or e}"
+        why = str(e) if failure is None else f"{failure}; then committing the records alone failed: {e}"
+        cause = f"writing the study's outputs into {out} failed: {why}"
         try:
             rescued = rescue_records(result)
         except Exception as second:
-            raise StudyOutputError(f"{cause}; saving the records of its {len(result.records)} runs into the "
-                                   f"temporary directory failed too: {second}") from e
-        raise StudyOutputError(f"{cause}; the records of its {len(result.records)} runs were saved to "
+            raise StudyOutputError(f"{cause}; saving the records of its {_runs(result)} into the temporary "
+                                   f"directory failed too: {second}") from e
+        raise StudyOutputError(f"{cause}; the records of its {_runs(result)} were saved to "
                                f"{rescued / 'results.json'} and {rescued / 'results.csv'} instead") from e
     print(f"{len(result.records)} runs in {result.wall_time:.1f} s ({args.workers} worker(s), {args.executor})")
     if failure is not None:
         raise StudyOutputError(f"writing the study's outputs into {out} failed: {failure}; the records of its "
-                               f"{len(result.records)} runs are in {out / 'results.json'} and "
-                               f"{out / 'results.csv'} (the figures, REPORT.md and the arena files were not "
-                               "written)") from failure
+                               f"{_runs(result)} are in {out / 'results.json'} and {out / 'results.csv'} (the "
+                               "figures, REPORT.md and the arena files were not written)") from failure
     for line in (out / "REPORT.md").read_text().splitlines():
         if line.startswith("- **"):
             print(line)
     print(f"wrote {out}/: {', '.join(names)}")
     return 0
+
+
+def _runs(result) -> str:
+    """"1 run", "12 runs": the number of a study's records."""
+    n = len(result.records)
+    return f"{n} run{'' if n == 1 else 's'}"
 
 
 # ---- parser and entry point ----------------------------------------------------

@@ -187,3 +187,21 @@ def test_records_that_out_cannot_take_are_saved_in_the_temporary_directory(tmp_p
                                    "No space left on device; saving the records of its 2 runs into the temporary "
                                    "directory failed too: [Errno 2] No such file or directory: ")
     assert "Traceback" not in captured.err
+
+
+def test_a_figure_error_and_then_a_failed_commit_name_both_and_save_the_records(tmp_path, tiny_scenario_path,
+                                                                                monkeypatch, capsys):
+    sweep = _sweep(tmp_path, tiny_scenario_path)
+    out = tmp_path / "out"
+    temporary = tmp_path / "tmp"
+    temporary.mkdir()
+    monkeypatch.setattr(tempfile, "tempdir", str(temporary))
+    monkeypatch.setattr(report, "write_figures", _script_failed)
+    monkeypatch.setattr(OutputSet, "_commit", _no_space)
+    assert main(["experiment", "sweep", str(sweep), "--out", str(out)]) == 1
+    (rescued,) = temporary.iterdir()
+    assert capsys.readouterr().err == (
+        f"drake-social: error: writing the study's outputs into {out} failed: ompl_benchmark_statistics.py failed on "
+        "the logs; then committing the records alone failed: [Errno 28] No space left on device; the records of its "
+        f"2 runs were saved to {rescued / 'results.json'} and {rescued / 'results.csv'} instead\n")
+    assert len(json.loads((rescued / "results.json").read_text())["runs"]) == 2
