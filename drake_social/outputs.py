@@ -50,6 +50,11 @@ The layout of one command's set (here ``plan``) in ``out_dir``::
 
 Different commands (``show`` and ``plan``) keep their own sets in one folder;
 a name written by two commands belongs to the one that wrote it last.
+
+On a file system without symbolic links (FAT, some network shares) the set
+is moved into place file by file, each file by an atomic rename, with the
+plain manifest last; there a process killed in those milliseconds can leave
+part of the new set beside part of the old one, and a warning says so.
 """
 
 from __future__ import annotations
@@ -284,6 +289,9 @@ class OutputSet:
         if odd:  # never drop a writer's output silently
             raise RuntimeError(f"output set {self.command!r}: staged entries that are not plain files: {odd}")
         staged = sorted(p.name for p in entries)
+        if not self._links_work():
+            self._commit_file_by_file(staged)
+            return
         self._adopt_plain_set()
         self._seal(self._staging, staged)
         generation = self.out_dir / f".{self.command}.gen-{secrets.token_hex(6)}"
@@ -300,6 +308,38 @@ class OutputSet:
         self.committed = [self.out_dir / n for n in staged]
         _fsync(self.out_dir)
         self._tidy_quietly()
+
+    def _links_work(self) -> bool:
+        """Whether the file system of ``out_dir`` has symbolic links (FAT and
+        some network shares have none)."""
+        probe = self.out_dir / f".{self.command}.new-{secrets.token_hex(6)}"
+        try:
+            os.symlink(".", probe)
+        except OSError as e:
+            if e.errno in (errno.EPERM, errno.ENOTSUP, errno.EOPNOTSUPP, errno.ENOSYS):
+                return False
+            raise
+        probe.unlink()
+        return True
+
+    def _commit_file_by_file(self, staged: list[str]) -> None:
+        """The commit without symbolic links: each file moved into place by
+        its own rename, the files of the previous set that the new one does
+        not have removed, the plain manifest last."""
+        _log.warning("%s has no symbolic links: the %s set is moved into place file by file, so a process "
+                     "killed in those milliseconds can leave a mix of two sets", self.out_dir, self.command)
+        try:
+            previous = set(self._manifest.read_text().splitlines())
+        except FileNotFoundError:
+            previous = set()
+        self._seal(self._staging, staged)
+        for name in staged:
+            os.replace(self._staging / name, self.out_dir / name)
+        for name in sorted(previous - set(staged)):
+            if name and Path(name).name == name and not name.startswith("."):
+                (self.out_dir / name).unlink(missing_ok=True)
+        os.replace(self._staging / _MANIFEST, self._manifest)
+        self.committed = [self.out_dir / n for n in staged]
 
     def _tidy_quietly(self) -> None:
         try:

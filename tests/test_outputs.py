@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import errno
 import os
 import signal
 import stat
@@ -179,3 +180,29 @@ def test_an_unwritable_out_is_an_oserror(tmp_path):
     with pytest.raises(OSError):
         with OutputSet(tmp_path / "file", "plan"):
             pass
+
+
+def test_without_symbolic_links_the_set_is_moved_file_by_file_with_a_warning(tmp_path, monkeypatch, caplog):
+    """FAT and some network shares refuse symbolic links (EPERM): the set
+    still lands, as plain files, and the weaker promise is logged."""
+    def no_links(*args, **kwargs):
+        raise OSError(errno.EPERM, "Operation not permitted")
+
+    monkeypatch.setattr(outputs_module.os, "symlink", no_links)
+    _write_set(tmp_path, {"path.csv": "old", "stale.png": "old"})
+    caplog.clear()
+    with caplog.at_level("WARNING", logger="drake_social.outputs"):
+        dut = _write_set(tmp_path, {"path.csv": "new", "path.png": "new png"})
+    assert _listing(tmp_path) == {"path.csv": b"new", "path.png": b"new png"}
+    assert dut.committed == [tmp_path / "path.csv", tmp_path / "path.png"]
+    assert not any(p.is_symlink() for p in tmp_path.iterdir())
+    assert _hidden(tmp_path) == [".plan.lock", ".plan.manifest"]
+    assert (tmp_path / ".plan.manifest").read_text() == "path.csv\npath.png\n"
+    assert [r.getMessage() for r in caplog.records] == [
+        f"{tmp_path} has no symbolic links: the plan set is moved into place file by file, so a process killed in "
+        "those milliseconds can leave a mix of two sets"]
+    # Back on a file system with links, that plain set is taken over as a generation.
+    monkeypatch.undo()
+    _write_set(tmp_path, {"path.csv": "third"})
+    assert _listing(tmp_path) == {"path.csv": b"third"}
+    assert _hidden(tmp_path) == _tidy_hidden(tmp_path)
