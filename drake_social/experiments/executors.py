@@ -7,16 +7,21 @@ the number of workers (each task carries its own seed).
 
 * ``"process"`` (:mod:`concurrent.futures`): ``workers == 1`` runs in this
   process; more use a :class:`~concurrent.futures.ProcessPoolExecutor` of
-  freshly spawned interpreters (``spawn``: no state inherited from the
-  caller's Drake or numba threads).
+  worker processes forked by multiprocessing's fork server (a fresh
+  interpreter: no state inherited from the caller's Drake or numba threads).
 * ``"dask"`` (the ``distributed`` package): the tasks go to the scheduler at
   ``scheduler`` (``[tcp://|tls://]HOST:PORT``, e.g. ``tcp://10.0.0.5:8786``,
   checked by :func:`check_scheduler_address` before anything starts), or to a
   :class:`distributed.LocalCluster` of ``workers`` single-threaded worker
-  processes started for the study and closed after it. Its workers never see
-  Ctrl-C (SIGINT stays blocked in them: a terminal sends it to every process
-  of the group), and the connections an interruption cuts short are closed
-  without logging: Ctrl-C ends the study as quietly as with ``"process"``.
+  processes (forked by the same fork server) started for the study and closed
+  after it; the connections an interruption cuts short are closed without
+  logging.
+
+Ctrl-C is the main process's alone: a terminal sends it to every process of
+its group, and a worker stopped by it prints a traceback. The fork server is
+started with SIGINT ignored, so every worker forked from it ignores SIGINT
+from its first instruction (a handler set in the worker would leave the
+moment of its start-up uncovered); the main process then stops them.
 """
 
 from __future__ import annotations
@@ -26,8 +31,11 @@ import logging
 import multiprocessing
 import re
 import signal
+import threading
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from typing import Callable, Iterator, Sequence
+
+from drake_social.outputs import _Deferred  # SIGINT and SIGTERM held back over a block
 
 __all__ = ["EXECUTORS", "SCHEDULER_SCHEMES", "check_scheduler_address", "map_tasks"]
 
@@ -120,19 +128,26 @@ def map_tasks(
         for k, task in enumerate(tasks):
             done(k, fn(task), k + 1)
     else:
-        context = multiprocessing.get_context("spawn")
+        context = _worker_context()
         # Workers ignore SIGINT: Ctrl-C reaches the main process only, which
         # then cancels what has not started and stops the workers at once
         # (a pool's own shutdown would wait for every queued task).
         pool = ProcessPoolExecutor(max_workers=min(workers, total), mp_context=context,
                                    initializer=_ignore_sigint)
         try:
-            futures = {pool.submit(fn, task): k for k, task in enumerate(tasks)}
+            # Submitting starts the workers: a Ctrl-C waits until every one
+            # is registered with the pool, so that all are stopped below.
+            with _Deferred() as deferred:
+                futures = {pool.submit(fn, task): k for k, task in enumerate(tasks)}
+            deferred.reraise()
             for count, future in enumerate(as_completed(futures), start=1):
                 done(futures[future], future.result(), count)
         except BaseException:
-            for process in list(getattr(pool, "_processes", {}).values()):
+            processes = list(getattr(pool, "_processes", {}).values())
+            for process in processes:
                 process.terminate()
+            for process in processes:  # none outlives the study (nor prints after its last line)
+                process.join(10)
             pool.shutdown(wait=False, cancel_futures=True)
             raise
         pool.shutdown(wait=True)
@@ -143,37 +158,58 @@ def _ignore_sigint() -> None:
     signal.signal(signal.SIGINT, signal.SIG_IGN)
 
 
+def _worker_context() -> multiprocessing.context.BaseContext:
+    """multiprocessing's ``forkserver`` context, its server running with
+    SIGINT ignored (a disposition that forked workers inherit). The server is
+    started here when it is not running; only its start-up, a fork and an
+    exec, runs with SIGINT ignored in this process."""
+    from multiprocessing import forkserver
+
+    context = multiprocessing.get_context("forkserver")
+    if threading.current_thread() is threading.main_thread():
+        previous = signal.signal(signal.SIGINT, signal.SIG_IGN)
+        try:
+            forkserver.ensure_running()
+        finally:
+            signal.signal(signal.SIGINT, previous)
+    return context
+
+
 def _map_dask(fn, tasks, workers: int, scheduler: str | None, done) -> None:
     try:
+        import dask
         from distributed import Client, LocalCluster, as_completed as dask_completed
+        from distributed.utils import get_mp_context
     except ImportError as e:  # pragma: no cover - the bench extra installs it
         raise RuntimeError("--executor dask needs the 'distributed' package (pip install 'drake-social[bench]')") from e
-    held: dict = {}  # what to close; filled before any Ctrl-C can be delivered
-    try:
-        if scheduler is None:
-            # Threads and processes inherit the signal mask: the cluster's
-            # threads, and the workers they spawn, keep SIGINT blocked. Here
-            # a Ctrl-C waits until the cluster is up, then arrives.
-            blocked = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
-            try:
-                # No dashboard; the scheduler's HTTP server on a free local
-                # port (its default, 8787, may be another cluster's).
-                held["cluster"] = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
-                                               dashboard_address=None, silence_logs=logging.ERROR,
-                                               scheduler_kwargs={"dashboard_address": "127.0.0.1:0"})
-            finally:
-                signal.pthread_sigmask(signal.SIG_SETMASK, blocked)
-            _log.info("started a Dask LocalCluster of %d workers at %s", workers, held["cluster"].scheduler_address)
-        held["client"] = Client(held.get("cluster", scheduler))
-        futures = held["client"].map(fn, list(tasks), pure=False)
-        index = {f.key: k for k, f in enumerate(futures)}
-        for count, future in enumerate(dask_completed(futures), start=1):
-            done(index[future.key], future.result(), count)
-    except BaseException:
-        with _silenced("distributed"):  # connections cut short: expected, not news
-            _close(held)
-        raise
-    _close(held)
+    held: dict = {}  # what to close
+    # The LocalCluster's nannies fork their workers from the fork server too.
+    with dask.config.set({"distributed.worker.multiprocessing-method": "forkserver"}):
+        try:
+            if scheduler is None:
+                get_mp_context()  # sets distributed's fork-server preload, before the server starts
+                _worker_context()
+                # A Ctrl-C waits until the cluster is up (cut short, distributed
+                # cannot close it), and then stops it with the study. No
+                # dashboard; the scheduler's HTTP server on a free local port
+                # (its default, 8787, may be another cluster's).
+                with _Deferred() as deferred:
+                    held["cluster"] = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
+                                                   dashboard_address=None, silence_logs=logging.ERROR,
+                                                   scheduler_kwargs={"dashboard_address": "127.0.0.1:0"})
+                deferred.reraise()
+                _log.info("started a Dask LocalCluster of %d workers at %s", workers,
+                          held["cluster"].scheduler_address)
+            held["client"] = Client(held.get("cluster", scheduler))
+            futures = held["client"].map(fn, list(tasks), pure=False)
+            index = {f.key: k for k, f in enumerate(futures)}
+            for count, future in enumerate(dask_completed(futures), start=1):
+                done(index[future.key], future.result(), count)
+        except BaseException:
+            with _silenced("distributed"):  # connections cut short: expected, not news
+                _close(held)
+            raise
+        _close(held)
 
 
 def _close(held: dict) -> None:

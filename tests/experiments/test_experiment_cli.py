@@ -67,27 +67,39 @@ def test_good_scheduler_addresses_pass(address):
 # ---- Ctrl-C with the Dask executor ------------------------------------------------------
 
 
-def _spawned_children(pid: int) -> list[int]:
-    """The processes that ``pid`` started with multiprocessing's spawn (Dask's workers)."""
-    children = []
+def _workers(pid: int) -> list[int]:
+    """The worker processes of the study run by ``pid``: the processes forked
+    by its multiprocessing fork server (a child of ``pid``), or spawned by
+    ``pid`` itself."""
+    parents, commands = {}, {}
     for entry in Path("/proc").iterdir():
         if entry.name.isdigit():
             try:
                 stat = (entry / "stat").read_text()
-                cmdline = (entry / "cmdline").read_bytes()
+                commands[int(entry.name)] = (entry / "cmdline").read_bytes()
             except OSError:
                 continue
-            if int(stat.rsplit(")", 1)[1].split()[1]) == pid and b"spawn_main" in cmdline:
-                children.append(int(entry.name))
-    return children
+            parents[int(entry.name)] = int(stat.rsplit(")", 1)[1].split()[1])
+    servers = {p for p, parent in parents.items() if parent == pid and b"forkserver" in commands.get(p, b"")}
+    return sorted(p for p, parent in parents.items()
+                  if parent in servers or (parent == pid and b"spawn_main" in commands.get(p, b"")))
 
 
-def test_ctrl_c_with_dask_exits_130_with_one_line(tmp_path, tiny_scenario_path):
-    """SIGINT to the whole process group, as a terminal's Ctrl-C: the workers
-    must not print tracebacks, nor distributed its shutdown log."""
+def _alive(pid: int) -> bool:
+    try:
+        return (Path("/proc") / str(pid) / "stat").read_text().rsplit(")", 1)[1].split()[0] != "Z"
+    except OSError:
+        return False
+
+
+@pytest.mark.parametrize("executor, when", [("dask", "running"), ("dask", "starting"), ("process", "starting")])
+def test_ctrl_c_during_a_study_exits_130_with_one_line(tmp_path, tiny_scenario_path, executor, when):
+    """SIGINT to the whole process group, as a terminal's Ctrl-C, while the
+    workers plan or while they start: no worker may print a traceback, nor
+    distributed its shutdown log."""
     sweep = _sweep(tmp_path, tiny_scenario_path, runs=4, iterations=1_000_000)
     out = tmp_path / "out"
-    proc = subprocess.Popen([str(CLI), "experiment", "sweep", str(sweep), "--executor", "dask", "--workers", "2",
+    proc = subprocess.Popen([str(CLI), "experiment", "sweep", str(sweep), "--executor", executor, "--workers", "2",
                              "--out", str(out), "--progress"], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
                             start_new_session=True, env={**os.environ, "PYTHONUNBUFFERED": "1"})
     err = bytearray()
@@ -99,11 +111,13 @@ def test_ctrl_c_with_dask_exits_130_with_one_line(tmp_path, tiny_scenario_path):
     reader = threading.Thread(target=read, daemon=True)
     reader.start()
     try:
-        deadline = time.monotonic() + 300
-        while len(_spawned_children(proc.pid)) < 2:  # the LocalCluster's two workers
+        deadline = time.monotonic() + 120
+        while len(workers := _workers(proc.pid)) < (2 if when == "running" else 1):
             assert proc.poll() is None and time.monotonic() < deadline, err.decode()
-            time.sleep(0.5)
-        time.sleep(8)  # they have the tasks, planning
+            time.sleep(0.05)
+        if when == "running":
+            time.sleep(8)  # the workers have the tasks, planning
+            workers = _workers(proc.pid)
         t0 = time.monotonic()
         os.killpg(proc.pid, signal.SIGINT)
         stdout = proc.stdout.read()
@@ -122,6 +136,8 @@ def test_ctrl_c_with_dask_exits_130_with_one_line(tmp_path, tiny_scenario_path):
     assert all(line.startswith("experiment abuse:") for line in lines[:-2]), stderr  # the bar, nothing else
     assert stdout == b"" and current_set(out, "experiment") is None
     assert stopped < 30
+    time.sleep(1)
+    assert not [w for w in workers if _alive(w)]  # no worker left behind
 
 
 # ---- an output error after the runs -----------------------------------------------------
