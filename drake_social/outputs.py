@@ -374,7 +374,8 @@ class OutputSet:
         generation does not have."""
         prefix = f".{self.command}."
         current = os.readlink(self._current) if self._current.is_symlink() else None
-        have = set(current_set(self.out_dir, self.command).files) if current else set()
+        shown = current_set(self.out_dir, self.command)
+        have = set(shown.files) if shown is not None else set()
         for entry in self.out_dir.iterdir():
             name = entry.name
             if name.startswith(f".staging-{self.command}-") or (

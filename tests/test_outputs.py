@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import errno
 import os
+import shutil
 import signal
 import stat
 import subprocess
@@ -15,7 +16,7 @@ from pathlib import Path
 import pytest
 
 from drake_social import outputs as outputs_module
-from drake_social.outputs import InterruptedAfterCommit, OutputBusyError, OutputSet
+from drake_social.outputs import InterruptedAfterCommit, OutputBusyError, OutputSet, current_set
 
 
 def _listing(folder: Path) -> dict[str, bytes]:
@@ -206,3 +207,20 @@ def test_without_symbolic_links_the_set_is_moved_file_by_file_with_a_warning(tmp
     _write_set(tmp_path, {"path.csv": "third"})
     assert _listing(tmp_path) == {"path.csv": b"third"}
     assert _hidden(tmp_path) == _tidy_hidden(tmp_path)
+
+
+def test_a_generation_removed_by_hand_is_replaced_by_the_next_set(tmp_path):
+    """`rm -rf out/.plan.gen-*` leaves dangling links: they read as missing
+    files, and the next run writes a complete set over them."""
+    _write_set(tmp_path, {"path.csv": "old", "path.png": "old png"})
+    for generation in tmp_path.glob(".plan.gen-*"):
+        shutil.rmtree(generation)
+    assert current_set(tmp_path, "plan") is None and _listing_readable(tmp_path) == {}
+    _write_set(tmp_path, {"path.csv": "new"})
+    assert _listing(tmp_path) == {"path.csv": b"new"}
+    assert _hidden(tmp_path) == _tidy_hidden(tmp_path)
+    assert current_set(tmp_path, "plan").files == ("path.csv",)
+
+
+def _listing_readable(folder: Path) -> dict[str, bytes]:
+    return {p.name: p.read_bytes() for p in folder.iterdir() if not p.name.startswith(".") and p.exists()}
