@@ -43,7 +43,8 @@ import numpy as np
 
 from drake_social import __version__
 from drake_social.planning.result import PlanningInputError
-from drake_social.scenario import ALGORITHMS, Scenario, ScenarioError, load_scenario
+from drake_social.scenario import ALGORITHMS, Scenario, ScenarioError, compose_yaml, load_scenario
+from drake_social.textfile import check_regular_file, read_text_file
 
 __all__ = ["EXIT_NO_PATH", "ProgressBar", "main", "build_parser", "load_with_overrides"]
 
@@ -73,10 +74,7 @@ def load_with_overrides(path: str | Path, sets: Sequence[str] | None) -> Scenari
 
     texts = list(sets or [])
     for text in texts:
-        try:
-            node = yaml.compose(text)
-        except yaml.YAMLError as e:
-            raise ScenarioError(f"{path} (--set {text!r}): not valid YAML: {e}") from e
+        node = compose_yaml(text, f"{path} (--set {text!r})")
         if not isinstance(node, yaml.MappingNode):
             raise ScenarioError(f"{path} (--set {text!r}): must be a YAML mapping such as 'random_seed: 3'")
     return load_scenario(path, texts, overrides_name="--set")
@@ -201,14 +199,16 @@ class _LineEnd:
         return getattr(self._stream, name)
 
 
-def _int_at_least(minimum: int) -> Callable[[str], int]:
+def _int_at_least(minimum: int, maximum: int | None = None) -> Callable[[str], int]:
+    allowed = f"an integer >= {minimum}" if maximum is None else f"an integer in [{minimum}, {maximum:,}]"
+
     def parse(text: str) -> int:
         try:
             value = int(text)
         except ValueError:
-            raise argparse.ArgumentTypeError(f"must be an integer >= {minimum}, got {text!r}") from None
-        if value < minimum:
-            raise argparse.ArgumentTypeError(f"must be an integer >= {minimum}, got {text}")
+            raise argparse.ArgumentTypeError(f"must be {allowed}, got {text!r}") from None
+        if value < minimum or (maximum is not None and value > maximum):
+            raise argparse.ArgumentTypeError(f"must be {allowed}, got {text}")
         return value
 
     return parse
@@ -388,14 +388,7 @@ def read_path_csv(path: Path, scenario: Scenario) -> np.ndarray:
             finite, or its first and last rows are not the scenario's start
             and goal (to 1e-9); the message names the file and the row.
     """
-    if path.is_dir():
-        raise ScenarioError(f"{path}: is a directory, not a path file (--path)")
-    try:
-        lines = path.read_text().splitlines()
-    except FileNotFoundError:
-        raise ScenarioError(f"{path}: no such path file (--path)") from None
-    except UnicodeDecodeError as e:
-        raise ScenarioError(f"{path}: not a text file ({e})") from None
+    lines = read_text_file(path, "path", "--path").splitlines()
     if not lines or lines[0].replace(" ", "") != "x,y,psi1,psi2":
         raise ScenarioError(f"{path}: line 1: the header must be 'x,y,psi1,psi2', got {lines[0] if lines else ''!r}")
     rows = []
@@ -556,10 +549,7 @@ def _run_bench(args: argparse.Namespace) -> int:
     from drake_social.outputs import OutputSet
 
     for path in args.scenarios:
-        if path.is_dir():
-            raise ScenarioError(f"{path}: is a directory, not a scenario file (--scenarios)")
-        if not path.is_file():
-            raise ScenarioError(f"{path}: no such scenario file (--scenarios)")
+        check_regular_file(path, "scenario", "--scenarios")
     bar = ProgressBar(1, sys.stderr, label="bench", interval=0.0) if _show_progress(args) else None
 
     def progress(done: int, total: int, label: str) -> None:
@@ -598,6 +588,8 @@ def _run_bench(args: argparse.Namespace) -> int:
 
 def _add_experiment(subparsers) -> None:
     from drake_social.experiments.executors import EXECUTORS
+    from drake_social.experiments.study import MAX_RUNS
+    from drake_social.scenario import MAX_ITERATIONS
 
     p = subparsers.add_parser(
         "experiment",
@@ -612,8 +604,10 @@ def _add_experiment(subparsers) -> None:
                              description="A: office_bar (bar) and B: generic_L (L object) with RRT*, Social "
                              "Risk-RRT* multi-point and base-only, Informed multi-point and base-only; D: generic_L "
                              "with the 1.5 m bar, Social Risk-RRT* with object, base and equal weights.")
-    paper.add_argument("--runs", type=_positive_int, default=10, metavar="N", help="runs per algorithm (default 10)")
-    paper.add_argument("--iterations", type=_positive_int, default=2000, metavar="K", help="K (default 2000)")
+    paper.add_argument("--runs", type=_int_at_least(1, MAX_RUNS), default=10, metavar="N",
+                       help=f"runs per algorithm, at most {MAX_RUNS:,} (default 10)")
+    paper.add_argument("--iterations", type=_int_at_least(1, MAX_ITERATIONS), default=2000, metavar="K",
+                       help=f"K, at most {MAX_ITERATIONS:,} (default 2000)")
     paper.add_argument("--seed", type=_nonnegative_int, default=0, metavar="S",
                        help="study seed; run seeds are drawn from it with SeedSequence (default 0)")
     paper.add_argument("--scenario-dir", type=Path, default=Path("scenarios"), metavar="DIR",
@@ -661,8 +655,7 @@ def _run_experiment(args: argparse.Namespace) -> int:
             logging.getLogger("distributed").setLevel(logging.WARNING)
     if args.study == "paper":
         for name in ("office_bar.yaml", "generic_L.yaml"):
-            if not (args.scenario_dir / name).is_file():
-                raise ScenarioError(f"{args.scenario_dir / name}: no such scenario file (--scenario-dir)")
+            check_regular_file(args.scenario_dir / name, "scenario", "--scenario-dir")
         study = paper_study(runs=args.runs, iterations=args.iterations, seed=args.seed, simulate=args.simulate,
                             scenario_dir=args.scenario_dir)
     else:

@@ -17,6 +17,7 @@ pure-numpy core may use the dataclasses without importing Drake.
 
 
 import dataclasses as dc
+import functools
 import math
 import typing
 from pathlib import Path
@@ -25,10 +26,17 @@ from typing import Optional, Sequence, Union
 import numpy as np
 
 from drake_social.limits import MAX_MOTION_STEPS
+from drake_social.textfile import read_yaml_file
 
 __all__ = [
     "ALGORITHMS",
     "EXECUTIONS",
+    "MAX_CONTROL_STEPS",
+    "MAX_PLANT_STEPS",
+    "MAX_REPLAY_FPS",
+    "MAX_TIME_LIMIT",
+    "MAX_YAML_DEPTH",
+    "MAX_YAML_NODES",
     "INFORMED_MODES",
     "SIM_MODES",
     "Bar",
@@ -43,13 +51,32 @@ __all__ = [
     "ScenarioError",
     "SocialCostOptions",
     "World",
+    "check_node",
+    "check_yaml",
+    "compose_yaml",
     "load_scenario",
+    "load_scenario_text",
     "validate_scenario",
 ]
 
 #: Largest ``planner.iterations`` accepted (the tree grows with the nodes
 #: added, but K samples still take time: 10^7 is hours of planning).
 MAX_ITERATIONS = 10_000_000
+#: Largest ``execution.time_limit``, seconds: twice the default (300 s) and
+#: eight times the longest run of the shipped scenarios (office_bar reaches
+#: its goal at 73-76 s in both modes and executions). Logs and the replay grow with it (a 1,200 s run held
+#: 0.75 GB and wrote a 19.7 MB replay).
+MAX_TIME_LIMIT = 600.0
+#: Most control periods in one run (``time_limit / control_period``): the
+#: logs keep one sample per period, about 3 kB each (the default 300 s /
+#: 0.01 s is 30,000; this is MAX_TIME_LIMIT at the default period, a run that
+#: peaked at 0.55 GB).
+MAX_CONTROL_STEPS = 60_000
+#: Most plant steps in one dynamic run (``time_limit / plant_time_step``):
+#: MAX_TIME_LIMIT at the default 0.002 s step.
+MAX_PLANT_STEPS = 300_000
+#: Largest ``execution.replay_fps``, frames per second (the replay keeps every frame).
+MAX_REPLAY_FPS = 60.0
 #: Values of ``planner.near_radius_mode``.
 NEAR_RADIUS_MODES = ("fixed", "shrinking")
 #: Planner names accepted in ``planner.algorithm`` (see ``drake_social.planning``).
@@ -282,9 +309,10 @@ class ExecutionOptions:
     # Time step of the discrete MultibodyPlant in "dynamic" mode, seconds (> 0).
     plant_time_step: float = 0.002
     # A run that has not reached the goal after this long stops and says so,
-    # seconds (> 0).
+    # seconds (> 0, <= MAX_TIME_LIMIT = 600; at most MAX_CONTROL_STEPS control
+    # periods and MAX_PLANT_STEPS plant steps).
     time_limit: float = 300.0
-    # Frames per second of the Meshcat recording (> 0).
+    # Frames per second of the Meshcat recording (> 0, <= MAX_REPLAY_FPS = 60).
     replay_fps: float = 30.0
 
 
@@ -337,22 +365,32 @@ def load_scenario(path: str | Path, overrides: str | Sequence[str] | None = None
         The validated scenario.
 
     Raises:
-        ScenarioError: the file is missing, a directory, malformed, has
+        ScenarioError: the file is missing, not a regular file, larger than
+            :data:`~drake_social.textfile.MAX_YAML_FILE_BYTES` (4 MiB), malformed, has
             duplicate or unknown keys or invalid values; the message names
             the file (or the override at fault), the line and the field.
     """
+    path = Path(path)
+    return load_scenario_text(read_yaml_file(path, "scenario"), str(path), overrides,
+                              overrides_name=overrides_name)
+
+
+def load_scenario_text(text: str, source: str, overrides: str | Sequence[str] | None = None, *,
+                       overrides_name: str = "overrides") -> Scenario:
+    """Loads and validates a scenario from its YAML text, as :func:`load_scenario` does a file.
+
+    Args:
+        text: the scenario's YAML.
+        source: how errors name it (the file it came from).
+        overrides, overrides_name: as :func:`load_scenario`.
+
+    Raises:
+        ScenarioError: as :func:`load_scenario`, naming ``source``.
+    """
     from pydrake.common.yaml import yaml_load_typed  # lazy: keep pydrake out of the core
 
-    path = Path(path)
-    if path.is_dir():
-        raise ScenarioError(f"{path}: is a directory, not a scenario file")
-    if not path.is_file():
-        raise ScenarioError(f"{path}: no such scenario file")
-    try:
-        text = path.read_text(encoding="utf-8")
-    except UnicodeDecodeError as e:
-        raise ScenarioError(f"{path}: not a text (UTF-8) file ({e})") from None
-    sources = [(str(path), text)]
+    path = source
+    sources = [(source, text)]
     for extra in [overrides] if isinstance(overrides, str) else list(overrides or []):
         sources.append((f"{path} ({overrides_name} {extra!r})", extra))
     stages = []
@@ -399,12 +437,17 @@ def _describe(tp) -> str:
         return text + (" or null" if len(alts) < len(typing.get_args(tp)) else "")
     if origin is list:
         return "a list of " + _plural(typing.get_args(tp)[0])
+    if origin is dict:
+        return "a mapping of names to " + _plural(typing.get_args(tp)[1])
     if dc.is_dataclass(tp):
         return f"a mapping ({tp.__name__}: {', '.join(f.name for f in dc.fields(tp))})"
     return {float: "a number", int: "an integer", bool: "true or false", str: "a string"}.get(tp, str(tp))
 
 
 def _plural(tp) -> str:
+    if typing.get_origin(tp) is Union:
+        alts = [a for a in typing.get_args(tp) if a is not type(None)]
+        return " or ".join(_plural(a) for a in alts) + (" or nulls" if len(alts) < len(typing.get_args(tp)) else "")
     if typing.get_origin(tp) is list:
         return "lists of " + _plural(typing.get_args(tp)[0])
     if dc.is_dataclass(tp):
@@ -412,26 +455,131 @@ def _plural(tp) -> str:
     return {float: "numbers", int: "integers", bool: "booleans", str: "strings"}.get(tp, str(tp))
 
 
+#: Deepest nesting of YAML collections accepted in a scenario, sweep or
+#: override (a scenario needs 4 levels, a sweep with variants 6); deeper
+#: documents are refused before Python's recursion limit is reached.
+MAX_YAML_DEPTH = 32
+#: Most nodes (mappings, lists, keys and values) of one YAML document, an
+#: alias counted as the nodes it stands for: a "billion laughs" of nested
+#: aliases is refused while it is read. A 2,000-obstacle room has about 25,000;
+#: PyYAML composes about 15,000 nodes a second.
+MAX_YAML_NODES = 100_000
+
+
+class _YamlLimit(Exception):
+    def __init__(self, mark, message: str):
+        super().__init__(message)
+        self.mark = mark
+
+
+@functools.lru_cache(maxsize=1)
+def _limited_loader(yaml):
+    """PyYAML's SafeLoader with :data:`MAX_YAML_DEPTH` and :data:`MAX_YAML_NODES` enforced while composing."""
+
+    class Loader(yaml.SafeLoader):
+        def __init__(self, stream):
+            super().__init__(stream)
+            self._depth = 0  # collections open around the node being composed
+            self._total = 0  # nodes so far, aliases expanded
+            self._size: dict[int, int] = {}  # id(node) -> its expanded node count
+            self._height: dict[int, int] = {}  # id(node) -> its expanded nesting depth
+
+        def _count(self, nodes: int, height: int, mark) -> None:
+            self._total += nodes
+            if self._total > MAX_YAML_NODES:
+                raise _YamlLimit(mark, f"more than {MAX_YAML_NODES:,} YAML nodes (aliases counted as the nodes "
+                                       f"they repeat); a document may have at most {MAX_YAML_NODES:,}")
+            if self._depth + height > MAX_YAML_DEPTH:
+                raise _YamlLimit(mark, f"nested more than {MAX_YAML_DEPTH} levels deep (aliases included); "
+                                       f"at most {MAX_YAML_DEPTH} are allowed")
+
+        def compose_node(self, parent, index):
+            mark = self.peek_event().start_mark
+            if self.check_event(yaml.AliasEvent):
+                node = super().compose_node(parent, index)
+                if id(node) not in self._size:  # its anchor is still open: the alias repeats itself
+                    raise _YamlLimit(mark, "an alias inside the node it refers to (a recursive YAML structure)")
+                self._count(self._size[id(node)], self._height[id(node)], mark)
+                return node
+            self._depth += 1
+            self._count(0, 0, mark)
+            before = self._total
+            node = super().compose_node(parent, index)
+            self._depth -= 1
+            children = (node.value if isinstance(node, yaml.SequenceNode) else
+                        [n for pair in node.value for n in pair] if isinstance(node, yaml.MappingNode) else [])
+            self._height[id(node)] = 1 + max((self._height[id(c)] for c in children), default=0)
+            self._count(1, 0, mark)
+            self._size[id(node)] = self._total - before
+            return node
+
+    return Loader
+
+
+def compose_yaml(text: str, source: str):
+    """Parses YAML ``text`` into PyYAML's node tree, within the limits.
+
+    The one YAML parser of scenario files, sweep files and overrides
+    (``--set``, sweep variants): the document may nest at most
+    :data:`MAX_YAML_DEPTH` levels and have at most :data:`MAX_YAML_NODES`
+    nodes, aliases counted as the nodes they repeat.
+
+    Args:
+        text: the YAML document.
+        source: how errors name it (a file, or a file and an override).
+
+    Returns:
+        The root node, or None for an empty document.
+
+    Raises:
+        ScenarioError: ``<source>: not valid YAML: ...`` or ``<source>: line <n>: <the limit exceeded>``.
+    """
+    import yaml  # PyYAML, as Drake's Python loader uses; lazy like pydrake
+
+    loader = _limited_loader(yaml)(text)
+    try:
+        return loader.get_single_node()
+    except yaml.YAMLError as e:
+        raise ScenarioError(f"{source}: not valid YAML: {e}") from None
+    except _YamlLimit as e:
+        raise ScenarioError(f"{source}: line {e.mark.line + 1}: {e}") from None
+    finally:
+        loader.dispose()
+
+
 def check_yaml(text: str, source: str, schema: type = Scenario) -> None:
     """Checks YAML ``text`` against the dataclass ``schema`` before it is loaded.
 
-    Refuses invalid YAML, duplicate keys (PyYAML and Drake keep the last one
-    silently), keys the schema does not have and values of the wrong type
-    (a word for a number, null or a mapping for a list, an unknown ``!Tag``).
-    Values are not range-checked here (see :func:`validate_scenario`).
+    Parses it with :func:`compose_yaml` (its nesting and size limits), then
+    refuses duplicate keys (PyYAML and Drake keep the last one silently),
+    keys the schema does not have and values of the wrong type (a word for a
+    number, null or a mapping for a list, an unknown ``!Tag``). Values are
+    not range-checked here (see :func:`validate_scenario`).
 
     Raises:
         ScenarioError: ``<source>: line <n>: <dotted field>: <what is allowed>, got <value>``.
     """
-    import yaml  # PyYAML, as Drake's Python loader uses; lazy like pydrake
+    import yaml
 
-    try:
-        root = yaml.compose(text, Loader=yaml.SafeLoader)
-    except yaml.YAMLError as e:
-        raise ScenarioError(f"{source}: not valid YAML: {e}") from None
+    root = compose_yaml(text, source)
     if root is None:
-        raise ScenarioError(f"{source}: empty; a scenario is a mapping ({', '.join(f.name for f in dc.fields(schema))})")
-    _check_node(schema, root, "", source, yaml)
+        raise ScenarioError(f"{source}: empty; a {schema.__name__.lower()} is a mapping "
+                            f"({', '.join(f.name for f in dc.fields(schema))})")
+    check_node(schema, root, source)
+
+
+def check_node(schema: type, node, source: str, field: str = "") -> None:
+    """Checks one composed YAML node (of :func:`compose_yaml`) against ``schema``, as :func:`check_yaml`.
+
+    Args:
+        schema: a dataclass, or ``list[...]``, ``dict[str, ...]``, ``Optional[...]`` of the schema types.
+        node: the node.
+        source: how errors name the document.
+        field: the dotted field of ``node`` in its document ("" at the top).
+    """
+    import yaml
+
+    _check_node(schema, node, field, source, yaml)
 
 
 def _check_node(tp, node, field: str, source: str, yaml) -> None:
@@ -468,10 +616,29 @@ def _check_node(tp, node, field: str, source: str, yaml) -> None:
         for i, child in enumerate(node.value):
             _check_node(item, child, f"{field}[{i}]", source, yaml)
         return
+    if origin is dict:
+        if not isinstance(node, yaml.MappingNode):
+            fail(f"must be {_describe(tp)}, got {shown(node)}")
+        key_type, value_type = typing.get_args(tp)
+        seen: dict[str, int] = {}
+        for key_node, value_node in node.value:
+            line = key_node.start_mark.line + 1
+            if (not isinstance(key_node, yaml.ScalarNode) or key_node.tag != "tag:yaml.org,2002:str"
+                    or key_node.value == ""):
+                raise ScenarioError(f"{source}: line {line}: {field}: names must be non-empty strings, got "
+                                    f"{shown(key_node)}")
+            sub = f"{field}.{key_node.value}" if field else key_node.value
+            if key_node.value in seen:
+                raise ScenarioError(f"{source}: line {line}: {sub}: duplicate key (first at line "
+                                    f"{seen[key_node.value]})")
+            seen[key_node.value] = line
+            _check_node(value_type, value_node, sub, source, yaml)
+        return
     if dc.is_dataclass(tp):
         if not isinstance(node, yaml.MappingNode):
             fail(f"must be {_describe(tp)}, got {shown(node)}")
-        types = {f.name: f.type for f in dc.fields(tp)}
+        hints = typing.get_type_hints(tp)  # resolves string annotations (from __future__ import annotations)
+        types = {f.name: hints[f.name] for f in dc.fields(tp)}
         seen: dict[str, int] = {}
         for key_node, value_node in node.value:
             key = key_node.value
@@ -701,5 +868,17 @@ def validate_scenario(scenario: Scenario, source: str = "<scenario>") -> None:
     if e.plant_time_step > e.control_period:
         c.fail("execution.plant_time_step",
                f"must be <= execution.control_period {e.control_period}, got {e.plant_time_step}")
+    if e.time_limit > MAX_TIME_LIMIT:
+        c.fail("execution.time_limit", f"must be <= {MAX_TIME_LIMIT:g} s, got {e.time_limit}")
+    if e.replay_fps > MAX_REPLAY_FPS:
+        c.fail("execution.replay_fps", f"must be <= {MAX_REPLAY_FPS:g} frames per second, got {e.replay_fps}")
+    if e.time_limit / e.control_period > MAX_CONTROL_STEPS:
+        c.fail("execution.control_period",
+               f"must be >= execution.time_limit / {MAX_CONTROL_STEPS:,} = {e.time_limit / MAX_CONTROL_STEPS:.3g} s "
+               f"(a run may take at most {MAX_CONTROL_STEPS:,} control periods), got {e.control_period}")
+    if e.time_limit / e.plant_time_step > MAX_PLANT_STEPS:
+        c.fail("execution.plant_time_step",
+               f"must be >= execution.time_limit / {MAX_PLANT_STEPS:,} = {e.time_limit / MAX_PLANT_STEPS:.3g} s "
+               f"(a run may take at most {MAX_PLANT_STEPS:,} plant steps), got {e.plant_time_step}")
     if scenario.random_seed < 0:
         c.fail("random_seed", f"must be >= 0, got {scenario.random_seed}")

@@ -164,3 +164,143 @@ def test_a_resolution_too_fine_for_the_room_names_the_least_allowed():
         f"{TINY} (--set 'social: {{resolution: 0.000001}}'): social.resolution: must be >= {least:.3g} m for this "
         f"world and robot (a motion may move a point {longest:.4g} m, sampled in at most 1,000,000 steps), got 1e-06")
     assert load_with_overrides(TINY, [f"social: {{resolution: {least * 1.0001}}}"]).social.resolution > least
+
+
+# ---- the limits of the shared YAML parser (compose_yaml): the same for scenario
+# files, --set overrides and sweep files (tests/experiments/test_study.py).
+
+
+def _laughs(levels: int = 10, item: str = "lol") -> list[str]:
+    """A "billion laughs": each level is a list of nine aliases of the one before (9^levels leaves)."""
+    lines = [f"l0: &l0 [{', '.join([item] * 9)}]"]
+    lines += [f"l{i}: &l{i} [{', '.join([f'*l{i - 1}'] * 9)}]" for i in range(1, levels)]
+    return lines
+
+
+def _depth_message(source, line: int) -> str:
+    return f"{source}: line {line}: nested more than 32 levels deep (aliases included); at most 32 are allowed"
+
+
+def _nodes_message(source, line: int) -> str:
+    return (f"{source}: line {line}: more than 100,000 YAML nodes (aliases counted as the nodes they repeat); "
+            f"a document may have at most 100,000")
+
+
+@pytest.mark.parametrize("field", ["description", "world", "start", "object"])
+def test_an_alias_bomb_is_refused_while_it_is_read(tmp_path, field):
+    """Under a known field too (not only refused as an unknown key), and in --set."""
+    import time
+
+    lines = _laughs()
+    dut = tmp_path / "bomb.yaml"
+    dut.write_text(f"{field}:\n" + "".join(f"  - {{{line}}}\n" for line in lines))
+    t0 = time.perf_counter()
+    message = _message(dut)
+    assert time.perf_counter() - t0 < 5
+    assert message == _nodes_message(dut, 7)  # the level of 9^6 leaves
+    text = "{" + ", ".join(lines) + "}"
+    assert _message(TINY, [text]) == _nodes_message(f"{TINY} (--set {text!r})", 1)
+
+
+def test_a_merge_key_bomb_is_refused(tmp_path):
+    lines = ["m0: &m0 {a: 1, b: 2, c: 3}"] + [f"m{i}: &m{i} {{<<: [{', '.join([f'*m{i - 1}'] * 9)}]}}"
+                                                for i in range(1, 12)]
+    dut = tmp_path / "merge.yaml"
+    dut.write_text("\n".join(lines) + "\n")
+    assert _message(dut) == _nodes_message(dut, 6)
+
+
+def test_a_recursive_alias_is_refused(tmp_path):
+    dut = tmp_path / "loop.yaml"
+    dut.write_text(TINY.read_text().replace("robot:\n", "robot: &r\n  extra: *r\n"))
+    assert _message(dut) == (f"{dut}: line 10: an alias inside the node it refers to (a recursive YAML "
+                             f"structure)")
+
+
+@pytest.mark.parametrize("depth", [33, 1000, 100_000])
+def test_deep_flow_nesting_is_refused_not_a_recursion_error(tmp_path, depth):
+    dut = tmp_path / "deep.yaml"
+    dut.write_text("start: " + "[" * depth + "]" * depth + "\n")
+    assert _message(dut) == _depth_message(dut, 1)
+    text = "social: {weights: " + "[" * depth + "]" * depth + "}"
+    assert _message(TINY, [text]) == _depth_message(f"{TINY} (--set {text!r})", 1)
+    text = "{a: " * depth + "}" * depth
+    assert _message(TINY, [text]) == _depth_message(f"{TINY} (--set {text!r})", 1)
+
+
+def test_deep_block_nesting_is_refused(tmp_path):
+    dut = tmp_path / "deep.yaml"
+    dut.write_text("".join("  " * i + f"k{i}:\n" for i in range(1000)) + "  " * 1000 + "x\n")
+    assert _message(dut) == _depth_message(dut, 32)  # the key k31 on line 32 is the 33rd level
+    dut.write_text("".join("  " * i + "-\n" for i in range(1000)) + "  " * 1000 + "x\n")
+    assert _message(dut) == _depth_message(dut, 33)
+
+
+def test_depth_through_aliases_counts(tmp_path):
+    """A 20-deep anchor used 20 levels down is 40 deep once expanded."""
+    dut = tmp_path / "deep.yaml"
+    deep = "[" * 20 + "]" * 20
+    dut.write_text(f"a: &a {deep}\nb: {'[' * 20}*a{']' * 20}\n")
+    assert _message(dut) == _depth_message(dut, 2)
+
+
+def test_a_document_of_too_many_plain_nodes_is_refused(tmp_path):
+    dut = tmp_path / "wide.yaml"
+    dut.write_text("start: [" + ", ".join(["0"] * 100_000) + "]\n")
+    assert _message(dut) == _nodes_message(dut, 1)
+
+
+def test_the_limits_leave_real_scenarios_alone(tmp_path):
+    """2,000 obstacles and 300 people (the crowds to come) and the shipped files load."""
+    obstacles = "".join(f"    - {{center: [{10 + (i % 50) * 1.5}, {10 + (i // 50) * 1.5}], size: [0.5, 0.5]}}\n"
+                        for i in range(2000))
+    people = "".join(f"  - {{x: {5 + (i % 30) * 3}, y: {80 + (i // 30) * 1.5}, theta: 0.0, radius: 0.25}}\n"
+                     for i in range(300))
+    dut = tmp_path / "crowd.yaml"
+    dut.write_text("world:\n  bounds: [0, 0, 100, 100]\n  obstacles:\n" + obstacles + "people:\n" + people +
+                   "start: [2, 2, 0, 0]\ngoal: [5, 5, 0, 0]\n")
+    scenario = load_scenario(dut)
+    assert (len(scenario.world.obstacles), len(scenario.people)) == (2000, 300)
+    for name in ("tiny", "office_bar", "generic_L"):
+        load_scenario(TINY.parent / f"{name}.yaml")
+
+
+# ---- execution: what a run may record
+
+
+@pytest.mark.parametrize("override, message", [
+    ("execution: {time_limit: 1200}", "execution.time_limit: must be <= 600 s, got 1200.0"),
+    ("execution: {time_limit: .inf}", "execution.time_limit: must be finite numbers, got inf"),
+    ("execution: {replay_fps: 1000}", "execution.replay_fps: must be <= 60 frames per second, got 1000.0"),
+    ("execution: {control_period: 0.002, plant_time_step: 0.001}",
+     "execution.control_period: must be >= execution.time_limit / 60,000 = 0.005 s (a run may take at most "
+     "60,000 control periods), got 0.002"),
+    ("execution: {time_limit: 600, control_period: 0.009}",
+     "execution.control_period: must be >= execution.time_limit / 60,000 = 0.01 s (a run may take at most "
+     "60,000 control periods), got 0.009"),
+    ("execution: {plant_time_step: 0.0005}",
+     "execution.plant_time_step: must be >= execution.time_limit / 300,000 = 0.001 s (a run may take at most "
+     "300,000 plant steps), got 0.0005"),
+])
+def test_execution_numbers_that_grow_a_run_are_bounded(override, message):
+    assert _message(TINY, [override]) == f"{TINY} (--set {override!r}): {message}"
+
+
+def test_the_bounds_themselves_are_accepted():
+    dut = load_scenario(TINY, ["execution: {time_limit: 600, replay_fps: 60, control_period: 0.01, "
+                               "plant_time_step: 0.002}"])
+    assert (dut.execution.time_limit, dut.execution.replay_fps) == (600.0, 60.0)
+    dut = load_scenario(TINY, ["execution: {time_limit: 60, control_period: 0.001, plant_time_step: 0.0002}"])
+    assert (dut.execution.control_period, dut.execution.plant_time_step) == (0.001, 0.0002)
+
+
+def test_simulate_refuses_a_time_limit_beyond_the_bound(tiny_scenario):
+    from drake_social.sim.run import simulate
+
+    with pytest.raises(ValueError, match=r"time_limit must be in \(0, 600\] seconds, got 1200.0"):
+        simulate(tiny_scenario, waypoints=np.array([tiny_scenario.start, tiny_scenario.goal]), time_limit=1200.0,
+                 analyze=False)
+    fine = load_scenario(TINY, ["execution: {control_period: 0.005, plant_time_step: 0.001}"])
+    with pytest.raises(ValueError, match=r"^time_limit 600.0 s is more than 60,000 control periods of 0.005 s or "
+                                         r"300,000 plant steps of 0.001 s$"):
+        simulate(fine, waypoints=np.array([fine.start, fine.goal]), time_limit=600.0, analyze=False)

@@ -30,16 +30,20 @@ import functools
 import io
 import json
 import logging
-import tempfile
+import re
 import time
 from pathlib import Path
-from typing import Callable, Sequence
+from typing import Callable, Optional, Sequence
 
 import numpy as np
 
-from drake_social.scenario import ALGORITHMS, ScenarioError
+from drake_social.scenario import ALGORITHMS, Scenario, ScenarioError
+from drake_social.textfile import check_regular_file, read_yaml_file
 
 __all__ = [
+    "MAX_RUNS",
+    "MAX_STUDY_TASKS",
+    "NAME_PATTERN",
     "PAPER_ALGORITHMS",
     "RECORD_FILES",
     "TIMING_FIELDS",
@@ -47,7 +51,9 @@ __all__ = [
     "Study",
     "StudyOutputError",
     "StudyResult",
+    "Sweep",
     "best_runs",
+    "check_study",
     "comparable",
     "load_sweep",
     "paper_study",
@@ -75,10 +81,10 @@ class Group:
     """One scenario (with overrides) and the algorithms planned on it.
 
     Attributes:
-        name: the group's name in tables and file names (letters, digits, _ -).
+        name: the group's name in tables and file names (:data:`NAME_PATTERN`), unique in its study.
         scenario: the scenario file.
         overrides: YAML mappings applied over the file in turn (as ``--set``).
-        algorithms: planners of :data:`drake_social.scenario.ALGORITHMS`.
+        algorithms: planners of :data:`drake_social.scenario.ALGORITHMS`, each at most once.
         label: a human description (tables, figure titles).
     """
 
@@ -94,13 +100,15 @@ class Study:
     """What to run.
 
     Attributes:
-        name: "paper" or the sweep's name.
+        name: "paper" or the sweep's name (:data:`NAME_PATTERN`).
         groups: the groups.
-        runs: runs per (group, algorithm), >= 1.
-        iterations: K, samples per run, >= 1.
+        runs: runs per (group, algorithm), in [1, :data:`MAX_RUNS`]; groups x
+            algorithms x runs is at most :data:`MAX_STUDY_TASKS`.
+        iterations: K, samples per run, in [1, ``MAX_ITERATIONS``].
         seed: the study seed; run r's seed is the r-th spawned SeedSequence's first word.
         simulate: also execute each path in the Drake diagram (kinematic mode).
-        checker: validity checker of the planner (``planar``: the fast exact one).
+        checker: validity checker of the planner: ``planar`` (the fast exact one), ``drake`` or ``numpy``.
+        (:func:`check_study` checks all of it before any run.)
     """
 
     name: str
@@ -149,7 +157,128 @@ def paper_study(*, runs: int = 10, iterations: int = 2000, seed: int = 0, simula
         groups.append(Group(f"D_{name}", str(d / "generic_L.yaml"),
                             overrides=(bar, f"social: {{weights: {json.dumps(w)}}}"),
                             algorithms=("social_rrt_star",), label=f"D: generic map, bar, {name} weights {w}"))
-    return Study("paper", tuple(groups), runs=runs, iterations=iterations, seed=seed, simulate=simulate)
+    study = Study("paper", tuple(groups), runs=runs, iterations=iterations, seed=seed, simulate=simulate)
+    check_study(study, "paper study")
+    return study
+
+
+#: Validity checkers of a study (= ``drake_social.model.checker.CHECKERS``; that module imports Drake).
+CHECKERS = ("planar", "drake", "numpy")
+#: Most runs per (group, algorithm) of a study (each run's seed is drawn up front).
+MAX_RUNS = 10_000
+#: Most tasks of a study (groups x algorithms x runs): every run's record is
+#: kept in memory until the study is written (a few kilobytes each).
+MAX_STUDY_TASKS = 100_000
+#: Study, group and variant names: a letter, digit or ``_`` first, then
+#: letters, digits, ``_``, ``-`` and ``.``; at most 100 characters. They name
+#: output files (``arena_<group>.log``) and the default folder ``out/<study>``.
+NAME_PATTERN = r"[A-Za-z0-9_][A-Za-z0-9_.-]{0,99}"
+_NAME_RULE = ("may contain only letters, digits, '_', '-' and '.' (not first), at most 100 characters, "
+              "as it names output files")
+
+
+@dc.dataclass
+class Sweep:
+    """The schema of a sweep file (``drake-social experiment sweep``), checked like a scenario's."""
+
+    # The study's name (NAME_PATTERN): the default output folder out/<name>;
+    # "" = the sweep file's stem.
+    name: str = ""
+    # Runs per (scenario, variant, algorithm), in [1, MAX_RUNS].
+    runs: int = 10
+    # K, samples per run, in [1, MAX_ITERATIONS] (replaces each scenario's planner.iterations).
+    iterations: int = 2000
+    # The study seed, >= 0; run r's planner seed is drawn from it (Study.run_seeds).
+    seed: int = 0
+    # true: also execute each path (kinematic simulation) and measure it.
+    simulate: bool = False
+    # Validity checker of the planner: planar, drake or numpy.
+    checker: str = "planar"
+    # Scenario files, relative to the sweep file's folder or else to the
+    # working directory; at least one, with distinct file names (stems).
+    scenarios: list[str] = dc.field(default_factory=list)
+    # Planners of ALGORITHMS, each at most once; default: PAPER_ALGORITHMS.
+    algorithms: list[str] = dc.field(default_factory=lambda: list(PAPER_ALGORITHMS))
+    # Variant name (NAME_PATTERN) -> a partial scenario applied over each
+    # scenario file, as --set (null or {} = the file as it is); default: {default: {}}.
+    variants: dict[str, Optional[Scenario]] = dc.field(default_factory=lambda: {"default": None})
+
+
+def _valid_name(name: str) -> bool:
+    return re.fullmatch(NAME_PATTERN, name) is not None
+
+
+def check_study(study: Study, source: str = "study") -> None:
+    """Checks a study before any run: its limits, names and planners, and
+    that every group's scenario file reads and loads with its overrides.
+
+    Args:
+        study: the study.
+        source: how errors name it (the sweep file, or the command).
+
+    Raises:
+        ScenarioError: ``<source>: <field>: <what is allowed>, got <value>``,
+            or the scenario error of a group (naming its file and overrides).
+    """
+    from drake_social.scenario import MAX_ITERATIONS
+
+    def fail(field: str, message: str):
+        raise ScenarioError(f"{source}: {field}: {message}")
+
+    for field, value, low, high in (("runs", study.runs, 1, MAX_RUNS),
+                                    ("iterations", study.iterations, 1, MAX_ITERATIONS)):
+        if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or not low <= value <= high:
+            fail(field, f"must be an integer in [{low}, {high:,}], got {value!r}")
+    if isinstance(study.seed, bool) or not isinstance(study.seed, (int, np.integer)) or study.seed < 0:
+        fail("seed", f"must be an integer >= 0, got {study.seed!r}")
+    if not isinstance(study.simulate, bool):
+        fail("simulate", f"must be true or false, got {study.simulate!r}")
+    if study.checker not in CHECKERS:
+        fail("checker", f"unknown checker {study.checker!r}; allowed: {', '.join(CHECKERS)}")
+    if not isinstance(study.name, str) or not _valid_name(study.name):
+        fail("name", f"{study.name!r}: a study name {_NAME_RULE}")
+    if not study.groups:
+        fail("groups", "a study needs at least one group")
+    seen: set[str] = set()
+    for g in study.groups:
+        if not isinstance(g.name, str) or not _valid_name(g.name):
+            fail(f"group {g.name!r}", f"a group name {_NAME_RULE}")
+        if g.name in seen:
+            fail(f"group {g.name!r}", "two groups have this name; their records and arena logs would mix")
+        seen.add(g.name)
+        if not g.algorithms:
+            fail(f"group {g.name!r}: algorithms", "needs at least one algorithm")
+        for a in g.algorithms:
+            if a not in ALGORITHMS:
+                fail(f"group {g.name!r}: algorithms", f"unknown algorithm {a!r}; allowed: {', '.join(ALGORITHMS)}")
+        if len(set(g.algorithms)) != len(g.algorithms):
+            twice = sorted({a for a in g.algorithms if g.algorithms.count(a) > 1})
+            fail(f"group {g.name!r}: algorithms", f"{', '.join(twice)} listed more than once (each would be "
+                                                   f"run and recorded twice)")
+    tasks = study.runs * sum(len(g.algorithms) for g in study.groups)
+    if tasks > MAX_STUDY_TASKS:
+        fail("runs", f"{len(study.groups)} groups x their algorithms x {study.runs} runs = {tasks:,} runs; a study "
+                     f"may have at most {MAX_STUDY_TASKS:,}")
+    for g in study.groups:
+        _group_scenario(g)
+
+
+def _group_scenario(group: Group):
+    """A group's scenario text and loaded scenario (errors name its file and the group)."""
+    text = read_yaml_file(group.scenario, "scenario")
+    return text, _load(group.scenario, text, tuple(group.overrides), f"group {group.name}")
+
+
+def _flow(node, yaml, seen=None) -> None:
+    """Sets a composed node tree to YAML flow style (one-line override text)."""
+    seen = set() if seen is None else seen
+    if id(node) in seen or isinstance(node, yaml.ScalarNode):
+        return
+    seen.add(id(node))
+    node.flow_style = True
+    for child in node.value:
+        for n in (child if isinstance(child, tuple) else (child,)):
+            _flow(n, yaml, seen)
 
 
 def load_sweep(path: str | Path) -> Study:
@@ -167,77 +296,141 @@ def load_sweep(path: str | Path) -> Study:
           default: {}
           lambda_0.5: {social: {length_weight: 0.5}}
 
-    Groups are scenario x variant, named ``<scenario stem>-<variant>``.
+    The file is read and checked as a scenario file is (the same size, depth
+    and alias limits, then the :class:`Sweep` schema: fields, types, lines),
+    then its values; every scenario with every variant is loaded before any
+    run. Groups are scenario x variant, named ``<scenario stem>-<variant>``.
 
     Raises:
-        ScenarioError: the file or a field is invalid (named with the allowed values).
+        ScenarioError: the file or a field is invalid (named with the allowed
+            values), or a scenario or variant is: the message names this file,
+            the scenario file and the variant.
     """
     import yaml
 
+    from drake_social.scenario import MAX_ITERATIONS, check_node, compose_yaml
+
     path = Path(path)
-    if not path.is_file():
-        raise ScenarioError(f"{path}: no such sweep file")
-    try:
-        spec = yaml.safe_load(path.read_text())
-    except yaml.YAMLError as e:
-        raise ScenarioError(f"{path}: not valid YAML: {e}") from e
-    if not isinstance(spec, dict):
-        raise ScenarioError(f"{path}: must be a YAML mapping with scenarios, algorithms, ...")
-    allowed = {"name", "runs", "iterations", "seed", "simulate", "scenarios", "algorithms", "variants", "checker"}
-    unknown = sorted(set(spec) - allowed)
-    if unknown:
-        raise ScenarioError(f"{path}: unknown keys {unknown}; allowed: {', '.join(sorted(allowed))}")
+    root = compose_yaml(read_yaml_file(path, "sweep"), str(path))
+    if root is None:
+        raise ScenarioError(f"{path}: empty; a sweep is a mapping ({', '.join(f.name for f in dc.fields(Sweep))})")
+    check_node(Sweep, root, str(path))
+    nodes = {k.value: v for k, v in root.value}
 
-    def integer(key: str, default: int, minimum: int) -> int:
-        value = spec.get(key, default)
-        if not isinstance(value, int) or isinstance(value, bool) or value < minimum:
-            raise ScenarioError(f"{path}: {key}: must be an integer >= {minimum}, got {value!r}")
-        return value
+    def fail(key: str, message: str, node=None):
+        node = nodes.get(key) if node is None else node
+        line = f"line {node.start_mark.line + 1}: " if node is not None else ""
+        raise ScenarioError(f"{path}: {line}{key}: {message}")
 
-    scenarios = spec.get("scenarios")
-    if not isinstance(scenarios, list) or not scenarios or not all(isinstance(s, str) for s in scenarios):
-        raise ScenarioError(f"{path}: scenarios: must be a non-empty list of scenario files")
-    files = []
-    for s in scenarios:
-        candidate = path.parent / s if not Path(s).is_absolute() and (path.parent / s).is_file() else Path(s)
-        if not candidate.is_file():
-            raise ScenarioError(f"{path}: scenarios: no such scenario file {s!r}")
+    def value(key: str):
+        if key not in nodes:
+            return getattr(Sweep(), key)
+        try:
+            return yaml.SafeLoader("").construct_object(nodes[key], deep=True)
+        except yaml.YAMLError as e:  # a tag of no YAML type, e.g. `name: !Bar x`
+            fail(key, f"{e.problem}")
+
+    runs, iterations, seed = int(value("runs")), int(value("iterations")), int(value("seed"))
+    if not 1 <= runs <= MAX_RUNS:
+        fail("runs", f"must be in [1, {MAX_RUNS:,}], got {runs}")
+    if not 1 <= iterations <= MAX_ITERATIONS:
+        fail("iterations", f"must be in [1, {MAX_ITERATIONS:,}] (K of every run), got {iterations}")
+    if seed < 0:
+        fail("seed", f"must be >= 0, got {seed}")
+    checker = value("checker")
+    if checker not in CHECKERS:
+        fail("checker", f"unknown checker {checker!r}; allowed: {', '.join(CHECKERS)}")
+    name = value("name") or path.stem
+    if not _valid_name(name):
+        fail("name", f"{name!r}: a study name {_NAME_RULE}" + ("" if "name" in nodes else
+                                                                " (it is the file's stem: set name:)"))
+    algorithms = value("algorithms")
+    if not algorithms:
+        fail("algorithms", f"needs at least one of {', '.join(ALGORITHMS)}")
+    for i, a in enumerate(algorithms):
+        at = nodes["algorithms"].value[i] if "algorithms" in nodes else None
+        if a not in ALGORITHMS:
+            fail(f"algorithms[{i}]", f"unknown algorithm {a!r}; allowed: {', '.join(ALGORITHMS)}", at)
+        if a in algorithms[:i]:
+            fail(f"algorithms[{i}]", f"{a} is listed twice (its runs would be recorded twice)", at)
+
+    scenarios = value("scenarios")
+    if not scenarios:
+        fail("scenarios", "needs at least one scenario file")
+    files: list[Path] = []
+    stems: dict[str, int] = {}
+    for i, s in enumerate(scenarios):
+        local = path.parent / s
+        candidate = local if not Path(s).is_absolute() and (local.exists() or local.is_symlink()) else Path(s)
+        try:
+            check_regular_file(candidate, "scenario")
+        except ScenarioError as e:
+            fail(f"scenarios[{i}]", str(e), nodes["scenarios"].value[i])
+        if candidate.stem in stems:
+            fail(f"scenarios[{i}]", f"{candidate} has the same name {candidate.stem!r} as scenarios[{stems[candidate.stem]}] "
+                 f"({files[stems[candidate.stem]]}); groups are named <scenario file name>-<variant>, so the "
+                 f"scenario files of a sweep need distinct names", nodes["scenarios"].value[i])
+        stems[candidate.stem] = i
         files.append(candidate)
-    algorithms = spec.get("algorithms", list(PAPER_ALGORITHMS))
-    if not isinstance(algorithms, list) or not algorithms or any(a not in ALGORITHMS for a in algorithms):
-        raise ScenarioError(f"{path}: algorithms: must be a non-empty list of {', '.join(ALGORITHMS)}; "
-                            f"got {algorithms!r}")
-    variants = spec.get("variants", {"default": {}})
-    if not isinstance(variants, dict) or not variants or any(not isinstance(v, (dict, type(None))) for v in
-                                                             variants.values()):
-        raise ScenarioError(f"{path}: variants: must map names to YAML mappings (overrides), got {variants!r}")
+
+    variants: dict[str, tuple[str, ...]] = {}
+    variant_nodes = {k.value: (k, v) for k, v in nodes["variants"].value} if "variants" in nodes else {}
+    if "variants" in nodes and not variant_nodes:
+        fail("variants", "needs at least one variant (e.g. default: {})")
+    for vname, (key_node, node) in variant_nodes.items():
+        if not _valid_name(vname):
+            fail(f"variants.{vname}", f"a variant name {_NAME_RULE}", key_node)
+        empty = (isinstance(node, yaml.ScalarNode) or not node.value)  # null (checked by the schema) or {}
+        if not empty:
+            _flow(node, yaml)
+        variants[vname] = () if empty else (yaml.serialize(node, width=10**9).strip(),)
+    if not variant_nodes:
+        variants = {"default": ()}
+
     groups = []
-    for f in files:
-        for vname, override in variants.items():
-            texts = (yaml.safe_dump(override, default_flow_style=True).strip(),) if override else ()
-            groups.append(Group(f"{f.stem}-{vname}", str(f), overrides=texts, algorithms=tuple(algorithms),
+    for i, f in enumerate(files):
+        text = read_yaml_file(f, "scenario")
+        try:
+            _load(str(f), text, ())
+        except ScenarioError as e:
+            fail(f"scenarios[{i}]", str(e), nodes["scenarios"].value[i])
+        for vname, texts in variants.items():
+            try:  # every override is checked before any run
+                _load(str(f), text, texts, f"variants.{vname}")
+            except ScenarioError as e:
+                raise ScenarioError(f"{path}: {e}") from None
+            group = f"{f.stem}-{vname}"
+            if not _valid_name(group):
+                fail(f"scenarios[{i}]", f"the group name {group!r} (<scenario file name>-<variant>) {_NAME_RULE}: "
+                     f"rename {f}", nodes["scenarios"].value[i])
+            groups.append(Group(group, str(f), overrides=texts, algorithms=tuple(algorithms),
                                 label=f"{f.stem}, {vname}" + (f": {texts[0]}" if texts else "")))
-    study = Study(str(spec.get("name", path.stem)), tuple(groups), runs=integer("runs", 10, 1),
-                  iterations=integer("iterations", 2000, 1), seed=integer("seed", 0, 0),
-                  simulate=bool(spec.get("simulate", False)), checker=str(spec.get("checker", "planar")))
-    for g in groups:  # every override is checked here, before any run (the error names the file and field)
-        _load(Path(g.scenario).name, Path(g.scenario).read_text(), g.overrides)
+    study = Study(name, tuple(groups), runs=runs, iterations=iterations, seed=seed, simulate=bool(value("simulate")),
+                  checker=checker)
+    check_study(study, str(path))
     return study
 
 
 def study_tasks(study: Study) -> list[dict]:
-    """One plain-data task per (group, algorithm, run), in a fixed order."""
+    """One plain-data task per (group, algorithm, run), in a fixed order.
+
+    Raises:
+        ScenarioError: the study is invalid (:func:`check_study`) or a group's
+            scenario or overrides are: nothing has run yet.
+    """
+    check_study(study)
+    texts = {group.name: _group_scenario(group)[0] for group in study.groups}
     seeds = study.run_seeds()
     tasks = []
     for group in study.groups:
-        text = Path(group.scenario).read_text()
+        text = texts[group.name]
         for algorithm in group.algorithms:
             for run, seed in enumerate(seeds):
                 tasks.append({
                     "index": len(tasks), "group": group.name, "scenario": Path(group.scenario).name,
-                    "scenario_text": text, "overrides": list(group.overrides), "algorithm": algorithm,
-                    "run": run, "seed": seed, "iterations": study.iterations, "simulate": study.simulate,
-                    "checker": study.checker,
+                    "source": group.scenario, "scenario_text": text, "overrides": list(group.overrides),
+                    "override_name": f"group {group.name}", "algorithm": algorithm, "run": run, "seed": seed,
+                    "iterations": study.iterations, "simulate": study.simulate, "checker": study.checker,
                 })
     return tasks
 
@@ -246,24 +439,18 @@ def study_tasks(study: Study) -> list[dict]:
 
 
 @functools.lru_cache(maxsize=16)
-def _load(name: str, text: str, overrides: tuple[str, ...]):
-    """The scenario of a task (loaded once per process and overrides)."""
-    from drake_social.scenario import load_scenario
+def _load(source: str, text: str, overrides: tuple[str, ...], overrides_name: str = "overrides"):
+    """The scenario of a task (loaded once per process and overrides); errors name ``source``."""
+    from drake_social.scenario import load_scenario_text
 
-    with tempfile.TemporaryDirectory(prefix="drake-social-task-") as d:
-        path = Path(d) / name
-        path.write_text(text)
-        try:
-            return load_scenario(path, list(overrides))
-        except ScenarioError as e:  # name the study's file, not the temporary copy
-            raise ScenarioError(str(e).replace(str(path), name)) from None
+    return load_scenario_text(text, source, list(overrides), overrides_name=overrides_name)
 
 
 @functools.lru_cache(maxsize=16)
-def _checker(name: str, text: str, overrides: tuple[str, ...], kind: str):
+def _checker(source: str, text: str, overrides: tuple[str, ...], overrides_name: str, kind: str):
     from drake_social.model.checker import make_checker
 
-    return make_checker(_load(name, text, overrides), kind, parallelism=1)
+    return make_checker(_load(source, text, overrides, overrides_name), kind, parallelism=1)
 
 
 def run_task(task: dict) -> dict:
@@ -282,7 +469,7 @@ def run_task(task: dict) -> dict:
     from drake_social.planning.objective import SocialObjective
     from drake_social.planning.variants import make_objective, plan
 
-    key = (task["scenario"], task["scenario_text"], tuple(task["overrides"]))
+    key = (task["source"], task["scenario_text"], tuple(task["overrides"]), task["override_name"])
     scenario = _load(*key)
     checker = _checker(*key, task["checker"])
     k = int(task["iterations"])

@@ -35,7 +35,7 @@ from drake_social.cost.social import SocialCost
 from drake_social.kinematics import ArmGeometry
 from drake_social.planning.result import PlannerResult
 from drake_social.planning.validity import ValidityChecker
-from drake_social.scenario import Scenario
+from drake_social.scenario import MAX_CONTROL_STEPS, MAX_PLANT_STEPS, MAX_TIME_LIMIT, Scenario
 from drake_social.sim.analysis import config_deviation, densify, point_deviation
 from drake_social.sim.diagram import TransportDiagram, build_diagram
 
@@ -233,8 +233,9 @@ def simulate(
             :func:`~drake_social.sim.diagram.build_diagram`. With ``meshcat``
             the run is recorded (``execution.replay_fps``); publish or export
             it afterwards (:mod:`drake_social.sim.replay`).
-        time_limit: simulated seconds before giving up; None =
-            ``scenario.execution.time_limit``.
+        time_limit: simulated seconds before giving up, in (0, MAX_TIME_LIMIT] and at
+            most MAX_CONTROL_STEPS control periods and MAX_PLANT_STEPS plant
+            steps; None = ``scenario.execution.time_limit``.
         analyze: check and measure the executed trajectory (:func:`analyze_execution`).
         analysis_checker: the checker of that analysis (None = Drake's).
         progress: optional ``progress(t)`` callback with the simulated time,
@@ -250,8 +251,12 @@ def simulate(
     built = build_diagram(scenario, mode=mode, execution=execution, waypoints=waypoints, checker=checker,
                           meshcat=meshcat)
     limit = float(scenario.execution.time_limit if time_limit is None else time_limit)
-    if not limit > 0:
-        raise ValueError(f"time_limit must be > 0 seconds, got {limit}")
+    if not 0 < limit <= MAX_TIME_LIMIT:
+        raise ValueError(f"time_limit must be in (0, {MAX_TIME_LIMIT:g}] seconds, got {limit}")
+    e = scenario.execution
+    if limit / e.control_period > MAX_CONTROL_STEPS or limit / e.plant_time_step > MAX_PLANT_STEPS:
+        raise ValueError(f"time_limit {limit} s is more than {MAX_CONTROL_STEPS:,} control periods of "
+                         f"{e.control_period} s or {MAX_PLANT_STEPS:,} plant steps of {e.plant_time_step} s")
     root = built.diagram.CreateDefaultContext()
     if built.visualizer is not None:
         from drake_social.sim.replay import start_recording

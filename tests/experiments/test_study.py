@@ -146,5 +146,5 @@ def test_sweep_file(tmp_path, tiny_scenario_path, repo_root):
     with pytest.raises(ScenarioError, match="sigma_h"):
         load_sweep(bad)
     bad.write_text(f"scenarios: [{tiny_scenario_path}]\nrun: 3\n")
-    with pytest.raises(ScenarioError, match="unknown keys"):
+    with pytest.raises(ScenarioError, match="line 2: run: unknown field at the top level; allowed: name, runs"):
         load_sweep(bad)

@@ -1,0 +1,148 @@
+"""Reading the user's text files (scenarios, sweeps, path CSVs) with one set of guards.
+
+Every file the command line or the library reads on a user's behalf goes
+through :func:`read_text_file`, so all of them are refused the same way:
+
+* a path that is not a regular file is named for what it is (a directory, a
+  FIFO, a character or block device, a socket), found with ``stat`` before the
+  file is opened, so a FIFO is never opened for reading (that would block
+  until a writer appears) and ``/dev/zero`` is never read (it never ends);
+* a file larger than its limit (:data:`MAX_YAML_FILE_BYTES` for scenario
+  and sweep files, :data:`MAX_TEXT_FILE_BYTES` for the others) is refused
+  with the limit stated, before anything is read;
+* the text must be UTF-8; the error names the byte offset at fault.
+
+Errors are :class:`~drake_social.scenario.ScenarioError` (invalid input: the
+command line prints it and exits 2), naming the file and, when given, the
+option that named it (``--path``).
+"""
+
+from __future__ import annotations
+
+import os
+import stat
+from pathlib import Path
+
+__all__ = ["MAX_TEXT_FILE_BYTES", "MAX_YAML_FILE_BYTES", "check_regular_file", "read_text_file", "read_yaml_file"]
+
+#: Largest text file read by default (path CSVs), bytes: 64 MiB (a path CSV
+#: of 100,000 waypoints is about 7 MB).
+MAX_TEXT_FILE_BYTES = 64 * 1024 * 1024
+#: Largest scenario or sweep file, bytes: 4 MiB. The shipped ones are a few
+#: kilobytes, a room with 2,000 obstacles about 120 kB; PyYAML reads about
+#: 2 MB/s, so this also bounds the time spent parsing.
+MAX_YAML_FILE_BYTES = 4 * 1024 * 1024
+
+_KINDS = (
+    (stat.S_ISDIR, "a directory"),
+    (stat.S_ISFIFO, "a FIFO"),
+    (stat.S_ISCHR, "a character device"),
+    (stat.S_ISBLK, "a block device"),
+    (stat.S_ISSOCK, "a socket"),
+)
+
+
+def _error(path: Path, message: str, option: str | None):
+    from drake_social.scenario import ScenarioError  # scenario.py imports this module
+
+    return ScenarioError(f"{path}: {message}" + ("" if option is None else f" ({option})"))
+
+
+def _not_regular(path: Path, mode: int, what: str, option: str | None):
+    if stat.S_ISDIR(mode):
+        return _error(path, f"is a directory, not a {what} file", option)
+    return _error(path, f"not a regular file ({_kind(mode)}); a {what} file must be a regular file", option)
+
+
+def _kind(mode: int) -> str:
+    for test, name in _KINDS:
+        if test(mode):
+            return name
+    return "not a regular file"
+
+
+def check_regular_file(path: str | Path, what: str, option: str | None = None) -> os.stat_result:
+    """Checks that ``path`` names an existing regular file, without opening it.
+
+    Args:
+        path: the file.
+        what: what the file should be, for the message, e.g. ``"scenario"``.
+        option: the command-line option that named it (e.g. ``"--path"``), or None.
+
+    Returns:
+        The file's ``os.stat`` (symbolic links followed).
+
+    Raises:
+        ScenarioError: ``<path>: no such <what> file``, ``<path>: not a
+            regular file (a FIFO)`` (or a directory, a character device, ...),
+            or ``<path>: cannot be read (...)``.
+    """
+    path = Path(path)
+    try:
+        st = os.stat(path)
+    except (FileNotFoundError, NotADirectoryError):
+        raise _error(path, f"no such {what} file", option) from None
+    except OSError as e:
+        raise _error(path, f"cannot be read ({e.strerror or e})", option) from None
+    if not stat.S_ISREG(st.st_mode):
+        raise _not_regular(path, st.st_mode, what, option)
+    return st
+
+
+def read_text_file(path: str | Path, what: str, option: str | None = None, *,
+                   limit: int = MAX_TEXT_FILE_BYTES) -> str:
+    """The UTF-8 text of a regular file of at most ``limit`` bytes.
+
+    The file is checked with :func:`check_regular_file` before it is opened,
+    opened non-blocking (a FIFO swapped in after the check does not block)
+    and checked again on the open descriptor, then read to at most
+    ``limit + 1`` bytes.
+
+    Args:
+        path: the file.
+        what: what the file should be, for messages (``"scenario"``, ``"sweep"``, ``"path"``).
+        option: the command-line option that named it, or None.
+        limit: the largest size accepted, bytes.
+
+    Returns:
+        The file's text.
+
+    Raises:
+        ScenarioError: the file is missing, not a regular file, larger than
+            ``limit``, unreadable or not UTF-8; the message names the file.
+    """
+    path = Path(path)
+    st = check_regular_file(path, what, option)
+    too_big = f"a {what} file may have at most {limit:,} bytes"
+    if st.st_size > limit:
+        raise _error(path, f"{st.st_size:,} bytes; {too_big}", option)
+    try:
+        fd = os.open(path, os.O_RDONLY | os.O_NONBLOCK | getattr(os, "O_CLOEXEC", 0))
+    except OSError as e:
+        raise _error(path, f"cannot be read ({e.strerror or e})", option) from None
+    with os.fdopen(fd, "rb") as f:
+        mode = os.fstat(fd).st_mode
+        if not stat.S_ISREG(mode):  # replaced between the stat and the open
+            raise _not_regular(path, mode, what, option)
+        try:
+            data = f.read(limit + 1)
+        except OSError as e:
+            raise _error(path, f"cannot be read ({e.strerror or e})", option) from None
+    if len(data) > limit:  # grew after the stat
+        raise _error(path, f"more than {limit:,} bytes; {too_big}", option)
+    try:
+        return data.decode("utf-8")
+    except UnicodeDecodeError as e:
+        raise _error(path, f"not a text (UTF-8) file: byte {e.start} ({data[e.start:e.start + 1]!r}) is not "
+                           f"valid UTF-8", option) from None
+
+
+def read_yaml_file(path: str | Path, what: str, option: str | None = None) -> str:
+    """:func:`read_text_file` with the limit of YAML files, :data:`MAX_YAML_FILE_BYTES`.
+
+    Args:
+        path: the file.
+        what: ``"scenario"`` or ``"sweep"``, for messages.
+        option: the command-line option that named it, or None.
+    """
+    return read_text_file(path, what, option, limit=MAX_YAML_FILE_BYTES)

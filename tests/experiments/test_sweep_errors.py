@@ -1,0 +1,226 @@
+"""Sweep files are read and checked like scenario files, and every study is
+checked before its first run: limits, types, names, duplicates, and errors
+that name the sweep file, the scenario file (with its folder) and the variant."""
+
+from __future__ import annotations
+
+import time
+from pathlib import Path
+
+import pytest
+
+from drake_social.cli import main
+from drake_social.experiments.study import (
+    MAX_RUNS,
+    MAX_STUDY_TASKS,
+    Group,
+    Study,
+    load_sweep,
+    paper_study,
+    run_study,
+    study_tasks,
+)
+from drake_social.scenario import ScenarioError
+
+TINY = Path(__file__).resolve().parent.parent.parent / "scenarios" / "tiny.yaml"
+NAME_RULE = ("may contain only letters, digits, '_', '-' and '.' (not first), at most 100 characters, as it names "
+             "output files")
+
+
+def _sweep(tmp_path: Path, body: str, head: str = f"runs: 1\niterations: 20\nscenarios: [{TINY}]\n") -> Path:
+    path = tmp_path / "sweep.yaml"
+    path.write_text(head + body)
+    return path
+
+
+def _error(path: Path) -> str:
+    t0 = time.perf_counter()
+    with pytest.raises(ScenarioError) as info:
+        load_sweep(path)
+    assert time.perf_counter() - t0 < 10, "refused at once, before any work"
+    return str(info.value)
+
+
+# ---- limits (item 9)
+
+
+def test_a_billion_runs_is_refused_at_once(tmp_path, capsys):
+    dut = _sweep(tmp_path, "", head=f"runs: 1000000000\nscenarios: [{TINY}]\n")
+    assert _error(dut) == f"{dut}: line 1: runs: must be in [1, 10,000], got 1000000000"
+    assert MAX_RUNS == 10_000
+    assert main(["experiment", "paper", "--runs", "1000000000", "--out", str(tmp_path / "o")]) == 2
+    assert capsys.readouterr().err.endswith("argument --runs: must be an integer in [1, 10,000], got 1000000000\n")
+    with pytest.raises(ScenarioError) as info:
+        paper_study(runs=10**9, scenario_dir=TINY.parent)
+    assert str(info.value) == "paper study: runs: must be an integer in [1, 10,000], got 1000000000"
+
+
+def test_the_total_number_of_runs_is_bounded(tmp_path):
+    variants = ", ".join(f"v{i}: {{}}" for i in range(20))
+    dut = _sweep(tmp_path, f"algorithms: [rrt_star]\nvariants: {{{variants}}}\n",
+                 head=f"runs: 5001\nscenarios: [{TINY}]\n")
+    assert _error(dut) == (f"{dut}: runs: 20 groups x their algorithms x 5001 runs = 100,020 runs; a study may "
+                           f"have at most {MAX_STUDY_TASKS:,}")
+    with pytest.raises(ScenarioError, match=r"^study: runs: 20 groups x their algorithms x 5001 runs = 100,020"):
+        study_tasks(Study("s", tuple(Group(f"g{i}", str(TINY), algorithms=("rrt_star",)) for i in range(20)),
+                          runs=5001))
+
+
+def test_iterations_beyond_the_planner_limit_name_the_sweep(tmp_path):
+    dut = _sweep(tmp_path, "", head=f"iterations: 100000000\nscenarios: [{TINY}]\n")
+    assert _error(dut) == f"{dut}: line 1: iterations: must be in [1, 10,000,000] (K of every run), got 100000000"
+
+
+def test_an_alias_bomb_in_a_sweep_is_refused_like_in_a_scenario(tmp_path):
+    lines = ["v0: &a0 {description: [lol, lol, lol, lol, lol, lol, lol, lol, lol]}"]
+    lines += [f"v{i}: &a{i} [{', '.join([f'*a{i - 1}'] * 9)}]" for i in range(1, 10)]
+    dut = _sweep(tmp_path, "variants:\n" + "".join(f"  {line}\n" for line in lines))
+    assert _error(dut) == (f"{dut}: line 10: more than 100,000 YAML nodes (aliases counted as the nodes they "
+                           f"repeat); a document may have at most 100,000")
+    lines = ["m0: &m0 {a: 1, b: 2, c: 3}"] + [f"m{i}: &m{i} {{<<: [{', '.join([f'*m{i - 1}'] * 9)}]}}"
+                                                for i in range(1, 12)]
+    dut = _sweep(tmp_path, "".join(f"{line}\n" for line in lines))
+    assert "more than 100,000 YAML nodes" in _error(dut)
+
+
+@pytest.mark.parametrize("depth", [40, 1000])
+def test_deep_nesting_in_a_sweep_is_refused(tmp_path, depth):
+    dut = _sweep(tmp_path, "variants: {v: {social: {weights: " + "[" * depth + "]" * depth + "}}}\n")
+    assert _error(dut) == (f"{dut}: line 4: nested more than 32 levels deep (aliases included); at most 32 are "
+                           f"allowed")
+    dut = _sweep(tmp_path, "variants:\n" + "".join("  " * (i + 1) + f"k{i}:\n" for i in range(depth)))
+    assert "nested more than 32 levels deep" in _error(dut)
+
+
+# ---- types (item 15) and values
+
+
+@pytest.mark.parametrize("text, shown", [('"false"', "'false'"), ("'no'", "'no'"), ("0", "'0'"), ("[]", "a list")])
+def test_simulate_must_be_a_boolean(tmp_path, text, shown):
+    dut = _sweep(tmp_path, f"simulate: {text}\n")
+    assert _error(dut) == f"{dut}: line 4: simulate: must be true or false, got {shown}"
+
+
+@pytest.mark.parametrize("field, text, allowed, shown", [
+    ("runs", "2.5", "an integer", "'2.5'"),
+    ("runs", "true", "an integer", "'true'"),
+    ("seed", "abc", "an integer", "'abc'"),
+    ("name", "[a]", "a string", "a list"),
+    ("scenarios", "tiny.yaml", "a list of strings", "'tiny.yaml'"),
+    ("algorithms", "{a: 1}", "a list of strings", "a mapping"),
+    ("variants", "[a, b]", "a mapping of names to mappings (Scenario: description, world,", "a list"),
+])
+def test_every_field_is_type_checked_with_its_line(tmp_path, field, text, allowed, shown):
+    dut = _sweep(tmp_path, f"{field}: {text}\n", head="checker: planar\n")
+    message = _error(dut)
+    assert message.startswith(f"{dut}: line 2: {field}: must be {allowed}") and message.endswith(f", got {shown}")
+
+
+def test_a_checker_typo_is_refused_before_any_run(tmp_path):
+    dut = _sweep(tmp_path, "checker: plnar\n")
+    assert _error(dut) == f"{dut}: line 4: checker: unknown checker 'plnar'; allowed: planar, drake, numpy"
+    with pytest.raises(ScenarioError, match=r"^study: checker: unknown checker 'plnar'; allowed: planar, drake"):
+        run_study(Study("s", (Group("g", str(TINY), algorithms=("rrt_star",)),), runs=1, iterations=10,
+                        checker="plnar"))
+
+
+def test_a_variant_may_set_the_object_with_its_tag(tmp_path):
+    dut = load_sweep(_sweep(tmp_path, "variants: {short: {object: !Bar {length: 1.2, thickness: 0.05}}}\n"))
+    assert dut.groups[0].overrides == ("{object: !Bar {length: 1.2, thickness: 0.05}}",)
+
+
+# ---- names (items 12, 13)
+
+
+def test_two_scenarios_with_the_same_file_name_are_refused(tmp_path):
+    for folder in ("a", "b"):
+        (tmp_path / folder).mkdir()
+        (tmp_path / folder / "tiny.yaml").write_text(TINY.read_text())
+    dut = _sweep(tmp_path, "", head="scenarios: [a/tiny.yaml, b/tiny.yaml]\n")
+    assert _error(dut) == (f"{dut}: line 1: scenarios[1]: {tmp_path / 'b' / 'tiny.yaml'} has the same name 'tiny' "
+                           f"as scenarios[0] ({tmp_path / 'a' / 'tiny.yaml'}); groups are named <scenario file "
+                           f"name>-<variant>, so the scenario files of a sweep need distinct names")
+    dut = _sweep(tmp_path, "", head=f"scenarios: [{TINY}, {TINY}]\n")
+    assert "scenarios[1]: " in _error(dut) and "has the same name 'tiny' as scenarios[0]" in _error(dut)
+
+
+@pytest.mark.parametrize("name", ["a/b", "..", ".hidden", "two words", "a\\\\b", "x" * 101, "é"])
+def test_a_variant_name_that_cannot_name_a_file_is_refused_before_running(tmp_path, name):
+    dut = _sweep(tmp_path, f'variants: {{"{name}": {{}}}}\n')
+    shown = name.replace("\\\\", "\\")
+    assert _error(dut) == f"{dut}: line 4: variants.{shown}: a variant name {NAME_RULE}"
+
+
+def test_a_variant_name_must_be_a_string(tmp_path):
+    dut = _sweep(tmp_path, "variants: {1: {}}\n")
+    assert _error(dut) == f"{dut}: line 4: variants: names must be non-empty strings, got '1'"
+
+
+def test_a_study_name_that_cannot_name_a_folder_is_refused(tmp_path):
+    dut = _sweep(tmp_path, "name: ../outside\n")
+    assert _error(dut) == f"{dut}: line 4: name: '../outside': a study name {NAME_RULE}"
+
+
+def test_group_names_and_planners_are_checked_at_the_door_of_run_study():
+    for groups, message in [
+        ((Group("a/b", str(TINY), algorithms=("rrt_star",)),), f"group 'a/b': a group name {NAME_RULE}"),
+        ((Group("g", str(TINY), algorithms=("rrt_star",)), Group("g", str(TINY), algorithms=("rrt_star",))),
+         "group 'g': two groups have this name; their records and arena logs would mix"),
+        ((Group("g", str(TINY), algorithms=("rrt_star", "rrt_star")),),
+         "group 'g': algorithms: rrt_star listed more than once (each would be run and recorded twice)"),
+    ]:
+        with pytest.raises(ScenarioError) as info:
+            run_study(Study("s", groups, runs=1, iterations=10))
+        assert str(info.value) == f"study: {message}"
+
+
+# ---- errors name the file and the option (item 17)
+
+
+def test_duplicate_algorithms_are_refused(tmp_path):
+    dut = _sweep(tmp_path, "algorithms: [social_rrt_star, social_rrt_star]\n")
+    assert _error(dut) == f"{dut}: line 4: algorithms[1]: social_rrt_star is listed twice (its runs would be " \
+                          f"recorded twice)"
+
+
+def test_a_bad_scenario_names_the_sweep_and_the_scenario_with_its_folder(tmp_path):
+    (tmp_path / "maps").mkdir()
+    bad = tmp_path / "maps" / "tiny.yaml"
+    bad.write_text(TINY.read_text().replace("bounds: [0.0, 0.0, 8.0, 5.0]", "bounds: [0.0, 0.0, -8.0, 5.0]"))
+    dut = _sweep(tmp_path, "", head="scenarios: [maps/tiny.yaml]\n")
+    assert _error(dut) == (f"{dut}: line 1: scenarios[0]: {bad}: world.bounds: must be [x_min, y_min, x_max, y_max] "
+                           f"with max > min, got [0.0, 0.0, -8.0, 5.0]")
+
+
+def test_an_override_error_names_the_sweep_and_the_variant(tmp_path):
+    dut = _sweep(tmp_path, "variants: {good: {}, wrong: {social: {sigma_h: -1}}}\n")
+    assert _error(dut) == (f"{dut}: {TINY} (variants.wrong '{{social: {{sigma_h: -1}}}}'): social.sigma_h: "
+                           f"must be > 0, got -1.0")
+    dut = _sweep(tmp_path, "variants: {wrong: {social: {sigma: 1}}}\n")
+    assert _error(dut) == (f"{dut}: line 4: variants.wrong.social.sigma: unknown field in variants.wrong.social; "
+                           f"allowed: sigma_h, side_ratio, rear_ratio, threshold, weights, length_weight, resolution")
+
+
+def test_paper_scenario_dir_errors_name_the_folder(tmp_path, capsys):
+    for name in ("office_bar.yaml", "generic_L.yaml"):
+        (tmp_path / name).write_text((TINY.parent / name).read_text())
+    bad = tmp_path / "office_bar.yaml"
+    bad.write_text(bad.read_text().replace("random_seed:", "random_seed: -1\nunused_seed:"))
+    assert main(["experiment", "paper", "--runs", "1", "--scenario-dir", str(tmp_path),
+                 "--out", str(tmp_path / "out")]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith(f"drake-social: error: {bad}: line ") and "unused_seed: unknown field" in err
+    assert not (tmp_path / "out").exists()
+    (tmp_path / "generic_L.yaml").unlink()
+    (tmp_path / "generic_L.yaml").mkdir()
+    assert main(["experiment", "paper", "--scenario-dir", str(tmp_path)]) == 2
+    assert capsys.readouterr().err == (f"drake-social: error: {tmp_path / 'generic_L.yaml'}: is a directory, not a "
+                                       f"scenario file (--scenario-dir)\n")
+
+
+def test_a_tag_of_no_yaml_type_and_a_bad_file_stem_are_named(tmp_path):
+    dut = _sweep(tmp_path, "name: !Foo x\n")
+    assert _error(dut) == f"{dut}: line 4: name: could not determine a constructor for the tag '!Foo'"
+    dut = tmp_path / "my sweep.yaml"
+    dut.write_text(f"scenarios: [{TINY}]\n")
+    assert _error(dut) == f"{dut}: name: 'my sweep': a study name {NAME_RULE} (it is the file's stem: set name:)"
