@@ -31,6 +31,7 @@ import io
 import json
 import logging
 import re
+import tempfile
 import time
 from pathlib import Path
 from typing import Callable, Optional, Sequence
