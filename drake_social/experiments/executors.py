@@ -192,10 +192,15 @@ def _map_dask(fn, tasks, workers: int, scheduler: str | None, done) -> None:
                 # A Ctrl-C waits until the cluster is up (cut short, distributed
                 # cannot close it), and then stops it with the study. No
                 # dashboard; the scheduler's HTTP server on a free local port
-                # (its default, 8787, may be another cluster's).
+                # (its default, 8787, may be another cluster's). The workers
+                # log nothing: a failed task reaches this process as its
+                # exception, a lost worker through the nanny, here; what a
+                # worker would say is its connections closing under it (an
+                # ERROR when a busy worker's heartbeat finds the scheduler
+                # gone after a Ctrl-C).
                 with _Deferred() as deferred:
                     held["cluster"] = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
-                                                   dashboard_address=None, silence_logs=logging.ERROR,
+                                                   dashboard_address=None, silence_logs=logging.CRITICAL + 1,
                                                    scheduler_kwargs={"dashboard_address": "127.0.0.1:0"})
                 deferred.reraise()
                 _log.info("started a Dask LocalCluster of %d workers at %s", workers,
