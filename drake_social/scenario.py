@@ -50,6 +50,12 @@ __all__ = [
 #: Largest ``planner.iterations`` accepted (the tree grows with the nodes
 #: added, but K samples still take time: 10^7 is hours of planning).
 MAX_ITERATIONS = 10_000_000
+#: Most vertices of a ``!Polyline`` object. Each segment is a box and each
+#: vertex a cylinder of the Drake model, and Drake's second-opinion check of a
+#: plan, the model's parsing and the figures take time in proportion: ``plan``
+#: of scenarios/tiny.yaml carrying a smooth polyline takes 9 s with 100
+#: vertices, 23 s with 300 and 160 s (2.6 GB) with 1,000, for a 0.1 s search.
+MAX_OBJECT_POINTS = 200
 #: Values of ``planner.near_radius_mode``.
 NEAR_RADIUS_MODES = ("fixed", "shrinking")
 #: Planner names accepted in ``planner.algorithm`` (see ``drake_social.planning``).
@@ -623,6 +629,10 @@ def validate_scenario(scenario: Scenario, source: str = "<scenario>") -> None:
         c.positive("object.lengths", o.lengths)
     else:
         c.points("object.points", o.points, 2)
+        if len(o.points) > MAX_OBJECT_POINTS:
+            c.fail("object.points", f"at most {MAX_OBJECT_POINTS} vertices (each is a collision shape of the model, "
+                                    f"checked at every step of a motion), got {len(o.points)}; a polyline through "
+                                    f"fewer of its vertices approximates a smooth curve")
     c.positive("object.thickness", o.thickness)
     if o.interest_points is not None:
         c.points("object.interest_points", o.interest_points, 1)
