@@ -79,13 +79,19 @@ def check_every_model(scenario, n_configs: int = 40, seed: int = 0) -> None:
     want.append((q[0], q[1], q[0], q[1], geometry.base_radius))
     got = planar.capsules(q)
 
-    def same(g, w) -> bool:  # the same ends (in either order) and radius, to 1e-9 m
-        return np.allclose(g[4], w[4], atol=1e-12, rtol=0) and (
-            np.allclose(g[:4], w[:4], atol=1e-9, rtol=0) or np.allclose(g[:4], [*w[2:4], *w[:2]], atol=1e-9, rtol=0))
+    def inside(g, w) -> bool:
+        """Capsule g lies in capsule w (to 1e-9 m): both of its end discs do (capsules are convex)."""
+        a, b = np.asarray(w[:2]), np.asarray(w[2:4])
+        d = b - a
+        for p in (np.asarray(g[:2]), np.asarray(g[2:4])):
+            t = np.clip(np.dot(p - a, d) / np.dot(d, d), 0.0, 1.0) if np.dot(d, d) > 0 else 0.0
+            if np.hypot(*(p - a - t * d)) + g[4] > w[4] + 1e-9:
+                return False
+        return True
 
-    # Equal as sets (a polyline of repeated points alone has one disc per vertex).
-    assert all(any(same(g, w) for g in got) for w in want), (want, got)
-    assert all(any(same(g, w) for w in want) for g in got), (want, got)
+    # The same union: each capsule of one lies in a capsule of the other.
+    assert all(any(inside(w, g) for g in got) for w in want), (want, got)
+    assert all(any(inside(g, w) for w in want) for g in got), (want, got)
 
     cost = SocialCost.from_scenario(scenario)
     assert np.all(np.isfinite(cost(qs)))
@@ -176,7 +182,7 @@ def robots(draw):
     return Robot(base_radius=draw(sizes), link_lengths=[draw(sizes), draw(sizes)], link_width=draw(sizes))
 
 
-@settings(max_examples=600)
+@settings(max_examples=80)
 @given(obj=objects(), robot=robots())
 def test_every_accepted_shape_builds_in_every_model(tiny_scenario, obj, robot):
     scenario = dc.replace(tiny_scenario, object=obj, robot=dc.replace(robot, joint_lower=tiny_scenario.robot.joint_lower,
