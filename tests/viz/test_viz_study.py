@@ -118,3 +118,13 @@ def test_paths_side_by_side_labels_inside_the_figure_and_off_the_other_maps(tiny
                 continue
             assert not box.overlaps(ax.get_window_extent()), (
                 f"{text.get_text()!r} of another panel is drawn over the map {ax.get_title()!r}")
+
+
+def test_boxplot_labels_and_note_inside_the_figure():
+    values = {f"informed_social_rrt_star_{k}": [1e4 * k + 1.0, 2e4 * k + 3.0] for k in range(5)} | {"empty": []}
+    fig = boxplot_figure(values, title="a long title: final cost F(q_end), all interest points, 20 runs of K = 2000",
+                         ylabel="F(q_end)  (weights 1 on every point)", note="RRT* not shown: " + "x" * 60)
+    FigureCanvasAgg(fig)
+    for _, text, box in _text_boxes(fig):
+        assert fig.bbox.x0 - 0.5 <= box.x0 and box.x1 <= fig.bbox.x1 + 0.5, f"{text.get_text()!r} is clipped"
+        assert fig.bbox.y0 - 0.5 <= box.y0 and box.y1 <= fig.bbox.y1 + 0.5, f"{text.get_text()!r} is clipped"
