@@ -6,7 +6,7 @@ social cost and the robot's drawing. A property test draws object and robot
 dimensions across the ranges ``validate_scenario`` accepts, with weight on
 their edges (micrometre and kilometre sizes, segments shorter than, as long
 as and just longer than the object's thickness, links wider than long,
-repeated vertices) and asserts that validation either refuses the scenario
+repeated vertices, interest points on and far from the object) and asserts that validation either refuses the scenario
 with a ScenarioError naming an object or robot field, or every model builds
 and the three checkers agree.
 
@@ -22,7 +22,7 @@ import re
 
 import numpy as np
 import pytest
-from hypothesis import given, settings
+from hypothesis import event, given, settings
 from hypothesis import strategies as st
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
@@ -151,30 +151,38 @@ sizes = st.one_of(st.sampled_from(_EDGE_SIZES), st.floats(1e-9, 3.0))
 
 
 @st.composite
-def segment_length(draw, thickness: float) -> float:
-    """A segment's length: at the edges relative to the thickness, or any size."""
-    return draw(st.one_of(
-        st.sampled_from([0.0, thickness * (1 - 1e-12), thickness, thickness * (1 + 1e-12), thickness / 2]),
-        sizes))
+def segment_length(draw, thickness: float, zero: bool = False) -> float:
+    """A segment's length: at the edges relative to the thickness (0 if
+    ``zero``: a repeated vertex), or any size."""
+    edges = [thickness * (1 - 1e-12), thickness, thickness * (1 + 1e-12), thickness / 2] + ([0.0] if zero else [])
+    return draw(st.one_of(st.sampled_from(edges), sizes))
+
+
+@st.composite
+def interest_points(draw):
+    """None (the defaults) or 1-3 points, on the object or far from it, metres."""
+    coordinate = st.one_of(st.sampled_from([0.0, 1e-9, -1e-9]), sizes, sizes.map(lambda v: -v))
+    return draw(st.one_of(st.none(), st.lists(st.lists(coordinate, min_size=2, max_size=2), min_size=1, max_size=3)))
 
 
 @st.composite
 def objects(draw):
     thickness = draw(sizes)
     kind = draw(st.sampled_from(["bar", "lshape", "polyline"]))
+    interest = draw(interest_points())
     if kind == "bar":
-        length = draw(segment_length(thickness).filter(lambda v: v > 0))
-        return Bar(length=length, thickness=thickness)
+        length = draw(segment_length(thickness))
+        return Bar(length=length, thickness=thickness, interest_points=interest)
     if kind == "lshape":
-        lengths = [draw(segment_length(thickness).filter(lambda v: v > 0)) for _ in range(2)]
-        return LShape(lengths=lengths, thickness=thickness)
+        lengths = [draw(segment_length(thickness)) for _ in range(2)]
+        return LShape(lengths=lengths, thickness=thickness, interest_points=interest)
     n = draw(st.integers(2, 7))
     point, heading, points = np.zeros(2), 0.0, [[0.0, 0.0]]
     for _ in range(n - 1):
         heading += draw(st.sampled_from([0.0, math.pi / 2, -math.pi / 2, math.pi, 1e-6, 2.5]))
-        point = point + draw(segment_length(thickness)) * np.array([math.cos(heading), math.sin(heading)])
+        point = point + draw(segment_length(thickness, zero=True)) * np.array([math.cos(heading), math.sin(heading)])
         points.append(point.tolist())
-    return Polyline(points=points, thickness=thickness)
+    return Polyline(points=points, thickness=thickness, interest_points=draw(interest_points()))
 
 
 @st.composite
@@ -191,5 +199,7 @@ def test_every_accepted_shape_builds_in_every_model(tiny_scenario, obj, robot):
         validate_scenario(scenario, "s.yaml")
     except ScenarioError as e:
         assert re.match(r"s\.yaml: (object|robot|social\.resolution)[.\[:]", str(e)), str(e)
+        event(f"refused: {str(e).split(':')[1].strip()}")
         return
+    event("accepted")
     check_every_model(scenario, n_configs=20)
