@@ -620,6 +620,15 @@ def validate_scenario(scenario: Scenario, source: str = "<scenario>") -> None:
     c.finite("robot.joint_upper", r.joint_upper)
     if not all(u > lo for lo, u in zip(r.joint_lower, r.joint_upper)):
         c.fail("robot.joint_upper", f"must exceed robot.joint_lower {r.joint_lower}, got {r.joint_upper}")
+    # A part as wide as the room's smaller side touches a wall in every
+    # configuration (and Drake's distance queries stall on parts ~10^6 m wide).
+    side = min(x_max - x_min, y_max - y_min)
+    for field, width, what in (("robot.base_radius", 2 * r.base_radius, "the base's diameter"),
+                               ("robot.link_width", r.link_width, "the links' width")):
+        if not width < side:
+            limit = side / 2 if field == "robot.base_radius" else side
+            c.fail(field, f"must be < {limit:.6g} m in this room ({what} must be less than its smaller side, "
+                          f"{side:.6g} m, or the robot touches a wall everywhere), got {getattr(r, field[6:])}")
 
     o = scenario.object
     if isinstance(o, Bar):
@@ -634,6 +643,9 @@ def validate_scenario(scenario: Scenario, source: str = "<scenario>") -> None:
                                     f"checked at every step of a motion), got {len(o.points)}; a polyline through "
                                     f"fewer of its vertices approximates a smooth curve")
     c.positive("object.thickness", o.thickness)
+    if not o.thickness < side:
+        c.fail("object.thickness", f"must be < {side:.6g} m in this room (the object's thickness must be less than "
+                                   f"its smaller side, or the object touches a wall everywhere), got {o.thickness}")
     if o.interest_points is not None:
         c.points("object.interest_points", o.interest_points, 1)
 
