@@ -77,6 +77,12 @@ MAX_CONTROL_STEPS = 60_000
 MAX_PLANT_STEPS = 300_000
 #: Largest ``execution.replay_fps``, frames per second (the replay keeps every frame).
 MAX_REPLAY_FPS = 60.0
+#: Most vertices of a ``!Polyline`` object. Each segment is a box and each
+#: vertex a cylinder of the Drake model, and Drake's second-opinion check of a
+#: plan, the model's parsing and the figures take time in proportion: ``plan``
+#: of scenarios/tiny.yaml carrying a smooth polyline takes 9 s with 100
+#: vertices, 23 s with 300 and 160 s (2.6 GB) with 1,000, for a 0.1 s search.
+MAX_OBJECT_POINTS = 200
 #: Values of ``planner.near_radius_mode``.
 NEAR_RADIUS_MODES = ("fixed", "shrinking")
 #: Planner names accepted in ``planner.algorithm`` (see ``drake_social.planning``).
@@ -783,6 +789,15 @@ def validate_scenario(scenario: Scenario, source: str = "<scenario>") -> None:
     c.finite("robot.joint_upper", r.joint_upper)
     if not all(u > lo for lo, u in zip(r.joint_lower, r.joint_upper)):
         c.fail("robot.joint_upper", f"must exceed robot.joint_lower {r.joint_lower}, got {r.joint_upper}")
+    # A part as wide as the room's smaller side touches a wall in every
+    # configuration (and Drake's distance queries stall on parts ~10^6 m wide).
+    side = min(x_max - x_min, y_max - y_min)
+    for field, width, what in (("robot.base_radius", 2 * r.base_radius, "the base's diameter"),
+                               ("robot.link_width", r.link_width, "the links' width")):
+        if not width < side:
+            limit = side / 2 if field == "robot.base_radius" else side
+            c.fail(field, f"must be < {limit:.6g} m in this room ({what} must be less than its smaller side, "
+                          f"{side:.6g} m, or the robot touches a wall everywhere), got {getattr(r, field[6:])}")
 
     o = scenario.object
     if isinstance(o, Bar):
@@ -792,7 +807,14 @@ def validate_scenario(scenario: Scenario, source: str = "<scenario>") -> None:
         c.positive("object.lengths", o.lengths)
     else:
         c.points("object.points", o.points, 2)
+        if len(o.points) > MAX_OBJECT_POINTS:
+            c.fail("object.points", f"at most {MAX_OBJECT_POINTS} vertices (each is a collision shape of the model, "
+                                    f"checked at every step of a motion), got {len(o.points)}; a polyline through "
+                                    f"fewer of its vertices approximates a smooth curve")
     c.positive("object.thickness", o.thickness)
+    if not o.thickness < side:
+        c.fail("object.thickness", f"must be < {side:.6g} m in this room (the object's thickness must be less than "
+                                   f"its smaller side, or the object touches a wall everywhere), got {o.thickness}")
     if o.interest_points is not None:
         c.points("object.interest_points", o.interest_points, 1)
 

@@ -23,10 +23,15 @@ from typing import Sequence
 
 import numpy as np
 
-__all__ = ["ALPHA", "Claim", "Comparison", "paired", "paper_claims", "report_markdown", "write_figures"]
+__all__ = ["ALPHA", "OFF_SCALE_FACTOR", "Claim", "Comparison", "axis_stretch", "boxplot_values", "paired",
+           "paper_claims", "report_markdown", "write_figures"]
 
 #: Significance level of the one-sided paired test.
 ALPHA = 0.05
+#: A group's boxplot leaves RRT* out (and gives its median in a note) only
+#: when its runs would stretch the value axis to more than this many times
+#: the range of the other algorithms' runs (:func:`axis_stretch`).
+OFF_SCALE_FACTOR = 3.0
 _ORDER = ("supported", "not significant", "not supported")
 _SHORT = {"rrt_star": "RRT*", "social_rrt_star": "Risk-RRT* (multi-point)", "base_rrt_star": "Risk-RRT* (base-only)",
           "informed_social_rrt_star": "Informed (multi-point)", "informed_base_rrt_star": "Informed (base-only)"}
@@ -250,6 +255,63 @@ def parts_table(result, groups: Sequence[str] | None = None) -> list[str]:
 # ---- figures ----------------------------------------------------------------------
 
 
+def _finite(values) -> np.ndarray:
+    return np.asarray([v for v in values if v is not None and np.isfinite(v)], float)
+
+
+def axis_stretch(values: Sequence[float], others: Sequence[float]) -> float:
+    """How many times wider a value axis becomes when ``values`` join ``others``.
+
+    The range of both together over the range of ``others``. A range below
+    10% of the others' largest magnitude counts as that much, so that runs of
+    equal values do not make every other value "off the scale". None and NaN
+    are left out; 1 when either side has no value (nothing is stretched).
+    """
+    v, o = _finite(values), _finite(others)
+    if not len(v) or not len(o):
+        return 1.0
+    span = float(o.max() - o.min())
+    both = float(max(v.max(), o.max()) - min(v.min(), o.min()))
+    floor = 0.1 * float(np.abs(o).max())
+    reference = max(span, floor)
+    if reference == 0.0:  # every other value is 0
+        return 1.0 if both == 0.0 else math.inf
+    return both / reference
+
+
+def boxplot_values(records: Sequence[dict], group: str, algorithms: Sequence[str],
+                   factor: float = OFF_SCALE_FACTOR) -> tuple[dict[str, list[float]], str | None]:
+    """The final costs F of a group's boxplot, and the note under it.
+
+    Every algorithm's successful runs are shown, except RRT* (which ignores
+    the people, so its costs can be orders of magnitude above the others')
+    when :func:`axis_stretch` of its runs against the other algorithms' runs
+    exceeds ``factor``; the note then says so, with its median.
+
+    Args:
+        records: the study's records (``group``, ``algorithm``, ``success``, ``F_multi``).
+        group: the group's name.
+        algorithms: the group's algorithms, in the boxplot's order.
+        factor: the largest stretch of the axis that RRT* may cause and be shown.
+
+    Returns:
+        ``(values, note)``: algorithm -> F of its successful runs; the note or None.
+    """
+    values = {a: [r["F_multi"] for r in records if r["group"] == group and r["algorithm"] == a and r["success"]]
+              for a in algorithms}
+    if "rrt_star" not in values or len(values) < 2:
+        return values, None
+    others = [v for a, vs in values.items() if a != "rrt_star" for v in vs]
+    stretch = axis_stretch(values["rrt_star"], others)
+    if stretch <= factor:
+        return values, None
+    o = _finite(others)
+    med = _median(records, group, "rrt_star", "F_multi")
+    del values["rrt_star"]
+    return values, (f"RRT* not shown: its median F = {med:.4g}; its runs would stretch the axis "
+                    f"{stretch:.3g}x the others' range {o.min():.3g}-{o.max():.3g} (shown up to {factor:g}x)")
+
+
 def write_figures(result, out: Path) -> list[str]:
     """Boxplots of F per group, cost against distance and best paths; returns the file names."""
     from drake_social.experiments.study import _group_scenario, best_runs
@@ -269,13 +331,7 @@ def write_figures(result, out: Path) -> list[str]:
     multi = [g for g in result.study.groups if len(g.algorithms) > 1]
     for g in multi:
         scen = scenario_of(g)
-        shown = [a for a in g.algorithms if a != "rrt_star"] or list(g.algorithms)
-        values = {a: [r["F_multi"] for r in result.records if r["group"] == g.name and r["algorithm"] == a
-                      and r["success"]] for a in shown}
-        note = None
-        if "rrt_star" in g.algorithms and len(shown) < len(g.algorithms):
-            med = _median(result.records, g.name, "rrt_star", "F_multi")
-            note = f"RRT* (not shown, off the scale): median F = {med:.4g}"
+        values, note = boxplot_values(result.records, g.name, g.algorithms)
         save(boxplot_figure(values, title=f"{g.label or g.name}: final cost F(q_end), all interest points, "
                             f"{result.study.runs} runs of K = {result.study.iterations}",
                             ylabel="F(q_end)  (weights 1 on every point)", note=note), f"boxplot_{g.name}.png")

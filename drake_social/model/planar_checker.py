@@ -275,28 +275,38 @@ def _rotate(cs: np.ndarray, p: np.ndarray) -> np.ndarray:
 def _capsules(shapes: list) -> list[tuple[str, list[float]]]:
     """A body's boxes and cylinders as capsules ``(label, [ax, ay, bx, by, r])``.
 
-    A box of width 2r with a cylinder of radius r centred on each end of its
-    long axis is a stadium: one capsule. Every other cylinder is a disc (a
-    capsule of length 0). Any other box is refused.
+    A box of width 2r with a cylinder of radius r centred on each end of one
+    of its axes is a stadium: one capsule along that axis. The axis is the one
+    whose two ends carry such cylinders, whichever side of the box is longer:
+    a segment shorter than its capsule's width (a short bar or object segment,
+    a link wider than long) is a box longer across than along. Every other
+    cylinder is a disc (a capsule of length 0). Any other box is refused.
     """
     discs = [s for s in shapes if s[1] == kernel.DISC]
     used: set[int] = set()
     out = []
+
+    def end_discs(x: float, y: float, half: float, r: float, ux: float, uy: float) -> list[int] | None:
+        ends = []
+        for sign in (-1.0, 1.0):
+            ex, ey = x + sign * half * ux, y + sign * half * uy
+            # The nearest cylinder of the radius: a box shorter than _TOL has both within _TOL of each end.
+            match = [(math.hypot(d[2] - ex, d[3] - ey), i) for i, d in enumerate(discs) if abs(d[6] - r) <= _TOL]
+            if not match or min(match)[0] > _TOL:
+                return None
+            ends.append(min(match)[1])
+        return ends
+
     for name, kind, x, y, c, s, hx, hy in shapes:
         if kind != kernel.BOX:
             continue
-        # The long axis: along the box's x (half length hx, radius hy) or y.
-        if abs(hx) >= abs(hy):
-            half, r, ux, uy = hx, hy, c, s
-        else:
-            half, r, ux, uy = hy, hx, -s, c
-        a, b = (x - half * ux, y - half * uy), (x + half * ux, y + half * uy)
-        ends = []
-        for end in (a, b):
-            match = [i for i, d in enumerate(discs)
-                     if abs(d[6] - r) <= _TOL and math.hypot(d[2] - end[0], d[3] - end[1]) <= _TOL]
-            ends.append(match[0] if match else None)
-        if None in ends:
+        # The box's own x axis (half length hx, radius hy) first, then its y axis.
+        r = hy
+        ends = end_discs(x, y, hx, hy, c, s)
+        if ends is None:
+            r = hx
+            ends = end_discs(x, y, hy, hx, -s, c)
+        if ends is None:
             raise ValueError(f"{name}: a robot box that is not a stadium (a box with a cylinder of radius "
                              f"half its width on each end); only discs and stadia are supported")
         used.update(ends)

@@ -27,6 +27,9 @@ def boxplot_figure(values: Mapping[str, Sequence[float]], *, title: str, ylabel:
                    note: str | None = None) -> Figure:
     """One box per label (median, quartiles, 1.5 IQR whiskers) with every run as a dot.
 
+    Each run is drawn once, as a dot: the boxes draw no fliers of their own
+    (the runs beyond the whiskers are the dots there).
+
     Args:
         values: label -> the runs' values (NaN and None left out; an empty
             list is drawn as "no run").
@@ -42,7 +45,7 @@ def boxplot_figure(values: Mapping[str, Sequence[float]], *, title: str, ylabel:
     present = [k for k, d in enumerate(data) if len(d)]
     if present:
         box = ax.boxplot([data[k] for k in present], positions=[k + 1 for k in present], widths=0.55,
-                         patch_artist=True, medianprops={"color": "black"})
+                         patch_artist=True, showfliers=False, medianprops={"color": "black"})
         for patch, k in zip(box["boxes"], present):
             patch.set_facecolor(_BOX_COLORS[k % len(_BOX_COLORS)])
             patch.set_alpha(0.75)
@@ -81,13 +84,15 @@ def paths_side_by_side(scenario: Scenario, paths: Mapping[str, np.ndarray], *, t
     aspect = (y1 - y0 + 2 * pad) / (x1 - x0 + 2 * pad)
     n = max(1, len(paths))
     map_h = width * aspect
-    fig = Figure(figsize=(n * width + 0.6, map_h + 1.2))
+    # Constrained layout places the labels, tick labels and titles outside
+    # every map and inside the figure; the maps share their axes, so only the
+    # outer ones carry tick labels and axis labels (label_outer below).
+    fig = Figure(figsize=(n * width + 0.6, map_h + 1.2), layout="constrained")
+    axes = fig.subplots(1, n, sharex=True, sharey=True, squeeze=False)[0]
     cost = SocialCost.from_scenario(scenario)
     geometry = ArmGeometry.from_scenario(scenario)
     vmax = None
-    for k, (label, wp) in enumerate(paths.items()):
-        ax = fig.add_axes(((0.3 + k * width) / fig.get_figwidth(), 0.55 / fig.get_figheight(),
-                           (width - 0.3) / fig.get_figwidth(), map_h / fig.get_figheight()))
+    for ax, (label, wp) in zip(axes, paths.items()):
         image = draw_social_field(ax, cost, scenario.world.bounds, colorbar=False, vmax=vmax)
         vmax = image.get_clim()[1]
         draw_world(ax, scenario, names=False)
@@ -101,6 +106,8 @@ def paths_side_by_side(scenario: Scenario, paths: Mapping[str, np.ndarray], *, t
             ax.text(0.5, 0.5, "no path", transform=ax.transAxes, ha="center", color="#b00000", fontsize=12)
         ax.set_title(label, fontsize=9)
         ax.tick_params(labelsize=7)
+    for ax in axes:
+        ax.label_outer()
     if title:
         fig.suptitle(title, fontsize=10)
     return fig
