@@ -8,6 +8,7 @@ and in synchronized kinematic mode every body point stays on the planned path.
 from __future__ import annotations
 
 import copy
+import tracemalloc
 
 import numpy as np
 import pytest
@@ -243,3 +244,36 @@ def test_densify_owner_names_the_configuration_each_sample_follows(tiny_scenario
     t = np.einsum("ij,ij->i", dense[mid] - a, b - a) / np.einsum("ij,ij->i", b - a, b - a)
     np.testing.assert_allclose(dense[mid], a + t[:, None] * (b - a), atol=1e-12)
     assert np.all((t > 0) & (t < 1))
+
+
+def _peak_bytes(function, *args, **kwargs):
+    tracemalloc.start()
+    try:
+        value = function(*args, **kwargs)
+        _, peak = tracemalloc.get_traced_memory()
+    finally:
+        tracemalloc.stop()
+    return value, peak
+
+
+def test_point_deviation_memory_does_not_grow_with_the_path(tiny_scenario):
+    """A long path (review: 10,000 rows of start, goal densified to 11 M
+    configurations, 3 GB) is searched in pieces; the figures are those of
+    the curves it traces."""
+    geometry = ArmGeometry.from_scenario(tiny_scenario)
+    start, goal = np.array(tiny_scenario.start, float), np.array(tiny_scenario.goal, float)
+    executed = densify(geometry, np.array([start, goal]), 0.2) + [0.0, 0.03, 0.01, -0.02]
+    # The same segment back and forth: every figure is that of the one segment.
+    zigzag = np.tile([start, goal], (1000, 1))
+    once = point_deviation(geometry, np.array([start, goal]), executed)
+    dut, peak = _peak_bytes(point_deviation, geometry, zigzag, executed)
+    assert peak < 40e6, peak
+    assert dut == once
+    # Distinct segments (each 2 mm off the last): searched piece by piece,
+    # within rounding of one search of the whole densified path.
+    rng = np.random.default_rng(3)
+    wander = np.tile([start, goal], (200, 1)) + [0.0, 1.0, 0.0, 0.0] * rng.uniform(0, 0.002, (400, 1))
+    whole = point_deviation(geometry, wander, executed, block=10**9)
+    dut, peak = _peak_bytes(point_deviation, geometry, wander, executed)
+    assert peak < 40e6, peak
+    assert dut == pytest.approx(whole, rel=0, abs=1e-12)
