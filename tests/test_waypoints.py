@@ -236,9 +236,14 @@ def test_the_planner_refuses_start_equal_to_goal(tiny_scenario):
 
 @pytest.mark.parametrize("execution, field, message", [
     ({"control_period": 10.0, "time_limit": 5.0}, "execution.control_period",
-     "must be < execution.time_limit 5.0 (the sequencer decides once per control period: a run must last "
-     "several), got 10.0"),
-    ({"control_period": 5.0, "time_limit": 5.0}, "execution.control_period", "must be < execution.time_limit 5.0"),
+     "must be <= execution.time_limit / 10 = 0.5 s (a run lasts at least 10 control periods: the sequencer "
+     "decides once per period), got 10.0"),
+    ({"control_period": 5.0, "time_limit": 5.0}, "execution.control_period",
+     "must be <= execution.time_limit / 10 = 0.5 s"),
+    ({"control_period": 4.99, "time_limit": 5.0, "kp": 0.1}, "execution.control_period",
+     "must be <= execution.time_limit / 10 = 0.5 s"),
+    ({"control_period": 0.01, "time_limit": 0.0999}, "execution.control_period",
+     "must be <= execution.time_limit / 10 = 0.00999 s"),
     ({"kp": 200.0}, "execution.kp",
      "execution.kp * execution.control_period must be < 2 (the base's sampled P-controller multiplies its error "
      "by 1 - kp * control_period each period and converges only then), got 200.0 * 0.01 = 2"),
@@ -258,17 +263,21 @@ def test_execution_options_just_inside_the_rules_are_accepted(tiny_scenario):
     import dataclasses as dc
 
     ok = copy.deepcopy(tiny_scenario)
-    ok.execution = dc.replace(ok.execution, control_period=4.9, time_limit=5.0, kp=0.4, plant_time_step=4.9)
+    ok.execution = dc.replace(ok.execution, control_period=0.5, time_limit=5.0, kp=3.9, plant_time_step=0.5)
     validate_scenario(ok)
     ok.execution = dc.replace(ok.execution, control_period=0.01, kp=199.9, plant_time_step=0.002)
     validate_scenario(ok)
 
 
 def test_control_period_against_time_limit_from_the_command_line(tmp_path, tiny_scenario_path, capsys):
-    setting = "execution: {control_period: 10, time_limit: 5}"
-    assert main(["simulate", str(tiny_scenario_path), "--set", setting, "--no-replay",
-                 "--out", str(tmp_path / "out")]) == 2
-    assert "execution.control_period: must be < execution.time_limit 5.0" in capsys.readouterr().err
+    for setting, period in (("execution: {control_period: 10, time_limit: 5}", 10.0),
+                            ("execution: {kp: 0.1, control_period: 4.99, time_limit: 5}", 4.99),
+                            ("execution: {control_period: 0.5000001, plant_time_step: 0.5, time_limit: 5}", 0.5000001)):
+        assert main(["simulate", str(tiny_scenario_path), "--set", setting, "--no-replay",
+                     "--out", str(tmp_path / "out")]) == 2
+        assert (f"execution.control_period: must be <= execution.time_limit / 10 = 0.5 s (a run lasts at least 10 "
+                f"control periods: the sequencer decides once per period), got {period}\n") in capsys.readouterr().err
+        assert not (tmp_path / "out").exists()
 
 
 # ---- the public functions' arguments ----------------------------------------------------------
@@ -306,9 +315,13 @@ def _cases(s):
          "simulate: time_limit must be a finite number > 0 seconds or None, got str '5'"),
         (lambda: simulate(s, waypoints=wp, time_limit=-1.0), ValueError,
          "simulate: time_limit must be a finite number > 0 seconds, got -1.0"),
-        (lambda: simulate(s, waypoints=wp, time_limit=0.01), ValueError,
-         "simulate: time_limit must be > execution.control_period 0.01 seconds (the sequencer decides once per "
-         "control period), got 0.01"),
+        (lambda: simulate(s, waypoints=wp, time_limit=601), ValueError,
+         "simulate: time_limit must be in (0, 600] seconds, got 601"),
+        (lambda: simulate(s, waypoints=wp, time_limit=0.010000001), ValueError,
+         "simulate: time_limit must be >= 10 * execution.control_period 0.01 = 0.1 s (a run lasts at least 10 "
+         "control periods: the sequencer decides once per period), got 0.010000001"),
+        (lambda: simulate(s, waypoints=wp, time_limit=0.0999), ValueError,
+         "simulate: time_limit must be >= 10 * execution.control_period 0.01 = 0.1 s"),
         (lambda: simulate(s, waypoints=wp, analysis_checker="drake"), TypeError,
          f"simulate: analysis_checker {CHECKER}"),
         (lambda: simulate(s, waypoints=wp, progress=3), TypeError, "simulate: progress must be a callable or None"),
@@ -373,6 +386,58 @@ def test_simulate_validates_a_scenario_changed_in_code(tiny_scenario):
 
     changed = copy.deepcopy(tiny_scenario)
     changed.execution = dc.replace(changed.execution, control_period=10.0, time_limit=5.0)
-    with pytest.raises(ScenarioError, match=r"^simulate: scenario: execution.control_period: must be < "
-                                            r"execution.time_limit 5.0"):
+    with pytest.raises(ScenarioError, match=r"^simulate: scenario: execution.control_period: must be <= "
+                                            r"execution.time_limit / 10 = 0.5 s"):
         simulate(changed, waypoints=[changed.start, changed.goal])
+
+
+# ---- each check once, the cheap ones first ----------------------------------------------------
+
+
+def _counting(monkeypatch, owner, name):
+    """Counts the calls of ``owner.name`` (a function or method)."""
+    calls = []
+    original = getattr(owner, name)
+
+    def counted(*args, **kwargs):
+        calls.append(1)
+        return original(*args, **kwargs)
+
+    monkeypatch.setattr(owner, name, counted)
+    return calls
+
+
+def test_a_path_file_and_the_scenario_are_checked_once(tmp_path, tiny_scenario_path, capsys, monkeypatch):
+    import drake_social.scenario
+    import drake_social.sim.diagram
+    from drake_social.model.planar_checker import PlanarChecker
+
+    motions = _counting(monkeypatch, PlanarChecker, "are_motions_valid")
+    validations = [_counting(monkeypatch, module, "validate_scenario")
+                   for module in (drake_social.scenario, drake_social.sim.diagram)]
+    file = _csv(tmp_path, [[1.0, 2.5, 0.0, 1.5708], [6.5, 2.5, 0.0, 1.5708]])
+    code = main(["simulate", str(tiny_scenario_path), "--path", file, "--no-replay", "--mode", "kinematic",
+                 "--out", str(tmp_path / "out")])
+    assert code == 0, capsys.readouterr().err
+    assert len(motions) == 1  # the path's segments: the analysis checks configurations only
+    assert sum(len(v) for v in validations) == 1
+
+
+@pytest.mark.parametrize("arguments, kind, message", [
+    ({"time_limit": "5"}, TypeError, "simulate: time_limit must be a finite number > 0 seconds or None, got str '5'"),
+    ({"analyze": "yes"}, TypeError, "simulate: analyze must be True or False, got str 'yes'"),
+    ({"progress": 3}, TypeError, "simulate: progress must be a callable or None"),
+    ({"analysis_checker": "drake"}, TypeError, "simulate: analysis_checker must be a validity checker object"),
+    ({"mode": "fast"}, ValueError, "simulate: unknown mode 'fast'"),
+    ({"time_limit": 1200.0}, ValueError, "simulate: time_limit must be in (0, 600] seconds, got 1200.0"),
+])
+def test_simulate_checks_cheap_arguments_before_the_waypoints_collisions(tiny_scenario, path, monkeypatch,
+                                                                         arguments, kind, message):
+    from drake_social.model.planar_checker import PlanarChecker
+
+    motions = _counting(monkeypatch, PlanarChecker, "are_motions_valid")
+    configurations = _counting(monkeypatch, PlanarChecker, "are_valid")
+    with pytest.raises(kind) as info:
+        simulate(tiny_scenario, waypoints=path, **arguments)
+    assert str(info.value).startswith(message), str(info.value)
+    assert (motions, configurations) == ([], [])
