@@ -783,11 +783,13 @@ def time_limit_problem(time_limit: float, execution: ExecutionOptions, argument:
     for length, field, fewest, most, why in rules:
         if fewest is not None and limit < fewest * length:
             if argument:
-                return argument, f"must be >= {fewest} * {field} {length} = {fewest * length:.6g} s ({why}), got {time_limit}"
+                return argument, (f"must be >= {fewest} * {field} {length} = {fewest * length:.6g} s ({why}), "
+                                  f"got {time_limit}")
             return field, f"must be <= execution.time_limit / {fewest} = {limit / fewest:.6g} s ({why}), got {length}"
         if most is not None and limit / length > most:
             if argument:
-                return argument, f"must be <= {most:,} * {field} {length} = {most * length:.6g} s ({why}), got {time_limit}"
+                return argument, (f"must be <= {most:,} * {field} {length} = {most * length:.6g} s ({why}), "
+                                  f"got {time_limit}")
             return field, f"must be >= execution.time_limit / {most:,} = {limit / most:.3g} s ({why}), got {length}"
     return None
 

@@ -35,7 +35,7 @@ from typing import Any, Sequence
 
 import numpy as np
 
-from drake_social.arguments import require_checker, require_scenario
+from drake_social.arguments import real_array, require_checker, require_scenario
 from drake_social.limits import MAX_WAYPOINTS
 from drake_social.planning.validity import ValidityChecker
 from drake_social.scenario import Scenario, ScenarioError
@@ -51,38 +51,24 @@ ENDPOINT_TOLERANCE = 1e-9
 #: The names of a waypoint's four values, in order.
 FIELDS = ("x", "y", "psi1", "psi2")
 
-_SHAPE = f"an (N, 4) array of rows [x, y, psi1, psi2] with 2 <= N <= {MAX_WAYPOINTS:,}"
-
 
 def waypoint_array(waypoints: Any, source: str) -> np.ndarray:
     """``waypoints`` as a new (N, 4) float array, 2 <= N <= MAX_WAYPOINTS, refused otherwise.
 
     Args:
-        waypoints: an array or nested sequence of real numbers.
+        waypoints: an array or nested sequence of real numbers
+            (:func:`~drake_social.arguments.real_array`; NaN and infinities
+            are left to :func:`check_waypoints`, which names the waypoint).
         source: who passed it, for the message (``"simulate: waypoints"``).
 
     Raises:
         TypeError: not an array of real numbers (strings, booleans, complex,
-            None, objects).
+            None, other objects, a masked array).
         ScenarioError: the wrong shape (never reshaped) or number of rows.
     """
-    if waypoints is None or isinstance(waypoints, (str, bytes)):
-        raise TypeError(f"{source}: must be {_SHAPE}, got {type(waypoints).__name__} {waypoints!r:.60}")
-    try:
-        raw = np.asarray(waypoints)
-    except (ValueError, TypeError) as e:  # ragged rows
-        raise ScenarioError(f"{source}: must be {_SHAPE}; its rows differ in length ({e})") from None
-    if raw.dtype.kind not in "iuf":
-        if raw.dtype.kind == "O":
-            kinds = sorted({type(v).__name__ for v in raw.ravel()[:1000]})
-            raise TypeError(f"{source}: must be {_SHAPE} of real numbers, got values of type {', '.join(kinds)}")
-        raise TypeError(f"{source}: must be {_SHAPE} of real numbers, got an array of {raw.dtype}")
-    if raw.ndim != 2 or raw.shape[1] != 4:
-        raise ScenarioError(f"{source}: must be {_SHAPE}, got shape {raw.shape}")
-    if not 2 <= len(raw) <= MAX_WAYPOINTS:
-        raise ScenarioError(f"{source}: must be {_SHAPE} (the start, ..., the goal; limits.MAX_WAYPOINTS), "
-                            f"got {len(raw):,} waypoints")
-    return np.array(raw, dtype=float)
+    return real_array(waypoints, source, "", (None, 4), layout="rows [x, y, psi1, psi2]", rows=(2, MAX_WAYPOINTS),
+                      rows_note="(the start, ..., the goal; limits.MAX_WAYPOINTS)", row_name="waypoint",
+                      finite=False, error=ScenarioError)
 
 
 def check_waypoints(

@@ -55,7 +55,7 @@ SHAPE = "must be an (N, 4) array of rows [x, y, psi1, psi2] with 2 <= N <= 10,00
     (np.zeros((2, 2, 4)), f"waypoints: {SHAPE}, got shape (2, 2, 4)"),
     (np.zeros((0, 4)), f"waypoints: {SHAPE} (the start, ..., the goal; limits.MAX_WAYPOINTS), got 0 waypoints"),
     ([[1.0, 2.5, 0.0, 1.5708]], f"waypoints: {SHAPE} (the start, ..., the goal; limits.MAX_WAYPOINTS), "
-                                "got 1 waypoints"),
+                                "got 1 waypoint"),
     (np.zeros((MAX_WAYPOINTS + 1, 4)), f"waypoints: {SHAPE} (the start, ..., the goal; limits.MAX_WAYPOINTS), "
                                        "got 10,001 waypoints"),
 ])
@@ -68,8 +68,11 @@ def test_a_wrong_shape_is_refused_never_reshaped(tiny_scenario, door, waypoints,
 
 
 @pytest.mark.parametrize("waypoints, kind", [
-    ("1,2,3,4", "str"), ([["1", "2", "3", "4"]] * 2, "<U1"), ([[1, 2, 3, None]] * 2, "NoneType, int"),
+    ("1,2,3,4", "str"), ([["1", "2", "3", "4"]] * 2, "<U1"), ([[1, 2, 3, None]] * 2, "values of type NoneType"),
     ([[True, False, True, False]] * 2, "bool"), ([[1j, 0, 0, 0]] * 2, "complex128"),
+    (np.array([[1.0, 2.5, 0.0, True]] * 2, dtype=object), "values of type bool"),
+    (np.array([[1.0, 2.5, 0.0, 1j]] * 2, dtype=object), "values of type complex"),
+    (np.ma.masked_array(np.zeros((2, 4)), mask=[[0, 0, 0, 1], [0] * 4]), "a masked array"),
 ])
 def test_values_that_are_not_real_numbers_are_a_type_error(tiny_scenario, waypoints, kind):
     with pytest.raises(TypeError, match=r"^simulate: waypoints: must be an \(N, 4\) array") as info:
@@ -358,13 +361,43 @@ def _cases(s):
         (lambda: HolonomicPController.from_options(None), TypeError,
          "HolonomicPController.from_options: execution_options must be"),
         (lambda: arm_source_from_options(s.execution, [0.0, 0.0, 0.0]), ValueError,
-         "arm_source_from_options: initial_arm must be 2 finite numbers [psi1, psi2], got shape (3,)"),
+         "arm_source_from_options: initial_arm: must be a (2,) array of [psi1, psi2], got shape (3,)"),
         (lambda: reference_source_from_options(s.execution, np.zeros((2, 2))), ValueError,
-         "reference_source_from_options: initial_q must be 4 finite numbers [x, y, psi1, psi2], got shape (2, 2)"),
+         "reference_source_from_options: initial_q: must be a (4,) array of [x, y, psi1, psi2], got shape (2, 2)"),
+        (lambda: reference_source_from_options(s.execution, [0.0, 0.0, 0.0, 1j]), TypeError,
+         "reference_source_from_options: initial_q: must be a (4,) array of real numbers ([x, y, psi1, psi2]), "
+         "got an array of complex128"),
+        (lambda: reference_source_from_options(s.execution, [0.0, 0.0, 0.0, np.inf]), ValueError,
+         "reference_source_from_options: initial_q: must hold finite numbers only, got inf at index 3"),
+        (lambda: RrtStar(space, GeometricChecker(s), objective).solve(np.ones(4, bool), s.goal,
+                                                                       np.random.default_rng(0)),
+         TypeError, "RrtStar.solve: start: must be a (4,) array of real numbers ([x, y, psi1, psi2]), got an array "
+                    "of bool"),
+        (lambda: RrtStar(space, GeometricChecker(s), objective).solve(np.array(s.start) + 0j, s.goal,
+                                                                       np.random.default_rng(0)),
+         TypeError, "RrtStar.solve: start: must be a (4,) array of real numbers ([x, y, psi1, psi2]), got an array "
+                    "of complex128"),
+        (lambda: RrtStar(space, GeometricChecker(s), objective).solve(s.start, [1.0, 2.0], np.random.default_rng(0)),
+         PlanningInputError, "RrtStar.solve: goal: must be a (4,) array of [x, y, psi1, psi2], got shape (2,)"),
+        (lambda: plan(s, GeometricChecker(s), seed=1.0), TypeError, "plan: seed must be an integer >= 0 or None"),
+        (lambda: plan(s, GeometricChecker(s), iterations="20"), TypeError, "plan: iterations must be an integer"),
+        (lambda: plan(s, GeometricChecker(s), iterations=0), ValueError,
+         "plan: iterations must be an integer >= 1 and <= 10,000,000, got 0"),
+        (lambda: PlannerSystem(s, iterations="20"), TypeError, "PlannerSystem: iterations must be an integer"),
+        (lambda: __import__("drake_social.planning.variants", fromlist=["x"]).evaluate_path(s, np.zeros(3)),
+         ValueError, "evaluate_path: waypoints: must be an (N, 4) array of rows [x, y, psi1, psi2] with N >= 1, "
+                     "got shape "
+                     "(3,)"),
+        (lambda: __import__("drake_social.planning.variants", fromlist=["x"]).evaluate_path(s, [[1, 2, 3, "4"]]),
+         TypeError, "evaluate_path: waypoints: must be an (N, 4) array"),
         (lambda: analyze_execution("x", wp, np.zeros(2), np.zeros((2, 4))), TypeError,
          "analyze_execution: scenario must be a drake_social.scenario.Scenario"),
         (lambda: analyze_execution(s, wp, np.zeros(3), np.zeros((3, 5))), ScenarioError,
-         "analyze_execution: q: must be a (T, 4) array, got shape (3, 5)"),
+         "analyze_execution: q: must be an (N, 4) array of rows [x, y, psi1, psi2] with N >= 1, got shape (3, 5)"),
+        (lambda: analyze_execution(s, wp, np.zeros(0), np.zeros((0, 4))), ScenarioError,
+         "analyze_execution: times: must be an (N,) array of seconds with N >= 1, got 0 samples"),
+        (lambda: analyze_execution(s, wp, np.ma.masked_array(np.zeros(2)), np.zeros((2, 4))), TypeError,
+         "analyze_execution: times: must be an (N,) array of real numbers (seconds) with N >= 1, got a masked array"),
         (lambda: analyze_execution(s, wp, np.zeros(2), np.zeros((3, 4))), ScenarioError,
          "analyze_execution: times and q must have the same T rows, got 2 and 3"),
         (lambda: analyze_execution(s, np.zeros(3), np.zeros(2), np.zeros((2, 4))), ScenarioError,
@@ -441,3 +474,19 @@ def test_simulate_checks_cheap_arguments_before_the_waypoints_collisions(tiny_sc
         simulate(tiny_scenario, waypoints=path, **arguments)
     assert str(info.value).startswith(message), str(info.value)
     assert (motions, configurations) == ([], [])
+
+
+def test_object_arrays_of_real_numbers_are_converted_exactly(tiny_scenario, path):
+    from decimal import Decimal
+    from fractions import Fraction
+
+    from drake_social.waypoints import waypoint_array
+
+    for convert in (float, np.float64, np.float32, Fraction, Decimal, lambda v: np.int64(v) if v == int(v) else v):
+        values = [[convert(v) for v in row] for row in path.tolist()]
+        dut = waypoint_array(np.array(values, dtype=object), "x")
+        np.testing.assert_array_equal(dut, np.array([[float(v) for v in row] for row in values]))
+        assert dut.dtype == float
+    # Python floats as Fractions (exact) come back bit for bit.
+    exact = [[Fraction(v) for v in row] for row in path.tolist()]
+    np.testing.assert_array_equal(waypoint_array(exact, "x"), path)

@@ -34,6 +34,7 @@ from pydrake.geometry import Meshcat
 from pydrake.systems.analysis import InitializeParams, Simulator
 
 from drake_social.arguments import (
+    real_array,
     require_callable,
     require_checker,
     require_instance,
@@ -338,23 +339,14 @@ def analyze_execution(
 
 
 def _trajectory(times, q, who: str) -> tuple[np.ndarray, np.ndarray]:
-    """``times`` (T,) and ``q`` (T, 4) as finite float arrays, or the error naming them."""
-    arrays = []
-    for name, value, shape in (("times", times, "(T,)"), ("q", q, "(T, 4)")):
-        try:
-            a = np.asarray(value)
-        except (TypeError, ValueError) as e:
-            raise ScenarioError(f"{who}: {name}: must be a {shape} array of real numbers ({e})") from None
-        if a.dtype.kind not in "iuf":
-            raise TypeError(f"{who}: {name}: must be a {shape} array of real numbers, got an array of {a.dtype}")
-        if a.ndim != (1 if name == "times" else 2) or (name == "q" and a.shape[1] != 4):
-            raise ScenarioError(f"{who}: {name}: must be a {shape} array, got shape {a.shape}")
-        if not np.all(np.isfinite(a)):
-            raise ScenarioError(f"{who}: {name}: must hold finite numbers only")
-        arrays.append(np.asarray(a, float))
-    if len(arrays[0]) != len(arrays[1]):
-        raise ScenarioError(f"{who}: times and q must have the same T rows, got {len(arrays[0])} and {len(arrays[1])}")
-    return arrays[0], arrays[1]
+    """``times`` (T,) and ``q`` (T, 4), T >= 1, as finite float arrays, or the error naming them."""
+    times = real_array(times, who, "times", (None,), layout="seconds", rows=(1, None), row_name="sample",
+                       error=ScenarioError)
+    q = real_array(q, who, "q", (None, 4), layout="rows [x, y, psi1, psi2]", rows=(1, None), row_name="sample",
+                   error=ScenarioError)
+    if len(times) != len(q):
+        raise ScenarioError(f"{who}: times and q must have the same T rows, got {len(times)} and {len(q)}")
+    return times, q
 
 
 def simulate(
