@@ -14,6 +14,8 @@
 
 from __future__ import annotations
 
+import itertools
+
 import numpy as np
 from scipy.spatial import cKDTree
 
@@ -277,20 +279,39 @@ def _segment_distances(x: np.ndarray, a: np.ndarray, d: np.ndarray, dd: np.ndarr
     return np.linalg.norm(x - (a + t[:, None] * d), axis=-1)
 
 
+def _nearest_of_all(x: np.ndarray, a: np.ndarray, d: np.ndarray, dd: np.ndarray, block: int) -> np.ndarray:
+    """Distance (P,) of each configuration ``x`` (P, 4) from the nearest of
+    all segments ``a + t d`` (the full comparison), in blocks of at most
+    ``block`` pairs."""
+    rows = max(1, block // len(a))
+    out = np.empty(len(x))
+    for r0 in range(0, len(x), rows):
+        xr = x[r0:r0 + rows]
+        i = np.repeat(np.arange(len(xr)), len(a))
+        j = np.tile(np.arange(len(a)), len(xr))
+        out[r0:r0 + rows] = _segment_distances(xr[i], a[j], d[j], dd[j]).reshape(len(xr), len(a)).min(axis=1)
+    return out
+
+
 def config_deviation(planned: np.ndarray, executed: np.ndarray, block: int = 1 << 16) -> float:
     """Largest Euclidean configuration-space distance (metres and radians
     mixed, as the planner's plain norm) of an executed configuration from the
-    polyline through the planned waypoints; exact, point to segment.
+    polyline through the planned waypoints; exact, point to segment: the
+    figure of the full comparison of every (configuration, segment) pair,
+    bit for bit (a NaN gives NaN, an infinity inf, as there).
 
-    Not every (configuration, segment) pair is measured: points are sampled
-    along the segments (at most ``h`` apart) into a KD-tree; the segment
-    owning a configuration's nearest sample gives an upper bound ``u`` of its
-    distance, and only segments with a sample within ``u + h / 2`` (every
-    point of a segment lies within ``h / 2`` of one of its samples) can be
-    nearer. Those pairs are measured with the point-to-segment formula, in
-    blocks of at most ``block`` pairs, so memory stays a few megabytes
-    whatever the lengths; in the worst case (every segment a candidate) it is
-    the full comparison, never more.
+    Not every pair is measured: points are sampled along the segments (at
+    most ``h`` apart) into a KD-tree; the segment owning a configuration's
+    nearest sample gives an upper bound ``u`` of its distance, and only
+    segments with a sample within ``u + h / 2`` (every point of a segment
+    lies within ``h / 2`` of one of its samples) can be nearer. Those pairs
+    are measured with the point-to-segment formula, in blocks of at most
+    ``block`` pairs, so memory stays a few megabytes whatever the lengths. A
+    configuration with as many candidate samples as there are segments (the
+    segments all overlap there) is compared with every segment instead, so
+    that it never costs much more than the full comparison; so are all when
+    a value is not finite or so large (> 1e150) that the sampling's squares
+    would overflow.
     """
     p = np.asarray(planned, float).reshape(-1, 4)
     x = np.asarray(executed, float).reshape(-1, 4)
@@ -298,10 +319,14 @@ def config_deviation(planned: np.ndarray, executed: np.ndarray, block: int = 1 <
         return 0.0
     if len(p) == 1:
         return float(np.max(np.linalg.norm(x - p[0], axis=1)))
-    if not (np.all(np.isfinite(p)) and np.all(np.isfinite(x))):
-        return float("nan")  # as the full comparison: a NaN or inf makes some distance NaN
     a, d = p[:-1], np.diff(p, axis=0)  # (S, 4)
     dd = np.einsum("sk,sk->s", d, d)
+    block = max(1, int(block))
+    with np.errstate(all="ignore"):
+        tame = bool(np.all(np.abs(p) <= 1e150) and np.all(np.abs(x) <= 1e150) and np.all(np.isfinite(d)))
+    if not tame:
+        with np.errstate(all="ignore"):
+            return float(_nearest_of_all(x, a, d, dd, block).max())
     length = np.sqrt(dd)
     # Samples along the segments, about 4 per segment on average, each
     # segment cut into n equal pieces of at most h.
@@ -312,7 +337,6 @@ def config_deviation(planned: np.ndarray, executed: np.ndarray, block: int = 1 <
     samples = a[owner] + frac[:, None] * d[owner]
     half = float(np.max(length / n)) / 2  # every segment point is this near one of its samples
     tree = cKDTree(samples)
-    block = max(1, int(block))
     best = np.empty(len(x))
     for t0 in range(0, len(x), block):
         xc = x[t0:t0 + block]
@@ -323,14 +347,19 @@ def config_deviation(planned: np.ndarray, executed: np.ndarray, block: int = 1 <
         radius = upper + half + 1e-9 * (1.0 + upper + half + np.abs(xc).max(axis=1))
         counts = np.asarray(tree.query_ball_point(xc, radius, return_length=True), np.int64)
         local = upper.copy()
+        crowded = counts >= len(a)  # as many candidates as segments: compare with all
+        if crowded.any():
+            local[crowded] = np.minimum(local[crowded], _nearest_of_all(xc[crowded], a, d, dd, block))
+        sparse = np.flatnonzero(~crowded)
         # Groups of configurations with at most `block` candidate samples in all (at least one configuration).
-        ends = np.cumsum(counts)
+        ends = np.cumsum(counts[sparse])
         g0 = 0
-        while g0 < len(xc):
+        while g0 < len(sparse):
             g1 = max(g0 + 1, int(np.searchsorted(ends, (ends[g0 - 1] if g0 else 0) + block, side="right")))
-            hits = tree.query_ball_point(xc[g0:g1], radius[g0:g1])
-            point = g0 + np.repeat(np.arange(g1 - g0), counts[g0:g1])
-            segment = owner[np.fromiter((i for h_ in hits for i in h_), np.int64, int(counts[g0:g1].sum()))]
+            rows = sparse[g0:g1]
+            hits = tree.query_ball_point(xc[rows], radius[rows])
+            point = np.repeat(rows, counts[rows])
+            segment = owner[np.fromiter(itertools.chain.from_iterable(hits), np.int64, int(counts[rows].sum()))]
             pairs = np.unique(point * len(a) + segment)  # each (configuration, segment) once
             i, j = pairs // len(a), pairs % len(a)
             np.minimum.at(local, i, _segment_distances(xc[i], a[j], d[j], dd[j]))
