@@ -105,6 +105,11 @@ def check_waypoints(
     """
     require_scenario(scenario, "check_waypoints")
     require_checker(checker, "check_waypoints")
+    their = getattr(checker, "scenario", None)
+    if isinstance(their, Scenario) and their is not scenario and _checked_world(their) != _checked_world(scenario):
+        raise ScenarioError(f"{source}: the checker {type(checker).__name__} was made for another scenario (its "
+                            "room, people, robot or object differ): make the checker of this scenario, "
+                            "make_checker(scenario, kind)")
     wp = waypoint_array(waypoints, source)
     if lines is not None and len(lines) != len(wp):
         raise ValueError(f"check_waypoints: {len(lines)} line numbers for {len(wp)} waypoints")
@@ -142,7 +147,7 @@ def check_waypoints(
                       f"(e.g. --set \"{name}: {wp[row].tolist()}\")")
 
     kind = type(checker).__name__
-    valid = np.asarray(checker.are_valid(wp), bool).reshape(len(wp))
+    valid = _answers(checker, "are_valid", (wp,), len(wp))
     if not valid.all():
         i = int(np.argmin(valid))
         contacts = getattr(checker, "contacts", None)
@@ -150,10 +155,26 @@ def check_waypoints(
         fail(i, f"configuration {wp[i].tolist()} is in collision ({kind}){': ' + touching if touching else ''}; "
                 "every waypoint must be collision-free")
     if check_segments:
-        moves = np.asarray(checker.are_motions_valid(wp[:-1], wp[1:]), bool).reshape(len(wp) - 1)
+        moves = _answers(checker, "are_motions_valid", (wp[:-1], wp[1:]), len(wp) - 1)
         if not moves.all():
             i = int(np.argmin(moves))
             to = f"waypoint {i + 1}" if lines is None else f"line {lines[i + 1]}"
-            fail(i, f"the straight motion to {to} collides ({kind}, at planner.collision_resolution "
-                    f"{scenario.planner.collision_resolution} m); every segment must be collision-free")
+            how = getattr(checker, "motion_check", None)
+            fail(i, f"the straight motion to {to} collides ({kind}{', ' + how if isinstance(how, str) else ''}); "
+                    "every segment must be collision-free")
     return wp
+
+
+def _checked_world(scenario: Scenario) -> str:
+    """What a validity checker of ``scenario`` checks against, as text to compare."""
+    return repr((scenario.world, scenario.people, scenario.robot, scenario.object))
+
+
+def _answers(checker: ValidityChecker, method: str, arguments: tuple, n: int) -> np.ndarray:
+    """``checker.<method>(*arguments)`` as an (n,) bool array, or the error naming the method."""
+    answer = np.asarray(getattr(checker, method)(*arguments))
+    if answer.shape != (n,) or answer.dtype.kind not in "biu":
+        raise TypeError(f"{type(checker).__name__}.{method} must return ({n},) booleans (one per "
+                        f"{'configuration' if method == 'are_valid' else 'motion'}), got an array of {answer.dtype} "
+                        f"of shape {answer.shape}")
+    return answer.astype(bool)

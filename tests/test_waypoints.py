@@ -117,8 +117,8 @@ def _with(path, row, values):
      "waypoint 1: configuration [4.0, 3.8, 0.0, 1.5708] is in collision (PlanarChecker): base with person[0] "
      "'standing'"),
     (lambda p: np.array(THROUGH_THE_DESK),
-     "waypoint 1: the straight motion to waypoint 2 collides (PlanarChecker, at planner.collision_resolution "
-     "0.05 m); every segment must be collision-free"),
+     "waypoint 1: the straight motion to waypoint 2 collides (PlanarChecker, checked continuously); every segment "
+     "must be collision-free"),
 ])
 def test_simulate_refuses_a_path_it_must_not_execute(tiny_scenario, path, make, message):
     if message is None:
@@ -490,3 +490,51 @@ def test_object_arrays_of_real_numbers_are_converted_exactly(tiny_scenario, path
     # Python floats as Fractions (exact) come back bit for bit.
     exact = [[Fraction(v) for v in row] for row in path.tolist()]
     np.testing.assert_array_equal(waypoint_array(exact, "x"), path)
+
+
+def test_the_segment_message_says_how_the_checker_checks_motions(tiny_scenario):
+    with pytest.raises(ScenarioError) as info:
+        simulate(tiny_scenario, waypoints=THROUGH_THE_DESK, checker=GeometricChecker(tiny_scenario, resolution=0.02))
+    assert str(info.value) == (
+        "simulate: waypoints: waypoint 1: the straight motion to waypoint 2 collides (GeometricChecker, sampled every "
+        "0.02 m of body-point motion (planner.collision_resolution)); every segment must be collision-free")
+
+
+def test_a_checker_of_another_scenario_is_refused(tiny_scenario):
+    import dataclasses as dc
+
+    from drake_social.model.checker import make_checker
+
+    empty = copy.deepcopy(tiny_scenario)
+    empty.world = dc.replace(empty.world, obstacles=[])
+    for checker in (make_checker(empty, "planar"), GeometricChecker(empty)):
+        with pytest.raises(ScenarioError, match=rf"^simulate: waypoints: the checker {type(checker).__name__} was "
+                                                r"made for another scenario \(its room, people, robot or object "
+                                                r"differ\)"):
+            simulate(tiny_scenario, waypoints=THROUGH_THE_DESK, checker=checker)
+    # A copy of the same scenario is the same room: its checker is accepted.
+    same = make_checker(copy.deepcopy(tiny_scenario), "planar")
+    with pytest.raises(ScenarioError, match="the straight motion to waypoint 2 collides"):
+        simulate(tiny_scenario, waypoints=THROUGH_THE_DESK, checker=same)
+
+
+@pytest.mark.parametrize("method, answer, expected", [
+    ("are_valid", lambda n: np.ones(n + 1, bool), "GeometricChecker.are_valid must return (2,) booleans (one per "
+                                                  "configuration), got an array of bool of shape (3,)"),
+    ("are_valid", lambda n: np.ones((n, 1), bool), "GeometricChecker.are_valid must return (2,) booleans"),
+    ("are_valid", lambda n: np.full(n, 0.5), "GeometricChecker.are_valid must return (2,) booleans (one per "
+                                             "configuration), got an array of float64 of shape (2,)"),
+    ("are_motions_valid", lambda n: np.ones(3, bool), "GeometricChecker.are_motions_valid must return (1,) booleans "
+                                                      "(one per motion), got an array of bool of shape (3,)"),
+])
+def test_a_checker_answering_the_wrong_shape_is_named(tiny_scenario, path, method, answer, expected):
+    checker = GeometricChecker(tiny_scenario)
+    setattr(checker, method, lambda *qs: answer(len(qs[0])))
+    with pytest.raises(TypeError) as info:
+        simulate(tiny_scenario, waypoints=path, checker=checker)
+    assert str(info.value).startswith(expected), str(info.value)
+
+
+def test_simulate_takes_numpy_booleans_for_analyze(tiny_scenario, path):
+    dut = simulate(tiny_scenario, waypoints=path, analyze=np.False_, time_limit=1.0)
+    assert dut.report is None
