@@ -315,9 +315,13 @@ def _cases(s):
         (lambda: simulate(s, execution="fast"), ValueError,
          "simulate: unknown execution 'fast'; allowed: synchronized, paper"),
         (lambda: simulate(s, waypoints=wp, time_limit="5"), TypeError,
-         "simulate: time_limit must be a finite number > 0 seconds or None, got str '5'"),
+         "simulate: time_limit must be a finite number of seconds or None, got str '5'"),
         (lambda: simulate(s, waypoints=wp, time_limit=-1.0), ValueError,
-         "simulate: time_limit must be a finite number > 0 seconds, got -1.0"),
+         "simulate: time_limit must be in (0, 600] seconds, got -1.0"),
+        (lambda: simulate(s, waypoints=wp, time_limit=0), ValueError,
+         "simulate: time_limit must be in (0, 600] seconds, got 0"),
+        (lambda: simulate(s, waypoints=wp, time_limit=math.nan), ValueError,
+         "simulate: time_limit must be a finite number of seconds, got nan"),
         (lambda: simulate(s, waypoints=wp, time_limit=601), ValueError,
          "simulate: time_limit must be in (0, 600] seconds, got 601"),
         (lambda: simulate(s, waypoints=wp, time_limit=0.010000001), ValueError,
@@ -457,7 +461,7 @@ def test_a_path_file_and_the_scenario_are_checked_once(tmp_path, tiny_scenario_p
 
 
 @pytest.mark.parametrize("arguments, kind, message", [
-    ({"time_limit": "5"}, TypeError, "simulate: time_limit must be a finite number > 0 seconds or None, got str '5'"),
+    ({"time_limit": "5"}, TypeError, "simulate: time_limit must be a finite number of seconds or None, got str '5'"),
     ({"analyze": "yes"}, TypeError, "simulate: analyze must be True or False, got str 'yes'"),
     ({"progress": 3}, TypeError, "simulate: progress must be a callable or None"),
     ({"analysis_checker": "drake"}, TypeError, "simulate: analysis_checker must be a validity checker object"),

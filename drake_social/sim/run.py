@@ -396,7 +396,7 @@ def simulate(
     """
     # The cheap checks first, the waypoints' collision check last.
     require_scenario(scenario, "simulate")
-    require_number(time_limit, "simulate", "time_limit", positive=True, optional=True, unit="seconds")
+    require_number(time_limit, "simulate", "time_limit", optional=True, unit="of seconds")  # its range: below
     require_instance(analyze, (bool, np.bool_), "simulate", "analyze", "True or False")
     require_checker(analysis_checker, "simulate", "analysis_checker", optional=True)
     require_callable(progress, "simulate", "progress")
