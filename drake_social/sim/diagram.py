@@ -97,7 +97,8 @@ from drake_social.planning.validity import ValidityChecker
 from drake_social.scenario import EXECUTIONS, SIM_MODES, Scenario, validate_scenario
 from drake_social.waypoints import check_waypoints
 
-__all__ = ["DiagramArguments", "TransportDiagram", "build_diagram", "check_diagram_arguments", "servo_gains"]
+__all__ = ["DiagramArguments", "TransportDiagram", "build_diagram", "check_diagram_arguments", "check_diagram_options",
+           "check_diagram_waypoints", "servo_gains"]
 
 
 @dc.dataclass
