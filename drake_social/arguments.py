@@ -18,12 +18,16 @@ Example::
 from __future__ import annotations
 
 import numbers
+from decimal import Decimal
 from typing import Any
+
+import numpy as np
 
 from drake_social.planning.validity import ValidityChecker
 from drake_social.scenario import ExecutionOptions, Scenario
 
 __all__ = [
+    "real_array",
     "require_callable",
     "require_checker",
     "require_choice",
@@ -167,3 +171,85 @@ def require_callable(value: Any, who: str, argument: str, *, optional: bool = Tr
     if not callable(value):
         raise TypeError(f"{who}: {argument} must be a callable{' or None' if optional else ''}, got {_shown(value)}")
 
+
+
+def _shape_text(shape: tuple[int | None, ...]) -> str:
+    """``an (N, 4) array``, ``a (4,) array``."""
+    dims = ["N" if n is None else str(n) for n in shape]
+    text = f"({dims[0]},)" if len(dims) == 1 else f"({', '.join(dims)})"
+    return f"{'an' if dims[0] in ('N', '8', '11', '18') else 'a'} {text} array"
+
+
+def real_array(value: Any, who: str, argument: str, shape: tuple[int | None, ...], *, layout: str = "",
+               rows: tuple[int, int | None] = (0, None), rows_note: str = "", row_name: str = "row",
+               finite: bool = True, error: type[ValueError] = ValueError) -> np.ndarray:
+    """``value`` as a new float array of exactly ``shape``, refused otherwise
+    (never reshaped, truncated or rounded).
+
+    Accepted: an array or nested sequence of real numbers: Python and numpy
+    integers and floats, and in an object array any :class:`numbers.Real`
+    (``Fraction``) or ``Decimal``. Refused: booleans, complex numbers,
+    strings, None and other objects, masked arrays (their mask would be
+    lost), ragged rows, a wrong shape.
+
+    Args:
+        value: the argument's value.
+        who: the public function, e.g. ``"simulate"`` (or the whole source
+            of the value, a file, when ``argument`` is empty).
+        argument: the argument's name, e.g. ``"waypoints"``.
+        shape: the shape, None where any length goes (the first axis: the rows).
+        layout: what the array holds, for the message (``"rows [x, y, psi1, psi2]"``).
+        rows: (fewest, most or None) rows when ``shape[0]`` is None.
+        rows_note: said after the rule when the number of rows is wrong.
+        row_name: what a row is, for that message (``"waypoint"``).
+        finite: refuse NaN and infinities too.
+        error: the class of the errors for a wrong shape or value (a
+            ``ValueError``, e.g. ``ScenarioError``).
+
+    Returns:
+        A new float array.
+
+    Raises:
+        TypeError: not an array of real numbers;
+        ``error``: the wrong shape or number of rows, or a value not finite.
+    """
+    fewest, most = rows
+    count = ""
+    if shape and shape[0] is None and (fewest or most is not None):
+        count = (f" with {fewest:,} <= N <= {most:,}" if most is not None else f" with N >= {fewest:,}")
+    what = f"{_shape_text(shape)}{' of ' + layout if layout else ''}{count}"
+    reals = f"{_shape_text(shape)} of real numbers{' (' + layout + ')' if layout else ''}{count}"
+    prefix = f"{who}: {argument}" if argument else who
+    if isinstance(value, np.ma.MaskedArray):
+        raise TypeError(f"{prefix}: must be {reals}, got a masked array (its mask would be ignored: "
+                        "pass the values to use, e.g. array.compressed() or array.filled(...))")
+    if value is None or isinstance(value, (str, bytes, bool, np.bool_, complex, np.complexfloating)):
+        raise TypeError(f"{prefix}: must be {reals}, got {_shown(value)}")
+    try:
+        raw = np.asarray(value)
+    except (TypeError, ValueError) as e:  # ragged rows
+        raise error(f"{prefix}: must be {what}; its rows differ in length ({e})") from None
+    if raw.dtype.kind == "O":
+        flat = raw.ravel()
+        wrong = [v for v in flat if isinstance(v, (bool, np.bool_)) or not isinstance(v, (numbers.Real, Decimal))]
+        if wrong:
+            kinds = ", ".join(sorted({type(v).__name__ for v in wrong[:1000]}))
+            raise TypeError(f"{prefix}: must be {reals}, got values of type {kinds}")
+        try:
+            raw = np.array([float(v) for v in flat], float).reshape(raw.shape)
+        except (OverflowError, ValueError) as e:
+            raise error(f"{prefix}: must be {reals} ({e})") from None
+    elif raw.dtype.kind not in "iuf":
+        raise TypeError(f"{prefix}: must be {reals}, got an array of {raw.dtype}")
+    if raw.ndim != len(shape) or any(n is not None and m != n for m, n in zip(raw.shape, shape)):
+        raise error(f"{prefix}: must be {what}, got shape {raw.shape}")
+    if shape and shape[0] is None and not (fewest <= len(raw) and (most is None or len(raw) <= most)):
+        n = len(raw)
+        raise error(f"{prefix}: must be {what}{' ' + rows_note if rows_note else ''}, got {n:,} "
+                    f"{row_name}{'' if n == 1 else 's'}")
+    out = np.array(raw, dtype=float)
+    if finite and not np.all(np.isfinite(out)):
+        index = tuple(int(i) for i in np.argwhere(~np.isfinite(out))[0])
+        raise error(f"{prefix}: must hold finite numbers only, got {out[index]} at index "
+                    f"{index if len(index) > 1 else index[0]}")
+    return out

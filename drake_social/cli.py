@@ -468,7 +468,8 @@ def _listed(names: Sequence[str]) -> str:
 
 def _run_simulate(args: argparse.Namespace) -> int:
     from drake_social.outputs import OutputSet
-    from drake_social.sim.run import simulate
+    from drake_social.scenario import validate_scenario
+    from drake_social.sim.run import run_checked
     from drake_social.viz.tracking import tracking_figure
 
     planning_only = [f"--{name}" for name in ("algorithm", "iterations", "seed") if getattr(args, name) is not None]
@@ -484,6 +485,7 @@ def _run_simulate(args: argparse.Namespace) -> int:
         scenario.planner.iterations = args.iterations or scenario.planner.iterations
         scenario.planner.algorithm = args.algorithm or scenario.planner.algorithm
         scenario.random_seed = scenario.random_seed if args.seed is None else args.seed
+        validate_scenario(scenario, source=f"{args.scenario} ({_listed(planning_only)})")
     out = args.out if args.out is not None else _default_out(args.scenario)
     parsed = _parse_path_csv(args.path) if args.path is not None else None  # a malformed file before the checker
     checker = _make_checker(scenario, args.checker, str(args.scenario))
@@ -501,8 +503,10 @@ def _run_simulate(args: argparse.Namespace) -> int:
 
     with OutputSet(out, "simulate") as outputs:
         try:
-            run = simulate(scenario, mode=args.mode, execution=args.execution, waypoints=waypoints,
-                           checker=checker, meshcat=meshcat, progress=progress if bar is not None else None)
+            # The scenario is validated (loaded) and the path checked with the checker above: once.
+            opts = scenario.execution
+            run = run_checked(scenario, args.mode or opts.mode, args.execution or opts.execution, waypoints, checker,
+                              meshcat, float(opts.time_limit), True, None, progress if bar is not None else None)
         except PlanningInputError as e:
             raise PlanningInputError(f"{args.scenario}: {e}") from e
         finally:

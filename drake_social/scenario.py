@@ -37,6 +37,7 @@ __all__ = [
     "MAX_TIME_LIMIT",
     "MAX_YAML_DEPTH",
     "MAX_YAML_NODES",
+    "MIN_CONTROL_PERIODS",
     "INFORMED_MODES",
     "SIM_MODES",
     "Bar",
@@ -75,6 +76,12 @@ MAX_CONTROL_STEPS = 60_000
 #: Most plant steps in one dynamic run (``time_limit / plant_time_step``):
 #: MAX_TIME_LIMIT at the default 0.002 s step.
 MAX_PLANT_STEPS = 300_000
+#: Fewest control periods in one run (``time_limit / control_period``). The
+#: sequencer and the controllers act once per period and the time to goal
+#: is known to one period; with fewer than 10 a run is decided by its
+#: sampling (the time to goal would be off by more than a tenth of the
+#: limit). The shipped scenarios run 30,000.
+MIN_CONTROL_PERIODS = 10
 #: Largest ``execution.replay_fps``, frames per second (the replay keeps every frame).
 MAX_REPLAY_FPS = 60.0
 #: Most vertices of a ``!Polyline`` object. Each segment is a box and each
@@ -748,6 +755,51 @@ def _longest_motion_bound(scenario: Scenario) -> float:
     return float(displacement_bound(extent, ArmGeometry.from_scenario(scenario).lever()))
 
 
+def time_limit_problem(time_limit: float, execution: ExecutionOptions, argument: str | None = None
+                       ) -> tuple[str, str] | None:
+    """What is wrong with a run of ``time_limit`` seconds under ``execution``
+    (the rules of a run's length), or None.
+
+    The rules: ``0 < time_limit <= MAX_TIME_LIMIT``, at least
+    :data:`MIN_CONTROL_PERIODS` and at most :data:`MAX_CONTROL_STEPS` control
+    periods, at most :data:`MAX_PLANT_STEPS` plant steps. Both
+    :func:`validate_scenario` (``execution.time_limit``) and
+    :func:`drake_social.sim.run.simulate` (its ``time_limit`` argument) use them.
+
+    Args:
+        time_limit: seconds.
+        execution: the periods and steps of the run.
+        argument: the name of a function's argument giving ``time_limit``;
+            None = the scenario's own ``execution.time_limit``.
+
+    Returns:
+        (the field at fault, what is allowed and what was given), or None.
+    """
+    e = execution
+    limit = float(time_limit)
+    if not 0 < limit <= MAX_TIME_LIMIT:
+        return argument or "execution.time_limit", f"must be in (0, {MAX_TIME_LIMIT:g}] seconds, got {time_limit}"
+    # (periods or steps, their length, its field, the fewest, the most, why)
+    rules = ((e.control_period, "execution.control_period", MIN_CONTROL_PERIODS, None,
+              f"a run lasts at least {MIN_CONTROL_PERIODS} control periods: the sequencer decides once per period"),
+             (e.control_period, "execution.control_period", None, MAX_CONTROL_STEPS,
+              f"a run may take at most {MAX_CONTROL_STEPS:,} control periods"),
+             (e.plant_time_step, "execution.plant_time_step", None, MAX_PLANT_STEPS,
+              f"a run may take at most {MAX_PLANT_STEPS:,} plant steps"))
+    for length, field, fewest, most, why in rules:
+        if fewest is not None and limit < fewest * length:
+            if argument:
+                return argument, (f"must be >= {fewest} * {field} {length} = {fewest * length:.6g} s ({why}), "
+                                  f"got {time_limit}")
+            return field, f"must be <= execution.time_limit / {fewest} = {limit / fewest:.6g} s ({why}), got {length}"
+        if most is not None and limit / length > most:
+            if argument:
+                return argument, (f"must be <= {most:,} * {field} {length} = {most * length:.6g} s ({why}), "
+                                  f"got {time_limit}")
+            return field, f"must be >= execution.time_limit / {most:,} = {limit / most:.3g} s ({why}), got {length}"
+    return None
+
+
 def validate_scenario(scenario: Scenario, source: str = "<scenario>") -> None:
     """Checks values that the schema's types cannot express.
 
@@ -895,26 +947,15 @@ def validate_scenario(scenario: Scenario, source: str = "<scenario>") -> None:
     if e.plant_time_step > e.control_period:
         c.fail("execution.plant_time_step",
                f"must be <= execution.control_period {e.control_period}, got {e.plant_time_step}")
-    if e.control_period >= e.time_limit:
-        c.fail("execution.control_period",
-               f"must be < execution.time_limit {e.time_limit} (the sequencer decides once per control period: "
-               f"a run must last several), got {e.control_period}")
+    problem = time_limit_problem(e.time_limit, e)
+    if problem:
+        c.fail(*problem)
     if e.kp * e.control_period >= 2.0:
         c.fail("execution.kp",
                f"execution.kp * execution.control_period must be < 2 (the base's sampled P-controller "
                f"multiplies its error by 1 - kp * control_period each period and converges only then), got "
                f"{e.kp} * {e.control_period} = {e.kp * e.control_period:.6g}")
-    if e.time_limit > MAX_TIME_LIMIT:
-        c.fail("execution.time_limit", f"must be <= {MAX_TIME_LIMIT:g} s, got {e.time_limit}")
     if e.replay_fps > MAX_REPLAY_FPS:
         c.fail("execution.replay_fps", f"must be <= {MAX_REPLAY_FPS:g} frames per second, got {e.replay_fps}")
-    if e.time_limit / e.control_period > MAX_CONTROL_STEPS:
-        c.fail("execution.control_period",
-               f"must be >= execution.time_limit / {MAX_CONTROL_STEPS:,} = {e.time_limit / MAX_CONTROL_STEPS:.3g} s "
-               f"(a run may take at most {MAX_CONTROL_STEPS:,} control periods), got {e.control_period}")
-    if e.time_limit / e.plant_time_step > MAX_PLANT_STEPS:
-        c.fail("execution.plant_time_step",
-               f"must be >= execution.time_limit / {MAX_PLANT_STEPS:,} = {e.time_limit / MAX_PLANT_STEPS:.3g} s "
-               f"(a run may take at most {MAX_PLANT_STEPS:,} plant steps), got {e.plant_time_step}")
     if scenario.random_seed < 0:
         c.fail("random_seed", f"must be >= 0, got {scenario.random_seed}")

@@ -35,7 +35,7 @@ from typing import Any, Sequence
 
 import numpy as np
 
-from drake_social.arguments import require_checker, require_scenario
+from drake_social.arguments import real_array, require_checker, require_scenario
 from drake_social.limits import MAX_WAYPOINTS
 from drake_social.planning.validity import ValidityChecker
 from drake_social.scenario import Scenario, ScenarioError
@@ -51,38 +51,24 @@ ENDPOINT_TOLERANCE = 1e-9
 #: The names of a waypoint's four values, in order.
 FIELDS = ("x", "y", "psi1", "psi2")
 
-_SHAPE = f"an (N, 4) array of rows [x, y, psi1, psi2] with 2 <= N <= {MAX_WAYPOINTS:,}"
-
 
 def waypoint_array(waypoints: Any, source: str) -> np.ndarray:
     """``waypoints`` as a new (N, 4) float array, 2 <= N <= MAX_WAYPOINTS, refused otherwise.
 
     Args:
-        waypoints: an array or nested sequence of real numbers.
+        waypoints: an array or nested sequence of real numbers
+            (:func:`~drake_social.arguments.real_array`; NaN and infinities
+            are left to :func:`check_waypoints`, which names the waypoint).
         source: who passed it, for the message (``"simulate: waypoints"``).
 
     Raises:
         TypeError: not an array of real numbers (strings, booleans, complex,
-            None, objects).
+            None, other objects, a masked array).
         ScenarioError: the wrong shape (never reshaped) or number of rows.
     """
-    if waypoints is None or isinstance(waypoints, (str, bytes)):
-        raise TypeError(f"{source}: must be {_SHAPE}, got {type(waypoints).__name__} {waypoints!r:.60}")
-    try:
-        raw = np.asarray(waypoints)
-    except (ValueError, TypeError) as e:  # ragged rows
-        raise ScenarioError(f"{source}: must be {_SHAPE}; its rows differ in length ({e})") from None
-    if raw.dtype.kind not in "iuf":
-        if raw.dtype.kind == "O":
-            kinds = sorted({type(v).__name__ for v in raw.ravel()[:1000]})
-            raise TypeError(f"{source}: must be {_SHAPE} of real numbers, got values of type {', '.join(kinds)}")
-        raise TypeError(f"{source}: must be {_SHAPE} of real numbers, got an array of {raw.dtype}")
-    if raw.ndim != 2 or raw.shape[1] != 4:
-        raise ScenarioError(f"{source}: must be {_SHAPE}, got shape {raw.shape}")
-    if not 2 <= len(raw) <= MAX_WAYPOINTS:
-        raise ScenarioError(f"{source}: must be {_SHAPE} (the start, ..., the goal; limits.MAX_WAYPOINTS), "
-                            f"got {len(raw):,} waypoints")
-    return np.array(raw, dtype=float)
+    return real_array(waypoints, source, "", (None, 4), layout="rows [x, y, psi1, psi2]", rows=(2, MAX_WAYPOINTS),
+                      rows_note="(the start, ..., the goal; limits.MAX_WAYPOINTS)", row_name="waypoint",
+                      finite=False, error=ScenarioError)
 
 
 def check_waypoints(
@@ -119,6 +105,11 @@ def check_waypoints(
     """
     require_scenario(scenario, "check_waypoints")
     require_checker(checker, "check_waypoints")
+    their = getattr(checker, "scenario", None)
+    if isinstance(their, Scenario) and their is not scenario and _checked_world(their) != _checked_world(scenario):
+        raise ScenarioError(f"{source}: the checker {type(checker).__name__} was made for another scenario (its "
+                            "room, people, robot or object differ): make the checker of this scenario, "
+                            "make_checker(scenario, kind)")
     wp = waypoint_array(waypoints, source)
     if lines is not None and len(lines) != len(wp):
         raise ValueError(f"check_waypoints: {len(lines)} line numbers for {len(wp)} waypoints")
@@ -156,7 +147,7 @@ def check_waypoints(
                       f"(e.g. --set \"{name}: {wp[row].tolist()}\")")
 
     kind = type(checker).__name__
-    valid = np.asarray(checker.are_valid(wp), bool).reshape(len(wp))
+    valid = _answers(checker, "are_valid", (wp,), len(wp))
     if not valid.all():
         i = int(np.argmin(valid))
         contacts = getattr(checker, "contacts", None)
@@ -164,10 +155,26 @@ def check_waypoints(
         fail(i, f"configuration {wp[i].tolist()} is in collision ({kind}){': ' + touching if touching else ''}; "
                 "every waypoint must be collision-free")
     if check_segments:
-        moves = np.asarray(checker.are_motions_valid(wp[:-1], wp[1:]), bool).reshape(len(wp) - 1)
+        moves = _answers(checker, "are_motions_valid", (wp[:-1], wp[1:]), len(wp) - 1)
         if not moves.all():
             i = int(np.argmin(moves))
             to = f"waypoint {i + 1}" if lines is None else f"line {lines[i + 1]}"
-            fail(i, f"the straight motion to {to} collides ({kind}, at planner.collision_resolution "
-                    f"{scenario.planner.collision_resolution} m); every segment must be collision-free")
+            how = getattr(checker, "motion_check", None)
+            fail(i, f"the straight motion to {to} collides ({kind}{', ' + how if isinstance(how, str) else ''}); "
+                    "every segment must be collision-free")
     return wp
+
+
+def _checked_world(scenario: Scenario) -> str:
+    """What a validity checker of ``scenario`` checks against, as text to compare."""
+    return repr((scenario.world, scenario.people, scenario.robot, scenario.object))
+
+
+def _answers(checker: ValidityChecker, method: str, arguments: tuple, n: int) -> np.ndarray:
+    """``checker.<method>(*arguments)`` as an (n,) bool array, or the error naming the method."""
+    answer = np.asarray(getattr(checker, method)(*arguments))
+    if answer.shape != (n,) or answer.dtype.kind not in "biu":
+        raise TypeError(f"{type(checker).__name__}.{method} must return ({n},) booleans (one per "
+                        f"{'configuration' if method == 'are_valid' else 'motion'}), got an array of {answer.dtype} "
+                        f"of shape {answer.shape}")
+    return answer.astype(bool)

@@ -55,7 +55,7 @@ SHAPE = "must be an (N, 4) array of rows [x, y, psi1, psi2] with 2 <= N <= 10,00
     (np.zeros((2, 2, 4)), f"waypoints: {SHAPE}, got shape (2, 2, 4)"),
     (np.zeros((0, 4)), f"waypoints: {SHAPE} (the start, ..., the goal; limits.MAX_WAYPOINTS), got 0 waypoints"),
     ([[1.0, 2.5, 0.0, 1.5708]], f"waypoints: {SHAPE} (the start, ..., the goal; limits.MAX_WAYPOINTS), "
-                                "got 1 waypoints"),
+                                "got 1 waypoint"),
     (np.zeros((MAX_WAYPOINTS + 1, 4)), f"waypoints: {SHAPE} (the start, ..., the goal; limits.MAX_WAYPOINTS), "
                                        "got 10,001 waypoints"),
 ])
@@ -68,8 +68,11 @@ def test_a_wrong_shape_is_refused_never_reshaped(tiny_scenario, door, waypoints,
 
 
 @pytest.mark.parametrize("waypoints, kind", [
-    ("1,2,3,4", "str"), ([["1", "2", "3", "4"]] * 2, "<U1"), ([[1, 2, 3, None]] * 2, "NoneType, int"),
+    ("1,2,3,4", "str"), ([["1", "2", "3", "4"]] * 2, "<U1"), ([[1, 2, 3, None]] * 2, "values of type NoneType"),
     ([[True, False, True, False]] * 2, "bool"), ([[1j, 0, 0, 0]] * 2, "complex128"),
+    (np.array([[1.0, 2.5, 0.0, True]] * 2, dtype=object), "values of type bool"),
+    (np.array([[1.0, 2.5, 0.0, 1j]] * 2, dtype=object), "values of type complex"),
+    (np.ma.masked_array(np.zeros((2, 4)), mask=[[0, 0, 0, 1], [0] * 4]), "a masked array"),
 ])
 def test_values_that_are_not_real_numbers_are_a_type_error(tiny_scenario, waypoints, kind):
     with pytest.raises(TypeError, match=r"^simulate: waypoints: must be an \(N, 4\) array") as info:
@@ -114,8 +117,8 @@ def _with(path, row, values):
      "waypoint 1: configuration [4.0, 3.8, 0.0, 1.5708] is in collision (PlanarChecker): base with person[0] "
      "'standing'"),
     (lambda p: np.array(THROUGH_THE_DESK),
-     "waypoint 1: the straight motion to waypoint 2 collides (PlanarChecker, at planner.collision_resolution "
-     "0.05 m); every segment must be collision-free"),
+     "waypoint 1: the straight motion to waypoint 2 collides (PlanarChecker, checked continuously); every segment "
+     "must be collision-free"),
 ])
 def test_simulate_refuses_a_path_it_must_not_execute(tiny_scenario, path, make, message):
     if message is None:
@@ -236,9 +239,14 @@ def test_the_planner_refuses_start_equal_to_goal(tiny_scenario):
 
 @pytest.mark.parametrize("execution, field, message", [
     ({"control_period": 10.0, "time_limit": 5.0}, "execution.control_period",
-     "must be < execution.time_limit 5.0 (the sequencer decides once per control period: a run must last "
-     "several), got 10.0"),
-    ({"control_period": 5.0, "time_limit": 5.0}, "execution.control_period", "must be < execution.time_limit 5.0"),
+     "must be <= execution.time_limit / 10 = 0.5 s (a run lasts at least 10 control periods: the sequencer "
+     "decides once per period), got 10.0"),
+    ({"control_period": 5.0, "time_limit": 5.0}, "execution.control_period",
+     "must be <= execution.time_limit / 10 = 0.5 s"),
+    ({"control_period": 4.99, "time_limit": 5.0, "kp": 0.1}, "execution.control_period",
+     "must be <= execution.time_limit / 10 = 0.5 s"),
+    ({"control_period": 0.01, "time_limit": 0.0999}, "execution.control_period",
+     "must be <= execution.time_limit / 10 = 0.00999 s"),
     ({"kp": 200.0}, "execution.kp",
      "execution.kp * execution.control_period must be < 2 (the base's sampled P-controller multiplies its error "
      "by 1 - kp * control_period each period and converges only then), got 200.0 * 0.01 = 2"),
@@ -258,17 +266,21 @@ def test_execution_options_just_inside_the_rules_are_accepted(tiny_scenario):
     import dataclasses as dc
 
     ok = copy.deepcopy(tiny_scenario)
-    ok.execution = dc.replace(ok.execution, control_period=4.9, time_limit=5.0, kp=0.4, plant_time_step=4.9)
+    ok.execution = dc.replace(ok.execution, control_period=0.5, time_limit=5.0, kp=3.9, plant_time_step=0.5)
     validate_scenario(ok)
     ok.execution = dc.replace(ok.execution, control_period=0.01, kp=199.9, plant_time_step=0.002)
     validate_scenario(ok)
 
 
 def test_control_period_against_time_limit_from_the_command_line(tmp_path, tiny_scenario_path, capsys):
-    setting = "execution: {control_period: 10, time_limit: 5}"
-    assert main(["simulate", str(tiny_scenario_path), "--set", setting, "--no-replay",
-                 "--out", str(tmp_path / "out")]) == 2
-    assert "execution.control_period: must be < execution.time_limit 5.0" in capsys.readouterr().err
+    for setting, period in (("execution: {control_period: 10, time_limit: 5}", 10.0),
+                            ("execution: {kp: 0.1, control_period: 4.99, time_limit: 5}", 4.99),
+                            ("execution: {control_period: 0.5000001, plant_time_step: 0.5, time_limit: 5}", 0.5000001)):
+        assert main(["simulate", str(tiny_scenario_path), "--set", setting, "--no-replay",
+                     "--out", str(tmp_path / "out")]) == 2
+        assert (f"execution.control_period: must be <= execution.time_limit / 10 = 0.5 s (a run lasts at least 10 "
+                f"control periods: the sequencer decides once per period), got {period}\n") in capsys.readouterr().err
+        assert not (tmp_path / "out").exists()
 
 
 # ---- the public functions' arguments ----------------------------------------------------------
@@ -303,12 +315,20 @@ def _cases(s):
         (lambda: simulate(s, execution="fast"), ValueError,
          "simulate: unknown execution 'fast'; allowed: synchronized, paper"),
         (lambda: simulate(s, waypoints=wp, time_limit="5"), TypeError,
-         "simulate: time_limit must be a finite number > 0 seconds or None, got str '5'"),
+         "simulate: time_limit must be a finite number of seconds or None, got str '5'"),
         (lambda: simulate(s, waypoints=wp, time_limit=-1.0), ValueError,
-         "simulate: time_limit must be a finite number > 0 seconds, got -1.0"),
-        (lambda: simulate(s, waypoints=wp, time_limit=0.01), ValueError,
-         "simulate: time_limit must be > execution.control_period 0.01 seconds (the sequencer decides once per "
-         "control period), got 0.01"),
+         "simulate: time_limit must be in (0, 600] seconds, got -1.0"),
+        (lambda: simulate(s, waypoints=wp, time_limit=0), ValueError,
+         "simulate: time_limit must be in (0, 600] seconds, got 0"),
+        (lambda: simulate(s, waypoints=wp, time_limit=math.nan), ValueError,
+         "simulate: time_limit must be a finite number of seconds, got nan"),
+        (lambda: simulate(s, waypoints=wp, time_limit=601), ValueError,
+         "simulate: time_limit must be in (0, 600] seconds, got 601"),
+        (lambda: simulate(s, waypoints=wp, time_limit=0.010000001), ValueError,
+         "simulate: time_limit must be >= 10 * execution.control_period 0.01 = 0.1 s (a run lasts at least 10 "
+         "control periods: the sequencer decides once per period), got 0.010000001"),
+        (lambda: simulate(s, waypoints=wp, time_limit=0.0999), ValueError,
+         "simulate: time_limit must be >= 10 * execution.control_period 0.01 = 0.1 s"),
         (lambda: simulate(s, waypoints=wp, analysis_checker="drake"), TypeError,
          f"simulate: analysis_checker {CHECKER}"),
         (lambda: simulate(s, waypoints=wp, progress=3), TypeError, "simulate: progress must be a callable or None"),
@@ -345,13 +365,43 @@ def _cases(s):
         (lambda: HolonomicPController.from_options(None), TypeError,
          "HolonomicPController.from_options: execution_options must be"),
         (lambda: arm_source_from_options(s.execution, [0.0, 0.0, 0.0]), ValueError,
-         "arm_source_from_options: initial_arm must be 2 finite numbers [psi1, psi2], got shape (3,)"),
+         "arm_source_from_options: initial_arm: must be a (2,) array of [psi1, psi2], got shape (3,)"),
         (lambda: reference_source_from_options(s.execution, np.zeros((2, 2))), ValueError,
-         "reference_source_from_options: initial_q must be 4 finite numbers [x, y, psi1, psi2], got shape (2, 2)"),
+         "reference_source_from_options: initial_q: must be a (4,) array of [x, y, psi1, psi2], got shape (2, 2)"),
+        (lambda: reference_source_from_options(s.execution, [0.0, 0.0, 0.0, 1j]), TypeError,
+         "reference_source_from_options: initial_q: must be a (4,) array of real numbers ([x, y, psi1, psi2]), "
+         "got an array of complex128"),
+        (lambda: reference_source_from_options(s.execution, [0.0, 0.0, 0.0, np.inf]), ValueError,
+         "reference_source_from_options: initial_q: must hold finite numbers only, got inf at index 3"),
+        (lambda: RrtStar(space, GeometricChecker(s), objective).solve(np.ones(4, bool), s.goal,
+                                                                       np.random.default_rng(0)),
+         TypeError, "RrtStar.solve: start: must be a (4,) array of real numbers ([x, y, psi1, psi2]), got an array "
+                    "of bool"),
+        (lambda: RrtStar(space, GeometricChecker(s), objective).solve(np.array(s.start) + 0j, s.goal,
+                                                                       np.random.default_rng(0)),
+         TypeError, "RrtStar.solve: start: must be a (4,) array of real numbers ([x, y, psi1, psi2]), got an array "
+                    "of complex128"),
+        (lambda: RrtStar(space, GeometricChecker(s), objective).solve(s.start, [1.0, 2.0], np.random.default_rng(0)),
+         PlanningInputError, "RrtStar.solve: goal: must be a (4,) array of [x, y, psi1, psi2], got shape (2,)"),
+        (lambda: plan(s, GeometricChecker(s), seed=1.0), TypeError, "plan: seed must be an integer >= 0 or None"),
+        (lambda: plan(s, GeometricChecker(s), iterations="20"), TypeError, "plan: iterations must be an integer"),
+        (lambda: plan(s, GeometricChecker(s), iterations=0), ValueError,
+         "plan: iterations must be an integer >= 1 and <= 10,000,000, got 0"),
+        (lambda: PlannerSystem(s, iterations="20"), TypeError, "PlannerSystem: iterations must be an integer"),
+        (lambda: __import__("drake_social.planning.variants", fromlist=["x"]).evaluate_path(s, np.zeros(3)),
+         ValueError, "evaluate_path: waypoints: must be an (N, 4) array of rows [x, y, psi1, psi2] with N >= 1, "
+                     "got shape "
+                     "(3,)"),
+        (lambda: __import__("drake_social.planning.variants", fromlist=["x"]).evaluate_path(s, [[1, 2, 3, "4"]]),
+         TypeError, "evaluate_path: waypoints: must be an (N, 4) array"),
         (lambda: analyze_execution("x", wp, np.zeros(2), np.zeros((2, 4))), TypeError,
          "analyze_execution: scenario must be a drake_social.scenario.Scenario"),
         (lambda: analyze_execution(s, wp, np.zeros(3), np.zeros((3, 5))), ScenarioError,
-         "analyze_execution: q: must be a (T, 4) array, got shape (3, 5)"),
+         "analyze_execution: q: must be an (N, 4) array of rows [x, y, psi1, psi2] with N >= 1, got shape (3, 5)"),
+        (lambda: analyze_execution(s, wp, np.zeros(0), np.zeros((0, 4))), ScenarioError,
+         "analyze_execution: times: must be an (N,) array of seconds with N >= 1, got 0 samples"),
+        (lambda: analyze_execution(s, wp, np.ma.masked_array(np.zeros(2)), np.zeros((2, 4))), TypeError,
+         "analyze_execution: times: must be an (N,) array of real numbers (seconds) with N >= 1, got a masked array"),
         (lambda: analyze_execution(s, wp, np.zeros(2), np.zeros((3, 4))), ScenarioError,
          "analyze_execution: times and q must have the same T rows, got 2 and 3"),
         (lambda: analyze_execution(s, np.zeros(3), np.zeros(2), np.zeros((2, 4))), ScenarioError,
@@ -373,6 +423,122 @@ def test_simulate_validates_a_scenario_changed_in_code(tiny_scenario):
 
     changed = copy.deepcopy(tiny_scenario)
     changed.execution = dc.replace(changed.execution, control_period=10.0, time_limit=5.0)
-    with pytest.raises(ScenarioError, match=r"^simulate: scenario: execution.control_period: must be < "
-                                            r"execution.time_limit 5.0"):
+    with pytest.raises(ScenarioError, match=r"^simulate: scenario: execution.control_period: must be <= "
+                                            r"execution.time_limit / 10 = 0.5 s"):
         simulate(changed, waypoints=[changed.start, changed.goal])
+
+
+# ---- each check once, the cheap ones first ----------------------------------------------------
+
+
+def _counting(monkeypatch, owner, name):
+    """Counts the calls of ``owner.name`` (a function or method)."""
+    calls = []
+    original = getattr(owner, name)
+
+    def counted(*args, **kwargs):
+        calls.append(1)
+        return original(*args, **kwargs)
+
+    monkeypatch.setattr(owner, name, counted)
+    return calls
+
+
+def test_a_path_file_and_the_scenario_are_checked_once(tmp_path, tiny_scenario_path, capsys, monkeypatch):
+    import drake_social.scenario
+    import drake_social.sim.diagram
+    from drake_social.model.planar_checker import PlanarChecker
+
+    motions = _counting(monkeypatch, PlanarChecker, "are_motions_valid")
+    validations = [_counting(monkeypatch, module, "validate_scenario")
+                   for module in (drake_social.scenario, drake_social.sim.diagram)]
+    file = _csv(tmp_path, [[1.0, 2.5, 0.0, 1.5708], [6.5, 2.5, 0.0, 1.5708]])
+    code = main(["simulate", str(tiny_scenario_path), "--path", file, "--no-replay", "--mode", "kinematic",
+                 "--out", str(tmp_path / "out")])
+    assert code == 0, capsys.readouterr().err
+    assert len(motions) == 1  # the path's segments: the analysis checks configurations only
+    assert sum(len(v) for v in validations) == 1
+
+
+@pytest.mark.parametrize("arguments, kind, message", [
+    ({"time_limit": "5"}, TypeError, "simulate: time_limit must be a finite number of seconds or None, got str '5'"),
+    ({"analyze": "yes"}, TypeError, "simulate: analyze must be True or False, got str 'yes'"),
+    ({"progress": 3}, TypeError, "simulate: progress must be a callable or None"),
+    ({"analysis_checker": "drake"}, TypeError, "simulate: analysis_checker must be a validity checker object"),
+    ({"mode": "fast"}, ValueError, "simulate: unknown mode 'fast'"),
+    ({"time_limit": 1200.0}, ValueError, "simulate: time_limit must be in (0, 600] seconds, got 1200.0"),
+])
+def test_simulate_checks_cheap_arguments_before_the_waypoints_collisions(tiny_scenario, path, monkeypatch,
+                                                                         arguments, kind, message):
+    from drake_social.model.planar_checker import PlanarChecker
+
+    motions = _counting(monkeypatch, PlanarChecker, "are_motions_valid")
+    configurations = _counting(monkeypatch, PlanarChecker, "are_valid")
+    with pytest.raises(kind) as info:
+        simulate(tiny_scenario, waypoints=path, **arguments)
+    assert str(info.value).startswith(message), str(info.value)
+    assert (motions, configurations) == ([], [])
+
+
+def test_object_arrays_of_real_numbers_are_converted_exactly(tiny_scenario, path):
+    from decimal import Decimal
+    from fractions import Fraction
+
+    from drake_social.waypoints import waypoint_array
+
+    for convert in (float, np.float64, np.float32, Fraction, Decimal, lambda v: np.int64(v) if v == int(v) else v):
+        values = [[convert(v) for v in row] for row in path.tolist()]
+        dut = waypoint_array(np.array(values, dtype=object), "x")
+        np.testing.assert_array_equal(dut, np.array([[float(v) for v in row] for row in values]))
+        assert dut.dtype == float
+    # Python floats as Fractions (exact) come back bit for bit.
+    exact = [[Fraction(v) for v in row] for row in path.tolist()]
+    np.testing.assert_array_equal(waypoint_array(exact, "x"), path)
+
+
+def test_the_segment_message_says_how_the_checker_checks_motions(tiny_scenario):
+    with pytest.raises(ScenarioError) as info:
+        simulate(tiny_scenario, waypoints=THROUGH_THE_DESK, checker=GeometricChecker(tiny_scenario, resolution=0.02))
+    assert str(info.value) == (
+        "simulate: waypoints: waypoint 1: the straight motion to waypoint 2 collides (GeometricChecker, sampled every "
+        "0.02 m of body-point motion (planner.collision_resolution)); every segment must be collision-free")
+
+
+def test_a_checker_of_another_scenario_is_refused(tiny_scenario):
+    import dataclasses as dc
+
+    from drake_social.model.checker import make_checker
+
+    empty = copy.deepcopy(tiny_scenario)
+    empty.world = dc.replace(empty.world, obstacles=[])
+    for checker in (make_checker(empty, "planar"), GeometricChecker(empty)):
+        with pytest.raises(ScenarioError, match=rf"^simulate: waypoints: the checker {type(checker).__name__} was "
+                                                r"made for another scenario \(its room, people, robot or object "
+                                                r"differ\)"):
+            simulate(tiny_scenario, waypoints=THROUGH_THE_DESK, checker=checker)
+    # A copy of the same scenario is the same room: its checker is accepted.
+    same = make_checker(copy.deepcopy(tiny_scenario), "planar")
+    with pytest.raises(ScenarioError, match="the straight motion to waypoint 2 collides"):
+        simulate(tiny_scenario, waypoints=THROUGH_THE_DESK, checker=same)
+
+
+@pytest.mark.parametrize("method, answer, expected", [
+    ("are_valid", lambda n: np.ones(n + 1, bool), "GeometricChecker.are_valid must return (2,) booleans (one per "
+                                                  "configuration), got an array of bool of shape (3,)"),
+    ("are_valid", lambda n: np.ones((n, 1), bool), "GeometricChecker.are_valid must return (2,) booleans"),
+    ("are_valid", lambda n: np.full(n, 0.5), "GeometricChecker.are_valid must return (2,) booleans (one per "
+                                             "configuration), got an array of float64 of shape (2,)"),
+    ("are_motions_valid", lambda n: np.ones(3, bool), "GeometricChecker.are_motions_valid must return (1,) booleans "
+                                                      "(one per motion), got an array of bool of shape (3,)"),
+])
+def test_a_checker_answering_the_wrong_shape_is_named(tiny_scenario, path, method, answer, expected):
+    checker = GeometricChecker(tiny_scenario)
+    setattr(checker, method, lambda *qs: answer(len(qs[0])))
+    with pytest.raises(TypeError) as info:
+        simulate(tiny_scenario, waypoints=path, checker=checker)
+    assert str(info.value).startswith(expected), str(info.value)
+
+
+def test_simulate_takes_numpy_booleans_for_analyze(tiny_scenario, path):
+    dut = simulate(tiny_scenario, waypoints=path, analyze=np.False_, time_limit=1.0)
+    assert dut.report is None

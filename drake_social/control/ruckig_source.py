@@ -60,7 +60,7 @@ import ruckig
 from pydrake.common.value import AbstractValue
 from pydrake.systems.framework import EventStatus, BasicVector, Context, LeafSystem, State
 
-from drake_social.arguments import require_execution_options
+from drake_social.arguments import real_array, require_execution_options
 from drake_social.scenario import ExecutionOptions
 
 __all__ = [
@@ -533,16 +533,7 @@ class RuckigTrajectorySource(LeafSystem):
 
 def _finite_vector(value, n: int, who: str, argument: str, layout: str) -> np.ndarray:
     """``value`` as a finite (n,) float array (never reshaped), or a TypeError/ValueError naming it."""
-    try:
-        a = np.asarray(value)
-    except (TypeError, ValueError) as e:
-        raise ValueError(f"{who}: {argument} must be {n} finite numbers {layout} ({e})") from None
-    if a.dtype.kind not in "iuf":
-        raise TypeError(f"{who}: {argument} must be {n} finite numbers {layout}, got {type(value).__name__} "
-                        f"{value!r:.60}")
-    if a.shape != (n,) or not np.all(np.isfinite(a)):
-        raise ValueError(f"{who}: {argument} must be {n} finite numbers {layout}, got shape {a.shape}: {value!r:.80}")
-    return np.array(a, float)
+    return real_array(value, who, argument, (n,), layout=layout)
 
 
 def arm_source_from_options(

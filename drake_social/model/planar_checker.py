@@ -240,6 +240,12 @@ class PlanarChecker(CheckerBase):
         return bool(kernel.motion_valid(np.asarray(q_a, float), np.asarray(q_b, float), self.lower, self.upper,
                                         self.bodies, self.robot, self.env, self.levers))
 
+    @property
+    def motion_check(self) -> str:
+        """How a straight motion is checked, in words: continuously (each
+        capsule advanced by its motion bound; no resolution)."""
+        return "checked continuously"
+
     def are_motions_valid(self, q_a: np.ndarray, q_b: np.ndarray) -> np.ndarray:
         """Many motions (E, 4), (E, 4) -> (E,) bool."""
         q_a = np.ascontiguousarray(q_a, float).reshape(-1, 4)

@@ -125,6 +125,12 @@ class CheckerBase:
         self.lower = np.array([b[0], b[1], *r.joint_lower], float)
         self.upper = np.array([b[2], b[3], *r.joint_upper], float)
 
+    @property
+    def motion_check(self) -> str:
+        """How a straight motion is checked, in words (for messages): sampled
+        at :attr:`resolution`."""
+        return f"sampled every {self.resolution:g} m of body-point motion (planner.collision_resolution)"
+
     def in_limits(self, qs: np.ndarray) -> np.ndarray:
         """Whether configurations (..., 4) lie within :attr:`lower`, :attr:`upper`."""
         qs = np.asarray(qs, float)

@@ -40,7 +40,7 @@ from typing import Callable
 
 import numpy as np
 
-from drake_social.arguments import require_callable, require_checker, require_instance
+from drake_social.arguments import real_array, require_callable, require_checker, require_instance
 from drake_social.planning.objective import Objective
 from drake_social.planning.result import PlannerResult, PlanningInputError
 from drake_social.planning.sampling import EllipseSampler, transverse_diameter
@@ -342,8 +342,9 @@ class RrtStar:
                 chunks are ``CHUNK`` long. Ctrl-C is noticed between chunks.
 
         Raises:
-            TypeError: ``rng`` is not a numpy Generator, ``progress`` not callable.
-            PlanningInputError: start or goal invalid, or the same
+            TypeError: ``rng`` is not a numpy Generator, ``progress`` not
+                callable, start or goal not real numbers.
+            PlanningInputError: start or goal not 4 finite numbers, invalid, or the same
                 configuration (nothing to plan). A goal that cannot be
                 reached is *not* an error: the result says ``success=False``.
         """
@@ -352,11 +353,8 @@ class RrtStar:
         require_instance(rng, np.random.Generator, "RrtStar.solve", "rng",
                          "a numpy.random.Generator (numpy.random.default_rng(seed))")
         require_callable(progress, "RrtStar.solve", "progress")
-        try:
-            start = np.asarray(start, dtype=float)
-            goal = np.asarray(goal, dtype=float)
-        except (TypeError, ValueError) as e:
-            raise PlanningInputError(f"start and goal must be 4 finite numbers each ({e})") from None
+        start = real_array(start, "RrtStar.solve", "start", (4,), layout="[x, y, psi1, psi2]", error=PlanningInputError)
+        goal = real_array(goal, "RrtStar.solve", "goal", (4,), layout="[x, y, psi1, psi2]", error=PlanningInputError)
         self._check_endpoints(start, goal)
         space, checker, objective = self.space, self.checker, self.objective
 

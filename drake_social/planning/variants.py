@@ -18,6 +18,7 @@ from __future__ import annotations
 import numpy as np
 
 from drake_social.arguments import (
+    real_array,
     require_callable,
     require_checker,
     require_choice,
@@ -32,7 +33,7 @@ from drake_social.planning.result import PlannerResult
 from drake_social.planning.rrt_star import RrtStar, RrtStarOptions
 from drake_social.planning.space import ConfigurationSpace
 from drake_social.planning.validity import ValidityChecker
-from drake_social.scenario import ALGORITHMS, MAX_ITERATIONS, ScenarioError
+from drake_social.scenario import ALGORITHMS, MAX_ITERATIONS
 
 __all__ = ["base_only_weights", "evaluate_path", "make_objective", "make_planner", "plan"]
 
@@ -88,7 +89,8 @@ def evaluate_path(scenario, waypoints: np.ndarray, objective: Objective | None =
         norm) and ``base_length`` (metres).
     """
     require_scenario(scenario, "evaluate_path")
-    wp = np.asarray(waypoints, float)
+    wp = real_array(waypoints, "evaluate_path", "waypoints", (None, 4), layout="rows [x, y, psi1, psi2]",
+                    rows=(1, None), row_name="waypoint")
     a, b = wp[:-1], wp[1:]
     full = SocialCost.from_scenario(scenario)
     out = {
@@ -126,8 +128,8 @@ def plan(
     Raises:
         TypeError: an argument of the wrong kind (a checker's name instead
             of a checker, a file name instead of a Scenario, ...), named.
-        ValueError: an unknown algorithm or a negative seed.
-        ScenarioError: iterations outside [1, MAX_ITERATIONS].
+        ValueError: an unknown algorithm, a negative seed, iterations
+            outside [1, MAX_ITERATIONS].
         PlanningInputError: the start or goal is unusable (from the planner).
     """
     import copy
@@ -137,16 +139,8 @@ def plan(
     require_choice(algorithm, "plan", "algorithm", ALGORITHMS, optional=True)
     require_int(seed, "plan", "seed", minimum=0, optional=True)
     require_callable(progress, "plan", "progress")
+    require_int(iterations, "plan", "iterations", minimum=1, maximum=MAX_ITERATIONS, optional=True)
     if iterations is not None:
-        try:
-            if isinstance(iterations, bool) or (isinstance(iterations, float) and not iterations.is_integer()):
-                raise TypeError
-            iterations = int(iterations)
-        except (TypeError, ValueError, OverflowError):
-            raise TypeError(f"plan: iterations must be an integer in [1, {MAX_ITERATIONS}] or None, "
-                            f"got {type(iterations).__name__} {iterations!r:.60}") from None
-        if not 1 <= int(iterations) <= MAX_ITERATIONS:
-            raise ScenarioError(f"planner.iterations: must be in [1, {MAX_ITERATIONS}], got {iterations}")
         scenario = copy.deepcopy(scenario)
         scenario.planner.iterations = int(iterations)
     planner = make_planner(scenario, checker, algorithm)

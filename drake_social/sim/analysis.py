@@ -14,6 +14,8 @@
 
 from __future__ import annotations
 
+import itertools
+
 import numpy as np
 from scipy.spatial import cKDTree
 
@@ -88,9 +90,42 @@ def _nearest_segment(points: np.ndarray, curve: np.ndarray, candidates: int = 16
     return best_i
 
 
+def _distinct_segments(planned: np.ndarray) -> np.ndarray:
+    """(S,) bool: segment i of ``planned`` (N, 4) is the first of the
+    segments with the same two ends (in either order), which trace the same
+    curves."""
+    a, b = planned[:-1], planned[1:]
+    d = b - a
+    nonzero = d != 0
+    first = np.argmax(nonzero, axis=1)
+    swap = nonzero.any(axis=1) & (d[np.arange(len(d)), first] < 0)  # b before a in lexicographic order
+    ends = np.concatenate([np.where(swap[:, None], b, a), np.where(swap[:, None], a, b)], axis=1)
+    distinct = np.zeros(len(d), bool)
+    distinct[np.unique(ends, axis=0, return_index=True)[1]] = True
+    return distinct
+
+
+def _pieces(steps: np.ndarray, distinct: np.ndarray, budget: int) -> list[tuple[int, int]]:
+    """Runs ``(first, last)`` of consecutive distinct segments with at most
+    ``budget`` densified steps each (at least one segment), then widened by
+    one segment on either side so that the steps across a piece's ends are
+    searched as they are along the whole path."""
+    pieces = []
+    start, total = None, 0
+    for i in range(len(steps) + 1):
+        if start is not None and (i == len(steps) or not distinct[i] or total + steps[i] > budget):
+            pieces.append((max(start - 1, 0), min(i, len(steps) - 1)))
+            start, total = None, 0
+        if i < len(steps) and distinct[i]:
+            if start is None:
+                start = i
+            total += int(steps[i])
+    return pieces
+
+
 def point_deviation(
     geometry: ArmGeometry, planned: np.ndarray, executed: np.ndarray, spacing: float = 0.005,
-    iterations: int = 30,
+    iterations: int = 30, block: int = 1 << 17,
 ) -> dict[str, float]:
     """Largest distance of each executed body point from its planned curve, metres.
 
@@ -103,28 +138,64 @@ def point_deviation(
     the distance to a point of the true curve: an upper bound, exact when the
     nearest point lies within a step of the polyline's choice.
 
+    Memory does not grow with the path's length: the path is densified and
+    searched in pieces of consecutive segments of at most ``block`` samples
+    (the smallest distance over the pieces is kept), a segment with the same
+    two ends as an earlier one (the same curves) is searched once, and a
+    piece is searched only for the executed points that it may bring nearer
+    (its curves lie within a disc: each body point stays within a segment's
+    motion bound of its position at the segment's start). A path of at most
+    ``block`` samples is one piece: the result is that of searching the
+    whole densified path at once.
+
     Args:
         geometry: the robot and object.
         planned: (N, 4) waypoints of the planned path (straight segments).
         executed: (T, 4) executed configurations.
         spacing: sample spacing along the planned curves, metres.
         iterations: golden-section steps (the bracket shrinks by 0.618 each).
+        block: the most densified samples searched at once.
 
     Returns:
         name -> largest deviation (see :func:`body_point_names`), plus
         ``"max"`` over all points.
     """
-    dense = densify(geometry, planned, spacing)
+    planned = np.asarray(planned, float).reshape(-1, 4)
     executed = np.asarray(executed, float).reshape(-1, 4)
     names = body_point_names(geometry)
     if len(executed) == 0:
         return {**{n: 0.0 for n in names}, "max": 0.0}
     executed_pts = body_points(geometry, executed)  # (T, K, 2)
-    if len(dense) == 1:
-        d = np.linalg.norm(executed_pts - body_points(geometry, dense[0]), axis=-1)
+    if len(planned) == 1:
+        d = np.linalg.norm(executed_pts - body_points(geometry, planned[0]), axis=-1)
         out = {n: float(d[:, k].max()) for k, n in enumerate(names)}
         out["max"] = max(out.values())
         return out
+    span = geometry.max_displacement(planned[:-1], planned[1:], include_body=True)
+    steps = np.maximum(1, np.ceil(span / spacing))  # densify's samples per segment
+    best = np.full(executed_pts.shape[:2], np.inf)  # (T, K)
+    for first, last in _pieces(steps, _distinct_segments(planned), max(1, int(block))):
+        # Each curve of the piece lies within its disc: centre the mean of the
+        # points at the segments' starts, radius the farthest start plus its motion bound.
+        starts = body_points(geometry, planned[first:last + 1])  # (S, K, 2)
+        centre = starts.mean(axis=0)
+        radius = (np.linalg.norm(starts - centre, axis=-1) + span[first:last + 1, None]).max(axis=0)
+        lower = np.linalg.norm(executed_pts - centre, axis=-1) - radius  # (T, K)
+        # Margin for rounding: skip only points the piece cannot bring nearer.
+        active = lower - 1e-9 * (1.0 + radius) < best
+        if active.any():
+            _search_piece(geometry, densify(geometry, planned[first:last + 2], spacing), executed_pts, active, best,
+                          iterations)
+    out = {name: float(best[:, k].max()) for k, name in enumerate(names)}
+    out["max"] = max(out.values())
+    return out
+
+
+def _search_piece(geometry: ArmGeometry, dense: np.ndarray, executed_pts: np.ndarray, active: np.ndarray,
+                  best: np.ndarray, iterations: int) -> None:
+    """Lowers ``best`` (T, K) to the distance of each ``active`` executed
+    point (T, K, 2) from its curve along the densified piece ``dense`` (M >= 2, 4)."""
+    names = body_point_names(geometry)
     planned_pts = body_points(geometry, dense)  # (M, K, 2)
     last = len(dense) - 1
 
@@ -161,9 +232,11 @@ def point_deviation(
         raise RuntimeError("point_deviation: the per-point kinematics disagree with body_points (a bug)")
 
     golden = (np.sqrt(5.0) - 1.0) / 2.0
-    out = {}
-    for k, name in enumerate(names):
-        x = executed_pts[:, k]
+    for k in range(len(names)):
+        rows = np.flatnonzero(active[:, k])
+        if len(rows) == 0:
+            continue
+        x = executed_pts[rows, k]
         curve = planned_pts[:, k]
         # Where the point stands still (the base while only the arm turns) its
         # samples repeat; keep the last of each run so that the segment that
@@ -171,7 +244,7 @@ def point_deviation(
         moves = np.concatenate([np.any(curve[1:] != curve[:-1], axis=1), [True]])
         keep = np.flatnonzero(moves)
         if len(keep) == 1:
-            out[name] = float(np.linalg.norm(x - curve[keep[0]], axis=1).max())
+            best[rows, k] = np.minimum(best[rows, k], np.linalg.norm(x - curve[keep[0]], axis=1))
             continue
         j = _nearest_segment(x, curve[keep])
         # The segment's motion is the dense step keep[j] -> keep[j] + 1 (the
@@ -179,13 +252,13 @@ def point_deviation(
         # steps either side, each on its own: within one step (a short arc)
         # the distance is unimodal, across a waypoint where the path turns
         # back it need not be.
-        best = np.full(len(x), np.inf)
+        found = np.full(len(x), np.inf)
         for offset in (-1, 0, 1):
             step = np.clip(keep[j] + offset, 0, last - 1)
             lo, hi = step.astype(float), step + 1.0
             a, b = hi - golden * (hi - lo), lo + golden * (hi - lo)
             fa, fb = distance(a, k, x), distance(b, k, x)
-            best = np.minimum(best, np.minimum(distance(lo, k, x), distance(hi, k, x)))
+            found = np.minimum(found, np.minimum(distance(lo, k, x), distance(hi, k, x)))
             for _ in range(iterations):
                 left = fa < fb
                 hi = np.where(left, b, hi)
@@ -194,10 +267,8 @@ def point_deviation(
                 fnew = distance(new, k, x)
                 a, b, fa, fb = (np.where(left, new, b), np.where(left, a, new),
                                 np.where(left, fnew, fb), np.where(left, fa, fnew))
-            best = np.minimum(best, np.minimum(fa, fb))
-        out[name] = float(best.max())
-    out["max"] = max(out.values())
-    return out
+            found = np.minimum(found, np.minimum(fa, fb))
+        best[rows, k] = np.minimum(best[rows, k], found)
 
 
 def _segment_distances(x: np.ndarray, a: np.ndarray, d: np.ndarray, dd: np.ndarray) -> np.ndarray:
@@ -208,20 +279,39 @@ def _segment_distances(x: np.ndarray, a: np.ndarray, d: np.ndarray, dd: np.ndarr
     return np.linalg.norm(x - (a + t[:, None] * d), axis=-1)
 
 
+def _nearest_of_all(x: np.ndarray, a: np.ndarray, d: np.ndarray, dd: np.ndarray, block: int) -> np.ndarray:
+    """Distance (P,) of each configuration ``x`` (P, 4) from the nearest of
+    all segments ``a + t d`` (the full comparison), in blocks of at most
+    ``block`` pairs."""
+    rows = max(1, block // len(a))
+    out = np.empty(len(x))
+    for r0 in range(0, len(x), rows):
+        xr = x[r0:r0 + rows]
+        i = np.repeat(np.arange(len(xr)), len(a))
+        j = np.tile(np.arange(len(a)), len(xr))
+        out[r0:r0 + rows] = _segment_distances(xr[i], a[j], d[j], dd[j]).reshape(len(xr), len(a)).min(axis=1)
+    return out
+
+
 def config_deviation(planned: np.ndarray, executed: np.ndarray, block: int = 1 << 16) -> float:
     """Largest Euclidean configuration-space distance (metres and radians
     mixed, as the planner's plain norm) of an executed configuration from the
-    polyline through the planned waypoints; exact, point to segment.
+    polyline through the planned waypoints; exact, point to segment: the
+    figure of the full comparison of every (configuration, segment) pair,
+    bit for bit (a NaN gives NaN, an infinity inf, as there).
 
-    Not every (configuration, segment) pair is measured: points are sampled
-    along the segments (at most ``h`` apart) into a KD-tree; the segment
-    owning a configuration's nearest sample gives an upper bound ``u`` of its
-    distance, and only segments with a sample within ``u + h / 2`` (every
-    point of a segment lies within ``h / 2`` of one of its samples) can be
-    nearer. Those pairs are measured with the point-to-segment formula, in
-    blocks of at most ``block`` pairs, so memory stays a few megabytes
-    whatever the lengths; in the worst case (every segment a candidate) it is
-    the full comparison, never more.
+    Not every pair is measured: points are sampled along the segments (at
+    most ``h`` apart) into a KD-tree; the segment owning a configuration's
+    nearest sample gives an upper bound ``u`` of its distance, and only
+    segments with a sample within ``u + h / 2`` (every point of a segment
+    lies within ``h / 2`` of one of its samples) can be nearer. Those pairs
+    are measured with the point-to-segment formula, in blocks of at most
+    ``block`` pairs, so memory stays a few megabytes whatever the lengths. A
+    configuration with as many candidate samples as there are segments (the
+    segments all overlap there) is compared with every segment instead, so
+    that it never costs much more than the full comparison; so are all when
+    a value is not finite or so large (> 1e150) that the sampling's squares
+    would overflow.
     """
     p = np.asarray(planned, float).reshape(-1, 4)
     x = np.asarray(executed, float).reshape(-1, 4)
@@ -229,10 +319,14 @@ def config_deviation(planned: np.ndarray, executed: np.ndarray, block: int = 1 <
         return 0.0
     if len(p) == 1:
         return float(np.max(np.linalg.norm(x - p[0], axis=1)))
-    if not (np.all(np.isfinite(p)) and np.all(np.isfinite(x))):
-        return float("nan")  # as the full comparison: a NaN or inf makes some distance NaN
     a, d = p[:-1], np.diff(p, axis=0)  # (S, 4)
     dd = np.einsum("sk,sk->s", d, d)
+    block = max(1, int(block))
+    with np.errstate(all="ignore"):
+        tame = bool(np.all(np.abs(p) <= 1e150) and np.all(np.abs(x) <= 1e150) and np.all(np.isfinite(d)))
+    if not tame:
+        with np.errstate(all="ignore"):
+            return float(_nearest_of_all(x, a, d, dd, block).max())
     length = np.sqrt(dd)
     # Samples along the segments, about 4 per segment on average, each
     # segment cut into n equal pieces of at most h.
@@ -243,7 +337,6 @@ def config_deviation(planned: np.ndarray, executed: np.ndarray, block: int = 1 <
     samples = a[owner] + frac[:, None] * d[owner]
     half = float(np.max(length / n)) / 2  # every segment point is this near one of its samples
     tree = cKDTree(samples)
-    block = max(1, int(block))
     best = np.empty(len(x))
     for t0 in range(0, len(x), block):
         xc = x[t0:t0 + block]
@@ -254,14 +347,19 @@ def config_deviation(planned: np.ndarray, executed: np.ndarray, block: int = 1 <
         radius = upper + half + 1e-9 * (1.0 + upper + half + np.abs(xc).max(axis=1))
         counts = np.asarray(tree.query_ball_point(xc, radius, return_length=True), np.int64)
         local = upper.copy()
+        crowded = counts >= len(a)  # as many candidates as segments: compare with all
+        if crowded.any():
+            local[crowded] = np.minimum(local[crowded], _nearest_of_all(xc[crowded], a, d, dd, block))
+        sparse = np.flatnonzero(~crowded)
         # Groups of configurations with at most `block` candidate samples in all (at least one configuration).
-        ends = np.cumsum(counts)
+        ends = np.cumsum(counts[sparse])
         g0 = 0
-        while g0 < len(xc):
+        while g0 < len(sparse):
             g1 = max(g0 + 1, int(np.searchsorted(ends, (ends[g0 - 1] if g0 else 0) + block, side="right")))
-            hits = tree.query_ball_point(xc[g0:g1], radius[g0:g1])
-            point = g0 + np.repeat(np.arange(g1 - g0), counts[g0:g1])
-            segment = owner[np.fromiter((i for h_ in hits for i in h_), np.int64, int(counts[g0:g1].sum()))]
+            rows = sparse[g0:g1]
+            hits = tree.query_ball_point(xc[rows], radius[rows])
+            point = np.repeat(rows, counts[rows])
+            segment = owner[np.fromiter(itertools.chain.from_iterable(hits), np.int64, int(counts[rows].sum()))]
             pairs = np.unique(point * len(a) + segment)  # each (configuration, segment) once
             i, j = pairs // len(a), pairs % len(a)
             np.minimum.at(local, i, _segment_distances(xc[i], a[j], d[j], dd[j]))

@@ -97,7 +97,8 @@ from drake_social.planning.validity import ValidityChecker
 from drake_social.scenario import EXECUTIONS, SIM_MODES, Scenario, validate_scenario
 from drake_social.waypoints import check_waypoints
 
-__all__ = ["DiagramArguments", "TransportDiagram", "build_diagram", "check_diagram_arguments", "servo_gains"]
+__all__ = ["DiagramArguments", "TransportDiagram", "build_diagram", "check_diagram_arguments", "check_diagram_options",
+           "check_diagram_waypoints", "servo_gains"]
 
 
 @dc.dataclass
@@ -203,7 +204,7 @@ def build_diagram(
     """
     checked = check_diagram_arguments(scenario, mode=mode, execution=execution, waypoints=waypoints, checker=checker,
                                       meshcat=meshcat, who="build_diagram")
-    return _build(scenario, checked.mode, checked.execution, checked.waypoints, checker, meshcat)
+    return build_checked(scenario, checked.mode, checked.execution, checked.waypoints, checker, meshcat)
 
 
 @dc.dataclass(frozen=True)
@@ -216,6 +217,44 @@ class DiagramArguments:
     waypoints: np.ndarray | None
 
 
+def check_diagram_options(
+    scenario: Scenario,
+    *,
+    mode: str | None,
+    execution: str | None,
+    checker: ValidityChecker | None,
+    meshcat: Meshcat | None,
+    who: str,
+) -> tuple[str, str]:
+    """The cheap part of :func:`check_diagram_arguments`: everything but the
+    waypoints (the scenario is validated too).
+
+    Returns:
+        The mode and execution in force.
+
+    Raises:
+        See :func:`build_diagram`.
+    """
+    require_scenario(scenario, who)
+    require_choice(mode, who, "mode", SIM_MODES, optional=True)
+    require_choice(execution, who, "execution", EXECUTIONS, optional=True)
+    require_checker(checker, who, optional=True)
+    require_instance(meshcat, Meshcat, who, "meshcat", "a pydrake.geometry.Meshcat", optional=True)
+    validate_scenario(scenario, source=f"{who}: scenario")  # also one changed in code after loading
+    return mode or scenario.execution.mode, execution or scenario.execution.execution
+
+
+def check_diagram_waypoints(scenario: Scenario, waypoints, checker: ValidityChecker | None, who: str) -> np.ndarray:
+    """The waypoints to execute checked by :func:`~drake_social.waypoints.check_waypoints`
+    with ``checker``, or the exact planar checker when it is None (the
+    planner's default: the checker of the run)."""
+    if checker is None:
+        from drake_social.model.checker import make_checker
+
+        checker = make_checker(scenario, "planar")
+    return check_waypoints(scenario, waypoints, checker, source=f"{who}: waypoints")
+
+
 def check_diagram_arguments(
     scenario: Scenario,
     *,
@@ -226,10 +265,9 @@ def check_diagram_arguments(
     meshcat: Meshcat | None,
     who: str,
 ) -> DiagramArguments:
-    """Checks :func:`build_diagram`'s arguments (also :func:`~drake_social.sim.run.simulate`'s).
-
-    The waypoints are checked with ``checker``, or the exact planar checker
-    when it is None (the planner's default: the checker of the run).
+    """Checks :func:`build_diagram`'s arguments: the cheap ones first
+    (:func:`check_diagram_options`), then the waypoints
+    (:func:`check_diagram_waypoints`).
 
     Args:
         who: the public function, named in the errors.
@@ -237,26 +275,20 @@ def check_diagram_arguments(
     Raises:
         See :func:`build_diagram`.
     """
-    require_scenario(scenario, who)
-    validate_scenario(scenario, source=f"{who}: scenario")  # also one changed in code after loading
-    require_choice(mode, who, "mode", SIM_MODES, optional=True)
-    require_choice(execution, who, "execution", EXECUTIONS, optional=True)
-    require_checker(checker, who, optional=True)
-    require_instance(meshcat, Meshcat, who, "meshcat", "a pydrake.geometry.Meshcat", optional=True)
+    mode, execution = check_diagram_options(scenario, mode=mode, execution=execution, checker=checker,
+                                            meshcat=meshcat, who=who)
     if waypoints is not None:
-        if checker is None:
-            from drake_social.model.checker import make_checker
-
-            checker = make_checker(scenario, "planar")
-        waypoints = check_waypoints(scenario, waypoints, checker, source=f"{who}: waypoints")
-    return DiagramArguments(mode or scenario.execution.mode, execution or scenario.execution.execution, waypoints)
+        waypoints = check_diagram_waypoints(scenario, waypoints, checker, who)
+    return DiagramArguments(mode, execution, waypoints)
 
 
-def _build(
+def build_checked(
     scenario: Scenario, mode: str, execution: str, waypoints: np.ndarray | None, checker: ValidityChecker | None,
     meshcat: Meshcat | None,
 ) -> TransportDiagram:
-    """:func:`build_diagram` with its arguments checked."""
+    """:func:`build_diagram` with its arguments already checked
+    (:func:`check_diagram_arguments`; ``mode`` and ``execution`` the ones in
+    force). For drake_social's own callers that checked them once."""
     opts = scenario.execution
     start = np.asarray(scenario.start, float)
     if waypoints is not None:

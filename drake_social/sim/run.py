@@ -34,6 +34,7 @@ from pydrake.geometry import Meshcat
 from pydrake.systems.analysis import InitializeParams, Simulator
 
 from drake_social.arguments import (
+    real_array,
     require_callable,
     require_checker,
     require_instance,
@@ -45,9 +46,14 @@ from drake_social.kinematics import ArmGeometry
 from drake_social.model.plant import ACTUATED_JOINTS
 from drake_social.planning.result import PlannerResult
 from drake_social.planning.validity import ValidityChecker
-from drake_social.scenario import MAX_CONTROL_STEPS, MAX_PLANT_STEPS, MAX_TIME_LIMIT, Scenario, ScenarioError
+from drake_social.scenario import Scenario, ScenarioError, time_limit_problem
 from drake_social.sim.analysis import config_deviation, densify, point_deviation
-from drake_social.sim.diagram import TransportDiagram, _build, check_diagram_arguments
+from drake_social.sim.diagram import (
+    TransportDiagram,
+    build_checked,
+    check_diagram_options,
+    check_diagram_waypoints,
+)
 from drake_social.waypoints import waypoint_array
 
 __all__ = ["ExecutionReport", "LimitViolation", "SimulationResult", "analyze_execution", "limit_violations",
@@ -333,23 +339,14 @@ def analyze_execution(
 
 
 def _trajectory(times, q, who: str) -> tuple[np.ndarray, np.ndarray]:
-    """``times`` (T,) and ``q`` (T, 4) as finite float arrays, or the error naming them."""
-    arrays = []
-    for name, value, shape in (("times", times, "(T,)"), ("q", q, "(T, 4)")):
-        try:
-            a = np.asarray(value)
-        except (TypeError, ValueError) as e:
-            raise ScenarioError(f"{who}: {name}: must be a {shape} array of real numbers ({e})") from None
-        if a.dtype.kind not in "iuf":
-            raise TypeError(f"{who}: {name}: must be a {shape} array of real numbers, got an array of {a.dtype}")
-        if a.ndim != (1 if name == "times" else 2) or (name == "q" and a.shape[1] != 4):
-            raise ScenarioError(f"{who}: {name}: must be a {shape} array, got shape {a.shape}")
-        if not np.all(np.isfinite(a)):
-            raise ScenarioError(f"{who}: {name}: must hold finite numbers only")
-        arrays.append(np.asarray(a, float))
-    if len(arrays[0]) != len(arrays[1]):
-        raise ScenarioError(f"{who}: times and q must have the same T rows, got {len(arrays[0])} and {len(arrays[1])}")
-    return arrays[0], arrays[1]
+    """``times`` (T,) and ``q`` (T, 4), T >= 1, as finite float arrays, or the error naming them."""
+    times = real_array(times, who, "times", (None,), layout="seconds", rows=(1, None), row_name="sample",
+                       error=ScenarioError)
+    q = real_array(q, who, "q", (None, 4), layout="rows [x, y, psi1, psi2]", rows=(1, None), row_name="sample",
+                   error=ScenarioError)
+    if len(times) != len(q):
+        raise ScenarioError(f"{who}: times and q must have the same T rows, got {len(times)} and {len(q)}")
+    return times, q
 
 
 def simulate(
@@ -373,9 +370,11 @@ def simulate(
             :func:`~drake_social.sim.diagram.build_diagram`. With ``meshcat``
             the run is recorded (``execution.replay_fps``); publish or export
             it afterwards (:mod:`drake_social.sim.replay`).
-        time_limit: simulated seconds before giving up, in (0, MAX_TIME_LIMIT] and at
-            most MAX_CONTROL_STEPS control periods and MAX_PLANT_STEPS plant
-            steps; None = ``scenario.execution.time_limit``.
+        time_limit: simulated seconds before giving up, in (0, MAX_TIME_LIMIT],
+            at least MIN_CONTROL_PERIODS and at most MAX_CONTROL_STEPS control
+            periods and at most MAX_PLANT_STEPS plant steps (the scenario's
+            rules, :func:`~drake_social.scenario.time_limit_problem`); None =
+            ``scenario.execution.time_limit``.
         analyze: check and measure the executed trajectory (:func:`analyze_execution`).
         analysis_checker: the checker of that analysis (None = Drake's).
         progress: optional ``progress(t)`` callback with the simulated time,
@@ -387,31 +386,52 @@ def simulate(
 
     Raises:
         TypeError: an argument of the wrong kind (named).
-        ValueError: an unknown mode or execution, a time limit <= 0 or not
-            above ``execution.control_period``.
+        ValueError: an unknown mode or execution, a time limit outside the
+            rules of a run's length.
         ScenarioError: an invalid scenario (e.g. contradictory execution
             options), or ``waypoints`` that must not be executed
             (:func:`~drake_social.waypoints.check_waypoints`: shape, limits,
             start and goal, collisions).
         PlanningInputError: the start or goal is unusable (from the planner).
     """
-    checked = check_diagram_arguments(scenario, mode=mode, execution=execution, waypoints=waypoints,
-                                      checker=checker, meshcat=meshcat, who="simulate")
-    require_number(time_limit, "simulate", "time_limit", positive=True, optional=True, unit="seconds")
-    require_instance(analyze, bool, "simulate", "analyze", "True or False")
+    # The cheap checks first, the waypoints' collision check last.
+    require_scenario(scenario, "simulate")
+    require_number(time_limit, "simulate", "time_limit", optional=True, unit="of seconds")  # its range: below
+    require_instance(analyze, (bool, np.bool_), "simulate", "analyze", "True or False")
     require_checker(analysis_checker, "simulate", "analysis_checker", optional=True)
     require_callable(progress, "simulate", "progress")
+    mode, execution = check_diagram_options(scenario, mode=mode, execution=execution, checker=checker,
+                                            meshcat=meshcat, who="simulate")
+    if time_limit is not None:  # the scenario's own was checked with it (validate_scenario)
+        problem = time_limit_problem(time_limit, scenario.execution, "time_limit")
+        if problem:
+            raise ValueError(f"simulate: {problem[0]} {problem[1]}")
     limit = float(scenario.execution.time_limit if time_limit is None else time_limit)
-    if not 0 < limit <= MAX_TIME_LIMIT:
-        raise ValueError(f"time_limit must be in (0, {MAX_TIME_LIMIT:g}] seconds, got {limit}")
-    e = scenario.execution
-    if limit / e.control_period > MAX_CONTROL_STEPS or limit / e.plant_time_step > MAX_PLANT_STEPS:
-        raise ValueError(f"time_limit {limit} s is more than {MAX_CONTROL_STEPS:,} control periods of "
-                         f"{e.control_period} s or {MAX_PLANT_STEPS:,} plant steps of {e.plant_time_step} s")
-    if limit <= e.control_period:
-        raise ValueError(f"simulate: time_limit must be > execution.control_period {e.control_period} "
-                         f"seconds (the sequencer decides once per control period), got {limit}")
-    built = _build(scenario, checked.mode, checked.execution, checked.waypoints, checker, meshcat)
+    if waypoints is not None:
+        waypoints = check_diagram_waypoints(scenario, waypoints, checker, "simulate")
+    return run_checked(scenario, mode, execution, waypoints, checker, meshcat, limit, bool(analyze),
+                       analysis_checker, progress)
+
+
+def run_checked(
+    scenario: Scenario,
+    mode: str,
+    execution: str,
+    waypoints: np.ndarray | None,
+    checker: ValidityChecker | None,
+    meshcat: Meshcat | None,
+    time_limit: float,
+    analyze: bool,
+    analysis_checker: ValidityChecker | None,
+    progress: Callable[[float], None] | None,
+) -> SimulationResult:
+    """:func:`simulate` with its arguments already checked (the scenario
+    validated, ``waypoints`` checked with ``checker`` by
+    :func:`~drake_social.waypoints.check_waypoints`, ``mode``, ``execution``
+    and ``time_limit`` the ones in force and allowed). For drake_social's own
+    callers that checked them once (``drake-social simulate``)."""
+    limit = time_limit
+    built = build_checked(scenario, mode, execution, waypoints, checker, meshcat)
     root = built.diagram.CreateDefaultContext()
     if built.visualizer is not None:
         from drake_social.sim.replay import start_recording

@@ -19,7 +19,7 @@ from drake_social.planning.geometric import GeometricChecker
 from drake_social.planning.objective import PathLengthObjective, SocialObjective
 from drake_social.planning.result import NoPathError, PlannerResult
 from drake_social.planning.variants import base_only_weights, evaluate_path, make_objective, make_planner, plan
-from drake_social.scenario import ALGORITHMS, MAX_ITERATIONS, ScenarioError
+from drake_social.scenario import ALGORITHMS, MAX_ITERATIONS
 
 # ---- result.py ---------------------------------------------------------------
 
@@ -213,12 +213,16 @@ def test_plan_accepts_exactly_the_allowed_iterations(short, monkeypatch):
 
     monkeypatch.setattr(variants, "make_planner", fake_make_planner)
     checker = GeometricChecker(short)
-    for n in (1, MAX_ITERATIONS, "17"):
+    for n in (1, MAX_ITERATIONS, np.int64(17)):
         with pytest.raises(RuntimeError, match="stop here"):
             plan(short, checker, iterations=n)
     assert seen == [1, MAX_ITERATIONS, 17]
+    # One rule for every integer argument (require_int): integers only, not their text nor floats.
+    for n in ("17", 17.0, True):
+        with pytest.raises(TypeError, match=r"^plan: iterations must be an integer >= 1 and <= 10,000,000 or None, "):
+            plan(short, checker, iterations=n)
     for n in (0, MAX_ITERATIONS + 1):
-        with pytest.raises(ScenarioError, match=rf"^planner.iterations: must be in \[1, {MAX_ITERATIONS}\], got {n}$"):
+        with pytest.raises(ValueError, match=rf"^plan: iterations must be an integer >= 1 and <= 10,000,000, got {n}$"):
             plan(short, checker, iterations=n)
     assert len(seen) == 3
 

@@ -8,6 +8,7 @@ and in synchronized kinematic mode every body point stays on the planned path.
 from __future__ import annotations
 
 import copy
+import tracemalloc
 
 import numpy as np
 import pytest
@@ -243,3 +244,71 @@ def test_densify_owner_names_the_configuration_each_sample_follows(tiny_scenario
     t = np.einsum("ij,ij->i", dense[mid] - a, b - a) / np.einsum("ij,ij->i", b - a, b - a)
     np.testing.assert_allclose(dense[mid], a + t[:, None] * (b - a), atol=1e-12)
     assert np.all((t > 0) & (t < 1))
+
+
+def _peak_bytes(function, *args, **kwargs):
+    tracemalloc.start()
+    try:
+        value = function(*args, **kwargs)
+        _, peak = tracemalloc.get_traced_memory()
+    finally:
+        tracemalloc.stop()
+    return value, peak
+
+
+def test_point_deviation_memory_does_not_grow_with_the_path(tiny_scenario):
+    """A long path (review: 10,000 rows of start, goal densified to 11 M
+    configurations, 3 GB) is searched in pieces; the figures are those of
+    the curves it traces."""
+    geometry = ArmGeometry.from_scenario(tiny_scenario)
+    start, goal = np.array(tiny_scenario.start, float), np.array(tiny_scenario.goal, float)
+    executed = densify(geometry, np.array([start, goal]), 0.2) + [0.0, 0.03, 0.01, -0.02]
+    # The same segment back and forth: every figure is that of the one segment.
+    zigzag = np.tile([start, goal], (1000, 1))
+    once = point_deviation(geometry, np.array([start, goal]), executed)
+    dut, peak = _peak_bytes(point_deviation, geometry, zigzag, executed)
+    assert peak < 40e6, peak
+    assert dut == once
+    # Distinct segments (each 2 mm off the last): searched piece by piece,
+    # within rounding of one search of the whole densified path.
+    rng = np.random.default_rng(3)
+    wander = np.tile([start, goal], (200, 1)) + [0.0, 1.0, 0.0, 0.0] * rng.uniform(0, 0.002, (400, 1))
+    whole = point_deviation(geometry, wander, executed, block=10**9)
+    dut, peak = _peak_bytes(point_deviation, geometry, wander, executed)
+    assert peak < 40e6, peak
+    assert dut == pytest.approx(whole, rel=0, abs=1e-12)
+
+
+def test_config_deviation_never_costs_much_more_than_the_full_comparison(rng):
+    """The worst case: every segment overlaps every other (start, goal, start,
+    ... 2000 segments), so every one is a candidate of every configuration."""
+    import time
+
+    start, goal = np.array([1.0, 2.5, 0.0, 1.5708]), np.array([6.5, 2.5, 0.0, 1.5708])
+    planned = np.tile([start, goal], (1001, 1))[:2001]
+    executed = start + rng.uniform(0, 1, (2000, 1)) * (goal - start) + rng.normal(size=(2000, 4)) * 0.01
+
+    def fastest(function):
+        times = []
+        for _ in range(3):
+            t0 = time.perf_counter()
+            value = function(planned, executed)
+            times.append(time.perf_counter() - t0)
+        return value, min(times)
+
+    dut, spent = fastest(config_deviation)
+    reference, full = fastest(_config_deviation_by_every_pair)
+    assert dut == reference
+    assert spent < 2.0 * full, (spent, full)
+
+
+@pytest.mark.parametrize("value", [np.nan, np.inf, -np.inf, 1e154, -3e200, 1e308])
+def test_config_deviation_of_extreme_values_is_the_full_comparison(rng, value):
+    planned = rng.normal(size=(30, 4))
+    executed = planned[rng.integers(0, 30, size=50)] + rng.normal(size=(50, 4)) * 0.01
+    for p, x in ((planned, executed), (executed[:30], planned)):
+        x = x.copy()
+        x[7, 2] = value
+        with np.errstate(all="ignore"):
+            np.testing.assert_equal(config_deviation(p, x), _config_deviation_by_every_pair(p, x))
+            np.testing.assert_equal(config_deviation(x, p), _config_deviation_by_every_pair(x, p))
