@@ -370,8 +370,8 @@ def load_scenario(path: str | Path, overrides: str | Sequence[str] | None = None
             duplicate or unknown keys or invalid values; the message names
             the file (or the override at fault), the line and the field.
     """
-    path = Path(path)
-    return load_scenario_text(read_yaml_file(path, "scenario"), str(path), overrides,
+    text = read_yaml_file(path, "scenario")  # refuses "" before Path("") could make it the working directory
+    return load_scenario_text(text, str(Path(path)), overrides,
                               overrides_name=overrides_name)
 
 
@@ -536,15 +536,17 @@ def compose_yaml(text: str, source: str):
     """
     import yaml  # PyYAML, as Drake's Python loader uses; lazy like pydrake
 
-    loader = _limited_loader(yaml)(text)
+    loader = None
     try:
+        loader = _limited_loader(yaml)(text)  # its reader refuses control characters and NULs at once
         return loader.get_single_node()
     except yaml.YAMLError as e:
         raise ScenarioError(f"{source}: not valid YAML: {e}") from None
     except _YamlLimit as e:
         raise ScenarioError(f"{source}: line {e.mark.line + 1}: {e}") from None
     finally:
-        loader.dispose()
+        if loader is not None:
+            loader.dispose()
 
 
 def check_yaml(text: str, source: str, schema: type = Scenario) -> None:
@@ -582,7 +584,16 @@ def check_node(schema: type, node, source: str, field: str = "") -> None:
     _check_node(schema, node, field, source, yaml)
 
 
-def _check_node(tp, node, field: str, source: str, yaml) -> None:
+#: PyYAML's tags of untagged mappings, lists and strings, and the prefix of its standard (``!!``) tags.
+_MAP_TAG = "tag:yaml.org,2002:map"
+_SEQ_TAG = "tag:yaml.org,2002:seq"
+_STR_TAG = "tag:yaml.org,2002:str"
+_YAML_TAG = "tag:yaml.org,2002:"
+
+
+def _check_node(tp, node, field: str, source: str, yaml, tag_checked: bool = False) -> None:
+    """:func:`check_node` of one node; ``tag_checked``: its ``!Tag`` chose ``tp`` (an object type)."""
+
     def fail(message: str, at=node) -> None:
         name = f"{field}: " if field else ""
         raise ScenarioError(f"{source}: line {at.start_mark.line + 1}: {name}{message}")
@@ -592,7 +603,11 @@ def _check_node(tp, node, field: str, source: str, yaml) -> None:
             return "a mapping"
         if isinstance(n, yaml.SequenceNode):
             return "a list"
-        return "null" if n.tag == "tag:yaml.org,2002:null" else repr(n.value)
+        if n.tag == "tag:yaml.org,2002:null":
+            return "null"
+        tag = "" if n.tag in (_STR_TAG, yaml.resolver.Resolver().resolve(yaml.ScalarNode, n.value, (True, False)))\
+            else n.tag.replace(_YAML_TAG, "!!") + " "
+        return tag + repr(n.value)
 
     is_null = isinstance(node, yaml.ScalarNode) and node.tag == "tag:yaml.org,2002:null"
     origin = typing.get_origin(tp)
@@ -605,10 +620,15 @@ def _check_node(tp, node, field: str, source: str, yaml) -> None:
             return _check_node(alts[0], node, field, source, yaml)
         tags = {f"!{a.__name__}": a for a in alts}
         if node.tag in tags:
-            return _check_node(tags[node.tag], node, field, source, yaml)
+            return _check_node(tags[node.tag], node, field, source, yaml, tag_checked=True)
         if node.tag.startswith("!"):
             fail(f"unknown type {node.tag}; allowed: {', '.join(tags)}")
         return _check_node(alts[0], node, field, source, yaml)  # untagged: the first alternative
+    # Elsewhere a mapping or list carries no tag (Drake's loader would read a
+    # !Tag as an unknown field "_tag", PyYAML's !!set or !!omap as another type).
+    default_tag = {yaml.MappingNode: _MAP_TAG, yaml.SequenceNode: _SEQ_TAG}.get(type(node))
+    if default_tag is not None and node.tag != default_tag and not tag_checked:
+        fail(f"must be {_describe(tp)} without a tag, got {node.tag.replace(_YAML_TAG, '!!')} {shown(node)}")
     if origin is list:
         if not isinstance(node, yaml.SequenceNode):
             fail(f"must be {_describe(tp)}, got {shown(node)}")
@@ -641,13 +661,17 @@ def _check_node(tp, node, field: str, source: str, yaml) -> None:
         types = {f.name: hints[f.name] for f in dc.fields(tp)}
         seen: dict[str, int] = {}
         for key_node, value_node in node.value:
+            line = key_node.start_mark.line + 1
+            if not isinstance(key_node, yaml.ScalarNode):
+                where = f"{field}: " if field else ""
+                raise ScenarioError(f"{source}: line {line}: {where}a key must be a field name ({', '.join(types)}), "
+                                    f"got {shown(key_node)}")
             key = key_node.value
             sub = f"{field}.{key}" if field else str(key)
-            line = key_node.start_mark.line + 1
             if key in seen:  # YAML loaders keep the last silently
                 raise ScenarioError(f"{source}: line {line}: {sub}: duplicate key (first at line {seen[key]})")
             seen[key] = line
-            if not isinstance(key_node, yaml.ScalarNode) or key not in types:
+            if key_node.tag != _STR_TAG or key not in types:
                 where = f"in {field}" if field else "at the top level"
                 raise ScenarioError(f"{source}: line {line}: {sub}: unknown field {where}; allowed: "
                                     f"{', '.join(types)}")
@@ -655,7 +679,12 @@ def _check_node(tp, node, field: str, source: str, yaml) -> None:
         return
     if not isinstance(node, yaml.ScalarNode) or is_null:
         fail(f"must be {_describe(tp)}, got {shown(node)}")
-    value = yaml.SafeLoader("").construct_object(node) if node.tag.startswith("tag:yaml.org") else node.value
+    if not node.tag.startswith(_YAML_TAG):  # e.g. `description: !Foo x`
+        fail(f"must be {_describe(tp)} without a tag, got {shown(node)}")
+    try:  # a standard tag whose text does not fit it (`!!int abc`, `!!bool maybe`), or Python's (`!!python/name:`)
+        value = yaml.SafeLoader("").construct_object(node)
+    except Exception:
+        fail(f"must be {_describe(tp)}, got {shown(node)}")
     if tp is bool:
         ok = isinstance(value, bool)
     elif tp is str:

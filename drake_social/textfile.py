@@ -42,7 +42,7 @@ _KINDS = (
 )
 
 
-def _error(path: Path, message: str, option: str | None):
+def _error(path: Path | str, message: str, option: str | None):
     from drake_social.scenario import ScenarioError  # scenario.py imports this module
 
     return ScenarioError(f"{path}: {message}" + ("" if option is None else f" ({option})"))
@@ -75,8 +75,10 @@ def check_regular_file(path: str | Path, what: str, option: str | None = None) -
     Raises:
         ScenarioError: ``<path>: no such <what> file``, ``<path>: not a
             regular file (a FIFO)`` (or a directory, a character device, ...),
-            or ``<path>: cannot be read (...)``.
+            ``<path>: cannot be read (...)`` or ``'<path>': not a valid file name (...)``.
     """
+    if str(path) == "":  # Path("") would be the working directory
+        raise _error(repr(""), f"an empty file name; a {what} file is needed", option)
     path = Path(path)
     try:
         st = os.stat(path)
@@ -84,6 +86,8 @@ def check_regular_file(path: str | Path, what: str, option: str | None = None) -
         raise _error(path, f"no such {what} file", option) from None
     except OSError as e:
         raise _error(path, f"cannot be read ({e.strerror or e})", option) from None
+    except ValueError as e:  # a NUL in the name, or a character the file system's encoding lacks
+        raise _error(repr(str(path)), f"not a valid file name ({e})", option) from None
     if not stat.S_ISREG(st.st_mode):
         raise _not_regular(path, st.st_mode, what, option)
     return st
@@ -111,8 +115,8 @@ def read_text_file(path: str | Path, what: str, option: str | None = None, *,
         ScenarioError: the file is missing, not a regular file, larger than
             ``limit``, unreadable or not UTF-8; the message names the file.
     """
-    path = Path(path)
     st = check_regular_file(path, what, option)
+    path = Path(path)
     too_big = f"a {what} file may have at most {limit:,} bytes"
     if st.st_size > limit:
         raise _error(path, f"{st.st_size:,} bytes; {too_big}", option)

@@ -304,3 +304,79 @@ def test_simulate_refuses_a_time_limit_beyond_the_bound(tiny_scenario):
     with pytest.raises(ValueError, match=r"^time_limit 600.0 s is more than 60,000 control periods of 0.005 s or "
                                          r"300,000 plant steps of 0.001 s$"):
         simulate(fine, waypoints=np.array([fine.start, fine.goal]), time_limit=600.0, analyze=False)
+
+
+# ---- review of the loader: characters YAML refuses, unusual keys and tags (exit 2, never a traceback)
+
+
+@pytest.mark.parametrize("char, code", [("\x00", "#x0000"), ("\x01", "#x0001"), ("\x7f", "#x007f"),
+                                        ("\udcff", "#xdcff")])
+def test_a_control_character_or_nul_is_refused_in_a_file_and_a_set(tmp_path, capsys, char, code):
+    dut = tmp_path / "nul.yaml"
+    if char != "\udcff":
+        dut.write_text(f"description: a{char}b\n")
+        assert main(["show", str(dut), "--out", str(tmp_path / "o")]) == 2
+        assert capsys.readouterr().err == (f"drake-social: error: {dut}: not valid YAML: unacceptable character "
+                                           f"{code}: special characters are not allowed\n  in \"<unicode string>\", "
+                                           f"position 14\n")
+    # a --set as the shell passes it (an invalid byte arrives as a lone surrogate)
+    assert main(["show", str(TINY), "--set", f"description: {char}", "--out", str(tmp_path / "o")]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith(f"drake-social: error: {TINY} (--set ") and f"not valid YAML: unacceptable character {code}" in err
+    assert "Traceback" not in err
+
+
+def test_a_sparse_file_of_nuls_at_the_size_limit_is_refused(tmp_path, capsys):
+    from drake_social.textfile import MAX_YAML_FILE_BYTES
+
+    dut = tmp_path / "zeros.yaml"
+    with open(dut, "wb") as f:
+        f.truncate(MAX_YAML_FILE_BYTES)
+    assert main(["show", str(dut), "--out", str(tmp_path / "o")]) == 2
+    assert capsys.readouterr().err.startswith(f"drake-social: error: {dut}: not valid YAML: unacceptable character "
+                                              f"#x0000")
+
+
+@pytest.mark.parametrize("override, message", [
+    ("? [a]\n: 1", "line 1: a key must be a field name (description, world, people, robot, object, start, goal, "
+                   "social, planner, execution, random_seed), got a list"),
+    ("{a: 1}: 2", "line 1: a key must be a field name (description, world, people, robot, object, start, goal, "
+                  "social, planner, execution, random_seed), got a mapping"),
+    ("world: {? [1]: 2}", "line 1: world: a key must be a field name (bounds, obstacles, wall_thickness), got a list"),
+    ("social: {weights: {? [1]: 2}}", "line 1: social.weights: must be a list of numbers, got a mapping"),
+    ("!Foo 3: 1", "line 1: 3: unknown field at the top level; allowed: description, world, people, robot, object, "
+                  "start, goal, social, planner, execution, random_seed"),
+])
+def test_keys_that_are_not_field_names(override, message):
+    assert _message(TINY, [override]) == f"{TINY} (--set {override!r}): {message}"
+
+
+@pytest.mark.parametrize("override, message", [
+    ("description: !!python/object:os.system x", "description: must be a string, got !!python/object:os.system 'x'"),
+    ("description: !!python/name:os.system x", "description: must be a string, got !!python/name:os.system 'x'"),
+    ("description: !!binary \"a\"", "description: must be a string, got !!binary 'a'"),
+    ("random_seed: !!int abc", "random_seed: must be an integer, got !!int 'abc'"),
+    ("random_seed: !!int 0x", "random_seed: must be an integer, got !!int '0x'"),
+    ("social: {threshold: !!float abc}", "social.threshold: must be a number, got !!float 'abc'"),
+    ("social: {threshold: !!float .}", "social.threshold: must be a number, got !!float '.'"),
+    ("planner: {optimize: !!bool maybe}", "planner.optimize: must be true or false, got !!bool 'maybe'"),
+    ("execution: {time_limit: !!timestamp x}", "execution.time_limit: must be a number, got !!timestamp 'x'"),
+    ("execution: {time_limit: !!timestamp 2001-01-01}",
+     "execution.time_limit: must be a number, got '2001-01-01'"),
+    ("description: !Foo x", "description: must be a string without a tag, got !Foo 'x'"),
+    ("world: !Bar {}", "world: must be a mapping (World: bounds, obstacles, wall_thickness) without a tag, got !Bar "
+                       "a mapping"),
+    ("world: !!set {a}", "world: must be a mapping (World: bounds, obstacles, wall_thickness) without a tag, got "
+                         "!!set a mapping"),
+    ("people: !!omap []", "people: must be a list of mappings (Person: x, y, theta, radius, name) without a tag, got "
+                          "!!omap a list"),
+    ("start: !Bar [1, 1, 0, 0]", "start: must be a list of numbers without a tag, got !Bar a list"),
+])
+def test_tags_whose_value_does_not_fit_are_named(override, message):
+    assert _message(TINY, [override]) == f"{TINY} (--set {override!r}): line 1: {message}"
+
+
+def test_standard_tags_that_fit_still_load():
+    scenario = load_with_overrides(TINY, ["random_seed: !!int 7", "description: !!str 12",
+                                          "social: {threshold: !!float 0.25}", "object: !Bar {length: 1.0}"])
+    assert (scenario.random_seed, scenario.description, scenario.social.threshold) == (7, "12", 0.25)

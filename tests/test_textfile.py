@@ -165,3 +165,14 @@ def test_a_missing_file_and_an_unreadable_one(tmp_path):
         with pytest.raises(ScenarioError, match="cannot be read"):
             load_scenario(locked)
         locked.chmod(stat.S_IRUSR | stat.S_IWUSR)
+
+
+def test_a_nul_or_empty_file_name_is_refused_by_name():
+    from drake_social.scenario import load_scenario
+
+    with pytest.raises(ScenarioError) as info:
+        load_scenario("a\0b.yaml")
+    assert str(info.value) == "'a\\x00b.yaml': not a valid file name (embedded null byte)"
+    with pytest.raises(ScenarioError) as info:
+        load_scenario("")
+    assert str(info.value) == "'': an empty file name; a scenario file is needed"

@@ -27,6 +27,7 @@ import functools
 import io
 import json
 import logging
+import os
 import re
 import time
 from pathlib import Path
@@ -274,6 +275,28 @@ def _flow(node, yaml, seen=None) -> None:
             _flow(n, yaml, seen)
 
 
+def _sweep_scenario(sweep: Path, name: str) -> Path:
+    """The regular file a sweep's ``scenarios`` entry names: relative to the
+    sweep's folder if it is there, else to the working directory.
+
+    Raises:
+        ScenarioError: as :func:`~drake_social.textfile.check_regular_file`; a
+            file in neither place is named in both.
+    """
+    if name == "" or Path(name).is_absolute():
+        check_regular_file(name, "scenario")
+        return Path(name)
+    local = sweep.parent / name
+    if os.path.lexists(local) or not os.path.lexists(name):  # lexists: False for a name with a NUL, too
+        if not os.path.lexists(local) and local != Path(name) and "\0" not in name:
+            raise ScenarioError(f"{name}: no such scenario file, neither beside the sweep ({local}) nor in the "
+                                f"working directory ({Path.cwd() / name})")
+        check_regular_file(local, "scenario")
+        return local
+    check_regular_file(name, "scenario")
+    return Path(name)
+
+
 def load_sweep(path: str | Path) -> Study:
     """A study from a YAML file (see ``studies/example_sweep.yaml``)::
 
@@ -353,10 +376,8 @@ def load_sweep(path: str | Path) -> Study:
     files: list[Path] = []
     stems: dict[str, int] = {}
     for i, s in enumerate(scenarios):
-        local = path.parent / s
-        candidate = local if not Path(s).is_absolute() and (local.exists() or local.is_symlink()) else Path(s)
         try:
-            check_regular_file(candidate, "scenario")
+            candidate = _sweep_scenario(path, s)
         except ScenarioError as e:
             fail(f"scenarios[{i}]", str(e), nodes["scenarios"].value[i])
         if candidate.stem in stems:

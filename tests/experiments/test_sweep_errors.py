@@ -220,7 +220,57 @@ def test_paper_scenario_dir_errors_name_the_folder(tmp_path, capsys):
 
 def test_a_tag_of_no_yaml_type_and_a_bad_file_stem_are_named(tmp_path):
     dut = _sweep(tmp_path, "name: !Foo x\n")
-    assert _error(dut) == f"{dut}: line 4: name: could not determine a constructor for the tag '!Foo'"
+    assert _error(dut) == f"{dut}: line 4: name: must be a string without a tag, got !Foo 'x'"
     dut = tmp_path / "my sweep.yaml"
     dut.write_text(f"scenarios: [{TINY}]\n")
     assert _error(dut) == f"{dut}: name: 'my sweep': a study name {NAME_RULE} (it is the file's stem: set name:)"
+
+
+# ---- review of the loader: bad characters, tags and file names in a sweep
+
+
+def test_a_nul_or_control_character_in_a_sweep_file_is_refused(tmp_path):
+    for char, code in (("\x00", "#x0000"), ("\x1b", "#x001b")):
+        dut = _sweep(tmp_path, f"name: a{char}b\n")
+        assert _error(dut).startswith(f"{dut}: not valid YAML: unacceptable character {code}: special characters are "
+                                      f"not allowed")
+
+
+@pytest.mark.parametrize("body, message", [
+    ("seed: !!int abc\n", "line 4: seed: must be an integer, got !!int 'abc'"),
+    ("simulate: !!bool maybe\n", "line 4: simulate: must be true or false, got !!bool 'maybe'"),
+    ("name: !!python/name:os.system x\n", "line 4: name: must be a string, got !!python/name:os.system 'x'"),
+    ("? [a]\n: 1\n", "line 4: a key must be a field name (name, runs, iterations, seed, simulate, checker, scenarios, "
+                     "algorithms, variants), got a list"),
+    ("variants: {? [a]: {}}\n", "line 4: variants: names must be non-empty strings, got a list"),
+    ("variants: !!set {a}\n", "line 4: variants: must be a mapping of names to mappings (Scenario: description, "
+                              "world, people, robot, object, start, goal, social, planner, execution, random_seed) "
+                              "or nulls without a tag, got !!set a mapping"),
+    ("variants: {a: {world: !Bar {}}}\n", "line 4: variants.a.world: must be a mapping (World: bounds, obstacles, "
+                                          "wall_thickness) without a tag, got !Bar a mapping"),
+])
+def test_unusual_yaml_in_a_sweep_is_named(tmp_path, body, message):
+    dut = _sweep(tmp_path, body)
+    assert _error(dut) == f"{dut}: {message}"
+
+
+def test_a_nul_in_a_scenario_name_is_refused(tmp_path, capsys):
+    dut = _sweep(tmp_path, "", head='runs: 1\nscenarios: ["a\\0b.yaml"]\n')
+    local = str(tmp_path / "a\0b.yaml")
+    assert _error(dut) == f"{dut}: line 2: scenarios[0]: {local!r}: not a valid file name (embedded null byte)"
+    assert main(["experiment", "sweep", str(dut), "--out", str(tmp_path / "o")]) == 2
+    assert "Traceback" not in capsys.readouterr().err
+
+
+def test_an_empty_scenario_name_is_not_the_working_directory(tmp_path):
+    dut = _sweep(tmp_path, "", head='runs: 1\nscenarios: [""]\n')
+    assert _error(dut) == f"{dut}: line 2: scenarios[0]: '': an empty file name; a scenario file is needed"
+
+
+def test_a_missing_scenario_names_both_places_searched(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "studies").mkdir()
+    dut = _sweep(tmp_path / "studies", "", head="runs: 1\nscenarios: [sub/none.yaml]\n")
+    assert _error(dut) == (f"{dut}: line 2: scenarios[0]: sub/none.yaml: no such scenario file, neither beside the "
+                           f"sweep ({tmp_path / 'studies' / 'sub' / 'none.yaml'}) nor in the working directory "
+                           f"({tmp_path / 'sub' / 'none.yaml'})")
