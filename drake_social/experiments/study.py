@@ -24,6 +24,7 @@ from __future__ import annotations
 import csv
 import dataclasses as dc
 import functools
+import hashlib
 import io
 import json
 import logging
@@ -253,14 +254,20 @@ def check_study(study: Study, source: str = "study") -> None:
     if tasks > MAX_STUDY_TASKS:
         fail("runs", f"{len(study.groups)} groups x their algorithms x {study.runs} runs = {tasks:,} runs; a study "
                      f"may have at most {MAX_STUDY_TASKS:,}")
+    _group_texts(study)
+
+
+def _group_texts(study: Study) -> dict[str, str]:
+    """Group name -> its scenario file's text, each file read once, each
+    group's scenario and overrides checked to load (:func:`_check_load`)."""
+    files: dict[str, str] = {}
+    texts = {}
     for g in study.groups:
-        _group_scenario(g)
-
-
-def _group_scenario(group: Group):
-    """A group's scenario text and loaded scenario (errors name its file and the group)."""
-    text = read_yaml_file(group.scenario, "scenario")
-    return text, _load(group.scenario, text, tuple(group.overrides), f"group {group.name}")
+        if g.scenario not in files:
+            files[g.scenario] = read_yaml_file(g.scenario, "scenario")
+        texts[g.name] = files[g.scenario]
+        _check_load(g.scenario, texts[g.name], tuple(g.overrides), f"group {g.name}")
+    return texts
 
 
 def _flow(node, yaml, seen=None) -> None:
@@ -403,16 +410,20 @@ def load_sweep(path: str | Path) -> Study:
 
     groups = []
     for i, f in enumerate(files):
-        text = read_yaml_file(f, "scenario")
         try:
-            _load(str(f), text, ())
+            text = read_yaml_file(f, "scenario")
         except ScenarioError as e:
             fail(f"scenarios[{i}]", str(e), nodes["scenarios"].value[i])
         for vname, texts in variants.items():
-            try:  # every override is checked before any run
-                _load(str(f), text, texts, f"variants.{vname}")
+            # Every group is loaded before any run, the file with its variant
+            # (a variant may make a value of the file valid); an error names
+            # the stage at fault, the file or the variant.
+            try:
+                _check_load(str(f), text, texts, f"variants.{vname}")
             except ScenarioError as e:
-                raise ScenarioError(f"{path}: {e}") from None
+                if str(e).startswith(f"{f} (variants.{vname} "):
+                    raise ScenarioError(f"{path}: {e}") from None
+                fail(f"scenarios[{i}]", str(e), nodes["scenarios"].value[i])
             group = f"{f.stem}-{vname}"
             if not _valid_name(group):
                 fail(f"scenarios[{i}]", f"the group name {group!r} (<scenario file name>-<variant>) {_NAME_RULE}: "
@@ -433,7 +444,7 @@ def study_tasks(study: Study) -> list[dict]:
             scenario or overrides are: nothing has run yet.
     """
     check_study(study)
-    texts = {group.name: _group_scenario(group)[0] for group in study.groups}
+    texts = _group_texts(study)
     seeds = study.run_seeds()
     tasks = []
     for group in study.groups:
@@ -457,7 +468,29 @@ def _load(source: str, text: str, overrides: tuple[str, ...], overrides_name: st
     """The scenario of a task (loaded once per process and overrides); errors name ``source``."""
     from drake_social.scenario import load_scenario_text
 
-    return load_scenario_text(text, source, list(overrides), overrides_name=overrides_name)
+    scenario = load_scenario_text(text, source, list(overrides), overrides_name=overrides_name)
+    _loads.add(_load_key(text, overrides))
+    return scenario
+
+
+#: Digests of the (scenario text, overrides) pairs this process has loaded
+#: without error: a study's check loads each once, however often it is checked
+#: and whatever its groups are called.
+_loads: set[bytes] = set()
+
+
+def _load_key(text: str, overrides: tuple[str, ...]) -> bytes:
+    digest = hashlib.sha256()
+    for part in (text, *overrides):
+        data = part.encode("utf-8", "surrogatepass")
+        digest.update(len(data).to_bytes(8, "little") + data)
+    return digest.digest()
+
+
+def _check_load(source: str, text: str, overrides: tuple[str, ...], overrides_name: str) -> None:
+    """Checks that ``text`` with ``overrides`` loads (:func:`_load`, once per pair and process)."""
+    if _load_key(text, overrides) not in _loads:
+        _load(source, text, overrides, overrides_name)
 
 
 @functools.lru_cache(maxsize=16)
@@ -567,9 +600,17 @@ class StudyResult:
     wall_time: float
     executor: str = "process"
     workers: int = 1
+    #: Group name -> the scenario text its runs loaded (read once, before the first run).
+    scenario_texts: dict[str, str] = dc.field(default_factory=dict)
 
     def group(self, name: str) -> Group:
         return next(g for g in self.study.groups if g.name == name)
+
+    def scenario(self, name: str) -> Scenario:
+        """The scenario group ``name`` ran on, from the text read before the runs (the file may have changed since)."""
+        g = self.group(name)
+        text = self.scenario_texts[name] if name in self.scenario_texts else read_yaml_file(g.scenario, "scenario")
+        return _load(g.scenario, text, tuple(g.overrides), f"group {g.name}")
 
 
 def run_study(study: Study, *, executor: str = "process", workers: int = 1, scheduler: str | None = None,
@@ -583,7 +624,8 @@ def run_study(study: Study, *, executor: str = "process", workers: int = 1, sche
                         progress=progress)
     wall = time.perf_counter() - t0
     _log.info("study %s: %d runs in %.1f s", study.name, len(records), wall)
-    return StudyResult(study, records, wall, executor, workers)
+    texts = {task["group"]: task["scenario_text"] for task in tasks}
+    return StudyResult(study, records, wall, executor, workers, scenario_texts=texts)
 
 
 def best_runs(records: Sequence[dict]) -> dict[tuple[str, str], dict]:

@@ -274,3 +274,57 @@ def test_a_missing_scenario_names_both_places_searched(tmp_path, monkeypatch):
     assert _error(dut) == (f"{dut}: line 2: scenarios[0]: sub/none.yaml: no such scenario file, neither beside the "
                            f"sweep ({tmp_path / 'studies' / 'sub' / 'none.yaml'}) nor in the working directory "
                            f"({tmp_path / 'sub' / 'none.yaml'})")
+
+
+def test_a_listed_scenario_too_big_or_not_utf8_names_the_sweep(tmp_path):
+    huge = tmp_path / "huge.yaml"
+    with open(huge, "wb") as f:
+        f.truncate(5_000_000)
+    dut = _sweep(tmp_path, "", head=f"runs: 1\nscenarios: [{TINY}, huge.yaml]\n")
+    assert _error(dut) == (f"{dut}: line 2: scenarios[1]: {huge}: 5,000,000 bytes; a scenario file may have at most "
+                           f"4,194,304 bytes")
+    huge.write_bytes(TINY.read_bytes() + b"# \xff\n")
+    assert _error(dut).startswith(f"{dut}: line 2: scenarios[1]: {huge}: not a text (UTF-8) file: byte ")
+
+
+def test_a_variant_may_make_the_file_valid(tmp_path):
+    kpneg = tmp_path / "kpneg.yaml"
+    kpneg.write_text(TINY.read_text() + "execution: {kp: -1.0}\n")
+    dut = _sweep(tmp_path, "variants: {a: {execution: {kp: 1.5}}}\n", head="runs: 1\nscenarios: [kpneg.yaml]\n")
+    study = load_sweep(dut)
+    assert [g.name for g in study.groups] == ["kpneg-a"]
+    # a variant that leaves the file's value as it is: the file is named, as the scenario at fault
+    dut = _sweep(tmp_path, "variants: {a: {execution: {kp: 1.5}}, b: {}}\n", head="runs: 1\nscenarios: [kpneg.yaml]\n")
+    assert _error(dut) == f"{dut}: line 2: scenarios[0]: {kpneg}: execution.kp: must be > 0, got -1.0"
+
+
+def test_each_scenario_and_variant_is_loaded_once(tmp_path, monkeypatch):
+    import drake_social.scenario as scenario_module
+    from drake_social.experiments import study as study_module
+
+    calls = []
+    real = scenario_module.load_scenario_text
+
+    def counted(text, source, overrides=None, **kw):
+        calls.append((source, tuple(overrides or ())))
+        return real(text, source, overrides, **kw)
+
+    monkeypatch.setattr(scenario_module, "load_scenario_text", counted)
+    monkeypatch.setattr(study_module, "_loads", set())
+    study_module._load.cache_clear()
+    variants = ", ".join(f"v{i}: {{social: {{length_weight: {i / 10}}}}}" for i in range(20))
+    dut = _sweep(tmp_path, f"variants: {{{variants}}}\n")
+    study = load_sweep(dut)
+    tasks = study_tasks(study)
+    assert len(study.groups) == 20 and len(tasks) == 20 * 5
+    assert len(calls) == 20 and len(set(calls)) == 20
+
+
+def test_figures_use_the_scenario_the_runs_loaded(tmp_path):
+    scenario = tmp_path / "tiny.yaml"
+    scenario.write_text(TINY.read_text())
+    result = run_study(Study("s", (Group("g", str(scenario), algorithms=("rrt_star",)),), runs=1, iterations=10))
+    scenario.write_text(TINY.read_text().replace("bounds: [0.0, 0.0, 8.0, 5.0]", "bounds: [0.0, 0.0, 9.0, 5.0]"))
+    assert result.scenario("g").world.bounds == [0.0, 0.0, 8.0, 5.0]
+    scenario.unlink()
+    assert result.scenario("g").world.bounds == [0.0, 0.0, 8.0, 5.0]
