@@ -43,7 +43,7 @@ import numpy as np
 from drake_social import __version__
 from drake_social.planning.result import PlanningInputError
 from drake_social.scenario import ALGORITHMS, Scenario, ScenarioError, compose_yaml, load_scenario
-from drake_social.textfile import check_regular_file, read_text_file
+from drake_social.textfile import check_regular_file, read_text_file, shorten
 
 __all__ = ["EXIT_NO_PATH", "ProgressBar", "main", "build_parser", "load_with_overrides"]
 
@@ -73,9 +73,10 @@ def load_with_overrides(path: str | Path, sets: Sequence[str] | None) -> Scenari
 
     texts = list(sets or [])
     for text in texts:
-        node = compose_yaml(text, f"{path} (--set {text!r})")
+        node = compose_yaml(text, f"{path} (--set {shorten(repr(text))})")
         if not isinstance(node, yaml.MappingNode):
-            raise ScenarioError(f"{path} (--set {text!r}): must be a YAML mapping such as 'random_seed: 3'")
+            raise ScenarioError(f"{path} (--set {shorten(repr(text))}): must be a YAML mapping such as "
+                                f"'random_seed: 3'")
     return load_scenario(path, texts, overrides_name="--set")
 
 
@@ -416,12 +417,20 @@ def _checked_path(path: Path, parsed: tuple[np.ndarray, list[int]], scenario: Sc
 
 
 def _parse_path_csv(path: Path) -> tuple[np.ndarray, list[int]]:
-    """The rows (N, 4) of a ``path.csv`` and the file line of each (see :func:`read_path_csv`)."""
-    from drake_social.limits import MAX_WAYPOINTS
+    """The rows (N, 4) of a ``path.csv`` and the file line of each (see :func:`read_path_csv`).
 
-    lines = read_text_file(path, "path", "--path").splitlines()
-    if not lines or lines[0].replace(" ", "") != "x,y,psi1,psi2":
-        raise ScenarioError(f"{path}: line 1: the header must be 'x,y,psi1,psi2', got {lines[0] if lines else ''!r}")
+    The file may have at most :data:`~drake_social.textfile.MAX_PATH_FILE_BYTES`
+    bytes; lines end with LF or CRLF (nothing else starts a line); a leading
+    UTF-8 byte order mark (as spreadsheets write) is skipped.
+    """
+    from drake_social.limits import MAX_WAYPOINTS
+    from drake_social.textfile import MAX_PATH_FILE_BYTES
+
+    text = read_text_file(path, "path", "--path", limit=MAX_PATH_FILE_BYTES).removeprefix("\ufeff")
+    lines = [line.removesuffix("\r") for line in text.split("\n")]
+    if lines[0].replace(" ", "") != "x,y,psi1,psi2":
+        raise ScenarioError(f"{path}: line 1: the header must be 'x,y,psi1,psi2', got {shorten(repr(lines[0]))} "
+                            f"(--path)")
     rows = []
     numbers = []  # the file line of each row
     for i, line in enumerate(lines[1:], start=2):
@@ -432,7 +441,8 @@ def _parse_path_csv(path: Path) -> tuple[np.ndarray, list[int]]:
                                 f"{MAX_WAYPOINTS:,} (drake_social.limits.MAX_WAYPOINTS) (--path)")
         cells = line.split(",")
         if len(cells) != 4:
-            raise ScenarioError(f"{path}: line {i}: needs 4 numbers x,y,psi1,psi2, got {len(cells)} values: {line!r}")
+            raise ScenarioError(f"{path}: line {i}: needs 4 numbers x,y,psi1,psi2, got {len(cells)} values: "
+                                f"{shorten(repr(line))} (--path)")
         values = []
         for column, cell in zip(("x", "y", "psi1", "psi2"), cells):
             try:
@@ -440,13 +450,13 @@ def _parse_path_csv(path: Path) -> tuple[np.ndarray, list[int]]:
             except ValueError:
                 value = None
             if value is None or not np.isfinite(value):
-                raise ScenarioError(f"{path}: line {i}: {column}: must be a finite number, got {cell.strip()!r} "
-                                    f"(--path)")
+                raise ScenarioError(f"{path}: line {i}: {column}: must be a finite number, got "
+                                    f"{shorten(repr(cell.strip()))} (--path)")
             values.append(value)
         rows.append(values)
         numbers.append(i)
     if len(rows) < 2:
-        raise ScenarioError(f"{path}: needs at least 2 waypoints (start and goal), got {len(rows)}")
+        raise ScenarioError(f"{path}: needs at least 2 waypoints (start and goal), got {len(rows)} (--path)")
     return np.array(rows), numbers
 
 

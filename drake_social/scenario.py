@@ -26,7 +26,7 @@ from typing import Optional, Sequence, Union
 import numpy as np
 
 from drake_social.limits import MAX_MOTION_STEPS
-from drake_social.textfile import read_yaml_file
+from drake_social.textfile import read_yaml_file, shorten
 
 __all__ = [
     "ALGORITHMS",
@@ -392,7 +392,7 @@ def load_scenario_text(text: str, source: str, overrides: str | Sequence[str] | 
     path = source
     sources = [(source, text)]
     for extra in [overrides] if isinstance(overrides, str) else list(overrides or []):
-        sources.append((f"{path} ({overrides_name} {extra!r})", extra))
+        sources.append((f"{path} ({overrides_name} {shorten(repr(extra))})", extra))
     stages = []
     scenario = None
     for source, data in sources:
@@ -607,7 +607,7 @@ def _check_node(tp, node, field: str, source: str, yaml, tag_checked: bool = Fal
             return "null"
         tag = "" if n.tag in (_STR_TAG, yaml.resolver.Resolver().resolve(yaml.ScalarNode, n.value, (True, False)))\
             else n.tag.replace(_YAML_TAG, "!!") + " "
-        return tag + repr(n.value)
+        return tag + shorten(repr(n.value))
 
     is_null = isinstance(node, yaml.ScalarNode) and node.tag == "tag:yaml.org,2002:null"
     origin = typing.get_origin(tp)
@@ -647,7 +647,7 @@ def _check_node(tp, node, field: str, source: str, yaml, tag_checked: bool = Fal
                     or key_node.value == ""):
                 raise ScenarioError(f"{source}: line {line}: {field}: names must be non-empty strings, got "
                                     f"{shown(key_node)}")
-            sub = f"{field}.{key_node.value}" if field else key_node.value
+            sub = f"{field}.{shorten(key_node.value)}" if field else shorten(key_node.value)
             if key_node.value in seen:
                 raise ScenarioError(f"{source}: line {line}: {sub}: duplicate key (first at line "
                                     f"{seen[key_node.value]})")
@@ -667,7 +667,7 @@ def _check_node(tp, node, field: str, source: str, yaml, tag_checked: bool = Fal
                 raise ScenarioError(f"{source}: line {line}: {where}a key must be a field name ({', '.join(types)}), "
                                     f"got {shown(key_node)}")
             key = key_node.value
-            sub = f"{field}.{key}" if field else str(key)
+            sub = f"{field}.{shorten(key)}" if field else shorten(key)
             if key in seen:  # YAML loaders keep the last silently
                 raise ScenarioError(f"{source}: line {line}: {sub}: duplicate key (first at line {seen[key]})")
             seen[key] = line
@@ -725,21 +725,21 @@ class _Checker:
     def finite(self, field: str, value) -> None:
         arr = np.asarray(value, dtype=float)
         if not np.all(np.isfinite(arr)):
-            self.fail(field, f"must be finite numbers, got {value}")
+            self.fail(field, f"must be finite numbers, got {_shown(value)}")
 
     def positive(self, field: str, value) -> None:
         self.finite(field, value)
         if not np.all(np.asarray(value, dtype=float) > 0):
-            self.fail(field, f"must be > 0, got {value}")
+            self.fail(field, f"must be > 0, got {_shown(value)}")
 
     def nonnegative(self, field: str, value) -> None:
         self.finite(field, value)
         if not np.all(np.asarray(value, dtype=float) >= 0):
-            self.fail(field, f"must be >= 0, got {value}")
+            self.fail(field, f"must be >= 0, got {_shown(value)}")
 
     def length(self, field: str, value, n: int) -> None:
         if len(value) != n:
-            self.fail(field, f"must have {n} values, got {len(value)}: {value}")
+            self.fail(field, f"must have {n} values, got {len(value)}: {_shown(value)}")
 
     def points(self, field: str, value, min_count: int) -> None:
         if len(value) < min_count:
@@ -747,6 +747,11 @@ class _Checker:
         for i, p in enumerate(value):
             self.length(f"{field}[{i}]", p, 2)
             self.finite(f"{field}[{i}]", p)
+
+
+def _shown(value) -> str:
+    """A value of the scenario as an error message repeats it (:func:`~drake_social.textfile.shorten`)."""
+    return shorten(repr(value) if isinstance(value, str) else str(value))
 
 
 def interest_point_count(obj: Union[Bar, LShape, Polyline]) -> int:
@@ -862,24 +867,24 @@ def validate_scenario(scenario: Scenario, source: str = "<scenario>") -> None:
 
     p = scenario.planner
     if p.algorithm not in ALGORITHMS:
-        c.fail("planner.algorithm", f"unknown algorithm {p.algorithm!r}; allowed: {', '.join(ALGORITHMS)}")
+        c.fail("planner.algorithm", f"unknown algorithm {_shown(p.algorithm)}; allowed: {', '.join(ALGORITHMS)}")
     if not 1 <= p.iterations <= MAX_ITERATIONS:
         c.fail("planner.iterations", f"must be in [1, {MAX_ITERATIONS}], got {p.iterations}")
     if p.near_radius_mode not in NEAR_RADIUS_MODES:
         c.fail("planner.near_radius_mode",
-               f"unknown mode {p.near_radius_mode!r}; allowed: {', '.join(NEAR_RADIUS_MODES)}")
+               f"unknown mode {_shown(p.near_radius_mode)}; allowed: {', '.join(NEAR_RADIUS_MODES)}")
     c.finite("planner.near_radius_gamma", p.near_radius_gamma)
     if p.near_radius_gamma < 0:
         c.fail("planner.near_radius_gamma", f"must be >= 0 (0: computed from the space), got {p.near_radius_gamma}")
     if not isinstance(p.optimize, bool):
-        c.fail("planner.optimize", f"must be true or false, got {p.optimize!r}")
+        c.fail("planner.optimize", f"must be true or false, got {_shown(p.optimize)}")
     c.positive("planner.planning_range", p.planning_range)
     c.positive("planner.near_radius", p.near_radius)
     c.finite("planner.goal_bias", p.goal_bias)
     if not 0.0 <= p.goal_bias < 1.0:
         c.fail("planner.goal_bias", f"must be in [0, 1), got {p.goal_bias}")
     if p.informed_mode not in INFORMED_MODES:
-        c.fail("planner.informed_mode", f"unknown mode {p.informed_mode!r}; allowed: {', '.join(INFORMED_MODES)}")
+        c.fail("planner.informed_mode", f"unknown mode {_shown(p.informed_mode)}; allowed: {', '.join(INFORMED_MODES)}")
     if p.informed_mode == "admissible" and p.algorithm.startswith("informed") and s.length_weight <= 0:
         c.fail("planner.informed_mode", "'admissible' needs social.length_weight > 0")
     c.length("planner.distance_weights", p.distance_weights, 4)
@@ -887,9 +892,9 @@ def validate_scenario(scenario: Scenario, source: str = "<scenario>") -> None:
     c.positive("planner.collision_resolution", p.collision_resolution)
     e = scenario.execution
     if e.mode not in SIM_MODES:
-        c.fail("execution.mode", f"unknown mode {e.mode!r}; allowed: {', '.join(SIM_MODES)}")
+        c.fail("execution.mode", f"unknown mode {_shown(e.mode)}; allowed: {', '.join(SIM_MODES)}")
     if e.execution not in EXECUTIONS:
-        c.fail("execution.execution", f"unknown execution {e.execution!r}; allowed: {', '.join(EXECUTIONS)}")
+        c.fail("execution.execution", f"unknown execution {_shown(e.execution)}; allowed: {', '.join(EXECUTIONS)}")
     for name in ("kp", "max_base_speed", "max_base_acceleration", "max_base_jerk", "wheel_radius",
                  "max_wheel_speed", "base_tolerance", "joint_tolerance", "control_period",
                  "plant_time_step", "time_limit", "replay_fps"):

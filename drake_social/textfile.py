@@ -8,7 +8,7 @@ through :func:`read_text_file`, so all of them are refused the same way:
   file is opened, so a FIFO is never opened for reading (that would block
   until a writer appears) and ``/dev/zero`` is never read (it never ends);
 * a file larger than its limit (:data:`MAX_YAML_FILE_BYTES` for scenario
-  and sweep files, :data:`MAX_TEXT_FILE_BYTES` for the others) is refused
+  and sweep files, :data:`MAX_PATH_FILE_BYTES` for path CSVs) is refused
   with the limit stated, before anything is read;
 * the text must be UTF-8; the error names the byte offset at fault.
 
@@ -23,11 +23,19 @@ import os
 import stat
 from pathlib import Path
 
-__all__ = ["MAX_TEXT_FILE_BYTES", "MAX_YAML_FILE_BYTES", "check_regular_file", "read_text_file", "read_yaml_file"]
+from drake_social.limits import MAX_WAYPOINTS
 
-#: Largest text file read by default (path CSVs), bytes: 64 MiB (a path CSV
-#: of 100,000 waypoints is about 7 MB).
-MAX_TEXT_FILE_BYTES = 64 * 1024 * 1024
+__all__ = ["MAX_PATH_FILE_BYTES", "MAX_YAML_FILE_BYTES", "check_regular_file", "read_text_file", "read_yaml_file",
+           "shorten"]
+
+#: Bytes allowed per row of a path CSV: four numbers of 17 significant digits
+#: with exponent and sign take at most 4 x 24 + 3 commas + CRLF = 101 bytes;
+#: this leaves room for spaces.
+PATH_ROW_BYTES = 256
+#: Largest path CSV (``simulate --path``), bytes: the header and
+#: :data:`~drake_social.limits.MAX_WAYPOINTS` rows of :data:`PATH_ROW_BYTES`
+#: (2.56 MB; a path of that many waypoints written by ``plan`` is about 0.5 MB).
+MAX_PATH_FILE_BYTES = (MAX_WAYPOINTS + 1) * PATH_ROW_BYTES
 #: Largest scenario or sweep file, bytes: 4 MiB. The shipped ones are a few
 #: kilobytes, a room with 2,000 obstacles about 120 kB; PyYAML reads about
 #: 2 MB/s, so this also bounds the time spent parsing.
@@ -42,10 +50,33 @@ _KINDS = (
 )
 
 
+#: Most characters of the user's input an error message repeats (:func:`shorten`).
+SHOWN_CHARACTERS = 80
+#: Most characters of a file name an error message repeats.
+SHOWN_PATH_CHARACTERS = 300
+
+
+def shorten(text: str, limit: int = SHOWN_CHARACTERS) -> str:
+    """``text`` as an error message repeats it: whole up to ``limit`` characters,
+    else its first ``limit`` characters, an ellipsis and its length.
+
+    Args:
+        text: the input to repeat (a value's repr, a line, an override).
+        limit: the most characters repeated.
+
+    Returns:
+        e.g. ``"'aaaa... (4,000 characters)"``.
+    """
+    if len(text) <= limit:
+        return text
+    return f"{text[:limit]}... ({len(text):,} characters)"
+
+
 def _error(path: Path | str, message: str, option: str | None):
     from drake_social.scenario import ScenarioError  # scenario.py imports this module
 
-    return ScenarioError(f"{path}: {message}" + ("" if option is None else f" ({option})"))
+    return ScenarioError(f"{shorten(str(path), SHOWN_PATH_CHARACTERS)}: {message}"
+                         + ("" if option is None else f" ({option})"))
 
 
 def _not_regular(path: Path, mode: int, what: str, option: str | None):
@@ -93,8 +124,7 @@ def check_regular_file(path: str | Path, what: str, option: str | None = None) -
     return st
 
 
-def read_text_file(path: str | Path, what: str, option: str | None = None, *,
-                   limit: int = MAX_TEXT_FILE_BYTES) -> str:
+def read_text_file(path: str | Path, what: str, option: str | None = None, *, limit: int) -> str:
     """The UTF-8 text of a regular file of at most ``limit`` bytes.
 
     The file is checked with :func:`check_regular_file` before it is opened,

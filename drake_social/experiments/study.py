@@ -37,7 +37,7 @@ from typing import Callable, Optional, Sequence
 import numpy as np
 
 from drake_social.scenario import ALGORITHMS, Scenario, ScenarioError
-from drake_social.textfile import check_regular_file, read_yaml_file
+from drake_social.textfile import SHOWN_PATH_CHARACTERS, check_regular_file, read_yaml_file, shorten
 
 __all__ = [
     "MAX_RUNS",
@@ -199,6 +199,11 @@ class Sweep:
     variants: dict[str, Optional[Scenario]] = dc.field(default_factory=lambda: {"default": None})
 
 
+def _shown(value) -> str:
+    """A value of the user's as an error message repeats it (its repr, shortened)."""
+    return shorten(repr(value))
+
+
 def _valid_name(name: str) -> bool:
     return re.fullmatch(NAME_PATTERN, name) is not None
 
@@ -223,32 +228,32 @@ def check_study(study: Study, source: str = "study") -> None:
     for field, value, low, high in (("runs", study.runs, 1, MAX_RUNS),
                                     ("iterations", study.iterations, 1, MAX_ITERATIONS)):
         if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or not low <= value <= high:
-            fail(field, f"must be an integer in [{low}, {high:,}], got {value!r}")
+            fail(field, f"must be an integer in [{low}, {high:,}], got {_shown(value)}")
     if isinstance(study.seed, bool) or not isinstance(study.seed, (int, np.integer)) or study.seed < 0:
-        fail("seed", f"must be an integer >= 0, got {study.seed!r}")
+        fail("seed", f"must be an integer >= 0, got {_shown(study.seed)}")
     if not isinstance(study.simulate, bool):
-        fail("simulate", f"must be true or false, got {study.simulate!r}")
+        fail("simulate", f"must be true or false, got {_shown(study.simulate)}")
     if study.checker not in CHECKERS:
-        fail("checker", f"unknown checker {study.checker!r}; allowed: {', '.join(CHECKERS)}")
+        fail("checker", f"unknown checker {_shown(study.checker)}; allowed: {', '.join(CHECKERS)}")
     if not isinstance(study.name, str) or not _valid_name(study.name):
-        fail("name", f"{study.name!r}: a study name {_NAME_RULE}")
+        fail("name", f"{_shown(study.name)}: a study name {_NAME_RULE}")
     if not study.groups:
         fail("groups", "a study needs at least one group")
     seen: set[str] = set()
     for g in study.groups:
         if not isinstance(g.name, str) or not _valid_name(g.name):
-            fail(f"group {g.name!r}", f"a group name {_NAME_RULE}")
+            fail(f"group {_shown(g.name)}", f"a group name {_NAME_RULE}")
         if g.name in seen:
-            fail(f"group {g.name!r}", "two groups have this name; their records and arena logs would mix")
+            fail(f"group {_shown(g.name)}", "two groups have this name; their records and arena logs would mix")
         seen.add(g.name)
         if not g.algorithms:
-            fail(f"group {g.name!r}: algorithms", "needs at least one algorithm")
+            fail(f"group {_shown(g.name)}: algorithms", "needs at least one algorithm")
         for a in g.algorithms:
             if a not in ALGORITHMS:
-                fail(f"group {g.name!r}: algorithms", f"unknown algorithm {a!r}; allowed: {', '.join(ALGORITHMS)}")
+                fail(f"group {_shown(g.name)}: algorithms", f"unknown algorithm {_shown(a)}; allowed: {', '.join(ALGORITHMS)}")
         if len(set(g.algorithms)) != len(g.algorithms):
             twice = sorted({a for a in g.algorithms if g.algorithms.count(a) > 1})
-            fail(f"group {g.name!r}: algorithms", f"{', '.join(twice)} listed more than once (each would be "
+            fail(f"group {_shown(g.name)}: algorithms", f"{', '.join(twice)} listed more than once (each would be "
                                                    f"run and recorded twice)")
     tasks = study.runs * sum(len(g.algorithms) for g in study.groups)
     if tasks > MAX_STUDY_TASKS:
@@ -296,7 +301,8 @@ def _sweep_scenario(sweep: Path, name: str) -> Path:
     local = sweep.parent / name
     if os.path.lexists(local) or not os.path.lexists(name):  # lexists: False for a name with a NUL, too
         if not os.path.lexists(local) and local != Path(name) and "\0" not in name:
-            raise ScenarioError(f"{name}: no such scenario file, neither beside the sweep ({local}) nor in the "
+            raise ScenarioError(f"{shorten(name, SHOWN_PATH_CHARACTERS)}: no such scenario file, neither beside the sweep "
+                                f"({shorten(str(local), SHOWN_PATH_CHARACTERS)}) nor in the "
                                 f"working directory ({Path.cwd() / name})")
         check_regular_file(local, "scenario")
         return local
@@ -362,10 +368,10 @@ def load_sweep(path: str | Path) -> Study:
         fail("seed", f"must be >= 0, got {seed}")
     checker = value("checker")
     if checker not in CHECKERS:
-        fail("checker", f"unknown checker {checker!r}; allowed: {', '.join(CHECKERS)}")
+        fail("checker", f"unknown checker {_shown(checker)}; allowed: {', '.join(CHECKERS)}")
     name = value("name") or path.stem
     if not _valid_name(name):
-        fail("name", f"{name!r}: a study name {_NAME_RULE}" + ("" if "name" in nodes else
+        fail("name", f"{_shown(name)}: a study name {_NAME_RULE}" + ("" if "name" in nodes else
                                                                 " (it is the file's stem: set name:)"))
     algorithms = value("algorithms")
     if not algorithms:
@@ -373,7 +379,7 @@ def load_sweep(path: str | Path) -> Study:
     for i, a in enumerate(algorithms):
         at = nodes["algorithms"].value[i] if "algorithms" in nodes else None
         if a not in ALGORITHMS:
-            fail(f"algorithms[{i}]", f"unknown algorithm {a!r}; allowed: {', '.join(ALGORITHMS)}", at)
+            fail(f"algorithms[{i}]", f"unknown algorithm {_shown(a)}; allowed: {', '.join(ALGORITHMS)}", at)
         if a in algorithms[:i]:
             fail(f"algorithms[{i}]", f"{a} is listed twice (its runs would be recorded twice)", at)
 
@@ -388,7 +394,7 @@ def load_sweep(path: str | Path) -> Study:
         except ScenarioError as e:
             fail(f"scenarios[{i}]", str(e), nodes["scenarios"].value[i])
         if candidate.stem in stems:
-            fail(f"scenarios[{i}]", f"{candidate} has the same name {candidate.stem!r} as scenarios[{stems[candidate.stem]}] "
+            fail(f"scenarios[{i}]", f"{candidate} has the same name {_shown(candidate.stem)} as scenarios[{stems[candidate.stem]}] "
                  f"({files[stems[candidate.stem]]}); groups are named <scenario file name>-<variant>, so the "
                  f"scenario files of a sweep need distinct names", nodes["scenarios"].value[i])
         stems[candidate.stem] = i
@@ -400,7 +406,7 @@ def load_sweep(path: str | Path) -> Study:
         fail("variants", "needs at least one variant (e.g. default: {})")
     for vname, (key_node, node) in variant_nodes.items():
         if not _valid_name(vname):
-            fail(f"variants.{vname}", f"a variant name {_NAME_RULE}", key_node)
+            fail(f"variants.{shorten(vname)}", f"a variant name {_NAME_RULE}", key_node)
         empty = (isinstance(node, yaml.ScalarNode) or not node.value)  # null (checked by the schema) or {}
         if not empty:
             _flow(node, yaml)
@@ -426,7 +432,7 @@ def load_sweep(path: str | Path) -> Study:
                 fail(f"scenarios[{i}]", str(e), nodes["scenarios"].value[i])
             group = f"{f.stem}-{vname}"
             if not _valid_name(group):
-                fail(f"scenarios[{i}]", f"the group name {group!r} (<scenario file name>-<variant>) {_NAME_RULE}: "
+                fail(f"scenarios[{i}]", f"the group name {_shown(group)} (<scenario file name>-<variant>) {_NAME_RULE}: "
                      f"rename {f}", nodes["scenarios"].value[i])
             groups.append(Group(group, str(f), overrides=texts, algorithms=tuple(algorithms),
                                 label=f"{f.stem}, {vname}" + (f": {texts[0]}" if texts else "")))

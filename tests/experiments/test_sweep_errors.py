@@ -21,6 +21,7 @@ from drake_social.experiments.study import (
     study_tasks,
 )
 from drake_social.scenario import ScenarioError
+from drake_social.textfile import shorten
 
 TINY = Path(__file__).resolve().parent.parent.parent / "scenarios" / "tiny.yaml"
 NAME_RULE = ("may contain only letters, digits, '_', '-' and '.' (not first), at most 100 characters, as it names "
@@ -147,7 +148,7 @@ def test_two_scenarios_with_the_same_file_name_are_refused(tmp_path):
 @pytest.mark.parametrize("name", ["a/b", "..", ".hidden", "two words", "a\\\\b", "x" * 101, "é"])
 def test_a_variant_name_that_cannot_name_a_file_is_refused_before_running(tmp_path, name):
     dut = _sweep(tmp_path, f'variants: {{"{name}": {{}}}}\n')
-    shown = name.replace("\\\\", "\\")
+    shown = shorten(name.replace("\\\\", "\\"))
     assert _error(dut) == f"{dut}: line 4: variants.{shown}: a variant name {NAME_RULE}"
 
 
