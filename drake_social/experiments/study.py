@@ -243,9 +243,10 @@ def check_study(study: Study, source: str = "study") -> None:
     for g in study.groups:
         if not isinstance(g.name, str) or not _valid_name(g.name):
             fail(f"group {_shown(g.name)}", f"a group name {_NAME_RULE}")
-        if g.name in seen:
-            fail(f"group {_shown(g.name)}", "two groups have this name; their records and arena logs would mix")
-        seen.add(g.name)
+        if g.name.casefold() in seen:
+            fail(f"group {_shown(g.name)}", "two groups have this name (letter case aside); their records and arena "
+                                            "logs would mix")
+        seen.add(g.name.casefold())
         if not g.algorithms:
             fail(f"group {_shown(g.name)}: algorithms", "needs at least one algorithm")
         for a in g.algorithms:
@@ -308,6 +309,35 @@ def _sweep_scenario(sweep: Path, name: str) -> Path:
         return local
     check_regular_file(name, "scenario")
     return Path(name)
+
+
+#: Scenario fields a study sets for every run (``run_task``), with what a sweep sets them by.
+_STUDY_SETTINGS = {
+    ("random_seed",): "the sweep's seed: (each run's planner seed is drawn from it)",
+    ("planner", "iterations"): "the sweep's iterations:",
+    ("planner", "algorithm"): "the sweep's algorithms:",
+    ("execution", "mode"): "nothing: a study simulates every run in kinematic mode",
+}
+
+
+def _refuse_study_settings(node, field: str, source: str, yaml) -> None:
+    """Refuses a variant that sets a field the study sets for every run
+    (:data:`_STUDY_SETTINGS`): it would be ignored without a word."""
+    if not isinstance(node, yaml.MappingNode):
+        return
+    for key_node, value_node in node.value:
+        for path, instead in _STUDY_SETTINGS.items():
+            at = key_node
+            if key_node.value != path[0]:
+                continue
+            if len(path) == 2:
+                if not isinstance(value_node, yaml.MappingNode):
+                    continue
+                at = next((k for k, _ in value_node.value if k.value == path[1]), None)
+                if at is None:
+                    continue
+            raise ScenarioError(f"{source}: line {at.start_mark.line + 1}: {field}.{'.'.join(path)}: a study sets it "
+                                f"for every run, so a variant cannot: use {instead}")
 
 
 def load_sweep(path: str | Path) -> Study:
@@ -387,32 +417,51 @@ def load_sweep(path: str | Path) -> Study:
     if not scenarios:
         fail("scenarios", "needs at least one scenario file")
     files: list[Path] = []
-    stems: dict[str, int] = {}
+    stems: dict[str, int] = {}  # file name, letter case aside -> its index
     for i, s in enumerate(scenarios):
         try:
             candidate = _sweep_scenario(path, s)
         except ScenarioError as e:
             fail(f"scenarios[{i}]", str(e), nodes["scenarios"].value[i])
-        if candidate.stem in stems:
-            fail(f"scenarios[{i}]", f"{candidate} has the same name {_shown(candidate.stem)} as scenarios[{stems[candidate.stem]}] "
-                 f"({files[stems[candidate.stem]]}); groups are named <scenario file name>-<variant>, so the "
-                 f"scenario files of a sweep need distinct names", nodes["scenarios"].value[i])
-        stems[candidate.stem] = i
+        j = stems.get(candidate.stem.casefold())
+        if j is not None:
+            same = "the same name" if files[j].stem == candidate.stem else "the same name, letter case aside,"
+            fail(f"scenarios[{i}]", f"{candidate} has {same} {_shown(candidate.stem)} as scenarios[{j}] ({files[j]}); "
+                 f"groups are named <scenario file name>-<variant>, so the scenario files of a sweep need distinct "
+                 f"names (output files would collide on a file system that ignores case)", nodes["scenarios"].value[i])
+        stems[candidate.stem.casefold()] = i
         files.append(candidate)
 
     variants: dict[str, tuple[str, ...]] = {}
     variant_nodes = {k.value: (k, v) for k, v in nodes["variants"].value} if "variants" in nodes else {}
     if "variants" in nodes and not variant_nodes:
         fail("variants", "needs at least one variant (e.g. default: {})")
+    folded: dict[str, str] = {}  # variant name, letter case aside -> the name
     for vname, (key_node, node) in variant_nodes.items():
         if not _valid_name(vname):
             fail(f"variants.{shorten(vname)}", f"a variant name {_NAME_RULE}", key_node)
+        if vname.casefold() in folded:
+            fail(f"variants.{vname}", f"differs from variants.{folded[vname.casefold()]} only in letter case; their "
+                 f"output files would collide on a file system that ignores case", key_node)
+        folded[vname.casefold()] = vname
+        _refuse_study_settings(node, f"variants.{vname}", str(path), yaml)
         empty = (isinstance(node, yaml.ScalarNode) or not node.value)  # null (checked by the schema) or {}
         if not empty:
             _flow(node, yaml)
         variants[vname] = () if empty else (yaml.serialize(node, width=10**9).strip(),)
     if not variant_nodes:
         variants = {"default": ()}
+    for i, f in enumerate(files):  # names first: they are cheaper to check than the scenarios
+        for vname in variants:
+            group = f"{f.stem}-{vname}"
+            if _valid_name(group):
+                continue
+            if not _valid_name(f.stem):
+                fail(f"scenarios[{i}]", f"the group name {_shown(group)} (<scenario file name>-<variant>) "
+                     f"{_NAME_RULE}: rename {f}", nodes["scenarios"].value[i])
+            fail(f"variants.{vname}", f"the group name {_shown(group)} (<scenario file name>-<variant>) has "
+                 f"{len(group)} characters; at most 100 are allowed: shorten the variant's name (or rename {f})",
+                 variant_nodes[vname][0])
 
     groups = []
     for i, f in enumerate(files):
@@ -431,9 +480,6 @@ def load_sweep(path: str | Path) -> Study:
                     raise ScenarioError(f"{path}: {e}") from None
                 fail(f"scenarios[{i}]", str(e), nodes["scenarios"].value[i])
             group = f"{f.stem}-{vname}"
-            if not _valid_name(group):
-                fail(f"scenarios[{i}]", f"the group name {_shown(group)} (<scenario file name>-<variant>) {_NAME_RULE}: "
-                     f"rename {f}", nodes["scenarios"].value[i])
             groups.append(Group(group, str(f), overrides=texts, algorithms=tuple(algorithms),
                                 label=f"{f.stem}, {vname}" + (f": {texts[0]}" if texts else "")))
     study = Study(name, tuple(groups), runs=runs, iterations=iterations, seed=seed, simulate=bool(value("simulate")),

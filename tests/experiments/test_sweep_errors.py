@@ -140,7 +140,8 @@ def test_two_scenarios_with_the_same_file_name_are_refused(tmp_path):
     dut = _sweep(tmp_path, "", head="scenarios: [a/tiny.yaml, b/tiny.yaml]\n")
     assert _error(dut) == (f"{dut}: line 1: scenarios[1]: {tmp_path / 'b' / 'tiny.yaml'} has the same name 'tiny' "
                            f"as scenarios[0] ({tmp_path / 'a' / 'tiny.yaml'}); groups are named <scenario file "
-                           f"name>-<variant>, so the scenario files of a sweep need distinct names")
+                           f"name>-<variant>, so the scenario files of a sweep need distinct names (output files would "
+                           f"collide on a file system that ignores case)")
     dut = _sweep(tmp_path, "", head=f"scenarios: [{TINY}, {TINY}]\n")
     assert "scenarios[1]: " in _error(dut) and "has the same name 'tiny' as scenarios[0]" in _error(dut)
 
@@ -166,7 +167,9 @@ def test_group_names_and_planners_are_checked_at_the_door_of_run_study():
     for groups, message in [
         ((Group("a/b", str(TINY), algorithms=("rrt_star",)),), f"group 'a/b': a group name {NAME_RULE}"),
         ((Group("g", str(TINY), algorithms=("rrt_star",)), Group("g", str(TINY), algorithms=("rrt_star",))),
-         "group 'g': two groups have this name; their records and arena logs would mix"),
+         "group 'g': two groups have this name (letter case aside); their records and arena logs would mix"),
+        ((Group("g", str(TINY), algorithms=("rrt_star",)), Group("G", str(TINY), algorithms=("rrt_star",))),
+         "group 'G': two groups have this name (letter case aside); their records and arena logs would mix"),
         ((Group("g", str(TINY), algorithms=("rrt_star", "rrt_star")),),
          "group 'g': algorithms: rrt_star listed more than once (each would be run and recorded twice)"),
     ]:
@@ -329,3 +332,41 @@ def test_figures_use_the_scenario_the_runs_loaded(tmp_path):
     assert result.scenario("g").world.bounds == [0.0, 0.0, 8.0, 5.0]
     scenario.unlink()
     assert result.scenario("g").world.bounds == [0.0, 0.0, 8.0, 5.0]
+
+
+# ---- settings a study makes for every run, names that differ in case, long names (review items 9, 10, 11)
+
+
+@pytest.mark.parametrize("variant, field, instead", [
+    ("{planner: {iterations: 5}}", "planner.iterations", "the sweep's iterations:"),
+    ("{planner: {goal_bias: 0.1, algorithm: rrt_star}}", "planner.algorithm", "the sweep's algorithms:"),
+    ("{random_seed: 3}", "random_seed", "the sweep's seed: (each run's planner seed is drawn from it)"),
+    ("{execution: {mode: dynamic}}", "execution.mode", "nothing: a study simulates every run in kinematic mode"),
+])
+def test_a_variant_may_not_set_what_the_study_sets_for_every_run(tmp_path, variant, field, instead):
+    dut = _sweep(tmp_path, f"variants:\n  fine: {{}}\n  a: {variant}\n")
+    assert _error(dut) == (f"{dut}: line 6: variants.a.{field}: a study sets it for every run, so a variant "
+                           f"cannot: use {instead}")
+
+
+def test_variant_and_scenario_names_that_differ_only_in_case_are_refused(tmp_path):
+    dut = _sweep(tmp_path, "variants: {a: {}, A: {social: {length_weight: 1.0}}}\n")
+    assert _error(dut) == (f"{dut}: line 4: variants.A: differs from variants.a only in letter case; their output "
+                           f"files would collide on a file system that ignores case")
+    (tmp_path / "sub").mkdir()
+    for name in ("tiny.yaml", "Tiny.yaml"):
+        (tmp_path / "sub" / name).write_text(TINY.read_text())
+    dut = _sweep(tmp_path, "", head="runs: 1\nscenarios: [sub/tiny.yaml, sub/Tiny.yaml]\n")
+    assert _error(dut) == (f"{dut}: line 2: scenarios[1]: {tmp_path / 'sub' / 'Tiny.yaml'} has the same name, letter "
+                           f"case aside, 'Tiny' as scenarios[0] ({tmp_path / 'sub' / 'tiny.yaml'}); groups are named "
+                           f"<scenario file name>-<variant>, so the scenario files of a sweep need distinct names "
+                           f"(output files would collide on a file system that ignores case)")
+
+
+def test_a_long_variant_name_is_blamed_for_a_long_group_name(tmp_path):
+    name = "v" * 100
+    dut = _sweep(tmp_path, f"variants:\n  ok: {{}}\n  {name}: {{}}\n")
+    group = f"tiny-{name}"
+    assert _error(dut) == (f"{dut}: line 6: variants.{name}: the group name {shorten(repr(group))} (<scenario file "
+                           f"name>-<variant>) has 105 characters; at most 100 are allowed: shorten the variant's name "
+                           f"(or rename {TINY})")
