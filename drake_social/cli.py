@@ -640,7 +640,7 @@ def _run_bench(args: argparse.Namespace) -> int:
 
 def _add_experiment(subparsers) -> None:
     from drake_social.experiments.executors import EXECUTORS
-    from drake_social.experiments.study import MAX_RUNS
+    from drake_social.experiments.study import MAX_PAPER_RUNS, MAX_STUDY_TASKS, PAPER_PAIRS
     from drake_social.scenario import MAX_ITERATIONS
 
     p = subparsers.add_parser(
@@ -656,8 +656,9 @@ def _add_experiment(subparsers) -> None:
                              description="A: office_bar (bar) and B: generic_L (L object) with RRT*, Social "
                              "Risk-RRT* multi-point and base-only, Informed multi-point and base-only; D: generic_L "
                              "with the 1.5 m bar, Social Risk-RRT* with object, base and equal weights.")
-    paper.add_argument("--runs", type=_int_at_least(1, MAX_RUNS), default=10, metavar="N",
-                       help=f"runs per algorithm, at most {MAX_RUNS:,} (default 10)")
+    paper.add_argument("--runs", type=_int_at_least(1, MAX_PAPER_RUNS), default=10, metavar="N",
+                       help=f"runs per algorithm, at most {MAX_PAPER_RUNS:,} (the study's {PAPER_PAIRS} group x "
+                       f"algorithm pairs x N runs stay within {MAX_STUDY_TASKS:,}; default 10)")
     paper.add_argument("--iterations", type=_int_at_least(1, MAX_ITERATIONS), default=2000, metavar="K",
                        help=f"K, at most {MAX_ITERATIONS:,} (default 2000)")
     paper.add_argument("--seed", type=_nonnegative_int, default=0, metavar="S",

@@ -56,6 +56,7 @@ __all__ = [
     "compose_yaml",
     "load_scenario",
     "load_scenario_text",
+    "period_count",
     "validate_scenario",
 ]
 
@@ -500,7 +501,12 @@ def _limited_loader(yaml):
                 if id(node) not in self._size:  # its anchor is still open: the alias repeats itself
                     raise _YamlLimit(mark, "an alias inside the node it refers to (a recursive YAML structure)")
                 self._count(self._size[id(node)], self._height[id(node)], mark)
-                return node
+                # A node of its own at the alias's place, so that errors name the alias's line (the
+                # content, shared, keeps its own lines).
+                style = node.style if isinstance(node, yaml.ScalarNode) else node.flow_style
+                here = type(node)(node.tag, node.value, mark, mark, style)
+                self._size[id(here)], self._height[id(here)] = self._size[id(node)], self._height[id(node)]
+                return here
             self._depth += 1
             self._count(0, 0, mark)
             before = self._total
@@ -754,6 +760,16 @@ def _shown(value) -> str:
     return shorten(repr(value) if isinstance(value, str) else str(value))
 
 
+def period_count(duration: float, period: float) -> int:
+    """How many periods of ``period`` seconds a run of ``duration`` seconds
+    takes (the ratio rounded up; a ratio within 1e-9 of an integer counts as
+    that integer, so 270 s / 0.0045 s is 60,000 periods although it computes
+    to 60000.00000000001)."""
+    ratio = duration / period
+    nearest = round(ratio)
+    return int(nearest) if abs(ratio - nearest) <= 1e-9 * max(1.0, ratio) else math.ceil(ratio)
+
+
 def interest_point_count(obj: Union[Bar, LShape, Polyline]) -> int:
     """The number of object interest points (explicit or default)."""
     if obj.interest_points is not None:
@@ -918,11 +934,11 @@ def validate_scenario(scenario: Scenario, source: str = "<scenario>") -> None:
         c.fail("execution.time_limit", f"must be <= {MAX_TIME_LIMIT:g} s, got {e.time_limit}")
     if e.replay_fps > MAX_REPLAY_FPS:
         c.fail("execution.replay_fps", f"must be <= {MAX_REPLAY_FPS:g} frames per second, got {e.replay_fps}")
-    if e.time_limit / e.control_period > MAX_CONTROL_STEPS:
+    if period_count(e.time_limit, e.control_period) > MAX_CONTROL_STEPS:
         c.fail("execution.control_period",
                f"must be >= execution.time_limit / {MAX_CONTROL_STEPS:,} = {e.time_limit / MAX_CONTROL_STEPS:.3g} s "
                f"(a run may take at most {MAX_CONTROL_STEPS:,} control periods), got {e.control_period}")
-    if e.time_limit / e.plant_time_step > MAX_PLANT_STEPS:
+    if period_count(e.time_limit, e.plant_time_step) > MAX_PLANT_STEPS:
         c.fail("execution.plant_time_step",
                f"must be >= execution.time_limit / {MAX_PLANT_STEPS:,} = {e.time_limit / MAX_PLANT_STEPS:.3g} s "
                f"(a run may take at most {MAX_PLANT_STEPS:,} plant steps), got {e.plant_time_step}")

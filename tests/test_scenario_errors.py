@@ -462,3 +462,26 @@ def test_a_byte_order_mark_is_skipped_and_the_header_error_names_the_option(tmp_
     with pytest.raises(ScenarioError) as info:
         read_path_csv(dut, tiny_scenario)
     assert str(info.value) == f"{dut}: line 1: the header must be 'x,y,psi1,psi2', got 'x;y;psi1;psi2' (--path)"
+
+
+def test_an_alias_error_names_the_aliass_line():
+    override = "random_seed: &a 1\nstart: *a"
+    assert _message(TINY, [override]) == (f"{TINY} (--set {override!r}): line 2: start: must be a list of numbers, "
+                                          f"got '1'")
+
+
+@pytest.mark.parametrize("time_limit, period", [(270, 0.0045), (9, 0.00015), (37, 37 / 60_000), (600, 0.01)])
+def test_exactly_the_most_control_periods_is_accepted(time_limit, period):
+    scenario = load_with_overrides(TINY, [f"execution: {{time_limit: {time_limit}, control_period: {period!r}, "
+                                          f"plant_time_step: {period!r}}}"])
+    assert scenario.execution.control_period == period
+    with pytest.raises(ScenarioError, match="a run may take at most 60,000 control periods"):
+        load_with_overrides(TINY, [f"execution: {{time_limit: {time_limit}, control_period: {period * 0.999!r}, "
+                                   f"plant_time_step: {period * 0.999!r}}}"])
+
+
+@pytest.mark.parametrize("time_limit, step", [(270, 0.0009), (151, 151 / 300_000), (302, 302 / 300_000)])
+def test_exactly_the_most_plant_steps_is_accepted(time_limit, step):
+    scenario = load_with_overrides(TINY, [f"execution: {{time_limit: {time_limit}, plant_time_step: {step!r}, "
+                                          f"control_period: {min(0.01, time_limit / 100)!r}}}"])
+    assert scenario.execution.plant_time_step == step

@@ -40,6 +40,7 @@ from drake_social.scenario import ALGORITHMS, Scenario, ScenarioError
 from drake_social.textfile import SHOWN_PATH_CHARACTERS, check_regular_file, read_yaml_file, shorten
 
 __all__ = [
+    "MAX_PAPER_RUNS",
     "MAX_RUNS",
     "MAX_STUDY_TASKS",
     "NAME_PATTERN",
@@ -164,6 +165,12 @@ MAX_RUNS = 10_000
 #: Most tasks of a study (groups x algorithms x runs): every run's record is
 #: kept in memory until the study is written (a few kilobytes each).
 MAX_STUDY_TASKS = 100_000
+#: (group, algorithm) pairs of :func:`paper_study`: A and B with the paper's
+#: five planners, D with Social Risk-RRT* under three weightings.
+PAPER_PAIRS = 2 * len(PAPER_ALGORITHMS) + len(paper_weights(5))
+#: Most runs of :func:`paper_study` (``experiment paper --runs``): its
+#: :data:`PAPER_PAIRS` pairs x runs stay within :data:`MAX_STUDY_TASKS`.
+MAX_PAPER_RUNS = min(MAX_RUNS, MAX_STUDY_TASKS // PAPER_PAIRS)
 #: Study, group and variant names: a letter, digit or ``_`` first, then
 #: letters, digits, ``_``, ``-`` and ``.``; at most 100 characters. They name
 #: output files (``arena_<group>.log``) and the default folder ``out/<study>``.

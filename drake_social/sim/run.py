@@ -42,7 +42,8 @@ from drake_social.cost.social import SocialCost
 from drake_social.kinematics import ArmGeometry
 from drake_social.planning.result import PlannerResult
 from drake_social.planning.validity import ValidityChecker
-from drake_social.scenario import MAX_CONTROL_STEPS, MAX_PLANT_STEPS, MAX_TIME_LIMIT, Scenario, ScenarioError
+from drake_social.scenario import (MAX_CONTROL_STEPS, MAX_PLANT_STEPS, MAX_TIME_LIMIT, Scenario, ScenarioError,
+                                   period_count)
 from drake_social.sim.analysis import config_deviation, densify, point_deviation
 from drake_social.sim.diagram import TransportDiagram, _build, check_diagram_arguments
 from drake_social.waypoints import waypoint_array
@@ -301,7 +302,8 @@ def simulate(
     if not 0 < limit <= MAX_TIME_LIMIT:
         raise ValueError(f"time_limit must be in (0, {MAX_TIME_LIMIT:g}] seconds, got {limit}")
     e = scenario.execution
-    if limit / e.control_period > MAX_CONTROL_STEPS or limit / e.plant_time_step > MAX_PLANT_STEPS:
+    if (period_count(limit, e.control_period) > MAX_CONTROL_STEPS
+            or period_count(limit, e.plant_time_step) > MAX_PLANT_STEPS):
         raise ValueError(f"time_limit {limit} s is more than {MAX_CONTROL_STEPS:,} control periods of "
                          f"{e.control_period} s or {MAX_PLANT_STEPS:,} plant steps of {e.plant_time_step} s")
     if limit <= e.control_period:

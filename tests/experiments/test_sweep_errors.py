@@ -50,7 +50,7 @@ def test_a_billion_runs_is_refused_at_once(tmp_path, capsys):
     assert _error(dut) == f"{dut}: line 1: runs: must be in [1, 10,000], got 1000000000"
     assert MAX_RUNS == 10_000
     assert main(["experiment", "paper", "--runs", "1000000000", "--out", str(tmp_path / "o")]) == 2
-    assert capsys.readouterr().err.endswith("argument --runs: must be an integer in [1, 10,000], got 1000000000\n")
+    assert capsys.readouterr().err.endswith("argument --runs: must be an integer in [1, 7,692], got 1000000000\n")
     with pytest.raises(ScenarioError) as info:
         paper_study(runs=10**9, scenario_dir=TINY.parent)
     assert str(info.value) == "paper study: runs: must be an integer in [1, 10,000], got 1000000000"
@@ -370,3 +370,26 @@ def test_a_long_variant_name_is_blamed_for_a_long_group_name(tmp_path):
     assert _error(dut) == (f"{dut}: line 6: variants.{name}: the group name {shorten(repr(group))} (<scenario file "
                            f"name>-<variant>) has 105 characters; at most 100 are allowed: shorten the variant's name "
                            f"(or rename {TINY})")
+
+
+def test_the_paper_runs_argument_bound_is_the_real_one(tmp_path, capsys):
+    from drake_social.cli import build_parser
+    from drake_social.experiments.study import MAX_PAPER_RUNS
+
+    study = paper_study(runs=MAX_PAPER_RUNS)  # the largest the argument allows passes the study's own check
+    assert study.runs * sum(len(g.algorithms) for g in study.groups) <= MAX_STUDY_TASKS
+    with pytest.raises(ScenarioError):
+        paper_study(runs=MAX_PAPER_RUNS + 1)
+    assert MAX_PAPER_RUNS == 100_000 // 13
+    assert main(["experiment", "paper", "--runs", str(MAX_PAPER_RUNS + 1), "--out", str(tmp_path / "o")]) == 2
+    assert capsys.readouterr().err.endswith("argument --runs: must be an integer in [1, 7,692], got 7693\n")
+    parser = build_parser()
+    experiment = parser._subparsers._group_actions[0].choices["experiment"]
+    paper = experiment._subparsers._group_actions[0].choices["paper"]
+    assert "at most 7,692 (the study's 13 group x algorithm pairs x N runs stay within 100,000" in \
+        " ".join(paper.format_help().split())
+
+
+def test_an_alias_error_names_the_aliass_line(tmp_path):
+    dut = _sweep(tmp_path, "", head=f"seed: &n 0\nscenarios: [{TINY}]\nruns: *n\n")
+    assert _error(dut) == f"{dut}: line 3: runs: must be in [1, 10,000], got 0"
