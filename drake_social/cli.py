@@ -42,7 +42,7 @@ import numpy as np
 
 from drake_social import __version__
 from drake_social.planning.result import PlanningInputError
-from drake_social.scenario import ALGORITHMS, Scenario, ScenarioError, compose_yaml, load_scenario
+from drake_social.scenario import ALGORITHMS, CHECKERS, Scenario, ScenarioError, compose_yaml, load_scenario
 from drake_social.textfile import check_regular_file, read_text_file, shorten
 
 __all__ = ["EXIT_NO_PATH", "ProgressBar", "main", "build_parser", "load_with_overrides"]
@@ -51,8 +51,6 @@ __all__ = ["EXIT_NO_PATH", "ProgressBar", "main", "build_parser", "load_with_ove
 EXIT_NO_PATH = 3
 #: Exit code of ``plan`` when Drake's verification rejects the returned path (a bug, not bad input).
 EXIT_UNVERIFIED = 4
-#: Validity checkers selectable with ``--checker``.
-CHECKERS = ("planar", "drake", "numpy")  # = drake_social.model.checker.CHECKERS; here so that --help needs no Drake
 
 _log = logging.getLogger("drake_social")
 

@@ -30,6 +30,7 @@ from drake_social.textfile import read_yaml_file, shorten
 
 __all__ = [
     "ALGORITHMS",
+    "CHECKERS",
     "EXECUTIONS",
     "MAX_CONTROL_STEPS",
     "MAX_PLANT_STEPS",
@@ -88,6 +89,12 @@ ALGORITHMS = (
     "informed_social_rrt_star",
     "informed_base_rrt_star",
 )
+
+#: Validity checkers (``drake_social.model.checker.make_checker``; the first is
+#: the default of the planner): the exact planar one, Drake's SceneGraph and
+#: the pure-numpy reference. Here, not in that module, so that the command
+#: line and studies can name them without importing Drake.
+CHECKERS = ("planar", "drake", "numpy")
 
 #: Modes of the informed sampler (see ``drake_social.planning.sampling``).
 INFORMED_MODES = ("paper", "admissible")
@@ -456,9 +463,12 @@ def _plural(tp) -> str:
     return {float: "numbers", int: "integers", bool: "booleans", str: "strings"}.get(tp, str(tp))
 
 
-#: Deepest nesting of YAML collections accepted in a scenario, sweep or
-#: override (a scenario needs 4 levels, a sweep with variants 6); deeper
-#: documents are refused before Python's recursion limit is reached.
+#: Deepest nesting of YAML nodes accepted in a scenario, sweep or override,
+#: counted as the loader counts it (the document's mapping is level 1, a
+#: scalar one more than its collection): the shipped scenarios and
+#: studies/example_sweep.yaml need 6, a sweep variant that sets an obstacle's
+#: centre 8. Deeper documents are refused before Python's recursion limit is
+#: reached.
 MAX_YAML_DEPTH = 32
 #: Most nodes (mappings, lists, keys and values) of one YAML document, an
 #: alias counted as the nodes it stands for: a "billion laughs" of nested

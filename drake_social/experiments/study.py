@@ -36,7 +36,7 @@ from typing import Callable, Optional, Sequence
 
 import numpy as np
 
-from drake_social.scenario import ALGORITHMS, Scenario, ScenarioError
+from drake_social.scenario import ALGORITHMS, CHECKERS, Scenario, ScenarioError
 from drake_social.textfile import SHOWN_PATH_CHARACTERS, check_regular_file, read_yaml_file, shorten
 
 __all__ = [
@@ -158,8 +158,6 @@ def paper_study(*, runs: int = 10, iterations: int = 2000, seed: int = 0, simula
     return study
 
 
-#: Validity checkers of a study (= ``drake_social.model.checker.CHECKERS``; that module imports Drake).
-CHECKERS = ("planar", "drake", "numpy")
 #: Most runs per (group, algorithm) of a study (each run's seed is drawn up front).
 MAX_RUNS = 10_000
 #: Most tasks of a study (groups x algorithms x runs): every run's record is
@@ -215,6 +213,38 @@ def _valid_name(name: str) -> bool:
     return re.fullmatch(NAME_PATTERN, name) is not None
 
 
+def _settings_problem(name, runs, iterations, seed, simulate, checker) -> tuple[str, str] | None:
+    """The first of a study's settings that is not allowed, as (field, what is
+    allowed and what it is), or None: the one check of a :class:`Study` and a sweep file."""
+    from drake_social.scenario import MAX_ITERATIONS
+
+    for field, value, low, high in (("runs", runs, 1, MAX_RUNS), ("iterations", iterations, 1, MAX_ITERATIONS)):
+        if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or not low <= value <= high:
+            return field, f"must be an integer in [{low}, {high:,}], got {_shown(value)}"
+    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
+        return "seed", f"must be an integer >= 0, got {_shown(seed)}"
+    if not isinstance(simulate, bool):
+        return "simulate", f"must be true or false, got {_shown(simulate)}"
+    if checker not in CHECKERS:
+        return "checker", f"unknown checker {_shown(checker)}; allowed: {', '.join(CHECKERS)}"
+    if not isinstance(name, str) or not _valid_name(name):
+        return "name", f"{_shown(name)}: a study name {_NAME_RULE}"
+    return None
+
+
+def _algorithms_problem(algorithms: Sequence[str]) -> tuple[Optional[int], str] | None:
+    """The first problem of a list of planners, as (its index or None, what is
+    wrong), or None: at least one, each of ALGORITHMS, none twice."""
+    if not algorithms:
+        return None, f"needs at least one of {', '.join(ALGORITHMS)}"
+    for i, a in enumerate(algorithms):
+        if a not in ALGORITHMS:
+            return i, f"unknown algorithm {_shown(a)}; allowed: {', '.join(ALGORITHMS)}"
+        if a in algorithms[:i]:
+            return i, f"{a} is listed twice (its runs would be recorded twice)"
+    return None
+
+
 def check_study(study: Study, source: str = "study") -> None:
     """Checks a study before any run: its limits, names and planners, and
     that every group's scenario file reads and loads with its overrides.
@@ -227,23 +257,12 @@ def check_study(study: Study, source: str = "study") -> None:
         ScenarioError: ``<source>: <field>: <what is allowed>, got <value>``,
             or the scenario error of a group (naming its file and overrides).
     """
-    from drake_social.scenario import MAX_ITERATIONS
-
     def fail(field: str, message: str):
         raise ScenarioError(f"{source}: {field}: {message}")
 
-    for field, value, low, high in (("runs", study.runs, 1, MAX_RUNS),
-                                    ("iterations", study.iterations, 1, MAX_ITERATIONS)):
-        if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or not low <= value <= high:
-            fail(field, f"must be an integer in [{low}, {high:,}], got {_shown(value)}")
-    if isinstance(study.seed, bool) or not isinstance(study.seed, (int, np.integer)) or study.seed < 0:
-        fail("seed", f"must be an integer >= 0, got {_shown(study.seed)}")
-    if not isinstance(study.simulate, bool):
-        fail("simulate", f"must be true or false, got {_shown(study.simulate)}")
-    if study.checker not in CHECKERS:
-        fail("checker", f"unknown checker {_shown(study.checker)}; allowed: {', '.join(CHECKERS)}")
-    if not isinstance(study.name, str) or not _valid_name(study.name):
-        fail("name", f"{_shown(study.name)}: a study name {_NAME_RULE}")
+    problem = _settings_problem(study.name, study.runs, study.iterations, study.seed, study.simulate, study.checker)
+    if problem is not None:
+        fail(*problem)
     if not study.groups:
         fail("groups", "a study needs at least one group")
     seen: set[str] = set()
@@ -254,15 +273,10 @@ def check_study(study: Study, source: str = "study") -> None:
             fail(f"group {_shown(g.name)}", "two groups have this name (letter case aside); their records and arena "
                                             "logs would mix")
         seen.add(g.name.casefold())
-        if not g.algorithms:
-            fail(f"group {_shown(g.name)}: algorithms", "needs at least one algorithm")
-        for a in g.algorithms:
-            if a not in ALGORITHMS:
-                fail(f"group {_shown(g.name)}: algorithms", f"unknown algorithm {_shown(a)}; allowed: {', '.join(ALGORITHMS)}")
-        if len(set(g.algorithms)) != len(g.algorithms):
-            twice = sorted({a for a in g.algorithms if g.algorithms.count(a) > 1})
-            fail(f"group {_shown(g.name)}: algorithms", f"{', '.join(twice)} listed more than once (each would be "
-                                                   f"run and recorded twice)")
+        problem = _algorithms_problem(g.algorithms)
+        if problem is not None:
+            i, message = problem
+            fail(f"group {_shown(g.name)}: algorithms" + ("" if i is None else f"[{i}]"), message)
     tasks = study.runs * sum(len(g.algorithms) for g in study.groups)
     if tasks > MAX_STUDY_TASKS:
         fail("runs", f"{len(study.groups)} groups x their algorithms x {study.runs} runs = {tasks:,} runs; a study "
@@ -374,7 +388,7 @@ def load_sweep(path: str | Path) -> Study:
     """
     import yaml
 
-    from drake_social.scenario import MAX_ITERATIONS, check_node, compose_yaml
+    from drake_social.scenario import check_node, compose_yaml
 
     path = Path(path)
     root = compose_yaml(read_yaml_file(path, "sweep"), str(path))
@@ -388,37 +402,24 @@ def load_sweep(path: str | Path) -> Study:
         line = f"line {node.start_mark.line + 1}: " if node is not None else ""
         raise ScenarioError(f"{path}: {line}{key}: {message}")
 
-    def value(key: str):
+    def value(key: str):  # the schema check above has checked its type
         if key not in nodes:
             return getattr(Sweep(), key)
-        try:
-            return yaml.SafeLoader("").construct_object(nodes[key], deep=True)
-        except yaml.YAMLError as e:  # a tag of no YAML type, e.g. `name: !Bar x`
-            fail(key, f"{e.problem}")
+        return yaml.SafeLoader("").construct_object(nodes[key], deep=True)
 
-    runs, iterations, seed = int(value("runs")), int(value("iterations")), int(value("seed"))
-    if not 1 <= runs <= MAX_RUNS:
-        fail("runs", f"must be in [1, {MAX_RUNS:,}], got {runs}")
-    if not 1 <= iterations <= MAX_ITERATIONS:
-        fail("iterations", f"must be in [1, {MAX_ITERATIONS:,}] (K of every run), got {iterations}")
-    if seed < 0:
-        fail("seed", f"must be >= 0, got {seed}")
-    checker = value("checker")
-    if checker not in CHECKERS:
-        fail("checker", f"unknown checker {_shown(checker)}; allowed: {', '.join(CHECKERS)}")
+    runs, iterations, seed = int(value("runs")), int(value("iterations")), int(value("seed"))  # 1e3 is an integer
+    checker, simulate = value("checker"), value("simulate")
     name = value("name") or path.stem
-    if not _valid_name(name):
-        fail("name", f"{_shown(name)}: a study name {_NAME_RULE}" + ("" if "name" in nodes else
-                                                                " (it is the file's stem: set name:)"))
+    problem = _settings_problem(name, runs, iterations, seed, simulate, checker)
+    if problem is not None:
+        field, message = problem
+        fail(field, message + ("" if field != "name" or "name" in nodes else " (it is the file's stem: set name:)"))
     algorithms = value("algorithms")
-    if not algorithms:
-        fail("algorithms", f"needs at least one of {', '.join(ALGORITHMS)}")
-    for i, a in enumerate(algorithms):
-        at = nodes["algorithms"].value[i] if "algorithms" in nodes else None
-        if a not in ALGORITHMS:
-            fail(f"algorithms[{i}]", f"unknown algorithm {_shown(a)}; allowed: {', '.join(ALGORITHMS)}", at)
-        if a in algorithms[:i]:
-            fail(f"algorithms[{i}]", f"{a} is listed twice (its runs would be recorded twice)", at)
+    problem = _algorithms_problem(algorithms)
+    if problem is not None:
+        i, message = problem
+        fail("algorithms" if i is None else f"algorithms[{i}]", message,
+             None if i is None or "algorithms" not in nodes else nodes["algorithms"].value[i])
 
     scenarios = value("scenarios")
     if not scenarios:
@@ -489,8 +490,7 @@ def load_sweep(path: str | Path) -> Study:
             group = f"{f.stem}-{vname}"
             groups.append(Group(group, str(f), overrides=texts, algorithms=tuple(algorithms),
                                 label=f"{f.stem}, {vname}" + (f": {texts[0]}" if texts else "")))
-    study = Study(name, tuple(groups), runs=runs, iterations=iterations, seed=seed, simulate=bool(value("simulate")),
-                  checker=checker)
+    study = Study(name, tuple(groups), runs=runs, iterations=iterations, seed=seed, simulate=simulate, checker=checker)
     check_study(study, str(path))
     return study
 

@@ -48,12 +48,9 @@ from drake_social.arguments import require_choice, require_scenario
 from drake_social.kinematics import displacement_bound
 from drake_social.model.plant import ScenarioDiagram, build_robot_diagram
 from drake_social.planning.geometric import CheckerBase
-from drake_social.scenario import Scenario, ScenarioError
+from drake_social.scenario import CHECKERS, Scenario, ScenarioError
 
 __all__ = ["CHECKERS", "Contact", "SceneGraphChecker", "check_start_goal", "make_checker", "verify_path"]
-
-#: Names of the validity checkers :func:`make_checker` builds; the first is the default.
-CHECKERS = ("planar", "drake", "numpy")
 
 
 @dc.dataclass(frozen=True)

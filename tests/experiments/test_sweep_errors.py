@@ -47,7 +47,7 @@ def _error(path: Path) -> str:
 
 def test_a_billion_runs_is_refused_at_once(tmp_path, capsys):
     dut = _sweep(tmp_path, "", head=f"runs: 1000000000\nscenarios: [{TINY}]\n")
-    assert _error(dut) == f"{dut}: line 1: runs: must be in [1, 10,000], got 1000000000"
+    assert _error(dut) == f"{dut}: line 1: runs: must be an integer in [1, 10,000], got 1000000000"
     assert MAX_RUNS == 10_000
     assert main(["experiment", "paper", "--runs", "1000000000", "--out", str(tmp_path / "o")]) == 2
     assert capsys.readouterr().err.endswith("argument --runs: must be an integer in [1, 7,692], got 1000000000\n")
@@ -69,7 +69,7 @@ def test_the_total_number_of_runs_is_bounded(tmp_path):
 
 def test_iterations_beyond_the_planner_limit_name_the_sweep(tmp_path):
     dut = _sweep(tmp_path, "", head=f"iterations: 100000000\nscenarios: [{TINY}]\n")
-    assert _error(dut) == f"{dut}: line 1: iterations: must be in [1, 10,000,000] (K of every run), got 100000000"
+    assert _error(dut) == f"{dut}: line 1: iterations: must be an integer in [1, 10,000,000], got 100000000"
 
 
 def test_an_alias_bomb_in_a_sweep_is_refused_like_in_a_scenario(tmp_path):
@@ -171,7 +171,7 @@ def test_group_names_and_planners_are_checked_at_the_door_of_run_study():
         ((Group("g", str(TINY), algorithms=("rrt_star",)), Group("G", str(TINY), algorithms=("rrt_star",))),
          "group 'G': two groups have this name (letter case aside); their records and arena logs would mix"),
         ((Group("g", str(TINY), algorithms=("rrt_star", "rrt_star")),),
-         "group 'g': algorithms: rrt_star listed more than once (each would be run and recorded twice)"),
+         "group 'g': algorithms[1]: rrt_star is listed twice (its runs would be recorded twice)"),
     ]:
         with pytest.raises(ScenarioError) as info:
             run_study(Study("s", groups, runs=1, iterations=10))
@@ -392,4 +392,41 @@ def test_the_paper_runs_argument_bound_is_the_real_one(tmp_path, capsys):
 
 def test_an_alias_error_names_the_aliass_line(tmp_path):
     dut = _sweep(tmp_path, "", head=f"seed: &n 0\nscenarios: [{TINY}]\nruns: *n\n")
-    assert _error(dut) == f"{dut}: line 3: runs: must be in [1, 10,000], got 0"
+    assert _error(dut) == f"{dut}: line 3: runs: must be an integer in [1, 10,000], got 0"
+
+
+@pytest.mark.parametrize("field, text, value", [
+    ("runs", "0", 0), ("iterations", "100000000", 10**8), ("seed", "-1", -1), ("checker", "plnar", "plnar"),
+    ("name", "a/b", "a/b"),
+])
+def test_a_sweep_and_a_study_check_their_settings_with_the_same_words(tmp_path, field, text, value):
+    dut = _sweep(tmp_path, f"{field}: {text}\n", head=f"scenarios: [{TINY}]\n")
+    settings = {"runs": 1, "iterations": 10, **{field: value}}
+    name = settings.pop("name", "s")
+    with pytest.raises(ScenarioError) as info:
+        study_tasks(Study(name, (Group("g", str(TINY), algorithms=("rrt_star",)),), **settings))
+    assert str(info.value).startswith(f"study: {field}: ")
+    assert _error(dut) == f"{dut}: line 2: {field}: " + str(info.value).removeprefix(f"study: {field}: ")
+
+
+def test_the_checkers_have_one_home():
+    from drake_social import cli, scenario
+    from drake_social.experiments import study
+    from drake_social.model import checker
+
+    assert cli.CHECKERS is study.CHECKERS is checker.CHECKERS is scenario.CHECKERS
+
+
+def test_the_depth_limit_leaves_room_for_what_the_comment_says(tmp_path):
+    import yaml
+
+    from drake_social.scenario import MAX_YAML_DEPTH, _limited_loader
+
+    def depth(text):
+        loader = _limited_loader(yaml)(text)
+        return loader._height[id(loader.get_single_node())]
+
+    root = TINY.parent.parent
+    assert depth((root / "scenarios" / "office_bar.yaml").read_text()) == 6
+    assert depth((root / "studies" / "example_sweep.yaml").read_text()) == 6
+    assert depth("variants: {a: {world: {obstacles: [{center: [1, 2]}]}}}") == 8 <= MAX_YAML_DEPTH
