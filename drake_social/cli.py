@@ -47,6 +47,17 @@ from drake_social.textfile import check_regular_file, read_text_file, shorten
 
 __all__ = ["EXIT_NO_PATH", "ProgressBar", "main", "build_parser", "load_with_overrides"]
 
+#: Most seeds of ``bench --seeds``: as many as a study's runs per planner
+#: (``experiments.study.MAX_RUNS``); each seed plans every algorithm on every scenario.
+MAX_BENCH_SEEDS = 10_000
+#: Most timings of one run in ``bench --repeats``: the median of 100 already
+#: filters the machine's noise, and each repeat replans the whole path.
+MAX_BENCH_REPEATS = 100
+#: Most worker processes of ``experiment --workers``: each holds Drake and a
+#: scenario's checker (a few hundred MB), so 64 already needs tens of GB; a
+#: cluster is the place for more (``--executor dask --scheduler``).
+MAX_WORKERS = 64
+
 #: Exit code of ``plan`` when no path reaches the goal.
 EXIT_NO_PATH = 3
 #: Exit code of ``plan`` when Drake's verification rejects the returned path (a bug, not bad input).
@@ -87,6 +98,39 @@ def _add_scenario_arguments(parser: argparse.ArgumentParser) -> None:
         help="override scenario fields with a YAML mapping, e.g. \"social: {sigma_h: 1.5}\" "
         "(repeatable: applied in turn, each merging into the result of the earlier ones)",
     )
+
+
+def _check_out_folder(out: Path) -> None:
+    """Refuses an ``--out`` that is not a folder, nor could become one: it, or
+    the nearest of its parents that exists, must be a directory.
+
+    Raises:
+        NotADirectoryError: ``<out>: --out must be a folder ...`` naming what
+            is in the way (an output that cannot be written: exit 1).
+    """
+    import os
+    import stat
+
+    from drake_social.textfile import describe_mode
+
+    here = out
+    while True:
+        try:
+            mode = os.stat(here).st_mode
+        except (FileNotFoundError, NotADirectoryError):
+            if here == here.parent:
+                return
+            here = here.parent
+            continue
+        except (OSError, ValueError) as e:
+            raise NotADirectoryError(f"{shorten(str(out), 300)}: --out cannot be used "
+                                     f"({getattr(e, 'strerror', None) or e})") from None
+        if stat.S_ISDIR(mode):
+            return
+        what = "a file" if stat.S_ISREG(mode) else describe_mode(mode)
+        where = "it is" if here == out else f"{here} is"
+        raise NotADirectoryError(f"{shorten(str(out), 300)}: --out must be a folder (its outputs are written inside "
+                                 f"it); {where} {what}")
 
 
 def _default_out(scenario_path: Path) -> Path:
@@ -569,10 +613,11 @@ def _add_bench(subparsers) -> None:
     p.add_argument("--algorithms", nargs="+", choices=ALGORITHMS, default=list(ALGORITHMS), metavar="A",
                    help=f"planners (default: all of {', '.join(ALGORITHMS)})")
     p.add_argument("--iterations", type=_positive_int, default=2000, metavar="K", help="samples per run (default 2000)")
-    p.add_argument("--seeds", type=_positive_int, default=10, metavar="N", help="seeds 0..N-1 per planner (default 10)")
-    p.add_argument("--repeats", type=_positive_int, default=1, metavar="R",
-                   help="time each seeded run R times, ours and OMPL's, and report the median (the same path each "
-                        "time: this only filters out the machine's noise; default 1)")
+    p.add_argument("--seeds", type=_int_at_least(1, MAX_BENCH_SEEDS), default=10, metavar="N",
+                   help=f"seeds 0..N-1 per planner, at most {MAX_BENCH_SEEDS:,} (default 10)")
+    p.add_argument("--repeats", type=_int_at_least(1, MAX_BENCH_REPEATS), default=1, metavar="R",
+                   help=f"time each seeded run R times (at most {MAX_BENCH_REPEATS}), ours and OMPL's, and report the "
+                        "median (the same path each time: this only filters out the machine's noise; default 1)")
     _add_checker_argument(p, default="planar")
     p.add_argument("--ompl-checker", choices=CHECKERS, default="drake",
                    help="the checker of OMPL's RRTstar (default: drake, Drake's SceneGraph checks as before "
@@ -669,8 +714,9 @@ def _add_experiment(subparsers) -> None:
     sweep.add_argument("config", type=Path, help="the sweep's YAML file")
     for q in (paper, sweep):
         q.add_argument("--out", type=Path, metavar="DIR", help="output directory (default: out/<study name>)")
-        q.add_argument("--workers", type=_positive_int, default=1, metavar="N",
-                       help="parallel worker processes (default 1: in this process); results do not depend on it")
+        q.add_argument("--workers", type=_int_at_least(1, MAX_WORKERS), default=1, metavar="N",
+                       help=f"parallel worker processes, at most {MAX_WORKERS} (each holds Drake: a few hundred MB; "
+                       "default 1: in this process); results do not depend on it")
         q.add_argument("--executor", choices=EXECUTORS, default="process",
                        help="process (concurrent.futures, default) or dask (the distributed package)")
         q.add_argument("--scheduler", metavar="ADDRESS",
@@ -761,6 +807,8 @@ def main(argv: Sequence[str] | None = None) -> int:
             import pydrake.common  # noqa: F401  (so that our level is not overwritten later)
 
             logging.getLogger("drake").setLevel(logging.WARNING)
+        if getattr(args, "out", None) is not None:
+            _check_out_folder(args.out)
         return args.run(args)
     except (ScenarioError, PlanningInputError) as e:
         print(f"drake-social: error: {e}", file=sys.stderr)

@@ -26,7 +26,7 @@ from pathlib import Path
 from drake_social.limits import MAX_WAYPOINTS
 
 __all__ = ["MAX_PATH_FILE_BYTES", "MAX_YAML_FILE_BYTES", "check_regular_file", "read_text_file", "read_yaml_file",
-           "shorten"]
+           "describe_mode", "shorten"]
 
 #: Bytes allowed per row of a path CSV: four numbers of 17 significant digits
 #: with exponent and sign take at most 4 x 24 + 3 commas + CRLF = 101 bytes;
@@ -83,6 +83,11 @@ def _not_regular(path: Path, mode: int, what: str, option: str | None):
     if stat.S_ISDIR(mode):
         return _error(path, f"is a directory, not a {what} file", option)
     return _error(path, f"not a regular file ({_kind(mode)}); a {what} file must be a regular file", option)
+
+
+def describe_mode(mode: int) -> str:
+    """What a file of ``os.stat`` mode ``mode`` is, for messages: "a directory", "a FIFO", ..."""
+    return _kind(mode)
 
 
 def _kind(mode: int) -> str:
