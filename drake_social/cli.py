@@ -22,8 +22,10 @@ goal in collision), 3 ``plan`` found no path (its outputs are still written),
 4 ``plan`` returned a path that Drake's independent check rejects (a bug in
 the checker that planned it; the outputs are still written, and one line on
 stderr names the segment), 5 ``simulate`` did not reach the goal within
-``execution.time_limit``, 6 ``simulate``'s executed trajectory collides
-(``simulate`` writes its files in every case), 130 interrupted (Ctrl-C): one
+``execution.time_limit``, 6 ``simulate``'s executed trajectory collides,
+7 it reached the goal collision-free but passed a joint limit (or left the
+room bounds; ``simulate`` writes its files in every case and names each
+finding on stderr), 130 interrupted (Ctrl-C): one
 line says what, and no file of the interrupted run is left (outputs are
 written as one set, see :mod:`drake_social.outputs`).
 """
@@ -33,6 +35,7 @@ from __future__ import annotations
 import argparse
 import json
 import logging
+import shutil
 import sys
 from pathlib import Path
 from typing import Callable, Sequence, TextIO
@@ -388,6 +391,8 @@ def _run_plan(args: argparse.Namespace) -> int:
 EXIT_NOT_REACHED = 5
 #: Exit code of ``simulate`` when the executed trajectory collides.
 EXIT_COLLISION = 6
+#: Exit code of ``simulate`` when the executed trajectory, collision-free, passes a joint limit (or a room bound).
+EXIT_LIMIT = 7
 
 
 def _add_simulate(subparsers) -> None:
@@ -402,8 +407,8 @@ def _add_simulate(subparsers) -> None:
         "the plan. Writes DIR/replay.html (a standalone Meshcat replay: open it in a browser, no server), "
         "DIR/executed.csv (t,x,y,psi1,psi2 and velocities), DIR/tracking.png (references against actual "
         f"over time) and DIR/sim.json. Exit code {EXIT_NO_PATH} no path, {EXIT_NOT_REACHED} goal not reached "
-        f"within execution.time_limit, {EXIT_COLLISION} the executed trajectory collides (files are written "
-        "in every case).",
+        f"within execution.time_limit, {EXIT_COLLISION} the executed trajectory collides, {EXIT_LIMIT} it "
+        "passes a joint limit (files are written in every case; stderr names each finding).",
     )
     _add_scenario_arguments(p)
     p.add_argument("--mode", choices=SIM_MODES,
@@ -584,14 +589,21 @@ def _run_simulate(args: argparse.Namespace) -> int:
         print(f"drake-social: no path from start to goal ({run.planner.message}); nothing was executed",
               file=sys.stderr)
         return EXIT_NO_PATH
+    # Every finding is named; the exit code is the first of: not reached,
+    # collision, limit.
+    codes = []
     if not run.reached:
         print(f"drake-social: {run.message}", file=sys.stderr)
-        return EXIT_NOT_REACHED
+        codes.append(EXIT_NOT_REACHED)
     if run.report is not None and not run.report.collision_free:
         print(f"drake-social: the executed trajectory collides (first at t = {run.report.first_collision_time:.2f} s)",
               file=sys.stderr)
-        return EXIT_COLLISION
-    return 0
+        codes.append(EXIT_COLLISION)
+    if run.report is not None and not run.report.within_limits:
+        for violation in run.report.limit_violations:
+            print(f"drake-social: the executed trajectory passes a joint limit: {violation}", file=sys.stderr)
+        codes.append(EXIT_LIMIT)
+    return codes[0] if codes else 0
 
 
 # ---- bench -------------------------------------------------------------------
@@ -730,11 +742,26 @@ def _add_experiment(subparsers) -> None:
 def _run_experiment(args: argparse.Namespace) -> int:
     from tqdm import tqdm
 
-    from drake_social.experiments.study import load_sweep, paper_study, run_study, write_study
+    from drake_social.experiments.study import (StudyOutputError, load_sweep, paper_study, rescue_records,
+                                                run_study, write_records, write_study)
     from drake_social.outputs import OutputSet
 
     if args.scheduler is not None and args.executor != "dask":
         raise ScenarioError("--scheduler needs --executor dask")
+    if args.scheduler is not None:  # before anything runs
+        from drake_social.experiments.executors import check_scheduler_address
+
+        try:
+            check_scheduler_address(args.scheduler)
+        except ValueError as e:
+            raise ScenarioError(f"--scheduler: {e}") from None
+    if args.executor == "dask" and not args.verbose:
+        try:  # distributed sets its loggers to INFO on import; keep their chatter for --verbose
+            import distributed  # noqa: F401
+        except ImportError:
+            pass  # map_tasks says what to install
+        else:
+            logging.getLogger("distributed").setLevel(logging.WARNING)
     if args.study == "paper":
         for name in ("office_bar.yaml", "generic_L.yaml"):
             check_regular_file(args.scenario_dir / name, "scenario", "--scenario-dir")
@@ -743,27 +770,62 @@ def _run_experiment(args: argparse.Namespace) -> int:
     else:
         study = load_sweep(args.config)
     out = args.out if args.out is not None else Path("out") / study.name
-    with OutputSet(out, "experiment") as outputs:  # entered first: a busy --out is refused before any run
-        bar = tqdm(total=1, desc=f"experiment {study.name}", unit="run", file=sys.stderr, dynamic_ncols=True,
-                   disable=not _show_progress(args))
+    result = None
+    failure = None  # the error of an output after the records
+    try:
+        with OutputSet(out, "experiment") as outputs:  # entered first: a busy --out is refused before any run
+            bar = tqdm(total=1, desc=f"experiment {study.name}", unit="run", file=sys.stderr, dynamic_ncols=True,
+                       disable=not _show_progress(args))
 
-        def progress(done: int, total: int, record: dict) -> None:
-            bar.total = total
-            bar.set_postfix_str(f"{record['group']} {record['algorithm']} run {record['run']}", refresh=False)
-            bar.update(done - bar.n)
+            def progress(done: int, total: int, record: dict) -> None:
+                bar.total = total
+                bar.set_postfix_str(f"{record['group']} {record['algorithm']} run {record['run']}", refresh=False)
+                bar.update(done - bar.n)
 
+            try:
+                result = run_study(study, executor=args.executor, workers=args.workers, scheduler=args.scheduler,
+                                   progress=progress)
+            finally:
+                bar.close()
+            try:
+                names = write_study(result, outputs.folder)
+            except Exception as e:  # the finished runs are kept: the set becomes the records alone
+                failure = StudyOutputError(str(e).replace(str(outputs.folder), str(out)))
+                for entry in outputs.folder.iterdir():
+                    if entry.is_dir() and not entry.is_symlink():
+                        shutil.rmtree(entry)
+                    else:
+                        entry.unlink()
+                names = write_records(result, outputs.folder)
+    except Exception as e:
+        if result is None:
+            raise
+        # Not even the records could be committed into --out: they go elsewhere.
+        why = str(e) if failure is None else f"{failure}; then committing the records alone failed: {e}"
+        cause = f"writing the study's outputs into {out} failed: {why}"
         try:
-            result = run_study(study, executor=args.executor, workers=args.workers, scheduler=args.scheduler,
-                               progress=progress)
-        finally:
-            bar.close()
-        names = write_study(result, outputs.folder)
+            rescued = rescue_records(result)
+        except Exception as second:
+            raise StudyOutputError(f"{cause}; saving the records of its {_runs(result)} into the temporary "
+                                   f"directory failed too: {second}") from e
+        raise StudyOutputError(f"{cause}; the records of its {_runs(result)} were saved to "
+                               f"{rescued / 'results.json'} and {rescued / 'results.csv'} instead") from e
     print(f"{len(result.records)} runs in {result.wall_time:.1f} s ({args.workers} worker(s), {args.executor})")
+    if failure is not None:
+        raise StudyOutputError(f"writing the study's outputs into {out} failed: {failure}; the records of its "
+                               f"{_runs(result)} are in {out / 'results.json'} and {out / 'results.csv'} (the "
+                               "figures, REPORT.md and the arena files were not written)") from failure
     for line in (out / "REPORT.md").read_text().splitlines():
         if line.startswith("- **"):
             print(line)
     print(f"wrote {out}/: {', '.join(names)}")
     return 0
+
+
+def _runs(result) -> str:
+    """"1 run", "12 runs": the number of a study's records."""
+    n = len(result.records)
+    return f"{n} run{'' if n == 1 else 's'}"
 
 
 # ---- parser and entry point ----------------------------------------------------

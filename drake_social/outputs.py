@@ -1,4 +1,4 @@
-"""Output sets that never mix runs: staged, locked, and committed as a whole.
+"""Output sets that never mix runs: staged, locked, and swapped in by one rename.
 
 A command writes its files through an :class:`OutputSet`::
 
@@ -7,52 +7,78 @@ A command writes its files through an :class:`OutputSet`::
         fig.savefig(outputs.path("tracking.png"))   # any writer, into the staging folder
     # here every file is in out_dir, or (on an exception, Ctrl-C) none of them changed
 
+The layout of one command's set (here ``plan``) in ``out_dir``::
+
+    .plan.gen-<id>/                  the files of the set, and .manifest (their names)
+    .plan.current -> .plan.gen-<id>  the set's generation: the one thing a commit swaps
+    path.csv -> .plan.current/path.csv         one link per file of the set
+    .plan.manifest -> .plan.current/.manifest
+    .plan.lock
+
 * Files are written into a private staging folder inside ``out_dir``
-  (``.staging-<command>-<pid>-<random>``) and moved into place by
-  ``os.replace`` only when the block ends normally, so a crash or Ctrl-C
-  while writing leaves the previous set untouched (and the staging folder
-  removed).
-* The move happens with SIGINT and SIGTERM deferred (Python-level handlers
-  that only note the signal, re-raised once the move is done: blocking the
-  signal in the main thread would not do, since Drake's and numba's threads
-  may receive it), so Ctrl-C cannot split it; files of this command's
-  *previous* set that the new one does not have (listed in
-  ``.<command>.manifest``) are removed in the same step, so the folder never
-  holds a new ``path.csv`` beside an old ``path.png``. A Ctrl-C that arrives
-  during the move raises :class:`InterruptedAfterCommit` (a
-  ``KeyboardInterrupt``) after it, so the caller can say the set was written.
-* Committed files get the permissions of a plainly created file
-  (``0o666 & ~umask``): the staging folder is private (``mkdtemp``: 0700) and
-  writers using ``tempfile`` create 0600 files.
+  (``.staging-<command>-<pid>-<random>``), which becomes the next generation.
+  The commit makes a link ``<name> -> .<command>.current/<name>`` for every
+  new name, then replaces the ``.<command>.current`` link by one
+  ``os.replace``: every file of the set changes at that instant, and since
+  every visible name reads through ``.<command>.current``, the folder shows
+  either the whole old set or the whole new one at any moment, also when the
+  process is killed (SIGKILL, power loss: the files and folders are fsynced
+  before the swap) between any two steps. A link whose file the current
+  generation does not have reads as a missing file, never as another run's.
+  After the swap the links of names the new set does not have and the old
+  generation are removed; a run killed before that leaves them to the next
+  run of the command, which removes them first.
+* :func:`current_set` tells a reader which generation ``out_dir`` holds and
+  its files.
+* A folder written before generations existed (plain files listed in a plain
+  ``.<command>.manifest``) is first taken over as a generation of its own,
+  hard links to the same files, so the swap is atomic from the first run on.
+* The commit happens with SIGINT and SIGTERM deferred (Python-level handlers
+  that only note the signal, re-raised once it is done: blocking the signal
+  in the main thread would not do, since Drake's and numba's threads may
+  receive it). A Ctrl-C that arrives during it raises
+  :class:`InterruptedAfterCommit` (a ``KeyboardInterrupt``) after it, so the
+  caller can say the set was written.
+* Committed files and generation folders get the permissions of a plainly
+  created file or folder (``0o666 & ~umask``, ``0o777 & ~umask``): the staging
+  folder is private (``mkdtemp``: 0700) and writers using ``tempfile`` create
+  0600 files.
 * A second run writing the same command's set into the same folder at the
   same time is refused (:class:`OutputBusyError`) through an advisory lock
   (``fcntl.flock`` on ``.<command>.lock``, released by the kernel when the
-  process dies, so a crashed run never leaves a stale lock; the staging
-  folders a killed run left are removed by the next run of the command).
+  process dies, so a crashed run never leaves a stale lock).
 
-Different commands (``show`` and ``plan``) keep their own sets in one folder.
+Different commands (``show`` and ``plan``) keep their own sets in one folder;
+a name written by two commands belongs to the one that wrote it last.
 
-What this does not cover: the move is a handful of renames, each atomic, not
-one; a process killed by SIGKILL or a power loss in those milliseconds can
-leave part of the new set beside part of the old one (the manifest then still
-lists the old set).
+On a file system without symbolic links (FAT, some network shares) the set
+is moved into place file by file, each file by an atomic rename, with the
+plain manifest last; there a process killed in those milliseconds can leave
+part of the new set beside part of the old one, and a warning says so.
 """
 
 from __future__ import annotations
 
+import dataclasses as dc
 import errno
 import fcntl
+import logging
 import os
+import secrets
 import shutil
 import signal
 import tempfile
 import threading
 from pathlib import Path
 
-__all__ = ["InterruptedAfterCommit", "OutputBusyError", "OutputSet"]
+__all__ = ["CommittedSet", "InterruptedAfterCommit", "OutputBusyError", "OutputSet", "current_set"]
+
+_log = logging.getLogger(__name__)
 
 #: Signals deferred while a set is moved into place.
 _DEFERRED_SIGNALS = (signal.SIGINT, signal.SIGTERM)
+#: The generation's list of its files (inside the generation folder).
+_MANIFEST = ".manifest"
 
 
 class OutputBusyError(OSError):
@@ -74,10 +100,47 @@ class InterruptedAfterCommit(KeyboardInterrupt):
         self.committed = committed
 
 
+@dc.dataclass(frozen=True)
+class CommittedSet:
+    """The set of one command that a folder holds.
+
+    Attributes:
+        generation: the generation folder's name (``.<command>.gen-<id>``),
+            different for every commit.
+        files: the set's file names, each readable as ``out_dir / name``.
+    """
+
+    generation: str
+    files: tuple[str, ...]
+
+
+def current_set(out_dir: str | os.PathLike, command: str) -> CommittedSet | None:
+    """The set of ``command`` in ``out_dir`` (None: no set committed).
+
+    Reads the ``.<command>.current`` link once, so the answer is one
+    generation even while another run commits.
+    """
+    out = Path(out_dir)
+    try:
+        generation = os.readlink(out / f".{command}.current")
+        names = (out / generation / _MANIFEST).read_text().splitlines()
+    except FileNotFoundError:
+        return None
+    return CommittedSet(generation, tuple(n for n in names if n))
+
+
 def _umask() -> int:
     mask = os.umask(0o022)
     os.umask(mask)
     return mask
+
+
+def _fsync(path: Path) -> None:
+    fd = os.open(path, os.O_RDONLY)
+    try:
+        os.fsync(fd)
+    finally:
+        os.close(fd)
 
 
 class OutputSet:
@@ -113,9 +176,8 @@ class OutputSet:
             raise
         self._lock_fd = fd
         try:
-            # We hold the lock: a staging folder of this command is a killed run's.
-            for stale in self.out_dir.glob(f".staging-{self.command}-*"):
-                shutil.rmtree(stale, ignore_errors=True)
+            # We hold the lock: what a killed run of this command left is removed.
+            self._tidy()
             self._staging = Path(tempfile.mkdtemp(prefix=f".staging-{self.command}-{os.getpid()}-",
                                                   dir=self.out_dir))
         except BaseException:
@@ -168,34 +230,164 @@ class OutputSet:
         p.write_text(text)
         return p
 
-    # ---- commit ---------------------------------------------------------------
+    # ---- the folder's layout --------------------------------------------------
 
+    @property
+    def _current(self) -> Path:
+        return self.out_dir / f".{self.command}.current"
+
+    @property
     def _manifest(self) -> Path:
         return self.out_dir / f".{self.command}.manifest"
 
+    def _link_target(self, name: str) -> str:
+        member = _MANIFEST if name == self._manifest.name else name
+        return f".{self.command}.current/{member}"
+
+    def _ours(self, entry: Path) -> bool:
+        """Whether ``entry`` is a link of this command's set."""
+        try:
+            return os.readlink(entry) == self._link_target(entry.name)
+        except OSError:  # not a link, or gone
+            return False
+
+    def _swap(self, link: Path, target: str) -> None:
+        """Makes ``link`` a symbolic link to ``target`` by one rename."""
+        tmp = self.out_dir / f".{self.command}.new-{secrets.token_hex(6)}"
+        os.symlink(target, tmp)
+        try:
+            os.replace(tmp, link)
+        except BaseException:
+            tmp.unlink(missing_ok=True)
+            raise
+
+    def _link_all(self, names) -> None:
+        """Links ``<name> -> .<command>.current/<name>`` for every name that is not linked yet."""
+        for name in names:
+            if not self._ours(self.out_dir / name):
+                self._swap(self.out_dir / name, self._link_target(name))
+
+    def _seal(self, generation: Path, names: list[str]) -> None:
+        """Writes the generation's manifest, sets normal permissions and
+        flushes it to disk (the swap must never point at lost data)."""
+        mode = 0o666 & ~_umask()
+        for name in names:
+            os.chmod(generation / name, mode)
+            _fsync(generation / name)
+        manifest = generation / _MANIFEST
+        manifest.write_text("".join(f"{n}\n" for n in names))
+        os.chmod(manifest, mode)
+        _fsync(manifest)
+        os.chmod(generation, 0o777 & ~_umask())
+        _fsync(generation)
+
+    # ---- commit ---------------------------------------------------------------
+
     def _commit(self) -> None:
         entries = list(self._staging.iterdir())
-        odd = [p.name for p in entries if not p.is_file() or p.name.startswith(".")]
+        odd = [p.name for p in entries if not p.is_file() or p.is_symlink() or p.name.startswith(".")]
         if odd:  # never drop a writer's output silently
             raise RuntimeError(f"output set {self.command!r}: staged entries that are not plain files: {odd}")
         staged = sorted(p.name for p in entries)
+        if not self._links_work():
+            self._commit_file_by_file(staged)
+            return
+        self._adopt_plain_set()
+        self._seal(self._staging, staged)
+        generation = self.out_dir / f".{self.command}.gen-{secrets.token_hex(6)}"
+        os.rename(self._staging, generation)
+        self._staging = None
         try:
-            previous = set(self._manifest().read_text().splitlines())
+            # Links of new names dangle until the swap (the old generation
+            # lacks them): to a reader, those files do not exist yet.
+            self._link_all([*staged, self._manifest.name])
+            self._swap(self._current, generation.name)  # the commit: one atomic rename
+        except BaseException:
+            self._tidy_quietly()  # the new generation and its dangling links
+            raise
+        self.committed = [self.out_dir / n for n in staged]
+        _fsync(self.out_dir)
+        self._tidy_quietly()
+
+    def _links_work(self) -> bool:
+        """Whether the file system of ``out_dir`` has symbolic links (FAT and
+        some network shares have none)."""
+        probe = self.out_dir / f".{self.command}.new-{secrets.token_hex(6)}"
+        try:
+            os.symlink(".", probe)
+        except OSError as e:
+            if e.errno in (errno.EPERM, errno.ENOTSUP, errno.EOPNOTSUPP, errno.ENOSYS):
+                return False
+            raise
+        probe.unlink()
+        return True
+
+    def _commit_file_by_file(self, staged: list[str]) -> None:
+        """The commit without symbolic links: each file moved into place by
+        its own rename, the files of the previous set that the new one does
+        not have removed, the plain manifest last."""
+        _log.warning("%s has no symbolic links: the %s set is moved into place file by file, so a process "
+                     "killed in those milliseconds can leave a mix of two sets", self.out_dir, self.command)
+        try:
+            previous = set(self._manifest.read_text().splitlines())
         except FileNotFoundError:
             previous = set()
-        mode = 0o666 & ~_umask()
-        for name in staged:
-            os.chmod(self._staging / name, mode)
-        manifest_tmp = self._staging / ".manifest"
-        manifest_tmp.write_text("".join(f"{n}\n" for n in staged))
-        os.chmod(manifest_tmp, mode)
+        self._seal(self._staging, staged)
         for name in staged:
             os.replace(self._staging / name, self.out_dir / name)
         for name in sorted(previous - set(staged)):
             if name and Path(name).name == name and not name.startswith("."):
                 (self.out_dir / name).unlink(missing_ok=True)
-        os.replace(manifest_tmp, self._manifest())
+        os.replace(self._staging / _MANIFEST, self._manifest)
         self.committed = [self.out_dir / n for n in staged]
+
+    def _tidy_quietly(self) -> None:
+        try:
+            self._tidy()
+        except OSError as e:  # the next run of the command removes the rest
+            _log.warning("%s: could not remove the previous %s set's leftovers: %s", self.out_dir, self.command, e)
+
+    def _adopt_plain_set(self) -> None:
+        """Turns a set of plain files listed in a plain ``.<command>.manifest``
+        (written before generations) into a generation, hard links to the same
+        files, so that every file reads the same at every step."""
+        if self._manifest.is_symlink() or not self._manifest.is_file():
+            return
+        names = [n for n in self._manifest.read_text().splitlines()
+                 if n and Path(n).name == n and not n.startswith(".")
+                 and ((self.out_dir / n).is_file() and not (self.out_dir / n).is_symlink() or self._ours(self.out_dir / n))]
+        generation = Path(tempfile.mkdtemp(prefix=f".{self.command}.gen-", dir=self.out_dir))
+        for name in names:
+            source = os.path.realpath(self.out_dir / name)
+            try:
+                os.link(source, generation / name)
+            except OSError:  # a file system without hard links
+                shutil.copy2(source, generation / name)
+        self._seal(generation, names)
+        self._swap(self._current, generation.name)
+        self._link_all([*names, self._manifest.name])
+        _fsync(self.out_dir)
+
+    def _tidy(self) -> None:
+        """Removes what is not part of the current set: staging folders,
+        unfinished links, other generations, and links of names the current
+        generation does not have."""
+        prefix = f".{self.command}."
+        current = os.readlink(self._current) if self._current.is_symlink() else None
+        shown = current_set(self.out_dir, self.command)
+        have = set(shown.files) if shown is not None else set()
+        for entry in self.out_dir.iterdir():
+            name = entry.name
+            if name.startswith(f".staging-{self.command}-") or (
+                    name.startswith(prefix + "gen-") and name != current):
+                if entry.is_symlink():
+                    entry.unlink()
+                else:
+                    shutil.rmtree(entry, ignore_errors=True)
+            elif name.startswith(prefix + "new-"):
+                entry.unlink(missing_ok=True)
+            elif not name.startswith(".") and name not in have and self._ours(entry):
+                entry.unlink(missing_ok=True)
 
 
 class _Deferred:

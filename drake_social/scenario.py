@@ -292,7 +292,9 @@ class ExecutionOptions:
     execution: str = "synchronized"
     # Proportional gain Kp of the base controller, 1/s (> 0; the paper: 1.5).
     kp: float = 1.5
-    # Largest base speed (norm of [vx, vy]), m/s (> 0).
+    # Largest base speed (norm of [vx, vy]), m/s (> 0). The synchronized
+    # reference also keeps to what the wheels give along each segment,
+    # max_wheel_speed * wheel_radius * |d| / (|dx| + |dy|), whichever is lower.
     max_base_speed: float = 0.5
     # Largest base acceleration and jerk per axis of the synchronized
     # reference, m/s^2 and m/s^3 (> 0).

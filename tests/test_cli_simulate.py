@@ -97,6 +97,10 @@ def test_time_limit_gives_exit_5(tmp_path, tiny_scenario_path, planned, capsys):
     ("x,y,psi1,psi2\n1.0,2.5,0.0,1.5708\n", "at least 2 waypoints"),
     ("x,y,psi1,psi2\n1.0,2.5,0.0,1.5708\n6.5,2.5,0.0,nan\n", "line 3"),
     ("x,y,psi1,psi2\n2.0,2.5,0.0,1.5708\n6.5,2.5,0.0,1.5708\n", "is not the scenario's start"),
+    ("x,y,psi1,psi2\n1.0,2.5,0.0,1.5708\n100,2.5,0,0\n6.5,2.5,0.0,1.5708\n",
+     "(--path): line 3 (waypoint 1): x: 100.0 is outside the room [0.0, 8.0] (world.bounds)"),
+    ("x,y,psi1,psi2\n1.0,2.5,0.0,1.5708\n\n2,2.5,0,10\n6.5,2.5,0.0,1.5708\n",
+     "(--path): line 4 (waypoint 1): psi2: 10.0 is outside the joint range [-3.141592653589793, 3.141592653589793] (robot.joint_lower/joint_upper)"),
 ])
 def test_bad_path_file_names_file_and_line(tmp_path, tiny_scenario_path, capsys, text, message):
     path = tmp_path / "path.csv"
@@ -110,3 +114,34 @@ def test_bad_path_file_names_file_and_line(tmp_path, tiny_scenario_path, capsys,
 def test_bad_mode_is_a_usage_error(tiny_scenario_path, capsys):
     assert main(["simulate", str(tiny_scenario_path), "--mode", "fast"]) == 2
     assert "invalid choice: 'fast'" in capsys.readouterr().err
+
+
+def test_a_joint_limit_pass_exits_7_and_is_named_apart_from_collisions(tmp_path, tiny_scenario_path, capsys,
+                                                                        monkeypatch):
+    # A goal on psi1's upper limit pi, driven by a deliberately under-damped
+    # servo (Kd = 12 1/s instead of 2 w = 120): the arm passes pi near the
+    # goal without touching anything. The run is collision-free and its
+    # finding is the limit, by name, joint, amount and time.
+    import drake_social.sim.diagram as diagram
+
+    monkeypatch.setattr(diagram, "servo_gains",
+                        lambda: (np.array([0.0, 0.0, 3600.0, 3600.0]), np.array([50.0, 50.0, 12.0, 12.0])))
+    out = tmp_path / "sim"
+    code = main(["simulate", str(tiny_scenario_path), "--set", "goal: [6.5, 2.5, 3.141592653589793, 1.5708]",
+                 "--mode", "dynamic", "--no-replay", "--out", str(out)])
+    captured = capsys.readouterr()
+    assert code == 7
+    record = json.loads((out / "sim.json").read_text())
+    assert record["reached"] and record["collision_free"] and record["first_collision_time"] is None
+    assert record["within_limits"] is False
+    (violation,) = record["limit_violations"]
+    assert violation["joint"] == "psi1" and violation["bound"] == "upper"
+    assert violation["limit"] == pytest.approx(np.pi, abs=0)
+    executed = np.loadtxt(out / "executed.csv", delimiter=",", skiprows=1)
+    beyond = executed[:, 3] - np.pi
+    assert violation["max_excess"] == pytest.approx(beyond.max(), rel=1e-12) and beyond.max() > 0
+    assert violation["first_time"] == pytest.approx(executed[np.argmax(beyond > 0), 0])
+    assert "within the joint limits" not in captured.out and "BEYOND A LIMIT: psi1" in captured.out
+    assert "collision-free" in captured.out and "COLLIDES" not in captured.out
+    assert "drake-social: the executed trajectory passes a joint limit: psi1 " in captured.err
+    assert "collides" not in captured.err

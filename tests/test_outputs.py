@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
+import errno
 import os
+import shutil
 import signal
 import stat
 import subprocess
@@ -14,7 +16,7 @@ from pathlib import Path
 import pytest
 
 from drake_social import outputs as outputs_module
-from drake_social.outputs import InterruptedAfterCommit, OutputBusyError, OutputSet
+from drake_social.outputs import InterruptedAfterCommit, OutputBusyError, OutputSet, current_set
 
 
 def _listing(folder: Path) -> dict[str, bytes]:
@@ -24,6 +26,14 @@ def _listing(folder: Path) -> dict[str, bytes]:
 
 def _hidden(folder: Path) -> list[str]:
     return sorted(p.name for p in folder.iterdir() if p.name.startswith("."))
+
+
+def _tidy_hidden(folder: Path, command: str = "plan") -> list[str]:
+    """The hidden entries of a folder holding one committed set of ``command``:
+    its lock, manifest link, current link and the one generation it names."""
+    generation = os.readlink(folder / f".{command}.current")
+    assert generation.startswith(f".{command}.gen-")
+    return sorted([f".{command}.current", generation, f".{command}.lock", f".{command}.manifest"])
 
 
 def _write_set(folder: Path, files: dict[str, str], command: str = "plan") -> OutputSet:
@@ -39,8 +49,11 @@ def test_a_new_set_replaces_the_previous_one_as_a_whole(tmp_path):
     dut = _write_set(tmp_path, {"path.csv": "new", "path.png": "new png"})
     assert _listing(tmp_path) == {"notes.txt": b"the user's", "path.csv": b"new", "path.png": b"new png"}
     assert dut.committed == [tmp_path / "path.csv", tmp_path / "path.png"]
-    assert _hidden(tmp_path) == [".plan.lock", ".plan.manifest"]  # the staging folder is gone
+    assert _hidden(tmp_path) == _tidy_hidden(tmp_path)  # the staging folder and the old generation are gone
     assert (tmp_path / ".plan.manifest").read_text() == "path.csv\npath.png\n"
+    # Every file reads through the one link that a commit swaps.
+    for name, target in (("path.csv", "path.csv"), ("path.png", "path.png"), (".plan.manifest", ".manifest")):
+        assert os.readlink(tmp_path / name) == f".plan.current/{target}"
 
 
 def test_sets_of_different_commands_are_independent(tmp_path):
@@ -60,7 +73,7 @@ def test_an_exception_or_ctrl_c_inside_the_block_leaves_the_old_set_untouched(tm
             dut.write_text("result.json", "new")
             raise error
     assert _listing(tmp_path) == before
-    assert _hidden(tmp_path) == [".plan.lock", ".plan.manifest"]
+    assert _hidden(tmp_path) == _tidy_hidden(tmp_path)
     # The lock was released: the next run goes ahead.
     _write_set(tmp_path, {"path.csv": "next"})
     assert _listing(tmp_path) == {"path.csv": b"next"}
@@ -82,6 +95,7 @@ def test_committed_files_have_normal_permissions(tmp_path):
         os.umask(old)
     for name in ("replay.html", "sim.json", ".simulate.manifest"):
         assert stat.S_IMODE((tmp_path / name).stat().st_mode) == 0o644, name
+    assert stat.S_IMODE((tmp_path / ".simulate.current").stat().st_mode) == 0o755  # the generation folder
 
 
 _HOLDER = textwrap.dedent("""
@@ -120,7 +134,7 @@ def test_a_killed_run_leaves_a_staging_folder_that_the_next_run_removes(tmp_path
     holder.stdin.close()
     assert [n for n in _hidden(tmp_path) if n.startswith(".staging-plan-")]
     _write_set(tmp_path, {"path.csv": "next"})
-    assert _hidden(tmp_path) == [".plan.lock", ".plan.manifest"]
+    assert _hidden(tmp_path) == _tidy_hidden(tmp_path)
     assert _listing(tmp_path) == {"path.csv": b"next"}
 
 
@@ -139,11 +153,12 @@ def test_ctrl_c_while_moving_the_set_into_place_completes_it_first(tmp_path, mon
 
     monkeypatch.setattr(outputs_module.os, "replace", interrupted_replace)
     with pytest.raises(InterruptedAfterCommit) as info:
-        _write_set(tmp_path, {"path.csv": "new", "path.png": "new png"})
+        _write_set(tmp_path, {"path.csv": "new", "path.png": "new png", "extra.png": "new extra"})
     assert isinstance(info.value, KeyboardInterrupt)
-    assert info.value.committed == [tmp_path / "path.csv", tmp_path / "path.png"]
-    assert calls == ["path.csv", "path.png", ".plan.manifest"]
-    assert _listing(tmp_path) == {"path.csv": b"new", "path.png": b"new png"}
+    assert info.value.committed == [tmp_path / "extra.png", tmp_path / "path.csv", tmp_path / "path.png"]
+    # The interrupted step links the new name; the swap of the generation still follows.
+    assert calls == ["extra.png", ".plan.current"]
+    assert _listing(tmp_path) == {"path.csv": b"new", "path.png": b"new png", "extra.png": b"new extra"}
     assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
 
 
@@ -166,3 +181,46 @@ def test_an_unwritable_out_is_an_oserror(tmp_path):
     with pytest.raises(OSError):
         with OutputSet(tmp_path / "file", "plan"):
             pass
+
+
+def test_without_symbolic_links_the_set_is_moved_file_by_file_with_a_warning(tmp_path, monkeypatch, caplog):
+    """FAT and some network shares refuse symbolic links (EPERM): the set
+    still lands, as plain files, and the weaker promise is logged."""
+    def no_links(*args, **kwargs):
+        raise OSError(errno.EPERM, "Operation not permitted")
+
+    monkeypatch.setattr(outputs_module.os, "symlink", no_links)
+    _write_set(tmp_path, {"path.csv": "old", "stale.png": "old"})
+    caplog.clear()
+    with caplog.at_level("WARNING", logger="drake_social.outputs"):
+        dut = _write_set(tmp_path, {"path.csv": "new", "path.png": "new png"})
+    assert _listing(tmp_path) == {"path.csv": b"new", "path.png": b"new png"}
+    assert dut.committed == [tmp_path / "path.csv", tmp_path / "path.png"]
+    assert not any(p.is_symlink() for p in tmp_path.iterdir())
+    assert _hidden(tmp_path) == [".plan.lock", ".plan.manifest"]
+    assert (tmp_path / ".plan.manifest").read_text() == "path.csv\npath.png\n"
+    assert [r.getMessage() for r in caplog.records] == [
+        f"{tmp_path} has no symbolic links: the plan set is moved into place file by file, so a process killed in "
+        "those milliseconds can leave a mix of two sets"]
+    # Back on a file system with links, that plain set is taken over as a generation.
+    monkeypatch.undo()
+    _write_set(tmp_path, {"path.csv": "third"})
+    assert _listing(tmp_path) == {"path.csv": b"third"}
+    assert _hidden(tmp_path) == _tidy_hidden(tmp_path)
+
+
+def test_a_generation_removed_by_hand_is_replaced_by_the_next_set(tmp_path):
+    """`rm -rf out/.plan.gen-*` leaves dangling links: they read as missing
+    files, and the next run writes a complete set over them."""
+    _write_set(tmp_path, {"path.csv": "old", "path.png": "old png"})
+    for generation in tmp_path.glob(".plan.gen-*"):
+        shutil.rmtree(generation)
+    assert current_set(tmp_path, "plan") is None and _listing_readable(tmp_path) == {}
+    _write_set(tmp_path, {"path.csv": "new"})
+    assert _listing(tmp_path) == {"path.csv": b"new"}
+    assert _hidden(tmp_path) == _tidy_hidden(tmp_path)
+    assert current_set(tmp_path, "plan").files == ("path.csv",)
+
+
+def _listing_readable(folder: Path) -> dict[str, bytes]:
+    return {p.name: p.read_bytes() for p in folder.iterdir() if not p.name.startswith(".") and p.exists()}

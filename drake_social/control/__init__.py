@@ -14,6 +14,7 @@ from drake_social.control.holonomic import (
     base_velocity,
     mecanum_matrix,
     saturate_norm,
+    wheel_limited_speed,
     wheel_speeds,
 )
 from drake_social.control.planner_system import PlannerSystem, path_parameter, waypoint_trajectory
@@ -39,5 +40,6 @@ __all__ = [
     "reference_source_from_options",
     "saturate_norm",
     "waypoint_trajectory",
+    "wheel_limited_speed",
     "wheel_speeds",
 ]

@@ -12,7 +12,8 @@ rotation is not controlled (the robot keeps its heading), so only ``[vx,
 vy]`` appear.
 
 * :func:`mecanum_matrix`, :func:`wheel_speeds`, :func:`base_velocity`,
-  :func:`saturate_norm`: pure numpy, vectorised over leading axes.
+  :func:`saturate_norm`, :func:`wheel_limited_speed`: pure numpy, vectorised
+  over leading axes.
 * :class:`HolonomicPController`: target and position in, limited wheel
   speeds and the base velocity they produce out.
 * :class:`MecanumDrive`: wheel speeds in, base velocity out (the base that
@@ -47,6 +48,7 @@ __all__ = [
     "base_velocity",
     "mecanum_matrix",
     "saturate_norm",
+    "wheel_limited_speed",
     "wheel_speeds",
 ]
 
@@ -92,6 +94,30 @@ def saturate_norm(v, max_norm: float) -> np.ndarray:
     norm = np.linalg.norm(v, axis=-1, keepdims=True)
     scale = np.minimum(1.0, max_norm / np.maximum(norm, np.finfo(float).tiny))
     return v * scale
+
+
+def wheel_limited_speed(direction, wheel_radius: float, max_wheel_speed: float) -> np.ndarray:
+    """The largest base speed (m/s) in ``direction`` that the wheels allow.
+
+    With ``w = (1/r) M^T v`` the largest wheel speed is ``(|vx| + |vy|) / r``,
+    so a base moving at speed s along the unit vector u needs ``s (|u_x| +
+    |u_y|) / r <= max_wheel_speed``: ``s <= max_wheel_speed r / (|u_x| +
+    |u_y|)``, from ``max_wheel_speed r`` along x or y down to ``max_wheel_speed
+    r / sqrt(2)`` on a diagonal.
+
+    Args:
+        direction: [dx, dy] (any non-zero length), shape (..., 2).
+        wheel_radius: r, metres (> 0).
+        max_wheel_speed: rad/s (> 0).
+
+    Returns:
+        Shape (...); ``inf`` for a zero direction (the base does not move).
+    """
+    d = np.asarray(direction, float)
+    norm = np.linalg.norm(d, axis=-1)
+    l1 = np.abs(d).sum(axis=-1)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return np.where(l1 > 0, max_wheel_speed * wheel_radius * norm / np.where(l1 > 0, l1, 1.0), np.inf)
 
 
 def _positive(name: str, value: float, who: str) -> float:

@@ -15,16 +15,23 @@ direct feedthrough from ``target``).
 
 Ports: input ``target`` (n; while it has no value, the reference stays
 where it is); outputs ``position``, ``velocity``,
-``acceleration`` (n each) and ``finished`` (1: 1.0 once ``t - t0 >=
-duration``).
+``acceleration`` (n each), ``state`` (3n: the three in one evaluation, for
+a consumer that reads them at every step of a fast plant) and ``finished``
+(1: 1.0 once ``t - t0 >= duration``).
 
 Ruckig is only ever given a current and a target state, never intermediate
 positions: the community version would otherwise call a remote web service.
+Nor does it take position limits (a feature of Ruckig Pro); with
+``position_limits`` the source itself keeps the reference within them: it
+checks each new segment's position extrema and, when a segment would leave
+the limits, heads for the new target only once at rest (a rest-to-rest
+segment between two positions within the limits stays within them).
 
 Factories: :func:`arm_source_from_options` (the two arm joints) and
 :func:`reference_source_from_options` (the synchronized 4-DoF reference
-``[x, y, psi1, psi2]``, phase-synchronized so that the base moves on the
-straight segment, with the base speed limit on the *norm* of ``[vx, vy]``).
+``[x, y, psi1, psi2]``, phase-synchronized so that each segment from rest is
+a motion on the straight segment, with the base speed limit on the *norm* of ``[vx, vy]``
+and the wheels' limit on ``|vx| + |vy|``).
 
 Example::
 
@@ -74,6 +81,12 @@ _SYNCHRONIZATIONS = {
 # DoF that does not move still has a valid (positive) limit.
 _SHARE_FLOOR = 1e-6
 
+# Ruckig's position extrema and at_time() are exact up to rounding; a segment
+# whose extrema pass a position limit by at most this much (in the DoF's
+# units, relative to max(1, |limit|)) is within it, and its outputs are
+# clipped to the limits, which removes only that rounding.
+_LIMIT_ROUNDING = 1e-12
+
 _SERIALS = itertools.count()
 
 
@@ -90,11 +103,14 @@ class RuckigSegment:
         rest: (n,) position held when ``trajectory`` is None.
         target: (n,) target this segment heads for, or None when no target
             has been seen yet (any target then starts a segment).
+        clip: (lower, upper) position limits (lists of floats) the segment's
+            extrema respect up to rounding; positions are clipped to them, or None.
     """
 
-    __slots__ = ("t0", "trajectory", "rest", "target", "target_list", "serial")
+    __slots__ = ("t0", "trajectory", "rest", "target", "target_list", "serial", "clip")
 
-    def __init__(self, t0: float, trajectory, rest: np.ndarray, target: np.ndarray | None):
+    def __init__(self, t0: float, trajectory, rest: np.ndarray, target: np.ndarray | None,
+                 clip: tuple[np.ndarray, np.ndarray] | None = None):
         object.__setattr__(self, "serial", next(_SERIALS))  # identifies the segment in caches
         object.__setattr__(self, "t0", float(t0))
         object.__setattr__(self, "trajectory", trajectory)
@@ -106,6 +122,7 @@ class RuckigSegment:
             target.flags.writeable = False
         object.__setattr__(self, "target", target)
         object.__setattr__(self, "target_list", None if target is None else target.tolist())
+        object.__setattr__(self, "clip", clip)
 
     def __setattr__(self, name, value):
         raise AttributeError("RuckigSegment is immutable")
@@ -138,6 +155,8 @@ class RuckigSegment:
             return self.target.copy(), zero, zero.copy()
         # at_time extrapolates for t < t0: clamp.
         p, v, a = self.trajectory.at_time(max(t - self.t0, 0.0))
+        if self.clip is not None:  # rounding only: see _LIMIT_ROUNDING (plain floats: this runs every step)
+            p = [lo if x < lo else hi if x > hi else x for x, lo, hi in zip(p, *self.clip)]
         return np.array(p, float), np.array(v, float), np.array(a, float)
 
 
@@ -161,6 +180,25 @@ def _direction_share(*vectors: np.ndarray) -> np.ndarray:
     return share
 
 
+class _LineTrajectory:
+    """A motion on a straight segment: a 1-DoF ``ruckig.Trajectory`` of the
+    distance s (0 to ``length``) along the unit vector ``u`` from ``start``;
+    the part of ``ruckig.Trajectory`` that :class:`RuckigSegment` uses."""
+
+    __slots__ = ("_trajectory", "_start", "_u", "duration")
+
+    def __init__(self, trajectory, start: np.ndarray, u: np.ndarray, length: float):
+        self._trajectory = trajectory
+        self._start = [float(x) for x in start]
+        self._u = [float(x) for x in u]
+        self.duration = float(trajectory.duration)
+
+    def at_time(self, t: float) -> tuple[list[float], list[float], list[float]]:
+        (s,), (sd,), (sdd,) = self._trajectory.at_time(t)
+        return ([p + s * u for p, u in zip(self._start, self._u)], [sd * u for u in self._u],
+                [sdd * u for u in self._u])
+
+
 class RuckigTrajectorySource(LeafSystem):
     """A jerk-limited reference that heads for its ``target`` input.
 
@@ -172,18 +210,36 @@ class RuckigTrajectorySource(LeafSystem):
         max_jerk: (n,) jerk limits, units/s^3 (> 0).
         period: period of the update that reads the target, seconds (> 0).
         synchronization: "time", "phase", "time_if_necessary", "none" or a
-            ``ruckig.Synchronization``.
+            ``ruckig.Synchronization``. With "phase", a segment from rest is
+            the time-optimal motion *on the straight segment* (a 1-DoF
+            Ruckig profile of the distance along it, each limit the tightest
+            the DoFs allow); Ruckig's own n-DoF phase synchronization falls
+            back to time synchronization, off the segment, when the DoFs'
+            profiles differ in shape.
         xy_norm_dofs: indices of DoFs (e.g. ``(0, 1)`` for the base x, y)
             whose limits bound the *norm* of their velocity, acceleration and
-            jerk instead of each component. For each new segment their limits
-            are scaled by ``|d_i| / |d|`` (d the displacement of those DoFs),
-            which with phase synchronization and a start at rest keeps the
-            group on the straight segment with its norm within the limit. When
-            a target changes mid-motion, each share is also at least the
-            share of the current velocity and acceleration, so the current
-            state stays within the per-DoF limits (that transition is then
-            not on a straight line and its norm may exceed the limit by up
-            to sqrt(2)).
+            jerk instead of each component (on a straight segment from rest:
+            exactly). When a target changes mid-motion, their limits are
+            scaled by ``|d_i| / |d|`` (d the displacement of those DoFs), each
+            share at least the share of the current velocity and
+            acceleration, so the current state stays within the per-DoF
+            limits (that transition is not on a straight line and its norm
+            may exceed the limit by up to sqrt(2)).
+        xy_max_abs_sum: when given (units/s, > 0; needs ``xy_norm_dofs``),
+            also bounds the *sum* of the group's absolute velocities: the
+            group's speed limit on a segment of direction d is
+            ``min(max_velocity, xy_max_abs_sum |d| / sum_i |d_i|)``
+            (mecanum wheels at ``max_wheel_speed`` reach exactly
+            ``|vx| + |vy| = max_wheel_speed * wheel_radius``).
+        position_limits: when given, ``(lower, upper)`` (n each, lower <
+            upper): the reference stays within them. A target outside them
+            is an error; a new segment whose position extrema (Ruckig's
+            ``position_extrema``) would leave them is not started while the
+            reference moves (the current segment, within the limits,
+            finishes first), and from rest it is the straight segment
+            (between two points of the box, within it). Positions are
+            clipped to the limits, which removes only rounding (see
+            ``_LIMIT_ROUNDING``).
         preview: when given (seconds, > 0), an extra output port
             ``mean_velocity`` = ``(position(t + preview) - position(t)) /
             preview`` along the current segment: the feed-forward that makes
@@ -192,8 +248,10 @@ class RuckigTrajectorySource(LeafSystem):
 
     Raises:
         ValueError: limits not positive or of the wrong length, unknown
-            synchronization, bad ``xy_norm_dofs``.
-        RuntimeError: (from an update) Ruckig cannot compute a segment.
+            synchronization, bad ``xy_norm_dofs``, ``xy_max_abs_sum`` or
+            ``position_limits``.
+        RuntimeError: (from an update) Ruckig cannot compute a segment, or
+            the target lies outside ``position_limits``.
     """
 
     def __init__(
@@ -206,6 +264,8 @@ class RuckigTrajectorySource(LeafSystem):
         period: float,
         synchronization: str | ruckig.Synchronization = "time",
         xy_norm_dofs: Sequence[int] | None = None,
+        xy_max_abs_sum: float | None = None,
+        position_limits: tuple[Sequence[float], Sequence[float]] | None = None,
         preview: float | None = None,
     ):
         super().__init__()
@@ -237,6 +297,33 @@ class RuckigTrajectorySource(LeafSystem):
                     f"got {xy_norm_dofs!r}"
                 )
             self._norm_dofs = np.array(dofs)
+        self._max_abs_sum = None
+        if xy_max_abs_sum is not None:
+            if self._norm_dofs is None or not (np.isfinite(xy_max_abs_sum) and xy_max_abs_sum > 0):
+                raise ValueError(
+                    f"RuckigTrajectorySource: xy_max_abs_sum must be a finite number > 0 and needs xy_norm_dofs, "
+                    f"got {xy_max_abs_sum!r}"
+                )
+            self._max_abs_sum = float(xy_max_abs_sum)
+        self._position_limits = None
+        if position_limits is not None:
+            try:
+                lower, upper = (np.array(v, float).reshape(-1) for v in position_limits)
+            except (TypeError, ValueError):
+                lower = upper = np.zeros(0)
+            if (lower.shape != (n,) or upper.shape != (n,) or not np.all(np.isfinite(lower))
+                    or not np.all(np.isfinite(upper)) or not np.all(lower < upper)):
+                raise ValueError(
+                    f"RuckigTrajectorySource: position_limits must be (lower, upper) of {n} finite numbers each "
+                    f"with lower < upper, got {position_limits!r}"
+                )
+            if not np.all((initial >= lower) & (initial <= upper)):
+                raise ValueError(f"RuckigTrajectorySource: initial_position {initial.tolist()} is outside "
+                                 f"position_limits [{lower.tolist()}, {upper.tolist()}]")
+            lower.flags.writeable = False
+            upper.flags.writeable = False
+            self._position_limits = (lower, upper)
+            self._limit_lists = (lower.tolist(), upper.tolist())
 
         self._target_port = self.DeclareVectorInputPort("target", n)
         self._segment_index = self.DeclareAbstractState(AbstractValue.Make(self._RestSegment(0.0, initial)))
@@ -248,6 +335,7 @@ class RuckigTrajectorySource(LeafSystem):
         self.DeclareVectorOutputPort("position", n, self._CalcPosition, prerequisites_of_calc=prereqs)
         self.DeclareVectorOutputPort("velocity", n, self._CalcVelocity, prerequisites_of_calc=prereqs)
         self.DeclareVectorOutputPort("acceleration", n, self._CalcAcceleration, prerequisites_of_calc=prereqs)
+        self.DeclareVectorOutputPort("state", 3 * n, self._CalcState, prerequisites_of_calc=prereqs)
         self.DeclareVectorOutputPort("finished", 1, self._CalcFinished, prerequisites_of_calc=prereqs)
         self._preview = None
         if preview is not None:
@@ -269,6 +357,10 @@ class RuckigTrajectorySource(LeafSystem):
         q = np.array(q, float).reshape(-1)
         if q.shape != (self._n,) or not np.all(np.isfinite(q)):
             raise ValueError(f"{self.get_name()}: SetInitialPosition needs {self._n} finite numbers, got {q!r}")
+        limits = self._position_limits
+        if limits is not None and not np.all((q >= limits[0]) & (q <= limits[1])):
+            raise ValueError(f"{self.get_name()}: SetInitialPosition: {q.tolist()} is outside the position limits "
+                             f"[{limits[0].tolist()}, {limits[1].tolist()}]")
         context.get_mutable_abstract_state(self._segment_index).set_value(self._RestSegment(context.get_time(), q))
 
     # ---- event -----------------------------------------------------------------
@@ -281,6 +373,10 @@ class RuckigTrajectorySource(LeafSystem):
         if self._norm_dofs is not None:
             g = self._norm_dofs
             share = _direction_share(d[g], v[g], a[g])
+            if self._max_abs_sum is not None:
+                # Along the segment v_i = s share_i, so sum |v_i| <= xy_max_abs_sum
+                # when the group's speed s <= xy_max_abs_sum / sum(share).
+                vmax[g] = np.minimum(vmax[g], self._max_abs_sum / share.sum())
             vmax[g] *= share
             amax[g] *= share
             jmax[g] *= share
@@ -298,8 +394,78 @@ class RuckigTrajectorySource(LeafSystem):
             raise RuntimeError(f"{self.get_name()}: the target input must be finite, got {target}")
         t = context.get_time()
         p, v, a = segment.at(t)
-        vmax, amax, jmax = self._Limits(target - p, v, a)
+        limits = self._position_limits
+        if limits is not None and not np.all((target >= limits[0]) & (target <= limits[1])):
+            raise RuntimeError(f"{self.get_name()}: the target {target.tolist()} at t = {t} s is outside the "
+                               f"position limits [{limits[0].tolist()}, {limits[1].tolist()}]")
+        at_rest = not (np.any(v) or np.any(a))
+        if at_rest and self._synchronization == ruckig.Synchronization.Phase:
+            trajectory = self._Line(t, p, target)
+        else:
+            trajectory = self._Calculate(t, p, v, a, target, self._synchronization)
+            if limits is not None and not self._WithinLimits(trajectory):
+                if not at_rest:
+                    # The current segment stays within the limits and ends at rest;
+                    # the next update after that starts a rest-to-rest segment.
+                    return EventStatus.DidNothing()
+                trajectory = self._Line(t, p, target)  # between two points of the box: within it
+        if trajectory is None:  # already there
+            state.get_mutable_abstract_state(self._segment_index).set_value(RuckigSegment(t, None, target, target))
+            return None
+        state.get_mutable_abstract_state(self._segment_index).set_value(
+            RuckigSegment(t, trajectory, p, target, clip=None if limits is None else self._limit_lists))
 
+    def _Line(self, t: float, p: np.ndarray, target: np.ndarray) -> "_LineTrajectory | None":
+        """The time-optimal rest-to-rest motion on the straight segment p -> target (None if p == target).
+
+        A 1-DoF Ruckig profile of the distance s along the unit direction u,
+        with each limit the tightest of the DoFs': ``max_i / |u_i|`` for a
+        per-DoF limit, ``max / |u_g|`` for the norm of the ``xy_norm_dofs``
+        group g and ``xy_max_abs_sum / sum_g |u_i|``. Unlike an n-DoF phase
+        synchronization, which Ruckig silently turns into a time
+        synchronization off the segment when the DoFs' profiles differ in
+        shape, it exists for every pair of limits.
+        """
+        d = target - p
+        length = float(np.linalg.norm(d))
+        if length == 0.0:
+            return None
+        u = d / length
+        scale = np.abs(u)
+        free = np.ones(self._n, bool)
+        limits = []
+        for per_dof in (self._max_velocity, self._max_acceleration, self._max_jerk):
+            bounds = []
+            if self._norm_dofs is not None:
+                g = self._norm_dofs
+                free[g] = False
+                norm = float(np.linalg.norm(u[g]))
+                if norm > 0:
+                    # The group's limits bound its norm (the per-DoF values of the group are equal).
+                    bounds.append(float(np.min(per_dof[g])) / norm)
+            moving = free & (scale > 0)
+            bounds.extend((per_dof[moving] / scale[moving]).tolist())
+            limits.append(min(bounds))
+        if self._max_abs_sum is not None:
+            l1 = float(np.sum(scale[self._norm_dofs]))
+            if l1 > 0:
+                limits[0] = min(limits[0], self._max_abs_sum / l1)
+        inp = ruckig.InputParameter(1)
+        inp.current_position, inp.current_velocity, inp.current_acceleration = [0.0], [0.0], [0.0]
+        inp.target_position, inp.target_velocity, inp.target_acceleration = [length], [0.0], [0.0]
+        inp.max_velocity, inp.max_acceleration, inp.max_jerk = [limits[0]], [limits[1]], [limits[2]]
+        trajectory = ruckig.Trajectory(1)
+        try:
+            result = ruckig.Ruckig(1).calculate(inp, trajectory)
+        except ruckig.RuckigError as error:
+            raise RuntimeError(f"{self.get_name()}: Ruckig failed at t = {t} s: {error}") from error
+        if result != ruckig.Result.Working:
+            raise RuntimeError(f"{self.get_name()}: Ruckig failed at t = {t} s with {result}; input:\n{inp}")
+        return _LineTrajectory(trajectory, p, u, length)
+
+    def _Calculate(self, t: float, p: np.ndarray, v: np.ndarray, a: np.ndarray, target: np.ndarray,
+                   synchronization: ruckig.Synchronization):
+        vmax, amax, jmax = self._Limits(target - p, v, a)
         inp = ruckig.InputParameter(self._n)
         inp.current_position = p.tolist()
         inp.current_velocity = v.tolist()
@@ -310,7 +476,7 @@ class RuckigTrajectorySource(LeafSystem):
         inp.max_velocity = vmax.tolist()
         inp.max_acceleration = amax.tolist()
         inp.max_jerk = jmax.tolist()
-        inp.synchronization = self._synchronization
+        inp.synchronization = synchronization
         # Never set inp.intermediate_positions (see the module docstring).
         trajectory = ruckig.Trajectory(self._n)
         try:
@@ -320,7 +486,16 @@ class RuckigTrajectorySource(LeafSystem):
             raise RuntimeError(f"{self.get_name()}: Ruckig failed at t = {t} s: {error}") from error
         if result != ruckig.Result.Working:
             raise RuntimeError(f"{self.get_name()}: Ruckig failed at t = {t} s with {result}; input:\n{inp}")
-        state.get_mutable_abstract_state(self._segment_index).set_value(RuckigSegment(t, trajectory, p, target))
+        return trajectory
+
+    def _WithinLimits(self, trajectory) -> bool:
+        lower, upper = self._position_limits
+        extrema = trajectory.position_extrema
+        low = np.array([e.min for e in extrema])
+        high = np.array([e.max for e in extrema])
+        slack_low = _LIMIT_ROUNDING * np.maximum(1.0, np.abs(lower))
+        slack_high = _LIMIT_ROUNDING * np.maximum(1.0, np.abs(upper))
+        return bool(np.all(low >= lower - slack_low) and np.all(high <= upper + slack_high))
 
     # ---- outputs ---------------------------------------------------------------
 
@@ -341,6 +516,10 @@ class RuckigTrajectorySource(LeafSystem):
 
     def _CalcAcceleration(self, context: Context, output: BasicVector) -> None:
         output.SetFromVector(self._At(context)[2])
+
+    def _CalcState(self, context: Context, output: BasicVector) -> None:
+        p, v, a = self._At(context)
+        output.SetFromVector(np.concatenate([p, v, a]))
 
     def _CalcMeanVelocity(self, context: Context, output: BasicVector) -> None:
         segment, t = self._Segment(context), context.get_time()
@@ -366,15 +545,21 @@ def _finite_vector(value, n: int, who: str, argument: str, layout: str) -> np.nd
     return np.array(a, float)
 
 
-def arm_source_from_options(execution_options: ExecutionOptions, initial_arm: Sequence[float]) -> RuckigTrajectorySource:
+def arm_source_from_options(
+    execution_options: ExecutionOptions, initial_arm: Sequence[float],
+    position_limits: tuple[Sequence[float], Sequence[float]] | None = None,
+) -> RuckigTrajectorySource:
     """The arm's reference (2 DoFs ``[psi1, psi2]``, radians) with the scenario's arm limits.
 
     Args:
         execution_options: a scenario's ``execution`` section.
         initial_arm: (2,) initial joint angles, radians.
+        position_limits: (lower, upper) joint limits the reference keeps
+            to (``robot.joint_lower``, ``robot.joint_upper``), radians, or None.
     """
     require_execution_options(execution_options, "arm_source_from_options")
     return RuckigTrajectorySource(
+        position_limits=position_limits,
         initial_position=_finite_vector(initial_arm, 2, "arm_source_from_options", "initial_arm", "[psi1, psi2]"),
         max_velocity=execution_options.arm_max_velocity,
         max_acceleration=execution_options.arm_max_acceleration,
@@ -384,23 +569,33 @@ def arm_source_from_options(execution_options: ExecutionOptions, initial_arm: Se
 
 
 def reference_source_from_options(
-    execution_options: ExecutionOptions, initial_q: Sequence[float]
+    execution_options: ExecutionOptions, initial_q: Sequence[float],
+    position_limits: tuple[Sequence[float], Sequence[float]] | None = None,
 ) -> RuckigTrajectorySource:
     """The synchronized reference of the whole configuration ``[x, y, psi1, psi2]``.
 
     Phase-synchronized, so base and arm start and arrive together and (from
     rest) move proportionally: the base on the straight segment. The base
     limits bound the norm of ``[vx, vy]`` (and of the acceleration and jerk)
-    through ``xy_norm_dofs=(0, 1)``. Its ``mean_velocity`` previews one
-    ``control_period``, the feed-forward of the sampled base controller.
+    through ``xy_norm_dofs=(0, 1)``, and the wheels' limit bounds ``|vx| +
+    |vy|`` by ``max_wheel_speed * wheel_radius`` (``xy_max_abs_sum``), so the
+    base's speed on a segment is at most
+    :func:`~drake_social.control.holonomic.wheel_limited_speed` and the
+    wheels are never asked for more than they give. Its ``mean_velocity``
+    previews one ``control_period``, the feed-forward of the sampled base
+    controller.
 
     Args:
         execution_options: a scenario's ``execution`` section.
         initial_q: (4,) initial configuration (metres, radians).
+        position_limits: (lower, upper) limits of ``[x, y, psi1, psi2]`` the
+            reference keeps to (the room bounds and the joint limits), or None.
     """
     require_execution_options(execution_options, "reference_source_from_options")
     e = execution_options
     return RuckigTrajectorySource(
+        xy_max_abs_sum=e.max_wheel_speed * e.wheel_radius,
+        position_limits=position_limits,
         initial_position=_finite_vector(initial_q, 4, "reference_source_from_options", "initial_q",
                                         "[x, y, psi1, psi2]"),
         max_velocity=[e.max_base_speed, e.max_base_speed, *e.arm_max_velocity],

@@ -5,11 +5,15 @@ from __future__ import annotations
 import numpy as np
 
 from drake_social.cost import kernel
-from drake_social.cost.agf import PersonalSpace, agf, agf_xy, gaussian, people_array
+from drake_social.cost.agf import PersonalSpace, agf_xy, gaussian, people_array
 from drake_social.kinematics import ArmGeometry, config_distance, displacement_bound
 from drake_social.limits import MAX_MOTION_STEPS
 
-__all__ = ["SocialCost", "interpolation_segments"]
+__all__ = ["FIELD_CHUNK_ELEMENTS", "SocialCost", "interpolation_segments"]
+
+#: Largest number of (point, person) values :meth:`SocialCost.field` holds at
+#: once (about 2 MB per temporary array); larger grids are evaluated in chunks.
+FIELD_CHUNK_ELEMENTS = 1 << 18
 
 
 def interpolation_segments(max_displacement: np.ndarray, resolution: float) -> np.ndarray:
@@ -109,15 +113,23 @@ class SocialCost:
 
     def point_costs(self, q: np.ndarray) -> np.ndarray:
         """Unweighted ``sum_i AGF_i(p_j(q))`` for every interest point, (..., 3 + P)."""
-        return agf(self.geometry.interest_points(q), self.people, self.space).sum(-1)
+        points = self.geometry.interest_points(q)
+        return self._people_sum(points[..., 0], points[..., 1])
 
     def __call__(self, q: np.ndarray) -> np.ndarray:
-        """S(q) for q of shape (..., 4); returns shape (...)."""
+        """S(q) for q of shape (..., 4); returns shape (...).
+
+        The people's sums are taken as in :meth:`field` (in chunks of
+        bounded memory), so a long path's profile in a crowd costs megabytes."""
         q = np.asarray(q, dtype=float)
         if len(self.people) == 0 or len(self._active) == 0:
             return np.zeros(q.shape[:-1])
         x, y = self.geometry.interest_xy(q, self._active)
-        return agf_xy(x, y, self.people, self.space).sum(-1) @ self._active_weights
+        # In the memory layout of x, as the sums of one (..., K, H) array
+        # would be: the weighted sum over K then runs the same BLAS path.
+        sums = np.empty_like(x)
+        sums[...] = self._people_sum(x, y)
+        return sums @ self._active_weights
 
     # ---- along motions --------------------------------------------------------
 
@@ -272,6 +284,45 @@ class SocialCost:
     # ---- for figures ----------------------------------------------------------
 
     def field(self, x: np.ndarray, y: np.ndarray) -> np.ndarray:
-        """``G(x, y) = sum_i AGF_i(x, y)`` (thresholded), broadcast over x and y."""
+        """``G(x, y) = sum_i AGF_i(x, y)`` (thresholded), broadcast over x and y.
+
+        Evaluated in chunks of consecutive points, each against only the
+        people within the AGF's reach of the chunk's bounding box (the others
+        add exactly 0), so the temporary (points, people) arrays hold at most
+        about :data:`FIELD_CHUNK_ELEMENTS` values whatever the number of
+        points and people: a 512 x 512 heat map of a crowd costs megabytes,
+        not gigabytes. Each point's sum is that of ``agf(...).sum(-1)`` of all
+        points at once, bit for bit.
+        """
+        return self._people_sum(x, y)
+
+    def _people_sum(self, x: np.ndarray, y: np.ndarray) -> np.ndarray:
+        """:meth:`field` (also the people's sums of :meth:`__call__` and :meth:`point_costs`)."""
         x, y = np.broadcast_arrays(np.asarray(x, float), np.asarray(y, float))
-        return agf(np.stack([x, y], -1), self.people, self.space).sum(-1)
+        shape = x.shape
+        x, y = x.ravel(), y.ravel()
+        out = np.zeros(x.size)
+        h = len(self.people)
+        if h == 0 or x.size == 0:
+            return out.reshape(shape)
+        # Beyond the reach every AGF is <= threshold, hence 0; the relative
+        # margin keeps a person whose value rounds just above the threshold.
+        reach = self.space.max_reach * (1.0 + 1e-9) + 1e-9
+        chunk = max(1, FIELD_CHUNK_ELEMENTS // h)
+        px, py = self.people[:, 0], self.people[:, 1]
+        for start in range(0, x.size, chunk):
+            cx, cy = x[start : start + chunk], y[start : start + chunk]
+            near = np.ones(h, dtype=bool)
+            if np.isfinite(reach):
+                # Distance from each person to the chunk's bounding box (NaN keeps the person).
+                gap_x = np.maximum(np.maximum(cx.min() - px, px - cx.max()), 0.0)
+                gap_y = np.maximum(np.maximum(cy.min() - py, py - cy.max()), 0.0)
+                near = ~(np.hypot(gap_x, gap_y) > reach)
+            if near.any():
+                # The far people's exact zeros stay in their columns, so each
+                # point's sum runs over the same H values in the same order as
+                # one unchunked evaluation would: the same bits.
+                values = np.zeros((len(cx), h))
+                values[:, near] = agf_xy(cx, cy, self.people[near], self.space)
+                out[start : start + chunk] = values.sum(-1)
+        return out.reshape(shape)

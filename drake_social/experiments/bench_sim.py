@@ -87,6 +87,7 @@ def run_sim_bench(
                     "max_config_deviation": report.max_config_deviation,
                     "min_clearance": report.min_clearance,
                     "collision_free": report.collision_free,
+                    "within_limits": report.within_limits,
                 }
                 if record:
                     meshcat = make_meshcat()

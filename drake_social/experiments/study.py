@@ -16,7 +16,10 @@ plans, measures the path (:mod:`drake_social.experiments.metrics`) and, with
 * :func:`load_sweep`: a study from a YAML file (``drake-social experiment sweep``).
 * :func:`run_study`: runs the tasks on an executor (:mod:`.executors`).
 * :func:`write_study`: results.csv, results.json, the figures, REPORT.md and
-  the Planner Arena log and database, as one output set.
+  the Planner Arena log and database, as one output set; the records first,
+  so that an error in a later file never costs the finished runs
+  (:func:`write_records` writes them alone, :func:`rescue_records` into a
+  new folder when the output folder cannot take them).
 """
 
 from __future__ import annotations
@@ -30,6 +33,7 @@ import json
 import logging
 import os
 import re
+import tempfile
 import time
 from pathlib import Path
 from typing import Callable, Optional, Sequence
@@ -45,9 +49,11 @@ __all__ = [
     "MAX_STUDY_TASKS",
     "NAME_PATTERN",
     "PAPER_ALGORITHMS",
+    "RECORD_FILES",
     "TIMING_FIELDS",
     "Group",
     "Study",
+    "StudyOutputError",
     "StudyResult",
     "Sweep",
     "best_runs",
@@ -55,9 +61,11 @@ __all__ = [
     "comparable",
     "load_sweep",
     "paper_study",
+    "rescue_records",
     "run_study",
     "run_task",
     "study_tasks",
+    "write_records",
     "write_study",
 ]
 
@@ -629,6 +637,7 @@ def _execute(scenario, waypoints, checker, executed_metrics) -> dict:
                             if r and r.planned_social_cost > 0 else None),
         "exec_max_deviation": r.max_point_deviation["max"] if r else None,
         "exec_collision_free": bool(r.collision_free) if r else None,
+        "exec_within_limits": bool(r.within_limits) if r else None,
     }
     if len(run.times) > 1:
         out.update(executed_metrics(scenario, run.times, run.q))
@@ -702,7 +711,14 @@ def best_runs(records: Sequence[dict]) -> dict[tuple[str, str], dict]:
 
 # ---- writing --------------------------------------------------------------------
 
+
+class StudyOutputError(OSError):
+    """A finished study's outputs could not all be written; the message says
+    where its records (:data:`RECORD_FILES`) were kept."""
+
 _NON_SCALAR = ("waypoints", "progress", "progress_time", "overrides")
+#: The files holding every run's record, written before any other output.
+RECORD_FILES = ("results.csv", "results.json")
 
 
 def results_csv(records: Sequence[dict]) -> str:
@@ -719,25 +735,48 @@ def results_csv(records: Sequence[dict]) -> str:
     return buf.getvalue()
 
 
+def write_records(result: StudyResult, out_dir: str | Path) -> list[str]:
+    """Writes the records of every run: results.csv and results.json
+    (:data:`RECORD_FILES`) into ``out_dir`` (created when missing).
+
+    Returns:
+        The names of the written files.
+    """
+    from drake_social.experiments.bench import _finite  # non-finite floats -> None (strict JSON)
+
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    (out / "results.csv").write_text(results_csv(result.records))
+    meta = {"study": result.study.to_json_dict(), "seeds": result.study.run_seeds(), "wall_time": result.wall_time,
+            "executor": result.executor, "workers": result.workers}
+    (out / "results.json").write_text(json.dumps(_finite({**meta, "runs": result.records}), allow_nan=False) + "\n")
+    return list(RECORD_FILES)
+
+
+def rescue_records(result: StudyResult) -> Path:
+    """Writes the records (:func:`write_records`) into a new folder of the
+    system's temporary directory (``$TMPDIR``), for when the output folder
+    cannot take them; returns the folder."""
+    folder = Path(tempfile.mkdtemp(prefix="drake-social-records-"))
+    write_records(result, folder)
+    return folder
+
+
 def write_study(result: StudyResult, out_dir: str | Path, *, scenario_loader=None) -> list[str]:
     """Writes results.csv, results.json, the figures, REPORT.md and the Planner
     Arena log (``arena_<scenario>.log``, one experiment per scenario) and, when
     OMPL's statistics script is importable, ``arena.db``, into ``out_dir``.
 
+    The records (:func:`write_records`) are written first: when a later file
+    fails, they are complete in ``out_dir``.
+
     Returns:
         The names of the written files.
     """
     from drake_social.experiments import arena, report
-    from drake_social.experiments.bench import _finite  # non-finite floats -> None (strict JSON)
 
     out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
-    names = []
-    (out / "results.csv").write_text(results_csv(result.records))
-    meta = {"study": result.study.to_json_dict(), "seeds": result.study.run_seeds(), "wall_time": result.wall_time,
-            "executor": result.executor, "workers": result.workers}
-    (out / "results.json").write_text(json.dumps(_finite({**meta, "runs": result.records}), allow_nan=False) + "\n")
-    names += ["results.csv", "results.json"]
+    names = write_records(result, out)
     figures = report.write_figures(result, out)
     names += figures
     logs = arena.write_logs(result, out)

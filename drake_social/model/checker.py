@@ -32,13 +32,18 @@ Which checker (:data:`CHECKERS`, :func:`make_checker`):
   the pure-numpy reference, sound by conservative advancement too.
 
 :func:`verify_path` is the independent second opinion: Drake's discrete
-edge check of every segment of a path at the checker's resolution.
+edge check of every segment of a path at the checker's resolution, from
+SceneGraphs that each hold only the shapes near a group of segments
+(:func:`local_checkers`): SceneGraph keeps a filter state for every pair of
+its shapes, in every context, so one SceneGraph of a room of thousands of
+boxes would take gigabytes.
 """
 
 from __future__ import annotations
 
 import dataclasses as dc
 import math
+from typing import Iterator, Sequence
 
 import numpy as np
 from pydrake.common import Parallelism
@@ -46,11 +51,19 @@ from pydrake.planning import LinearDistanceAndInterpolationProvider, SceneGraphC
 
 from drake_social.arguments import require_choice, require_scenario
 from drake_social.kinematics import displacement_bound
-from drake_social.model.plant import ScenarioDiagram, build_robot_diagram
+from drake_social.model import plant
+from drake_social.model.plant import (
+    ScenarioDiagram,
+    build_robot_diagram,
+    environment_discs,
+    environment_parts,
+    registration_order,
+)
 from drake_social.planning.geometric import CheckerBase
 from drake_social.scenario import CHECKERS, Scenario, ScenarioError
 
-__all__ = ["CHECKERS", "Contact", "SceneGraphChecker", "check_start_goal", "make_checker", "verify_path"]
+__all__ = ["CHECKERS", "Contact", "SceneGraphChecker", "check_start_goal", "local_checkers", "make_checker",
+           "near_environment", "valid_configurations", "verify_path"]
 
 
 @dc.dataclass(frozen=True)
@@ -79,6 +92,10 @@ class SceneGraphChecker(CheckerBase):
         scenario, resolution: see :class:`CheckerBase` (geometry, limits).
         parallelism: threads of the batched calls (:meth:`are_valid`,
             :meth:`are_motions_valid`): True = all cores, False = 1, or a count.
+        environment: indices into
+            :func:`~drake_social.model.plant.environment_names` of the shapes
+            checked against (a part of the room, see :func:`local_checkers`);
+            None = all.
 
     Attributes:
         edge_step_size: Drake's step in its weighted configuration distance,
@@ -96,11 +113,12 @@ class SceneGraphChecker(CheckerBase):
     #: Configurations whose clearance is remembered (oldest forgotten first).
     cache_size: int = 100_000
 
-    def __init__(self, scenario: Scenario, resolution: float | None = None, parallelism: bool | int = True):
+    def __init__(self, scenario: Scenario, resolution: float | None = None, parallelism: bool | int = True,
+                 environment: Sequence[int] | None = None):
         super().__init__(scenario, resolution)
         self.parallelism = Parallelism(parallelism)
         b = scenario.world.bounds
-        self.model: ScenarioDiagram = build_robot_diagram(scenario)
+        self.model: ScenarioDiagram = build_robot_diagram(scenario, environment=environment)
         plant = self.model.diagram.plant()
         provider = LinearDistanceAndInterpolationProvider(plant, self.geometry.reach(include_body=True))
         self.edge_step_size = self.resolution / math.sqrt(3.0)
@@ -257,6 +275,60 @@ class SceneGraphChecker(CheckerBase):
         return sorted((Contact(a, b, d) for (a, b), d in deepest.items()), key=lambda c: c.distance)
 
 
+def near_environment(scenario: Scenario, a_xy: np.ndarray, b_xy: np.ndarray, margin: float = 0.01) -> np.ndarray:
+    """Indices into :func:`~drake_social.model.plant.environment_names` of the
+    shapes the robot can touch while its base moves on the straight tracks
+    ``a_xy[i] -> b_xy[i]`` ((M, 2) each), in :func:`registration_order`.
+
+    A shape is kept when its bounding disc (:func:`environment_discs`) comes
+    within the robot's extent from its base centre (base radius, or the
+    arm's and object's reach with their capsule radii) plus ``margin`` metres
+    of a track: every other shape is farther than any robot point at any
+    configuration on the tracks, whatever the arm angles.
+    """
+    return _near_function(scenario, margin)(a_xy, b_xy)
+
+
+def _near_function(scenario: Scenario, margin: float = 0.01):
+    """:func:`near_environment` of ``scenario`` as a function of the tracks
+    (the room's discs and the robot's extent computed once)."""
+    from drake_social.kinematics import ArmGeometry
+
+    geometry = ArmGeometry.from_scenario(scenario)
+    extent = max(float(scenario.robot.base_radius), float(np.sum(geometry.lever(include_body=True))))
+    discs = environment_discs(scenario)
+    order = np.asarray(registration_order(scenario), int)
+
+    def near(a_xy: np.ndarray, b_xy: np.ndarray) -> np.ndarray:
+        a = np.asarray(a_xy, float).reshape(-1, 2)
+        d = np.asarray(b_xy, float).reshape(-1, 2) - a
+        hit = np.zeros(len(discs), dtype=bool)
+        for start, step in zip(a, d):
+            rel = discs[:, :2] - start
+            length2 = float(step @ step)
+            t = np.clip(rel @ step / length2, 0.0, 1.0) if length2 > 0 else np.zeros(len(discs))
+            gap = np.hypot(*(rel - t[:, None] * step).T) - discs[:, 2]
+            hit |= ~(gap > extent + margin)  # NaN keeps the shape
+        return order[hit[order]]
+
+    return near
+
+
+def local_checkers(scenario: Scenario, a_xy: np.ndarray, b_xy: np.ndarray, resolution: float | None = None,
+                   parallelism: bool | int = True) -> Iterator[SceneGraphChecker]:
+    """Drake checkers that together hold every shape near the base tracks
+    ``a_xy[i] -> b_xy[i]`` (:func:`near_environment`), at most
+    :data:`~drake_social.model.plant.ENVIRONMENT_PART` shapes each, built one
+    at a time (at least one, with the robot alone when nothing is near).
+
+    A configuration on the tracks collides with the room exactly when it
+    collides with a shape of one of them: Drake's answers for the room,
+    from SceneGraphs whose memory does not grow with the room.
+    """
+    for part in environment_parts(near_environment(scenario, a_xy, b_xy)):
+        yield SceneGraphChecker(scenario, resolution, parallelism=parallelism, environment=part)
+
+
 def check_start_goal(
     scenario: Scenario, checker: SceneGraphChecker | None = None, source: str = "<scenario>"
 ) -> None:
@@ -264,7 +336,8 @@ def check_start_goal(
 
     Args:
         scenario: the scenario to check.
-        checker: a checker of this scenario (built if None).
+        checker: a checker of this scenario; None = Drake checkers of the
+            shapes near the start and the goal (:func:`local_checkers`).
         source: the file name used in the message.
 
     Raises:
@@ -272,15 +345,18 @@ def check_start_goal(
             the configuration and which robot bodies collide with which
             obstacles, people or walls (or which limit is exceeded).
     """
-    checker = checker or SceneGraphChecker(scenario)
     for field in ("start", "goal"):
         q = np.asarray(getattr(scenario, field), float)
-        if not checker.in_limits(q):
-            raise ScenarioError(
-                f"{source}: {field}: configuration {q.tolist()} is outside the limits "
-                f"lower={checker.lower.tolist()}, upper={checker.upper.tolist()} (world.bounds, robot.joint_*)"
-            )
-        contacts = checker.contacts(q)
+        checkers = [checker] if checker is not None else local_checkers(scenario, q[None, :2], q[None, :2])
+        contacts: list[Contact] = []
+        for part in checkers:
+            if not part.in_limits(q):
+                raise ScenarioError(
+                    f"{source}: {field}: configuration {q.tolist()} is outside the limits "
+                    f"lower={part.lower.tolist()}, upper={part.upper.tolist()} (world.bounds, robot.joint_*)"
+                )
+            contacts += part.contacts(q)
+        contacts.sort(key=lambda c: c.distance)
         if contacts:
             raise ScenarioError(
                 f"{source}: {field}: configuration {q.tolist()} is in collision: "
@@ -316,7 +392,7 @@ def make_checker(
 
         checker = PlanarChecker(scenario)
         if source is not None:
-            check_start_goal(scenario, checker.drake_checker, source)
+            check_start_goal(scenario, None, source)
         return checker
     if kind != "drake":
         raise ValueError(f"unknown checker {kind!r}; allowed: {', '.join(CHECKERS)}")
@@ -339,8 +415,12 @@ def verify_path(scenario_or_checker, waypoints: np.ndarray) -> int | None:
         scenario_or_checker: a :class:`Scenario` (checked at its
             ``planner.collision_resolution``), a :class:`SceneGraphChecker`
             (used as is), or any other checker of this package (its
-            scenario at its resolution; a ``PlanarChecker`` lends its own
-            ``drake_checker``).
+            scenario at its resolution). Without a SceneGraphChecker, the
+            segments are checked in consecutive groups against Drake
+            checkers of the shapes near each group (:func:`local_checkers`,
+            at most :data:`~drake_social.model.plant.ENVIRONMENT_PART`
+            shapes per SceneGraph), which give the same answers as one
+            checker of the whole room in bounded memory.
         waypoints: (N, 4) configurations; a single waypoint is checked as a
             configuration (segment 0 = that configuration).
 
@@ -348,18 +428,63 @@ def verify_path(scenario_or_checker, waypoints: np.ndarray) -> int | None:
         The index i of the first failing segment, or None when all pass.
     """
     x = scenario_or_checker
+    wp = np.asarray(waypoints, float).reshape(-1, 4)
+    if isinstance(x, SceneGraphChecker):
+        if len(wp) == 1:
+            return None if x.are_valid(wp)[0] else 0
+        bad = np.flatnonzero(~x.are_motions_valid(wp[:-1], wp[1:]))
+        return int(bad[0]) if len(bad) else None
     if isinstance(x, Scenario):
-        drake = SceneGraphChecker(x)
-    elif isinstance(x, SceneGraphChecker):
-        drake = x
-    elif hasattr(x, "drake_checker"):
-        drake = x.drake_checker
+        scenario, resolution = x, None
     elif isinstance(x, CheckerBase):
-        drake = SceneGraphChecker(x.scenario, x.resolution)
+        scenario, resolution = x.scenario, x.resolution
     else:
         raise TypeError(f"verify_path needs a Scenario or a checker, got {type(x).__name__}")
-    wp = np.asarray(waypoints, float).reshape(-1, 4)
     if len(wp) == 1:
-        return None if drake.are_valid(wp)[0] else 0
-    bad = np.flatnonzero(~drake.are_motions_valid(wp[:-1], wp[1:]))
-    return int(bad[0]) if len(bad) else None
+        ok = all(part.are_valid(wp)[0] for part in local_checkers(scenario, wp[:, :2], wp[:, :2], resolution))
+        return None if ok else 0
+    for first, stop in _segment_groups(scenario, wp):
+        a, b = wp[first:stop], wp[first + 1 : stop + 1]
+        ok = np.ones(len(a), dtype=bool)
+        for part in local_checkers(scenario, a[:, :2], b[:, :2], resolution):
+            ok &= part.are_motions_valid(a, b)
+        bad = np.flatnonzero(~ok)
+        if len(bad):
+            return first + int(bad[0])
+    return None
+
+
+def valid_configurations(scenario: Scenario, qs: np.ndarray, resolution: float | None = None) -> np.ndarray:
+    """Drake's verdicts on configurations (N, 4) -> (N,) bool (within the
+    limits and collision-free, :meth:`SceneGraphChecker.are_valid`), from
+    SceneGraphs of the shapes near runs of consecutive configurations (a
+    trajectory's samples): the same answers as one checker of the whole room,
+    in memory that does not grow with the room (see :func:`verify_path`)."""
+    qs = np.asarray(qs, float).reshape(-1, 4)
+    ok = np.ones(len(qs), dtype=bool)
+    groups = _segment_groups(scenario, qs) if len(qs) > 1 else [(0, len(qs) - 1)] if len(qs) else []
+    for first, stop in groups:
+        run = qs[first : stop + 1]
+        a, b = (run[:-1, :2], run[1:, :2]) if len(run) > 1 else (run[:, :2], run[:, :2])
+        for part in local_checkers(scenario, a, b, resolution):
+            ok[first : stop + 1] &= np.asarray(part.are_valid(run), bool)
+    return ok
+
+
+def _segment_groups(scenario: Scenario, wp: np.ndarray) -> list[tuple[int, int]]:
+    """Consecutive segments ``[first, stop)`` of the path ``wp`` grouped so
+    that the shapes near a group fit in one part
+    (:data:`~drake_social.model.plant.ENVIRONMENT_PART`) where they can: a
+    group grows while its shapes do; a segment near more shapes is a group
+    alone (checked in several parts)."""
+    groups: list[tuple[int, int]] = []
+    first, shapes = 0, set()
+    near_of = _near_function(scenario)
+    for i in range(len(wp) - 1):
+        near = set(near_of(wp[i : i + 1, :2], wp[i + 1 : i + 2, :2]).tolist())
+        if i > first and len(shapes | near) > plant.ENVIRONMENT_PART:
+            groups.append((first, i))
+            first, shapes = i, set()
+        shapes |= near
+    groups.append((first, len(wp) - 1))
+    return groups

@@ -24,13 +24,14 @@ arms of the displacement bound measured on the same shapes.
 from __future__ import annotations
 
 import math
+from typing import Iterable
 
 import numpy as np
 from pydrake.geometry import Box as DrakeBox
 from pydrake.geometry import Cylinder, Role
 
 from drake_social.model.checker import Contact, SceneGraphChecker
-from drake_social.model.plant import ScenarioDiagram, build_robot_diagram
+from drake_social.model.plant import ScenarioDiagram, build_robot_diagram, environment_parts, registration_order
 from drake_social.planning import planar_kernel as kernel
 from drake_social.planning.geometric import CheckerBase
 from drake_social.scenario import Scenario
@@ -58,10 +59,14 @@ class PlanarChecker(CheckerBase):
         scenario, resolution: see :class:`CheckerBase`; the resolution only
             serves Drake's second opinion (:attr:`drake_checker`,
             :func:`~drake_social.model.checker.verify_path`).
-        model: a built :func:`build_robot_diagram` of ``scenario`` (built if None).
+        model: a built :func:`build_robot_diagram` of ``scenario``, read
+            whole; None = the room is built and read in parts of at most
+            :data:`~drake_social.model.plant.ENVIRONMENT_PART` shapes (the
+            memory of one SceneGraph grows with the square of its shapes).
 
     Attributes:
-        model: the :class:`ScenarioDiagram` whose geometry is checked.
+        model: the given :class:`ScenarioDiagram`, or the first part's
+            (the robot and the first shapes of the room).
         bodies: (B, 6) the planar chain, body names :attr:`body_names`.
         robot: (S, 6) the robot's capsules in their body frames.
         env: (K, 8) the environment's boxes and discs, names :attr:`env_names`.
@@ -75,9 +80,17 @@ class PlanarChecker(CheckerBase):
     def __init__(self, scenario: Scenario, resolution: float | None = None, model: ScenarioDiagram | None = None):
         super().__init__(scenario, resolution)
         self.scenario = scenario
-        self.model = model if model is not None else build_robot_diagram(scenario)
         self._drake_checker: SceneGraphChecker | None = None
-        self._read_geometry()
+        if model is not None:
+            self.model = model
+            self._read_geometry()
+        else:
+            # The room is read in parts of at most ENVIRONMENT_PART shapes, each
+            # from its own small diagram (SceneGraph's memory grows with the
+            # square of its shapes); the robot from the first.
+            parts = environment_parts(registration_order(scenario))
+            self.model = build_robot_diagram(scenario, environment=parts[0])
+            self._read_geometry((build_robot_diagram(scenario, environment=p) for p in parts[1:]))
         # numba initialises itself and loads cached machine code at the first
         # compiled call of a process (about 0.5 s): here, with the model,
         # rather than inside the first plan's timing.
@@ -85,10 +98,12 @@ class PlanarChecker(CheckerBase):
 
     # ---- reading the SceneGraph ---------------------------------------------
 
-    def _read_geometry(self) -> None:
+    def _read_geometry(self, more_environment: Iterable[ScenarioDiagram] = ()) -> None:
+        """Reads the chain, the robot's shapes and the environment's from
+        :attr:`model`, and further environment shapes from the diagrams of
+        ``more_environment`` (built and dropped one at a time)."""
         diagram = self.model.diagram
         plant = diagram.plant()
-        inspector = diagram.scene_graph().model_inspector()
         context = diagram.CreateDefaultContext()
         plant_context = plant.GetMyContextFromRoot(context)
         plant.SetPositions(plant_context, self.model.robot, np.zeros(4))
@@ -108,22 +123,33 @@ class PlanarChecker(CheckerBase):
         # Shapes per body: (name, kind, x, y, c, s, a, b) with a, b = half sizes or (radius, 0).
         shapes: dict[str, list] = {}
         z_ranges = set()
-        for g in inspector.GetAllGeometryIds(Role.kProximity):
-            body = plant.GetBodyFromFrameId(inspector.GetFrameId(g))
-            key = "world" if body.index() == world else body.name()
-            name = inspector.GetName(g)
-            shape = inspector.GetShape(g)
-            x, y, c, s, z = _planar(inspector.GetPoseInFrame(g), name)
-            if isinstance(shape, DrakeBox):
-                entry = (name, kernel.BOX, x, y, c, s, shape.width() / 2, shape.depth() / 2)
-                height = shape.height()
-            elif isinstance(shape, Cylinder):
-                entry = (name, kernel.DISC, x, y, c, s, shape.radius(), 0.0)
-                height = shape.length()
-            else:
-                raise ValueError(f"{name}: unsupported collision shape {type(shape).__name__} (Box, Cylinder only)")
-            z_ranges.add((round(z - height / 2, 9), round(z + height / 2, 9)))
-            shapes.setdefault(key, []).append(entry)
+
+        def read(model: ScenarioDiagram, world_only: bool) -> None:
+            plant = model.diagram.plant()
+            inspector = model.diagram.scene_graph().model_inspector()
+            world = plant.world_body().index()
+            for g in inspector.GetAllGeometryIds(Role.kProximity):
+                body = plant.GetBodyFromFrameId(inspector.GetFrameId(g))
+                key = "world" if body.index() == world else body.name()
+                if world_only and key != "world":
+                    continue
+                name = inspector.GetName(g)
+                shape = inspector.GetShape(g)
+                x, y, c, s, z = _planar(inspector.GetPoseInFrame(g), name)
+                if isinstance(shape, DrakeBox):
+                    entry = (name, kernel.BOX, x, y, c, s, shape.width() / 2, shape.depth() / 2)
+                    height = shape.height()
+                elif isinstance(shape, Cylinder):
+                    entry = (name, kernel.DISC, x, y, c, s, shape.radius(), 0.0)
+                    height = shape.length()
+                else:
+                    raise ValueError(f"{name}: unsupported collision shape {type(shape).__name__} (Box, Cylinder only)")
+                z_ranges.add((round(z - height / 2, 9), round(z + height / 2, 9)))
+                shapes.setdefault(key, []).append(entry)
+
+        read(self.model, world_only=False)
+        for model in more_environment:
+            read(model, world_only=True)
         if len(z_ranges) > 1:
             raise ValueError(f"collision shapes span different z slabs {sorted(z_ranges)}: not planar")
         self.slab = next(iter(z_ranges), (0.0, 0.0))

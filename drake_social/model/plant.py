@@ -15,6 +15,7 @@ south and north walls run past the corners so the room is closed.
 from __future__ import annotations
 
 import dataclasses as dc
+from typing import Sequence
 
 import numpy as np
 from pydrake.geometry import Box as DrakeBox
@@ -33,8 +34,12 @@ __all__ = [
     "ScenarioDiagram",
     "add_environment",
     "add_robot",
+    "ENVIRONMENT_PART",
     "build_robot_diagram",
+    "environment_discs",
     "environment_names",
+    "environment_parts",
+    "registration_order",
     "wall_boxes",
 ]
 
@@ -72,31 +77,75 @@ def environment_names(scenario: Scenario) -> list[str]:
     return names + list(wall_boxes(scenario))
 
 
+#: Most environment shapes in one diagram built for reading shapes or for a
+#: second opinion (:func:`environment_parts`): SceneGraph's pair filter then
+#: costs at most about 60 * (ENVIRONMENT_PART + robot shapes)^2 bytes (a few MB).
+ENVIRONMENT_PART = 256
+
+
+def registration_order(scenario: Scenario) -> list[int]:
+    """Indices into :func:`environment_names` in the order :func:`add_environment`
+    registers the shapes: obstacles, walls, then people."""
+    n_obstacles, n_people = len(scenario.world.obstacles), len(scenario.people)
+    n = n_obstacles + n_people + len(wall_boxes(scenario))
+    return [*range(n_obstacles), *range(n_obstacles + n_people, n), *range(n_obstacles, n_obstacles + n_people)]
+
+
+def environment_parts(indices: Sequence[int], size: int | None = None) -> list[list[int]]:
+    """``indices`` in consecutive parts of at most ``size`` (>= 1; None =
+    :data:`ENVIRONMENT_PART`); one empty part when there are none."""
+    indices = [int(i) for i in indices]
+    size = ENVIRONMENT_PART if size is None else size
+    if size < 1:
+        raise ValueError(f"size must be >= 1, got {size}")
+    return [indices[k : k + size] for k in range(0, len(indices), size)] or [[]]
+
+
 def _register(plant: MultibodyPlant, name: str, X_WG: RigidTransform, shape, kind: str) -> None:
     world = plant.world_body()
     plant.RegisterCollisionGeometry(world, X_WG, shape, name, _FRICTION)
     plant.RegisterVisualGeometry(world, X_WG, shape, name, np.array(_ENV_COLOURS[kind]))
 
 
-def add_environment(plant: MultibodyPlant, scenario: Scenario) -> list[str]:
+def environment_discs(scenario: Scenario) -> np.ndarray:
+    """(N, 3) ``[x, y, rho]`` of the environment's shapes in the order of
+    :func:`environment_names`: each shape lies within ``rho`` metres of
+    ``(x, y)`` (a box's half diagonal, a person's radius)."""
+    boxes = list(scenario.world.obstacles)
+    n_obstacles = len(boxes)
+    boxes += list(wall_boxes(scenario).values())
+    rows = [[b.center[0], b.center[1], 0.5 * float(np.hypot(*b.size))] for b in boxes[:n_obstacles]]
+    rows += [[p.x, p.y, p.radius] for p in scenario.people]
+    rows += [[b.center[0], b.center[1], 0.5 * float(np.hypot(*b.size))] for b in boxes[n_obstacles:]]
+    return np.array(rows, float).reshape(-1, 3)
+
+
+def add_environment(plant: MultibodyPlant, scenario: Scenario, only: Sequence[int] | None = None) -> list[str]:
     """Anchors the obstacles, people and walls of ``scenario`` to the world.
 
     Must be called before ``plant.Finalize()``.
+
+    Args:
+        only: indices into :func:`environment_names` of the shapes to add
+            (each keeps its name); None = all.
 
     Returns:
         The registered shape names, in the order of :func:`environment_names`.
     """
     names = environment_names(scenario)
-    boxes = [(n, b, "obstacle") for n, b in zip(names, scenario.world.obstacles)]
-    boxes += [(n, b, "wall") for n, b in wall_boxes(scenario).items()]
-    for name, box, kind in boxes:
-        X_WG = RigidTransform(RotationMatrix.MakeZRotation(float(box.yaw)), [*box.center, COLLISION_HEIGHT / 2])
-        _register(plant, name, X_WG, DrakeBox(box.size[0], box.size[1], COLLISION_HEIGHT), kind)
-    person_names = names[len(scenario.world.obstacles) : len(scenario.world.obstacles) + len(scenario.people)]
-    for name, p in zip(person_names, scenario.people):
-        X_WG = RigidTransform([p.x, p.y, COLLISION_HEIGHT / 2])
-        _register(plant, name, X_WG, Cylinder(p.radius, COLLISION_HEIGHT), "person")
-    return names
+    n_obstacles, n_people = len(scenario.world.obstacles), len(scenario.people)
+    wanted = set(range(len(names))) if only is None else {int(i) for i in only}
+    shapes = [(i, b, "obstacle") for i, b in enumerate(scenario.world.obstacles)]
+    shapes += [(n_obstacles + n_people + k, b, "wall") for k, b in enumerate(wall_boxes(scenario).values())]
+    for i, box, kind in shapes:
+        if i in wanted:
+            X_WG = RigidTransform(RotationMatrix.MakeZRotation(float(box.yaw)), [*box.center, COLLISION_HEIGHT / 2])
+            _register(plant, names[i], X_WG, DrakeBox(box.size[0], box.size[1], COLLISION_HEIGHT), kind)
+    for k, p in enumerate(scenario.people):
+        if n_obstacles + k in wanted:
+            X_WG = RigidTransform([p.x, p.y, COLLISION_HEIGHT / 2])
+            _register(plant, names[n_obstacles + k], X_WG, Cylinder(p.radius, COLLISION_HEIGHT), "person")
+    return [names[i] for i in sorted(wanted)] if only is not None else names
 
 
 def add_robot(plant: MultibodyPlant, scenario: Scenario, parser: Parser | None = None) -> ModelInstanceIndex:
@@ -131,19 +180,26 @@ class ScenarioDiagram:
     environment: list[str]
 
 
-def build_robot_diagram(scenario: Scenario, *, time_step: float = 0.0) -> ScenarioDiagram:
+def build_robot_diagram(scenario: Scenario, *, time_step: float = 0.0,
+                        environment: Sequence[int] | None = None) -> ScenarioDiagram:
     """Builds the robot, its object and the room into a RobotDiagram.
 
     Args:
         scenario: the scenario.
         time_step: the plant's time step, seconds; 0 (the default) makes a
             continuous plant, which serves kinematics and collision queries.
+        environment: indices into :func:`environment_names` of the shapes to
+            build (a part of the room); None = all. SceneGraph keeps a filter
+            state for every pair of collision shapes, and every context
+            copies it: about 60 N^2 bytes for N shapes (250 MB per copy at
+            2,000 boxes), so large rooms are built in parts
+            (:data:`ENVIRONMENT_PART`).
 
     The plant's positions are ``[x, y, psi1, psi2]``.
     """
     builder = RobotDiagramBuilder(time_step=float(time_step))
     robot = add_robot(builder.plant(), scenario, builder.parser())
-    names = add_environment(builder.plant(), scenario)
+    names = add_environment(builder.plant(), scenario, environment)
     builder.plant().Finalize()
     diagram = builder.Build()
     plant = diagram.plant()

@@ -31,7 +31,7 @@ _EXPORTS = {
     )
 }
 
-_EXPORTS.update({name: "drake_social.sim.diagram" for name in ("TransportDiagram", "build_diagram", "dynamic_gains")})
+_EXPORTS.update({name: "drake_social.sim.diagram" for name in ("TransportDiagram", "build_diagram", "servo_gains")})
 _EXPORTS.update({
     name: "drake_social.sim.run"
     for name in ("ExecutionReport", "SimulationResult", "analyze_execution", "simulate")

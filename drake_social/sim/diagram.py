@@ -15,7 +15,8 @@ Blocks (all named; ``[p]`` only with ``execution="paper"``, ``[s]`` only with
                           │            [p] arm (2-DoF Ruckig) ◀─psi─┘
                           │  controller ─wheel_speeds─▶ drive (mecanum forward kinematics)
     [k] base (Integrator of the drive's velocity) + arm position ─▶ configuration ─▶ to_pose ─▶ scene_graph
-    [d] drive velocity + arm references ─▶ desired_state ─▶ hold (ZOH) ─▶ pd ─▶ plant (actuators)
+    [d] drive velocity ─▶ hold (ZOH) ─▶ desired_state ◀─ arm reference state (position, velocity, acceleration)
+        desired_state, plant state ─▶ servo_* (commanded acceleration) ─▶ servo (inverse dynamics) ─▶ plant
 
 The planner is left out when ``waypoints`` are given. In ``synchronized``
 execution each segment's reference is one phase-synchronized Ruckig
@@ -37,11 +38,20 @@ continuous ``Integrator``) and the arm follows its reference exactly; the
 plant is not simulated (it stays outside the diagram and only turns
 positions into SceneGraph poses, :attr:`TransportDiagram.plant`).
 ``dynamic`` mode: the ``MultibodyPlant`` is a discrete system
-(``execution.plant_time_step``, TAMSI) whose joint actuators are driven by a
-PD law ``u = K (x_d - x)`` in C++ gain blocks (``pd``) at every plant step:
-the base joints as velocity servos on the drive's velocity, the arm joints
-on the reference's position and velocity; the Python controllers' outputs
-reach it through a zero-order hold (``hold``) at ``execution.control_period``.
+(``execution.plant_time_step``, TAMSI) whose joint actuators are driven at
+every plant step by a computed-torque servo in C++ blocks: the commanded
+acceleration ``a = a_d + Kp (q_d - q) + Kd (v_d - v)`` (gain blocks
+``servo_*``, the gains of :func:`servo_gains`), then Drake's
+``InverseDynamics`` (``servo``) ``u = M(q) a + C(q, v) v`` of the plant.
+The arm joints follow the reference's position, velocity and acceleration,
+evaluated at the plant's rate like a servo drive's interpolation of its
+trajectory: with the acceleration fed forward
+and the inertia and coupling compensated, the error obeys ``e'' + Kd e' +
+Kp e = 0`` (critically damped) in every configuration, so the arm lands on
+the reference's end instead of passing it (a PD law on the joint error alone
+leads a decelerating reference and can pass a joint limit at the goal). The
+base joints are velocity servos on the drive's velocity (the digital base
+controller's output, held for ``execution.control_period`` by ``hold``).
 
 Loggers (``VectorLogSink``, period ``execution.control_period``), in
 :attr:`TransportDiagram.loggers`: ``q`` (configuration), ``v`` (its
@@ -58,9 +68,11 @@ import numpy as np
 from pydrake.geometry import Meshcat, SceneGraph
 from pydrake.multibody.plant import AddMultibodyPlantSceneGraph, DiscreteContactApproximation, MultibodyPlant
 from pydrake.multibody.tree import ModelInstanceIndex
+from pydrake.systems.controllers import InverseDynamics
 from pydrake.systems.framework import Diagram, DiagramBuilder, OutputPort
 from pydrake.systems.primitives import (
     Adder,
+    ConstantVectorSource,
     Demultiplexer,
     Integrator,
     LogVectorOutput,
@@ -80,12 +92,12 @@ from drake_social.control import (
     arm_source_from_options,
     reference_source_from_options,
 )
-from drake_social.model.plant import ACTUATED_JOINTS, add_environment, add_robot
+from drake_social.model.plant import add_environment, add_robot
 from drake_social.planning.validity import ValidityChecker
 from drake_social.scenario import EXECUTIONS, SIM_MODES, Scenario, validate_scenario
 from drake_social.waypoints import check_waypoints
 
-__all__ = ["DiagramArguments", "TransportDiagram", "build_diagram", "check_diagram_arguments", "dynamic_gains"]
+__all__ = ["DiagramArguments", "TransportDiagram", "build_diagram", "check_diagram_arguments", "servo_gains"]
 
 
 @dc.dataclass
@@ -123,36 +135,22 @@ class TransportDiagram:
         return self.diagram.GetSubsystemByName(name)
 
 
-def dynamic_gains(plant: MultibodyPlant, *, bandwidth: float = 60.0, base_time_constant: float = 0.02,
-                  samples: int = 24) -> dict[str, tuple[float, float]]:
-    """PD gains (proportional, derivative) of the dynamic mode's joints, from the plant's inertia.
+def servo_gains(*, bandwidth: float = 60.0, base_time_constant: float = 0.02) -> tuple[np.ndarray, np.ndarray]:
+    """Gains ``(Kp, Kd)`` of the dynamic mode's inverse-dynamics servo, in joint order.
 
-    Each joint j gets the effective inertia ``m_j = 1 / (M(q)^-1)_jj`` (what
-    a force on that joint alone accelerates, the others free), minimised over
-    a ``samples`` x ``samples`` grid of (psi1, psi2) (the mass matrix does not
-    depend on the base position). The arm joints then get a critically damped loop of
-    ``bandwidth`` rad/s on that inertia, ``kp = m w^2``, ``kd = 2 m w``
-    (N m/rad, N m s/rad); the base joints are velocity servos, ``kp = 0``,
-    ``kd = m / base_time_constant`` (N s/m). The discrete plant (TAMSI)
-    applies the PD force explicitly, which is stable while ``kd dt / m`` stays
-    well below 1 (here ``2 w dt`` = 0.24 and ``dt / tau`` = 0.1 at the 2 ms
-    step); using the smallest inertia keeps it so in every configuration (the
-    loop is only slower where the inertia is larger).
+    They act on accelerations (the inertia is compensated): the arm joints
+    get a critically damped error of ``bandwidth`` rad/s, ``Kp = w^2``
+    (1/s^2), ``Kd = 2 w`` (1/s); the base joints are velocity servos of time
+    constant ``base_time_constant`` seconds, ``Kp = 0``, ``Kd = 1 / tau``.
+    The discrete plant (TAMSI) applies the force explicitly, which is stable
+    while ``Kd dt`` stays well below 1 (here ``2 w dt`` = 0.24 and ``dt /
+    tau`` = 0.1 at the 2 ms step).
+
+    Returns:
+        Two (4,) arrays for ``[base_x, base_y, psi1, psi2]``.
     """
-    context = plant.CreateDefaultContext()
-    q = np.zeros(plant.num_positions())
-    effective = np.full(4, np.inf)
-    angles = np.linspace(-np.pi, np.pi, samples, endpoint=False)
-    for psi1 in angles:
-        for psi2 in angles:
-            q[2], q[3] = psi1, psi2
-            plant.SetPositions(context, q)
-            effective = np.minimum(effective, 1.0 / np.diag(np.linalg.inv(plant.CalcMassMatrix(context))))
-    gains = {}
-    for j, name in enumerate(ACTUATED_JOINTS):
-        m = float(effective[j])
-        gains[name] = (0.0, m / base_time_constant) if j < 2 else (m * bandwidth**2, 2.0 * m * bandwidth)
-    return gains
+    w, tau = float(bandwidth), float(base_time_constant)
+    return np.array([0.0, 0.0, w * w, w * w]), np.array([1.0 / tau, 1.0 / tau, 2.0 * w, 2.0 * w])
 
 
 def _populate(plant: MultibodyPlant, scenario: Scenario) -> ModelInstanceIndex:
@@ -265,14 +263,19 @@ def _build(
         start = waypoints[0].copy()
     synchronized = execution == "synchronized"
     period = float(opts.control_period)
+    # The references keep to the limits of a valid configuration: the room
+    # bounds for the base and the joint limits (the checkers' and the model's).
+    x_min, y_min, x_max, y_max = (float(v) for v in scenario.world.bounds)
+    lower = np.array([x_min, y_min, *scenario.robot.joint_lower], float)
+    upper = np.array([x_max, y_max, *scenario.robot.joint_upper], float)
 
     builder = DiagramBuilder()
     if mode == "dynamic":
         plant, scene_graph = AddMultibodyPlantSceneGraph(builder, time_step=float(opts.plant_time_step))
         # TAMSI: a step of this plant costs ~60 us against ~200 us with the
         # SAP solvers (measured on office_bar), which Drake's built-in joint
-        # PD controllers would need; the PD law is therefore a C++ gain block
-        # (pd) on the plant's actuation input.
+        # PD controllers would need; the servo is therefore made of C++ blocks
+        # (servo_*, servo) on the plant's actuation input.
         plant.set_discrete_contact_approximation(DiscreteContactApproximation.kTamsi)
         robot = _populate(plant, scenario)
         plant.SetDefaultPositions(robot, start)
@@ -306,7 +309,7 @@ def _build(
         builder.Connect(controller.GetOutputPort("wheel_speeds"), drive.GetInputPort("wheel_speeds"))
         wheel_port = controller.GetOutputPort("wheel_speeds")
     if synchronized:
-        reference = builder.AddNamedSystem("reference", reference_source_from_options(opts, start))
+        reference = builder.AddNamedSystem("reference", reference_source_from_options(opts, start, (lower, upper)))
         builder.Connect(sequencer.GetOutputPort("target"), reference.GetInputPort("target"))
         builder.Connect(reference.GetOutputPort("finished"), sequencer.GetInputPort("reference_done"))
         ref_pos = builder.AddNamedSystem("reference_position_split", Demultiplexer([2, 2]))
@@ -319,15 +322,22 @@ def _build(
         builder.Connect(ref_ff.get_output_port(0), controller.GetInputPort("base_velocity_ff"))
         arm_position: OutputPort = ref_pos.get_output_port(1)
         arm_velocity: OutputPort = ref_vel.get_output_port(1)
+        # [xy, arm] x (position, velocity, acceleration) in one evaluation (the servo's, every plant step).
+        ref_state = builder.AddNamedSystem("reference_state_split", Demultiplexer([2] * 6))
+        builder.Connect(reference.GetOutputPort("state"), ref_state.get_input_port())
+        arm_state = [ref_state.get_output_port(k) for k in (1, 3, 5)]
         reference_out: OutputPort = reference.GetOutputPort("position")
     else:
         split = builder.AddNamedSystem("target_split", Demultiplexer([2, 2]))
         builder.Connect(sequencer.GetOutputPort("target"), split.get_input_port())
-        arm = builder.AddNamedSystem("arm", arm_source_from_options(opts, start[2:]))
+        arm = builder.AddNamedSystem("arm", arm_source_from_options(opts, start[2:], (lower[2:], upper[2:])))
         builder.Connect(split.get_output_port(1), arm.GetInputPort("target"))
         builder.Connect(split.get_output_port(0), controller.GetInputPort("base_target"))
         arm_position = arm.GetOutputPort("position")
         arm_velocity = arm.GetOutputPort("velocity")
+        arm_split = builder.AddNamedSystem("arm_state_split", Demultiplexer([2, 2, 2]))
+        builder.Connect(arm.GetOutputPort("state"), arm_split.get_input_port())
+        arm_state = [arm_split.get_output_port(k) for k in range(3)]
         tracked = builder.AddNamedSystem("reference_config", Multiplexer([2, 2]))
         builder.Connect(split.get_output_port(0), tracked.get_input_port(0))
         builder.Connect(arm_position, tracked.get_input_port(1))
@@ -340,25 +350,41 @@ def _build(
         q_port, v_port = state.get_output_port(0), state.get_output_port(1)
         q_split = builder.AddNamedSystem("q_split", Demultiplexer([2, 2]))
         builder.Connect(q_port, q_split.get_input_port())
-        # Desired state [q_d, v_d] in joint order; the base's q_d is unused (velocity servo, gain 0).
+        # The digital base controller's velocity, held for a control period.
+        hold = builder.AddNamedSystem("hold", ZeroOrderHold(period, 2))
+        builder.Connect(drive.GetOutputPort("base_velocity"), hold.get_input_port())
+        # Desired state [q_d, v_d] and acceleration in joint order; the base's
+        # q_d is unused (velocity servo, Kp = 0) and its acceleration is 0.
         desired = builder.AddNamedSystem("desired_state", Multiplexer([2, 2, 2, 2]))
         builder.Connect(q_split.get_output_port(0), desired.get_input_port(0))
-        builder.Connect(arm_position, desired.get_input_port(1))
-        builder.Connect(drive.GetOutputPort("base_velocity"), desired.get_input_port(2))
-        builder.Connect(arm_velocity, desired.get_input_port(3))
-        hold = builder.AddNamedSystem("hold", ZeroOrderHold(period, 8))
-        builder.Connect(desired.get_output_port(0), hold.get_input_port())
-        # u = K (x_d - x) with K = [diag(kp) diag(kd)], in joint order.
-        gains = dynamic_gains(plant)
-        K = np.hstack([np.diag([gains[j][0] for j in ACTUATED_JOINTS]), np.diag([gains[j][1] for j in ACTUATED_JOINTS])])
-        pd_desired = builder.AddNamedSystem("pd_desired", MatrixGain(K))
-        pd_state = builder.AddNamedSystem("pd_state", MatrixGain(-K))
-        pd = builder.AddNamedSystem("pd", Adder(2, 4))
-        builder.Connect(hold.get_output_port(), pd_desired.get_input_port())
-        builder.Connect(plant.get_state_output_port(robot), pd_state.get_input_port())
-        builder.Connect(pd_desired.get_output_port(), pd.get_input_port(0))
-        builder.Connect(pd_state.get_output_port(), pd.get_input_port(1))
-        builder.Connect(pd.get_output_port(), plant.get_actuation_input_port(robot))
+        builder.Connect(arm_state[0], desired.get_input_port(1))
+        builder.Connect(hold.get_output_port(), desired.get_input_port(2))
+        builder.Connect(arm_state[1], desired.get_input_port(3))
+        base_acceleration = builder.AddNamedSystem("base_acceleration", ConstantVectorSource(np.zeros(2)))
+        acceleration = builder.AddNamedSystem("desired_acceleration", Multiplexer([2, 2]))
+        builder.Connect(base_acceleration.get_output_port(), acceleration.get_input_port(0))
+        builder.Connect(arm_state[2], acceleration.get_input_port(1))
+        # The commanded acceleration a_d + K (x_d - x), K = [diag(Kp) diag(Kd)],
+        # in stateless C++ blocks (Drake's InverseDynamicsController adds a
+        # PID integrator: continuous state, which makes the simulator take
+        # variable sub-steps between the plant's, 3x the evaluations), then
+        # u = M(q) a + C(q, v) v of the plant itself (the room is welded to
+        # the world: the plant's velocities are the robot's).
+        kp, kd = servo_gains()
+        K = np.hstack([np.diag(kp), np.diag(kd)])
+        gain_desired = builder.AddNamedSystem("servo_desired", MatrixGain(K))
+        gain_state = builder.AddNamedSystem("servo_state", MatrixGain(-K))
+        commanded = builder.AddNamedSystem("servo_acceleration", Adder(3, 4))
+        builder.Connect(desired.get_output_port(), gain_desired.get_input_port())
+        builder.Connect(plant.get_state_output_port(robot), gain_state.get_input_port())
+        builder.Connect(gain_desired.get_output_port(), commanded.get_input_port(0))
+        builder.Connect(gain_state.get_output_port(), commanded.get_input_port(1))
+        builder.Connect(acceleration.get_output_port(), commanded.get_input_port(2))
+        servo = builder.AddNamedSystem("servo", InverseDynamics(plant))
+        builder.Connect(plant.get_state_output_port(robot), servo.get_input_port_estimated_state())
+        builder.Connect(commanded.get_output_port(), servo.get_input_port_desired_acceleration())
+        # The actuation input is [u_x, u_y, u_1, u_2] (see _populate).
+        builder.Connect(servo.get_output_port_generalized_force(), plant.get_actuation_input_port(robot))
     else:
         base = builder.AddNamedSystem("base", Integrator(2))
         base.set_default_integral_value(start[:2])

@@ -5,9 +5,11 @@ plans at initialization (or takes the given waypoints), advances until the
 sequencer reports the goal reached or ``execution.time_limit`` passes, and
 returns a :class:`SimulationResult`: the logged trajectory and, after every
 run, what the *executed* trajectory did: checked for collisions at the
-checker's resolution, its social cost integrated with the same cost code as
-the planner's, the deviation of every body point from the planned path, the
-minimum clearance and the time to goal.
+checker's resolution (geometry only), checked against the limits of a valid
+configuration (a separate finding: which joint, when, by how much), its
+social cost integrated with the same cost code as the planner's, the
+deviation of every body point from the planned path, the minimum clearance
+and the time to goal.
 
 Example::
 
@@ -40,6 +42,7 @@ from drake_social.arguments import (
 )
 from drake_social.cost.social import SocialCost
 from drake_social.kinematics import ArmGeometry
+from drake_social.model.plant import ACTUATED_JOINTS
 from drake_social.planning.result import PlannerResult
 from drake_social.planning.validity import ValidityChecker
 from drake_social.scenario import (MAX_CONTROL_STEPS, MAX_PLANT_STEPS, MAX_TIME_LIMIT, Scenario, ScenarioError,
@@ -48,12 +51,44 @@ from drake_social.sim.analysis import config_deviation, densify, point_deviation
 from drake_social.sim.diagram import TransportDiagram, _build, check_diagram_arguments
 from drake_social.waypoints import waypoint_array
 
-__all__ = ["ExecutionReport", "SimulationResult", "analyze_execution", "simulate"]
+__all__ = ["ExecutionReport", "LimitViolation", "SimulationResult", "analyze_execution", "limit_violations",
+           "simulate"]
 
 #: Simulated seconds per AdvanceTo call between checks for the goal.
 _CHUNK = 0.25
 
 _log = logging.getLogger(__name__)
+
+
+@dc.dataclass(frozen=True)
+class LimitViolation:
+    """One joint of the executed trajectory beyond its limit.
+
+    The limits are those of a valid configuration (the checkers' and the
+    robot model's): the room bounds for ``base_x`` and ``base_y`` (metres),
+    ``robot.joint_lower`` / ``joint_upper`` for ``psi1`` and ``psi2``
+    (radians).
+
+    Attributes:
+        joint: ``base_x``, ``base_y``, ``psi1`` or ``psi2``.
+        bound: ``"lower"`` or ``"upper"``.
+        limit: the limit passed, metres or radians.
+        first_time: first logged time beyond it, seconds.
+        worst_time: time of the largest excess, seconds.
+        max_excess: the largest distance beyond the limit (> 0), metres or radians.
+    """
+
+    joint: str
+    bound: str
+    limit: float
+    first_time: float
+    worst_time: float
+    max_excess: float
+
+    def __str__(self) -> str:
+        unit = "m" if self.joint.startswith("base") else "rad"
+        return (f"{self.joint} {self.max_excess:.3g} {unit} beyond its {self.bound} limit {self.limit:.6g} "
+                f"at t = {self.worst_time:.2f} s (first at t = {self.first_time:.2f} s)")
 
 
 @dc.dataclass
@@ -71,8 +106,13 @@ class ExecutionReport:
         min_clearance: smallest signed distance (metres) of the robot to the
             environment along the executed trajectory (checked configurations;
             exact planar distances).
-        collision_free: no checked configuration collides.
+        collision_free: no checked configuration collides: a verdict on the
+            geometry alone (signed distance > 0), whatever the joint limits.
         first_collision_time: time (s) of the first colliding configuration, or None.
+        within_limits: no executed configuration is beyond a limit of a valid
+            configuration (see :class:`LimitViolation`).
+        limit_violations: one :class:`LimitViolation` per joint and bound
+            passed, in joint order (empty when ``within_limits``).
         checked_configurations: how many configurations were checked (the
             executed samples, densified to the collision resolution).
         collision_resolution: largest body-point motion between checked
@@ -88,6 +128,8 @@ class ExecutionReport:
     first_collision_time: float | None
     checked_configurations: int
     collision_resolution: float
+    within_limits: bool
+    limit_violations: list[LimitViolation]
 
 
 @dc.dataclass
@@ -139,7 +181,9 @@ class SimulationResult:
             line += (f"; social cost planned {r.planned_social_cost:.4g}, executed {r.executed_social_cost:.4g}; "
                      f"max point deviation {r.max_point_deviation['max']:.3g} m; "
                      f"min clearance {r.min_clearance:.3g} m; "
-                     f"{'collision-free' if r.collision_free else 'COLLIDES'}")
+                     f"{'collision-free' if r.collision_free else 'COLLIDES'}; "
+                     + ("within the joint limits" if r.within_limits else
+                        "BEYOND A LIMIT: " + "; ".join(str(v) for v in r.limit_violations)))
         return line + f"; {self.realtime_factor:.0f}x realtime"
 
     def to_json_dict(self) -> dict[str, Any]:
@@ -170,6 +214,56 @@ class SimulationResult:
         return out
 
 
+def _limits(scenario: Scenario) -> tuple[np.ndarray, np.ndarray]:
+    """(lower, upper) of a valid ``[x, y, psi1, psi2]``: room bounds and joint limits."""
+    x_min, y_min, x_max, y_max = (float(v) for v in scenario.world.bounds)
+    r = scenario.robot
+    return (np.array([x_min, y_min, *r.joint_lower], float), np.array([x_max, y_max, *r.joint_upper], float))
+
+
+def limit_violations(scenario: Scenario, times: np.ndarray, q: np.ndarray) -> list[LimitViolation]:
+    """Where the executed configurations ``q`` (T, 4) at ``times`` (T,) pass a limit.
+
+    The configurations are compared with the limits exactly (as the
+    checkers do); between two logged samples the executed trajectory is
+    taken as straight, whose extremes are at the samples.
+
+    Returns:
+        One :class:`LimitViolation` per joint and bound passed, in joint
+        order, lower before upper; empty when every sample is within.
+    """
+    lower, upper = _limits(scenario)
+    q = np.asarray(q, float).reshape(-1, 4)
+    times = np.asarray(times, float).reshape(-1)
+    found = []
+    for j, joint in enumerate(ACTUATED_JOINTS):
+        for bound, excess, limit in (("lower", lower[j] - q[:, j], lower[j]), ("upper", q[:, j] - upper[j], upper[j])):
+            beyond = np.flatnonzero(excess > 0)
+            if len(beyond):
+                worst = int(np.argmax(excess))
+                found.append(LimitViolation(joint=joint, bound=bound, limit=float(limit),
+                                            first_time=float(times[beyond[0]]), worst_time=float(times[worst]),
+                                            max_excess=float(excess[worst])))
+    return found
+
+
+def _collision_free(are_valid: Callable[[np.ndarray], np.ndarray], clearance: Callable[[np.ndarray], float],
+                    lower: np.ndarray, upper: np.ndarray, qs: np.ndarray) -> np.ndarray:
+    """(N,) bool: each configuration's geometry is clear (signed distance > 0).
+
+    A checker's ``are_valid`` also refuses configurations beyond the limits;
+    those (found separately, :func:`limit_violations`) are judged here by
+    their ``clearance`` alone.
+    """
+    inside = np.all((qs >= lower) & (qs <= upper), axis=1)
+    free = np.zeros(len(qs), bool)
+    if inside.any():
+        free[inside] = np.asarray(are_valid(qs[inside]), bool)
+    for i in np.flatnonzero(~inside):
+        free[i] = clearance(qs[i]) > 0.0
+    return free
+
+
 def analyze_execution(
     scenario: Scenario,
     waypoints: np.ndarray,
@@ -179,13 +273,18 @@ def analyze_execution(
 ) -> ExecutionReport:
     """Checks and measures an executed trajectory against its planned path.
 
+    Two separate findings: collisions (the geometry at the checker's
+    resolution) and the limits of a valid configuration
+    (:func:`limit_violations`).
+
     Args:
         scenario: the scenario.
         waypoints: (N, 4) planned path.
         times, q: (T,), (T, 4) executed configurations over time.
         checker: the collision checker of the executed configurations;
-            None = Drake's (:class:`~drake_social.model.checker.SceneGraphChecker`),
-            independent of the planar checker that planned. The minimum
+            None = Drake's (:func:`~drake_social.model.checker.valid_configurations`:
+            SceneGraphCollisionChecker answers from the shapes near the
+            trajectory), independent of the planar checker that planned. The minimum
             clearance is the exact planar checker's.
 
     Raises:
@@ -193,14 +292,12 @@ def analyze_execution(
         ScenarioError: ``waypoints`` not an (N, 4) array with 2 <= N <=
             MAX_WAYPOINTS; ``times`` and ``q`` not (T,) and (T, 4) finite.
     """
-    from drake_social.model.checker import make_checker
+    from drake_social.model.checker import make_checker, valid_configurations
 
     require_scenario(scenario, "analyze_execution")
     require_checker(checker, "analyze_execution", optional=True)
     waypoints = waypoint_array(waypoints, "analyze_execution: waypoints")
     times, q = _trajectory(times, q, "analyze_execution")
-    if checker is None:
-        checker = make_checker(scenario, "drake")
     # Clearances from the exact planar checker: Drake's cylinder-box distance
     # can exceed the true one (see drake_social.model.checker).
     planar = make_checker(scenario, "planar")
@@ -213,7 +310,12 @@ def analyze_execution(
     resolution = float(scenario.planner.collision_resolution)
     # Which executed sample each densified configuration follows (for the collision time).
     dense, owner = densify(geometry, q, resolution, return_owner=True)
-    valid = np.asarray(checker.are_valid(dense), bool)
+    lower, upper = _limits(scenario)
+    if checker is None:  # Drake's, from SceneGraphs of the shapes near the trajectory (bounded memory)
+        valid = _collision_free(lambda qs: valid_configurations(scenario, qs), planar.clearance, lower, upper, dense)
+    else:
+        valid = _collision_free(checker.are_valid, checker.clearance, lower, upper, dense)
+    violations = limit_violations(scenario, times, q)
     clearance = float(np.min(planar.clearances(dense))) if len(dense) else math.inf
     first = None if valid.all() else float(times[owner[int(np.argmin(valid))]])
     return ExecutionReport(
@@ -226,6 +328,8 @@ def analyze_execution(
         first_collision_time=first,
         checked_configurations=int(len(dense)),
         collision_resolution=resolution,
+        within_limits=not violations,
+        limit_violations=violations,
     )
 
 

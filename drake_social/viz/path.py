@@ -29,6 +29,7 @@ from drake_social.cost import SocialCost
 from drake_social.kinematics import ArmGeometry, config_distance, cumulative_distance
 from drake_social.planning.result import PlannerResult
 from drake_social.scenario import Scenario
+from drake_social.viz.labels import fit_text
 from drake_social.viz.robot import RobotStyle, draw_robot
 from drake_social.viz.show import scene_with_field
 
@@ -232,7 +233,8 @@ def path_figure(
         scenario: the planned scenario.
         result: the planner's result; without a path, the map shows start,
             goal and the tree explored.
-        title: the figure title; None = the scenario's description.
+        title: the figure title; None = the scenario's description (either
+            cut to one line by :func:`~drake_social.viz.labels.fit_text`).
         poses: see :func:`draw_path`.
         tree: draw the tree's base edges; None = only when there is no path.
         resolution: heat-map cell size, metres; None = picked from the
@@ -253,7 +255,7 @@ def path_figure(
         draw_robot(ax, geometry, np.asarray(scenario.goal, float))
         ax.set_title(f"{result.algorithm}: no path found; {result.tree_size} tree nodes", fontsize=9,
                      color="#b00000")
-    fig.suptitle(title if title is not None else scenario.description or "scenario")
+    fig.suptitle(fit_text(title if title is not None else scenario.description or "scenario", max_lines=1))
     fig.legend(loc="lower center", bbox_to_anchor=(0.5, 0.0), ncol=5, fontsize=8, frameon=False)
     return fig
 

@@ -14,6 +14,7 @@ from matplotlib.patches import Circle
 from drake_social.cost import SocialCost
 from drake_social.kinematics import ArmGeometry
 from drake_social.scenario import Scenario
+from drake_social.viz.labels import fit_text
 from drake_social.viz.robot import draw_robot
 from drake_social.viz.world import VIEW_MARGIN, draw_social_field, draw_world
 
@@ -86,7 +87,8 @@ def show_figure(scenario: Scenario, *, title: str | None = None, resolution: flo
 
     Args:
         scenario: a validated scenario.
-        title: the figure title; None = the scenario's description.
+        title: the figure title; None = the scenario's description (either
+            cut to one line by :func:`~drake_social.viz.labels.fit_text`).
         resolution: heat-map cell size, metres; None = picked from the
             world's size (a bounded number of cells).
 
@@ -97,7 +99,7 @@ def show_figure(scenario: Scenario, *, title: str | None = None, resolution: flo
     draw_robot(ax, geometry, np.asarray(scenario.start, float), labels=True)
     draw_robot(ax, geometry, np.asarray(scenario.goal, float))
     s_start, s_goal = cost(np.array([scenario.start, scenario.goal], float))
-    fig.suptitle(title if title is not None else scenario.description or "scenario")
+    fig.suptitle(fit_text(title if title is not None else scenario.description or "scenario", max_lines=1))
     n = len(scenario.people)
     people = "1 person" if n == 1 else f"{n} people"
     ax.set_title(f"{people}; social cost S(start) = {s_start:.2f}, S(goal) = {s_goal:.2f}", fontsize=9)

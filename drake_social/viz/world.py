@@ -19,6 +19,7 @@ from matplotlib.patches import Circle, FancyArrow, Polygon, Rectangle
 
 from drake_social.cost import SocialCost
 from drake_social.scenario import Box, Scenario
+from drake_social.viz.labels import MAX_LABEL_CHARS, fit_text
 
 __all__ = [
     "FIELD_CMAP",
@@ -66,7 +67,9 @@ def draw_world(ax: Axes, scenario: Scenario, *, names: bool = True, margin: floa
     Args:
         ax: the axes to draw on (world metres on both axes).
         scenario: the scenario whose world and people are drawn.
-        names: also write each person's ``name`` next to them.
+        names: also write each person's ``name`` next to them (its first
+            line, cut to :data:`~drake_social.viz.labels.MAX_LABEL_CHARS`
+            characters).
         margin: free space around the outer walls in the view, metres.
 
     Returns:
@@ -105,7 +108,8 @@ def draw_world(ax: Axes, scenario: Scenario, *, names: bool = True, margin: floa
         if names and p.name:
             # Label on the side opposite to the facing arrow, to keep it readable.
             off = p.radius + 0.2
-            out["names"].append(ax.text(p.x - off * c, p.y - off * s, p.name, fontsize=7,
+            out["names"].append(ax.text(p.x - off * c, p.y - off * s, fit_text(p.name, MAX_LABEL_CHARS, 1),
+                                        fontsize=7,
                                         ha="left" if c < -0.3 else ("right" if c > 0.3 else "center"),
                                         va="bottom" if s < -0.3 else ("top" if s > 0.3 else "center"),
                                         zorder=6, color="#202020"))

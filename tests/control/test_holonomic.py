@@ -11,6 +11,7 @@ from drake_social.control import (
     base_velocity,
     mecanum_matrix,
     saturate_norm,
+    wheel_limited_speed,
     wheel_speeds,
 )
 from drake_social.scenario import ExecutionOptions
@@ -48,6 +49,21 @@ def test_mecanum_matrix_is_the_papers_transposed():
 def test_wheel_speeds_by_hand():
     # vx = 0.1, vy = 0.2, r = 0.05: w = 20 * [0.1 - 0.2, 0.1 + 0.2, -0.1 + 0.2, -0.1 - 0.2]
     np.testing.assert_allclose(wheel_speeds([0.1, 0.2], R), [-2.0, 6.0, 2.0, -6.0], rtol=0, atol=1e-12)
+
+
+def test_wheel_limited_speed_by_hand():
+    # r = 0.05 m, 20 rad/s: |w| = |vx +- vy| / r <= 20, so |vx| + |vy| <= 1 m/s.
+    # Along x: 1 m/s; diagonal: vx = vy = s / sqrt(2), 2 s / sqrt(2) = 1 -> 0.7071;
+    # along (3, -4): s (3 + 4) / 5 = 1 -> 5/7.
+    dut = wheel_limited_speed([[2.0, 0.0], [0.0, -0.3], [1.0, 1.0], [3.0, -4.0], [0.0, 0.0]], R, 20.0)
+    np.testing.assert_allclose(dut[:4], [1.0, 1.0, 1 / np.sqrt(2), 5 / 7], rtol=1e-15)
+    assert dut[4] == np.inf
+    # At that speed the largest wheel is exactly at its limit, in random directions.
+    rng = np.random.default_rng(3)
+    d = rng.normal(size=(100, 2))
+    s = wheel_limited_speed(d, R, 20.0)
+    v = d / np.linalg.norm(d, axis=1, keepdims=True) * s[:, None]
+    np.testing.assert_allclose(np.max(np.abs(wheel_speeds(v, R)), axis=1), 20.0, rtol=1e-12)
 
 
 def test_base_velocity_inverts_wheel_speeds_on_random_vectors():

@@ -91,10 +91,11 @@ def test_ports_default_context_and_no_feedthrough():
     dut = _source(initial=(0.3, -0.2))
     assert [dut.get_input_port(i).get_name() for i in range(dut.num_input_ports())] == ["target"]
     assert [dut.get_output_port(i).get_name() for i in range(dut.num_output_ports())] == [
-        "position", "velocity", "acceleration", "finished"]
+        "position", "velocity", "acceleration", "state", "finished"]
     assert not dut.HasAnyDirectFeedthrough()
     context = dut.CreateDefaultContext()
     p, v, a, f = _outputs(dut, context)
+    np.testing.assert_array_equal(dut.GetOutputPort("state").Eval(context), np.concatenate([p, v, a]))
     np.testing.assert_array_equal(p, [0.3, -0.2])
     np.testing.assert_array_equal(v, [0.0, 0.0])
     np.testing.assert_array_equal(a, [0.0, 0.0])
@@ -213,7 +214,8 @@ def test_reference_base_speed_by_hand():
     _force_update(dut, context)
     assert context.get_abstract_state(0).get_value().duration == pytest.approx(10.7, abs=1e-9)
     context.SetTime(5.35)
-    p, v, _, _ = _outputs(dut, context)
+    p, v, a, _ = _outputs(dut, context)
+    np.testing.assert_array_equal(dut.GetOutputPort("state").Eval(context), np.concatenate([p, v, a]))
     np.testing.assert_allclose(v[:2], [0.3, 0.4], atol=1e-9)  # norm 0.5, along (3, 4)
     np.testing.assert_allclose(p, [1.5, 2.0, 0.1, -0.05], atol=1e-9)  # halfway, all DoFs
 
@@ -347,3 +349,116 @@ def test_non_finite_target_raises_naming_the_system():
     dut.GetInputPort("target").FixValue(context, [np.nan, 0.0])
     with pytest.raises(RuntimeError, match="arm_source.*finite"):
         _force_update(dut, context)
+
+
+# ---- position limits -------------------------------------------------------------
+
+_ARM = dict(max_velocity=[1.0, 1.0], max_acceleration=[2.0, 2.0], max_jerk=[10.0, 10.0], period=PERIOD)
+_PI_BOX = ([-np.pi, -np.pi], [np.pi, np.pi])
+
+
+def _plain_ruckig_maximum(p, v, a, target):
+    """The largest position of each DoF on plain Ruckig's segment from (p, v, a) to target (time sync)."""
+    import ruckig
+
+    inp = ruckig.InputParameter(2)
+    inp.current_position, inp.current_velocity, inp.current_acceleration = list(p), list(v), list(a)
+    inp.target_position, inp.target_velocity, inp.target_acceleration = list(target), [0.0, 0.0], [0.0, 0.0]
+    inp.max_velocity, inp.max_acceleration, inp.max_jerk = [1.0, 1.0], [2.0, 2.0], [10.0, 10.0]
+    trajectory = ruckig.Trajectory(2)
+    ruckig.Ruckig(2).calculate(inp, trajectory)
+    return np.array([e.max for e in trajectory.position_extrema])
+
+
+def _sampled_positions(dut, context, t_from, t_to):
+    out = []
+    for t in np.arange(t_from, t_to + DT / 2, DT):
+        context.SetTime(float(t))
+        out.append(dut.GetOutputPort("position").Eval(context).copy())
+    return np.array(out)
+
+
+def test_a_retarget_that_would_pass_a_limit_waits_for_rest_and_the_reference_never_passes_it():
+    # psi1 heads for its upper limit pi; 1.26 s into that segment (still
+    # moving) the target changes to one with psi1 also at pi. Plain Ruckig's
+    # new segment from that state passes pi (by 2.7e-9 rad): the source
+    # keeps its current segment, and heads for the new target once at rest.
+    a, b, c = [2.46, 0.54], [np.pi, 1.3], [np.pi, 1.22]
+    dut = RuckigTrajectorySource(initial_position=a, position_limits=_PI_BOX, **_ARM)
+    context = dut.CreateDefaultContext()
+    port = dut.GetInputPort("target")
+    port.FixValue(context, b)
+    _force_update(dut, context)
+    first = context.get_abstract_state(0).get_value()
+    context.SetTime(1.26)
+    p, v, acc, _ = _outputs(dut, context)
+    assert np.max(np.abs(v)) > 1e-3  # moving
+    assert _plain_ruckig_maximum(p, v, acc, c)[0] > np.pi + 1e-12  # the witness: plain Ruckig passes pi
+    port.FixValue(context, c)
+    _force_update(dut, context)
+    assert context.get_abstract_state(0).get_value() is first  # not started while moving
+    context.SetTime(first.duration)
+    _force_update(dut, context)  # at rest at b: now heads for c
+    second = context.get_abstract_state(0).get_value()
+    assert second is not first and np.array_equal(second.target, c)
+    before = dut.CreateDefaultContext()
+    before.SetAbstractState(0, first)
+    positions = np.concatenate([_sampled_positions(dut, before, 0.0, first.duration),
+                                _sampled_positions(dut, context, first.duration, first.duration + second.duration)])
+    assert np.all(positions <= np.pi) and np.all(positions >= -np.pi)
+    np.testing.assert_array_equal(positions[-1], c)
+
+
+def test_a_segment_ending_at_a_limit_never_passes_it_by_rounding():
+    # Rest to rest onto both upper limits: Ruckig's own extrema pass pi by
+    # rounding (~4e-16); the outputs are clipped to the limits.
+    dut = RuckigTrajectorySource(initial_position=[0.3, -2.0], position_limits=_PI_BOX, **_ARM)
+    t, p, _, _, _ = _run(dut, [(0.0, [np.pi, np.pi])], t_end=6.0)
+    assert np.max(p) <= np.pi
+    np.testing.assert_array_equal(p[-1], [np.pi, np.pi])
+
+
+def test_a_target_outside_the_position_limits_is_an_error_naming_it():
+    dut = RuckigTrajectorySource(initial_position=[0.0, 0.0], position_limits=_PI_BOX, **_ARM)
+    dut.set_name("arm")
+    context = dut.CreateDefaultContext()
+    dut.GetInputPort("target").FixValue(context, [3.2, 0.0])
+    with pytest.raises(RuntimeError, match=r"arm: the target \[3.2, 0.0\] at t = 0.0 s is outside the position limits"):
+        _force_update(dut, context)
+    with pytest.raises(ValueError, match="initial_position .* is outside position_limits"):
+        RuckigTrajectorySource(initial_position=[0.0, -3.5], position_limits=_PI_BOX, **_ARM)
+    with pytest.raises(ValueError, match="SetInitialPosition: .* is outside the position limits"):
+        dut.SetInitialPosition(context, [0.0, 4.0])
+    with pytest.raises(ValueError, match=r"position_limits must be \(lower, upper\) of 2 finite numbers"):
+        RuckigTrajectorySource(initial_position=[0.0, 0.0], position_limits=([1.0, 0.0], [0.0, 1.0]), **_ARM)
+
+
+# ---- the wheels' limit on the base ---------------------------------------------------
+
+
+@pytest.mark.parametrize("direction, expected", [
+    # wheel limit r * w_max = 0.05 * 20 = 1 m/s on |vx| + |vy|; speed s along u: s (|ux| + |uy|) <= 1.
+    ([4.0, 0.0], 1.0),                    # along x: |ux| + |uy| = 1
+    ([0.0, -4.0], 1.0),                   # along y
+    ([3.0, 3.0], 1.0 / np.sqrt(2.0)),     # diagonal: 2 / sqrt(2)
+    ([3.0, -4.0], 5.0 / 7.0),             # (3/5 + 4/5) = 7/5
+])
+def test_reference_base_speed_is_the_wheels_limit_when_max_base_speed_exceeds_it(direction, expected):
+    options = ExecutionOptions(max_base_speed=2.0, max_base_acceleration=1.0, max_base_jerk=5.0)
+    dut = reference_source_from_options(options, [0.0, 0.0, 0.0, 0.0])
+    t, p, v, a, _ = _run(dut, [(0.0, [*direction, 0.0, 0.0])], t_end=8.0)
+    speed = np.hypot(v[:, 0], v[:, 1])
+    # Cruises at it (4-5 m segments); a DoF that does not move keeps a share
+    # of 1e-6 of the limits (_SHARE_FLOOR), counted in the sum: 1e-6 slower.
+    assert np.max(speed) == pytest.approx(expected, rel=2e-6)
+    assert np.max(speed) <= expected * (1 + 1e-12)
+    wheels = (np.abs(v[:, 0]) + np.abs(v[:, 1])) / options.wheel_radius  # the largest |w_i|, by hand
+    assert np.max(wheels) <= options.max_wheel_speed * (1 + 1e-9)
+    assert np.max(_distance_from_line(p[:, :2], np.zeros(2), np.array(direction))) < 1e-9
+
+
+def test_reference_base_speed_below_the_wheels_limit_is_unchanged():
+    # max_base_speed 0.5 < 1/sqrt(2): the diagonal cruise is still 0.5 m/s.
+    dut = reference_source_from_options(ExecutionOptions(), [0.0, 0.0, 0.0, 0.0])
+    _, _, v, _, _ = _run(dut, [(0.0, [3.0, 3.0, 0.0, 0.0])], t_end=3.0)
+    assert np.max(np.hypot(v[:, 0], v[:, 1])) == pytest.approx(0.5, rel=1e-9)

@@ -1,0 +1,223 @@
+"""drake-social experiment's execution and outputs under abuse: scheduler
+addresses refused before any run, Ctrl-C with the Dask executor (a real
+process group, as a terminal interrupts), and finished runs never lost to an
+output error."""
+
+from __future__ import annotations
+
+import errno
+import json
+import os
+import signal
+import subprocess
+import sys
+import tempfile
+import threading
+import time
+from pathlib import Path
+
+import pytest
+
+from drake_social.cli import main
+from drake_social.experiments import arena, report
+from drake_social.experiments.executors import check_scheduler_address, map_tasks
+from drake_social.outputs import OutputSet, current_set
+
+CLI = Path(sys.executable).with_name("drake-social")
+_FORM = "the form is [tcp://|tls://]HOST:PORT with PORT in 1..65535, e.g. tcp://10.0.0.5:8786"
+
+
+def _sweep(tmp_path: Path, tiny: Path, *, runs: int = 1, iterations: int = 30, algorithms=("social_rrt_star",)) -> Path:
+    path = tmp_path / "sweep.yaml"
+    path.write_text(f"name: abuse\nruns: {runs}\niterations: {iterations}\nseed: 0\nscenarios: [{tiny}]\n"
+                    f"algorithms: [{', '.join(algorithms)}]\nvariants: {{default: {{}}, wide: {{social: {{sigma_h: 1.2}}}}}}\n")
+    return path
+
+
+# ---- the scheduler address ---------------------------------------------------------
+
+
+@pytest.mark.parametrize("address, problem", [
+    ("notanaddress", "has no port"), ("tcp://127.0.0.1", "has no port"), ("", "is empty"),
+    ("[::1]", "has no port"), ("tcp://:8786", "is not HOST:PORT"), ("127.0.0.1:port", "is not HOST:PORT"),
+    ("tcp://host:8786/path", "is not HOST:PORT"), (" tcp://host:8786", "unknown protocol ' tcp'"),
+    ("http://host:8786", "unknown protocol 'http'"), ("tcp://host:0", "port 0 is out of range"),
+    ("tcp://host:65536", "port 65536 is out of range"),
+])
+def test_a_bad_scheduler_address_is_refused_before_anything_runs(tmp_path, tiny_scenario_path, capsys, address,
+                                                                   problem):
+    sweep = _sweep(tmp_path, tiny_scenario_path)
+    out = tmp_path / "out"
+    rc = main(["experiment", "sweep", str(sweep), "--executor", "dask", "--scheduler", address, "--out", str(out)])
+    captured = capsys.readouterr()
+    assert rc == 2
+    sep = ":" if problem.startswith(("unknown", "port")) else ""
+    assert captured.err == f"drake-social: error: --scheduler: scheduler address {address!r}{sep} {problem}; {_FORM}\n"
+    assert captured.out == "" and not out.exists()  # nothing ran, nothing was written
+    with pytest.raises(ValueError, match="the form is"):  # the API checks the same before any task
+        map_tasks(len, [{}], executor="dask", scheduler=address)
+
+
+@pytest.mark.parametrize("address", ["tcp://10.0.0.5:8786", "localhost:8786", "tls://scheduler.example.org:1",
+                                     "tcp://[::1]:65535", "127.0.0.1:8786"])
+def test_good_scheduler_addresses_pass(address):
+    assert check_scheduler_address(address) == address
+
+
+# ---- Ctrl-C with the Dask executor ------------------------------------------------------
+
+
+def _workers(pid: int) -> list[int]:
+    """The worker processes of the study run by ``pid``: the processes forked
+    by its multiprocessing fork server (a child of ``pid``), or spawned by
+    ``pid`` itself."""
+    parents, commands = {}, {}
+    for entry in Path("/proc").iterdir():
+        if entry.name.isdigit():
+            try:
+                stat = (entry / "stat").read_text()
+                commands[int(entry.name)] = (entry / "cmdline").read_bytes()
+            except OSError:
+                continue
+            parents[int(entry.name)] = int(stat.rsplit(")", 1)[1].split()[1])
+    servers = {p for p, parent in parents.items() if parent == pid and b"forkserver" in commands.get(p, b"")}
+    return sorted(p for p, parent in parents.items()
+                  if parent in servers or (parent == pid and b"spawn_main" in commands.get(p, b"")))
+
+
+def _alive(pid: int) -> bool:
+    try:
+        return (Path("/proc") / str(pid) / "stat").read_text().rsplit(")", 1)[1].split()[0] != "Z"
+    except OSError:
+        return False
+
+
+@pytest.mark.parametrize("executor, when", [("dask", "running"), ("dask", "starting"), ("process", "starting")])
+def test_ctrl_c_during_a_study_exits_130_with_one_line(tmp_path, tiny_scenario_path, executor, when):
+    """SIGINT to the whole process group, as a terminal's Ctrl-C, while the
+    workers plan or while they start: no worker may print a traceback, nor
+    distributed its shutdown log."""
+    sweep = _sweep(tmp_path, tiny_scenario_path, runs=4, iterations=1_000_000)
+    out = tmp_path / "out"
+    proc = subprocess.Popen([str(CLI), "experiment", "sweep", str(sweep), "--executor", executor, "--workers", "2",
+                             "--out", str(out), "--progress"], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                            start_new_session=True, env={**os.environ, "PYTHONUNBUFFERED": "1"})
+    err = bytearray()
+
+    def read() -> None:
+        while chunk := proc.stderr.read1(4096):
+            err.extend(chunk)
+
+    reader = threading.Thread(target=read, daemon=True)
+    reader.start()
+    try:
+        deadline = time.monotonic() + 120
+        while len(workers := _workers(proc.pid)) < (2 if when == "running" else 1):
+            assert proc.poll() is None and time.monotonic() < deadline, err.decode()
+            time.sleep(0.05)
+        if when == "running":
+            time.sleep(8)  # the workers have the tasks, planning
+            workers = _workers(proc.pid)
+        t0 = time.monotonic()
+        os.killpg(proc.pid, signal.SIGINT)
+        stdout = proc.stdout.read()
+        rc = proc.wait(timeout=120)
+        stopped = time.monotonic() - t0
+    finally:
+        if proc.poll() is None:
+            os.killpg(proc.pid, signal.SIGKILL)
+    reader.join(30)
+    stderr = err.decode()
+    assert rc == 130, stderr
+    assert "Traceback" not in stderr and "KeyboardInterrupt" not in stderr and "Error" not in stderr, stderr
+    assert "distributed" not in stderr, stderr
+    lines = [line.split("\r")[-1] for line in stderr.split("\n")]
+    assert lines[-2:] == ["drake-social: experiment interrupted; no output of this run was written", ""], stderr
+    assert all(line.startswith("experiment abuse:") for line in lines[:-2]), stderr  # the bar, nothing else
+    assert stdout == b"" and current_set(out, "experiment") is None
+    assert stopped < 30
+    time.sleep(1)
+    assert not [w for w in workers if _alive(w)]  # no worker left behind
+
+
+# ---- an output error after the runs -----------------------------------------------------
+
+
+def _no_space(*args, **kwargs):
+    raise OSError(errno.ENOSPC, "No space left on device")
+
+
+def _script_failed(*args, **kwargs):
+    raise RuntimeError("ompl_benchmark_statistics.py failed on the logs")
+
+
+@pytest.mark.parametrize("where, failure, message", [
+    (report, ("write_figures", _no_space), "[Errno 28] No space left on device"),
+    (arena, ("build_database", _script_failed), "ompl_benchmark_statistics.py failed on the logs"),
+])
+def test_an_output_error_after_the_runs_keeps_their_records_in_out(tmp_path, tiny_scenario_path, monkeypatch, capsys,
+                                                                   where, failure, message):
+    sweep = _sweep(tmp_path, tiny_scenario_path)
+    out = tmp_path / "out"
+    monkeypatch.setattr(where, *failure)
+    rc = main(["experiment", "sweep", str(sweep), "--out", str(out)])
+    captured = capsys.readouterr()
+    assert rc == 1
+    assert captured.err == (f"drake-social: error: writing the study's outputs into {out} failed: {message}; the "
+                            f"records of its 2 runs are in {out / 'results.json'} and {out / 'results.csv'} (the "
+                            "figures, REPORT.md and the arena files were not written)\n")
+    # The set committed is the records alone, complete.
+    assert sorted(p.name for p in out.iterdir() if not p.name.startswith(".")) == ["results.csv", "results.json"]
+    assert current_set(out, "experiment").files == ("results.csv", "results.json")
+    records = json.loads((out / "results.json").read_text())["runs"]
+    assert [(r["group"], r["run"]) for r in records] == [("tiny-default", 0), ("tiny-wide", 0)]
+    assert all(r["success"] and len(r["waypoints"]) >= 2 for r in records)
+    assert len((out / "results.csv").read_text().splitlines()) == 3
+
+
+def test_records_that_out_cannot_take_are_saved_in_the_temporary_directory(tmp_path, tiny_scenario_path, monkeypatch,
+                                                                           capsys):
+    sweep = _sweep(tmp_path, tiny_scenario_path)
+    out = tmp_path / "out"
+    temporary = tmp_path / "tmp"
+    temporary.mkdir()
+    monkeypatch.setattr(tempfile, "tempdir", str(temporary))
+    monkeypatch.setattr(OutputSet, "_commit", _no_space)  # even the records cannot land in out
+    rc = main(["experiment", "sweep", str(sweep), "--out", str(out)])
+    captured = capsys.readouterr()
+    assert rc == 1
+    (rescued,) = temporary.iterdir()
+    assert rescued.name.startswith("drake-social-records-")
+    assert captured.err == (f"drake-social: error: writing the study's outputs into {out} failed: [Errno 28] No space "
+                            f"left on device; the records of its 2 runs were saved to {rescued / 'results.json'} and "
+                            f"{rescued / 'results.csv'} instead\n")
+    records = json.loads((rescued / "results.json").read_text())["runs"]
+    assert [(r["group"], r["success"]) for r in records] == [("tiny-default", True), ("tiny-wide", True)]
+    assert current_set(out, "experiment") is None  # out holds nothing of the run
+    # Nowhere to save them: the message says so, still without a traceback.
+    monkeypatch.setattr(tempfile, "tempdir", str(tmp_path / "missing"))
+    rc = main(["experiment", "sweep", str(sweep), "--out", str(out)])
+    captured = capsys.readouterr()
+    assert rc == 1
+    assert captured.err.startswith(f"drake-social: error: writing the study's outputs into {out} failed: [Errno 28] "
+                                   "No space left on device; saving the records of its 2 runs into the temporary "
+                                   "directory failed too: [Errno 2] No such file or directory: ")
+    assert "Traceback" not in captured.err
+
+
+def test_a_figure_error_and_then_a_failed_commit_name_both_and_save_the_records(tmp_path, tiny_scenario_path,
+                                                                                monkeypatch, capsys):
+    sweep = _sweep(tmp_path, tiny_scenario_path)
+    out = tmp_path / "out"
+    temporary = tmp_path / "tmp"
+    temporary.mkdir()
+    monkeypatch.setattr(tempfile, "tempdir", str(temporary))
+    monkeypatch.setattr(report, "write_figures", _script_failed)
+    monkeypatch.setattr(OutputSet, "_commit", _no_space)
+    assert main(["experiment", "sweep", str(sweep), "--out", str(out)]) == 1
+    (rescued,) = temporary.iterdir()
+    assert capsys.readouterr().err == (
+        f"drake-social: error: writing the study's outputs into {out} failed: ompl_benchmark_statistics.py failed on "
+        "the logs; then committing the records alone failed: [Errno 28] No space left on device; the records of its "
+        f"2 runs were saved to {rescued / 'results.json'} and {rescued / 'results.csv'} instead\n")
+    assert len(json.loads((rescued / "results.json").read_text())["runs"]) == 2
