@@ -251,9 +251,9 @@ def _int_at_least(minimum: int, maximum: int | None = None) -> Callable[[str], i
         try:
             value = int(text)
         except ValueError:
-            raise argparse.ArgumentTypeError(f"must be {allowed}, got {text!r}") from None
+            raise argparse.ArgumentTypeError(f"must be {allowed}, got {shorten(repr(text))}") from None
         if value < minimum or (maximum is not None and value > maximum):
-            raise argparse.ArgumentTypeError(f"must be {allowed}, got {text}")
+            raise argparse.ArgumentTypeError(f"must be {allowed}, got {shorten(text)}")
         return value
 
     return parse

@@ -210,3 +210,19 @@ def test_an_experiment_out_that_is_a_file_is_refused_before_any_run(tmp_path, ca
     assert main(["experiment", "sweep", str(tmp_path / "none.yaml"), "--out", str(plain)]) == 1
     assert capsys.readouterr().err == (f"drake-social: error: {plain}: --out must be a folder (its outputs are written "
                                        f"inside it); it is a file\n")
+
+
+def test_a_long_argument_is_not_repeated_whole(capsys):
+    for text in ("x" * 5000, "9" * 5000, "1" * 100):
+        assert main(["experiment", "paper", "--runs", text]) == 2
+        err = capsys.readouterr().err.splitlines()[-1]
+        assert len(err) < 250 and err.endswith("characters)"), err
+
+
+def test_a_long_api_argument_is_not_repeated_whole():
+    from drake_social.arguments import require_choice
+
+    with pytest.raises(ValueError) as info:
+        require_choice("x" * 5000, "make_checker", "kind", ("planar", "drake"))
+    assert str(info.value) == (f"make_checker: unknown kind {repr('x' * 5000)[:80]}... (5,002 characters); allowed: "
+                               f"planar, drake")
