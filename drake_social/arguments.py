@@ -25,6 +25,7 @@ import numpy as np
 
 from drake_social.planning.validity import ValidityChecker
 from drake_social.scenario import ExecutionOptions, Scenario
+from drake_social.textfile import shorten
 
 __all__ = [
     "real_array",
@@ -40,8 +41,7 @@ __all__ = [
 
 
 def _shown(value: Any) -> str:
-    text = repr(value)
-    return f"{type(value).__name__} {text[:60] + '...' if len(text) > 60 else text}"
+    return f"{type(value).__name__} {shorten(repr(value))}"
 
 
 def require_instance(value: Any, kind: type | tuple[type, ...], who: str, argument: str, allowed: str, *,
@@ -104,7 +104,7 @@ def require_checker(value: Any, who: str, argument: str = "checker", *, optional
                "with is_valid, are_valid, is_motion_valid, are_motions_valid and clearance)")
     hint = ""
     if isinstance(value, str):
-        hint = f" (a checker's name: build the checker with make_checker(scenario, {value!r}))"
+        hint = f" (a checker's name: build the checker with make_checker(scenario, {shorten(repr(value))}))"
     raise TypeError(f"{who}: {argument} must be {allowed}{' or None' if optional else ''}, got {_shown(value)}{hint}")
 
 
@@ -120,7 +120,7 @@ def require_choice(value: Any, who: str, argument: str, allowed: tuple[str, ...]
         raise TypeError(f"{who}: {argument} must be one of {', '.join(allowed)}{' or None' if optional else ''}, "
                         f"got {_shown(value)}")
     if value not in allowed:
-        raise ValueError(f"{who}: unknown {argument} {value!r}; allowed: {', '.join(allowed)}")
+        raise ValueError(f"{who}: unknown {argument} {shorten(repr(value))}; allowed: {', '.join(allowed)}")
 
 
 def require_number(value: Any, who: str, argument: str, *, positive: bool = False, optional: bool = False,

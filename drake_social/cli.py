@@ -45,17 +45,26 @@ import numpy as np
 
 from drake_social import __version__
 from drake_social.planning.result import PlanningInputError
-from drake_social.scenario import ALGORITHMS, Scenario, ScenarioError, compose_yaml, load_scenario
-from drake_social.textfile import check_regular_file, read_text_file
+from drake_social.scenario import ALGORITHMS, CHECKERS, Scenario, ScenarioError, compose_yaml, load_scenario
+from drake_social.textfile import check_regular_file, read_text_file, shorten
 
 __all__ = ["EXIT_NO_PATH", "ProgressBar", "main", "build_parser", "load_with_overrides"]
+
+#: Most seeds of ``bench --seeds``: as many as a study's runs per planner
+#: (``experiments.study.MAX_RUNS``); each seed plans every algorithm on every scenario.
+MAX_BENCH_SEEDS = 10_000
+#: Most timings of one run in ``bench --repeats``: the median of 100 already
+#: filters the machine's noise, and each repeat replans the whole path.
+MAX_BENCH_REPEATS = 100
+#: Most worker processes of ``experiment --workers``: each holds Drake and a
+#: scenario's checker (a few hundred MB), so 64 already needs tens of GB; a
+#: cluster is the place for more (``--executor dask --scheduler``).
+MAX_WORKERS = 64
 
 #: Exit code of ``plan`` when no path reaches the goal.
 EXIT_NO_PATH = 3
 #: Exit code of ``plan`` when Drake's verification rejects the returned path (a bug, not bad input).
 EXIT_UNVERIFIED = 4
-#: Validity checkers selectable with ``--checker``.
-CHECKERS = ("planar", "drake", "numpy")  # = drake_social.model.checker.CHECKERS; here so that --help needs no Drake
 
 _log = logging.getLogger("drake_social")
 
@@ -76,9 +85,10 @@ def load_with_overrides(path: str | Path, sets: Sequence[str] | None) -> Scenari
 
     texts = list(sets or [])
     for text in texts:
-        node = compose_yaml(text, f"{path} (--set {text!r})")
+        node = compose_yaml(text, f"{path} (--set {shorten(repr(text))})")
         if not isinstance(node, yaml.MappingNode):
-            raise ScenarioError(f"{path} (--set {text!r}): must be a YAML mapping such as 'random_seed: 3'")
+            raise ScenarioError(f"{path} (--set {shorten(repr(text))}): must be a YAML mapping such as "
+                                f"'random_seed: 3'")
     return load_scenario(path, texts, overrides_name="--set")
 
 
@@ -91,6 +101,39 @@ def _add_scenario_arguments(parser: argparse.ArgumentParser) -> None:
         help="override scenario fields with a YAML mapping, e.g. \"social: {sigma_h: 1.5}\" "
         "(repeatable: applied in turn, each merging into the result of the earlier ones)",
     )
+
+
+def _check_out_folder(out: Path) -> None:
+    """Refuses an ``--out`` that is not a folder, nor could become one: it, or
+    the nearest of its parents that exists, must be a directory.
+
+    Raises:
+        NotADirectoryError: ``<out>: --out must be a folder ...`` naming what
+            is in the way (an output that cannot be written: exit 1).
+    """
+    import os
+    import stat
+
+    from drake_social.textfile import describe_mode
+
+    here = out
+    while True:
+        try:
+            mode = os.stat(here).st_mode
+        except (FileNotFoundError, NotADirectoryError):
+            if here == here.parent:
+                return
+            here = here.parent
+            continue
+        except (OSError, ValueError) as e:
+            raise NotADirectoryError(f"{shorten(str(out), 300)}: --out cannot be used "
+                                     f"({getattr(e, 'strerror', None) or e})") from None
+        if stat.S_ISDIR(mode):
+            return
+        what = "a file" if stat.S_ISREG(mode) else describe_mode(mode)
+        where = "it is" if here == out else f"{here} is"
+        raise NotADirectoryError(f"{shorten(str(out), 300)}: --out must be a folder (its outputs are written inside "
+                                 f"it); {where} {what}")
 
 
 def _default_out(scenario_path: Path) -> Path:
@@ -208,9 +251,9 @@ def _int_at_least(minimum: int, maximum: int | None = None) -> Callable[[str], i
         try:
             value = int(text)
         except ValueError:
-            raise argparse.ArgumentTypeError(f"must be {allowed}, got {text!r}") from None
+            raise argparse.ArgumentTypeError(f"must be {allowed}, got {shorten(repr(text))}") from None
         if value < minimum or (maximum is not None and value > maximum):
-            raise argparse.ArgumentTypeError(f"must be {allowed}, got {text}")
+            raise argparse.ArgumentTypeError(f"must be {allowed}, got {shorten(text)}")
         return value
 
     return parse
@@ -421,12 +464,20 @@ def _checked_path(path: Path, parsed: tuple[np.ndarray, list[int]], scenario: Sc
 
 
 def _parse_path_csv(path: Path) -> tuple[np.ndarray, list[int]]:
-    """The rows (N, 4) of a ``path.csv`` and the file line of each (see :func:`read_path_csv`)."""
-    from drake_social.limits import MAX_WAYPOINTS
+    """The rows (N, 4) of a ``path.csv`` and the file line of each (see :func:`read_path_csv`).
 
-    lines = read_text_file(path, "path", "--path").splitlines()
-    if not lines or lines[0].replace(" ", "") != "x,y,psi1,psi2":
-        raise ScenarioError(f"{path}: line 1: the header must be 'x,y,psi1,psi2', got {lines[0] if lines else ''!r}")
+    The file may have at most :data:`~drake_social.textfile.MAX_PATH_FILE_BYTES`
+    bytes; lines end with LF or CRLF (nothing else starts a line); a leading
+    UTF-8 byte order mark (as spreadsheets write) is skipped.
+    """
+    from drake_social.limits import MAX_WAYPOINTS
+    from drake_social.textfile import MAX_PATH_FILE_BYTES
+
+    text = read_text_file(path, "path", "--path", limit=MAX_PATH_FILE_BYTES).removeprefix("\ufeff")
+    lines = [line.removesuffix("\r") for line in text.split("\n")]
+    if lines[0].replace(" ", "") != "x,y,psi1,psi2":
+        raise ScenarioError(f"{path}: line 1: the header must be 'x,y,psi1,psi2', got {shorten(repr(lines[0]))} "
+                            f"(--path)")
     rows = []
     numbers = []  # the file line of each row
     for i, line in enumerate(lines[1:], start=2):
@@ -437,7 +488,8 @@ def _parse_path_csv(path: Path) -> tuple[np.ndarray, list[int]]:
                                 f"{MAX_WAYPOINTS:,} (drake_social.limits.MAX_WAYPOINTS) (--path)")
         cells = line.split(",")
         if len(cells) != 4:
-            raise ScenarioError(f"{path}: line {i}: needs 4 numbers x,y,psi1,psi2, got {len(cells)} values: {line!r}")
+            raise ScenarioError(f"{path}: line {i}: needs 4 numbers x,y,psi1,psi2, got {len(cells)} values: "
+                                f"{shorten(repr(line))} (--path)")
         values = []
         for column, cell in zip(("x", "y", "psi1", "psi2"), cells):
             try:
@@ -445,13 +497,13 @@ def _parse_path_csv(path: Path) -> tuple[np.ndarray, list[int]]:
             except ValueError:
                 value = None
             if value is None or not np.isfinite(value):
-                raise ScenarioError(f"{path}: line {i}: {column}: must be a finite number, got {cell.strip()!r} "
-                                    f"(--path)")
+                raise ScenarioError(f"{path}: line {i}: {column}: must be a finite number, got "
+                                    f"{shorten(repr(cell.strip()))} (--path)")
             values.append(value)
         rows.append(values)
         numbers.append(i)
     if len(rows) < 2:
-        raise ScenarioError(f"{path}: needs at least 2 waypoints (start and goal), got {len(rows)}")
+        raise ScenarioError(f"{path}: needs at least 2 waypoints (start and goal), got {len(rows)} (--path)")
     return np.array(rows), numbers
 
 
@@ -577,10 +629,11 @@ def _add_bench(subparsers) -> None:
     p.add_argument("--algorithms", nargs="+", choices=ALGORITHMS, default=list(ALGORITHMS), metavar="A",
                    help=f"planners (default: all of {', '.join(ALGORITHMS)})")
     p.add_argument("--iterations", type=_positive_int, default=2000, metavar="K", help="samples per run (default 2000)")
-    p.add_argument("--seeds", type=_positive_int, default=10, metavar="N", help="seeds 0..N-1 per planner (default 10)")
-    p.add_argument("--repeats", type=_positive_int, default=1, metavar="R",
-                   help="time each seeded run R times, ours and OMPL's, and report the median (the same path each "
-                        "time: this only filters out the machine's noise; default 1)")
+    p.add_argument("--seeds", type=_int_at_least(1, MAX_BENCH_SEEDS), default=10, metavar="N",
+                   help=f"seeds 0..N-1 per planner, at most {MAX_BENCH_SEEDS:,} (default 10)")
+    p.add_argument("--repeats", type=_int_at_least(1, MAX_BENCH_REPEATS), default=1, metavar="R",
+                   help=f"time each seeded run R times (at most {MAX_BENCH_REPEATS}), ours and OMPL's, and report the "
+                        "median (the same path each time: this only filters out the machine's noise; default 1)")
     _add_checker_argument(p, default="planar")
     p.add_argument("--ompl-checker", choices=CHECKERS, default="drake",
                    help="the checker of OMPL's RRTstar (default: drake, Drake's SceneGraph checks as before "
@@ -646,7 +699,7 @@ def _run_bench(args: argparse.Namespace) -> int:
 
 def _add_experiment(subparsers) -> None:
     from drake_social.experiments.executors import EXECUTORS
-    from drake_social.experiments.study import MAX_RUNS
+    from drake_social.experiments.study import MAX_PAPER_RUNS, MAX_STUDY_TASKS, PAPER_PAIRS
     from drake_social.scenario import MAX_ITERATIONS
 
     p = subparsers.add_parser(
@@ -662,8 +715,9 @@ def _add_experiment(subparsers) -> None:
                              description="A: office_bar (bar) and B: generic_L (L object) with RRT*, Social "
                              "Risk-RRT* multi-point and base-only, Informed multi-point and base-only; D: generic_L "
                              "with the 1.5 m bar, Social Risk-RRT* with object, base and equal weights.")
-    paper.add_argument("--runs", type=_int_at_least(1, MAX_RUNS), default=10, metavar="N",
-                       help=f"runs per algorithm, at most {MAX_RUNS:,} (default 10)")
+    paper.add_argument("--runs", type=_int_at_least(1, MAX_PAPER_RUNS), default=10, metavar="N",
+                       help=f"runs per algorithm, at most {MAX_PAPER_RUNS:,} (the study's {PAPER_PAIRS} group x "
+                       f"algorithm pairs x N runs stay within {MAX_STUDY_TASKS:,}; default 10)")
     paper.add_argument("--iterations", type=_int_at_least(1, MAX_ITERATIONS), default=2000, metavar="K",
                        help=f"K, at most {MAX_ITERATIONS:,} (default 2000)")
     paper.add_argument("--seed", type=_nonnegative_int, default=0, metavar="S",
@@ -676,8 +730,9 @@ def _add_experiment(subparsers) -> None:
     sweep.add_argument("config", type=Path, help="the sweep's YAML file")
     for q in (paper, sweep):
         q.add_argument("--out", type=Path, metavar="DIR", help="output directory (default: out/<study name>)")
-        q.add_argument("--workers", type=_positive_int, default=1, metavar="N",
-                       help="parallel worker processes (default 1: in this process); results do not depend on it")
+        q.add_argument("--workers", type=_int_at_least(1, MAX_WORKERS), default=1, metavar="N",
+                       help=f"parallel worker processes, at most {MAX_WORKERS} (each holds Drake: a few hundred MB; "
+                       "default 1: in this process); results do not depend on it")
         q.add_argument("--executor", choices=EXECUTORS, default="process",
                        help="process (concurrent.futures, default) or dask (the distributed package)")
         q.add_argument("--scheduler", metavar="ADDRESS",
@@ -818,6 +873,8 @@ def main(argv: Sequence[str] | None = None) -> int:
             import pydrake.common  # noqa: F401  (so that our level is not overwritten later)
 
             logging.getLogger("drake").setLevel(logging.WARNING)
+        if getattr(args, "out", None) is not None:
+            _check_out_folder(args.out)
         return args.run(args)
     except (ScenarioError, PlanningInputError) as e:
         print(f"drake-social: error: {e}", file=sys.stderr)

@@ -26,10 +26,11 @@ from typing import Optional, Sequence, Union
 import numpy as np
 
 from drake_social.limits import MAX_MOTION_STEPS
-from drake_social.textfile import read_yaml_file
+from drake_social.textfile import read_yaml_file, shorten
 
 __all__ = [
     "ALGORITHMS",
+    "CHECKERS",
     "EXECUTIONS",
     "MAX_CONTROL_STEPS",
     "MAX_PLANT_STEPS",
@@ -57,6 +58,7 @@ __all__ = [
     "compose_yaml",
     "load_scenario",
     "load_scenario_text",
+    "period_count",
     "validate_scenario",
 ]
 
@@ -100,6 +102,12 @@ ALGORITHMS = (
     "informed_social_rrt_star",
     "informed_base_rrt_star",
 )
+
+#: Validity checkers (``drake_social.model.checker.make_checker``; the first is
+#: the default of the planner): the exact planar one, Drake's SceneGraph and
+#: the pure-numpy reference. Here, not in that module, so that the command
+#: line and studies can name them without importing Drake.
+CHECKERS = ("planar", "drake", "numpy")
 
 #: Modes of the informed sampler (see ``drake_social.planning.sampling``).
 INFORMED_MODES = ("paper", "admissible")
@@ -385,8 +393,8 @@ def load_scenario(path: str | Path, overrides: str | Sequence[str] | None = None
             duplicate or unknown keys or invalid values; the message names
             the file (or the override at fault), the line and the field.
     """
-    path = Path(path)
-    return load_scenario_text(read_yaml_file(path, "scenario"), str(path), overrides,
+    text = read_yaml_file(path, "scenario")  # refuses "" before Path("") could make it the working directory
+    return load_scenario_text(text, str(Path(path)), overrides,
                               overrides_name=overrides_name)
 
 
@@ -407,7 +415,7 @@ def load_scenario_text(text: str, source: str, overrides: str | Sequence[str] | 
     path = source
     sources = [(source, text)]
     for extra in [overrides] if isinstance(overrides, str) else list(overrides or []):
-        sources.append((f"{path} ({overrides_name} {extra!r})", extra))
+        sources.append((f"{path} ({overrides_name} {shorten(repr(extra))})", extra))
     stages = []
     scenario = None
     for source, data in sources:
@@ -470,9 +478,12 @@ def _plural(tp) -> str:
     return {float: "numbers", int: "integers", bool: "booleans", str: "strings"}.get(tp, str(tp))
 
 
-#: Deepest nesting of YAML collections accepted in a scenario, sweep or
-#: override (a scenario needs 4 levels, a sweep with variants 6); deeper
-#: documents are refused before Python's recursion limit is reached.
+#: Deepest nesting of YAML nodes accepted in a scenario, sweep or override,
+#: counted as the loader counts it (the document's mapping is level 1, a
+#: scalar one more than its collection): the shipped scenarios and
+#: studies/example_sweep.yaml need 6, a sweep variant that sets an obstacle's
+#: centre 8. Deeper documents are refused before Python's recursion limit is
+#: reached.
 MAX_YAML_DEPTH = 32
 #: Most nodes (mappings, lists, keys and values) of one YAML document, an
 #: alias counted as the nodes it stands for: a "billion laughs" of nested
@@ -515,7 +526,12 @@ def _limited_loader(yaml):
                 if id(node) not in self._size:  # its anchor is still open: the alias repeats itself
                     raise _YamlLimit(mark, "an alias inside the node it refers to (a recursive YAML structure)")
                 self._count(self._size[id(node)], self._height[id(node)], mark)
-                return node
+                # A node of its own at the alias's place, so that errors name the alias's line (the
+                # content, shared, keeps its own lines).
+                style = node.style if isinstance(node, yaml.ScalarNode) else node.flow_style
+                here = type(node)(node.tag, node.value, mark, mark, style)
+                self._size[id(here)], self._height[id(here)] = self._size[id(node)], self._height[id(node)]
+                return here
             self._depth += 1
             self._count(0, 0, mark)
             before = self._total
@@ -551,15 +567,17 @@ def compose_yaml(text: str, source: str):
     """
     import yaml  # PyYAML, as Drake's Python loader uses; lazy like pydrake
 
-    loader = _limited_loader(yaml)(text)
+    loader = None
     try:
+        loader = _limited_loader(yaml)(text)  # its reader refuses control characters and NULs at once
         return loader.get_single_node()
     except yaml.YAMLError as e:
         raise ScenarioError(f"{source}: not valid YAML: {e}") from None
     except _YamlLimit as e:
         raise ScenarioError(f"{source}: line {e.mark.line + 1}: {e}") from None
     finally:
-        loader.dispose()
+        if loader is not None:
+            loader.dispose()
 
 
 def check_yaml(text: str, source: str, schema: type = Scenario) -> None:
@@ -597,7 +615,16 @@ def check_node(schema: type, node, source: str, field: str = "") -> None:
     _check_node(schema, node, field, source, yaml)
 
 
-def _check_node(tp, node, field: str, source: str, yaml) -> None:
+#: PyYAML's tags of untagged mappings, lists and strings, and the prefix of its standard (``!!``) tags.
+_MAP_TAG = "tag:yaml.org,2002:map"
+_SEQ_TAG = "tag:yaml.org,2002:seq"
+_STR_TAG = "tag:yaml.org,2002:str"
+_YAML_TAG = "tag:yaml.org,2002:"
+
+
+def _check_node(tp, node, field: str, source: str, yaml, tag_checked: bool = False) -> None:
+    """:func:`check_node` of one node; ``tag_checked``: its ``!Tag`` chose ``tp`` (an object type)."""
+
     def fail(message: str, at=node) -> None:
         name = f"{field}: " if field else ""
         raise ScenarioError(f"{source}: line {at.start_mark.line + 1}: {name}{message}")
@@ -607,7 +634,11 @@ def _check_node(tp, node, field: str, source: str, yaml) -> None:
             return "a mapping"
         if isinstance(n, yaml.SequenceNode):
             return "a list"
-        return "null" if n.tag == "tag:yaml.org,2002:null" else repr(n.value)
+        if n.tag == "tag:yaml.org,2002:null":
+            return "null"
+        tag = "" if n.tag in (_STR_TAG, yaml.resolver.Resolver().resolve(yaml.ScalarNode, n.value, (True, False)))\
+            else n.tag.replace(_YAML_TAG, "!!") + " "
+        return tag + shorten(repr(n.value))
 
     is_null = isinstance(node, yaml.ScalarNode) and node.tag == "tag:yaml.org,2002:null"
     origin = typing.get_origin(tp)
@@ -620,10 +651,15 @@ def _check_node(tp, node, field: str, source: str, yaml) -> None:
             return _check_node(alts[0], node, field, source, yaml)
         tags = {f"!{a.__name__}": a for a in alts}
         if node.tag in tags:
-            return _check_node(tags[node.tag], node, field, source, yaml)
+            return _check_node(tags[node.tag], node, field, source, yaml, tag_checked=True)
         if node.tag.startswith("!"):
             fail(f"unknown type {node.tag}; allowed: {', '.join(tags)}")
         return _check_node(alts[0], node, field, source, yaml)  # untagged: the first alternative
+    # Elsewhere a mapping or list carries no tag (Drake's loader would read a
+    # !Tag as an unknown field "_tag", PyYAML's !!set or !!omap as another type).
+    default_tag = {yaml.MappingNode: _MAP_TAG, yaml.SequenceNode: _SEQ_TAG}.get(type(node))
+    if default_tag is not None and node.tag != default_tag and not tag_checked:
+        fail(f"must be {_describe(tp)} without a tag, got {node.tag.replace(_YAML_TAG, '!!')} {shown(node)}")
     if origin is list:
         if not isinstance(node, yaml.SequenceNode):
             fail(f"must be {_describe(tp)}, got {shown(node)}")
@@ -642,7 +678,7 @@ def _check_node(tp, node, field: str, source: str, yaml) -> None:
                     or key_node.value == ""):
                 raise ScenarioError(f"{source}: line {line}: {field}: names must be non-empty strings, got "
                                     f"{shown(key_node)}")
-            sub = f"{field}.{key_node.value}" if field else key_node.value
+            sub = f"{field}.{shorten(key_node.value)}" if field else shorten(key_node.value)
             if key_node.value in seen:
                 raise ScenarioError(f"{source}: line {line}: {sub}: duplicate key (first at line "
                                     f"{seen[key_node.value]})")
@@ -656,13 +692,17 @@ def _check_node(tp, node, field: str, source: str, yaml) -> None:
         types = {f.name: hints[f.name] for f in dc.fields(tp)}
         seen: dict[str, int] = {}
         for key_node, value_node in node.value:
-            key = key_node.value
-            sub = f"{field}.{key}" if field else str(key)
             line = key_node.start_mark.line + 1
+            if not isinstance(key_node, yaml.ScalarNode):
+                where = f"{field}: " if field else ""
+                raise ScenarioError(f"{source}: line {line}: {where}a key must be a field name ({', '.join(types)}), "
+                                    f"got {shown(key_node)}")
+            key = key_node.value
+            sub = f"{field}.{shorten(key)}" if field else shorten(key)
             if key in seen:  # YAML loaders keep the last silently
                 raise ScenarioError(f"{source}: line {line}: {sub}: duplicate key (first at line {seen[key]})")
             seen[key] = line
-            if not isinstance(key_node, yaml.ScalarNode) or key not in types:
+            if key_node.tag != _STR_TAG or key not in types:
                 where = f"in {field}" if field else "at the top level"
                 raise ScenarioError(f"{source}: line {line}: {sub}: unknown field {where}; allowed: "
                                     f"{', '.join(types)}")
@@ -670,7 +710,12 @@ def _check_node(tp, node, field: str, source: str, yaml) -> None:
         return
     if not isinstance(node, yaml.ScalarNode) or is_null:
         fail(f"must be {_describe(tp)}, got {shown(node)}")
-    value = yaml.SafeLoader("").construct_object(node) if node.tag.startswith("tag:yaml.org") else node.value
+    if not node.tag.startswith(_YAML_TAG):  # e.g. `description: !Foo x`
+        fail(f"must be {_describe(tp)} without a tag, got {shown(node)}")
+    try:  # a standard tag whose text does not fit it (`!!int abc`, `!!bool maybe`), or Python's (`!!python/name:`)
+        value = yaml.SafeLoader("").construct_object(node)
+    except Exception:
+        fail(f"must be {_describe(tp)}, got {shown(node)}")
     if tp is bool:
         ok = isinstance(value, bool)
     elif tp is str:
@@ -711,21 +756,21 @@ class _Checker:
     def finite(self, field: str, value) -> None:
         arr = np.asarray(value, dtype=float)
         if not np.all(np.isfinite(arr)):
-            self.fail(field, f"must be finite numbers, got {value}")
+            self.fail(field, f"must be finite numbers, got {_shown(value)}")
 
     def positive(self, field: str, value) -> None:
         self.finite(field, value)
         if not np.all(np.asarray(value, dtype=float) > 0):
-            self.fail(field, f"must be > 0, got {value}")
+            self.fail(field, f"must be > 0, got {_shown(value)}")
 
     def nonnegative(self, field: str, value) -> None:
         self.finite(field, value)
         if not np.all(np.asarray(value, dtype=float) >= 0):
-            self.fail(field, f"must be >= 0, got {value}")
+            self.fail(field, f"must be >= 0, got {_shown(value)}")
 
     def length(self, field: str, value, n: int) -> None:
         if len(value) != n:
-            self.fail(field, f"must have {n} values, got {len(value)}: {value}")
+            self.fail(field, f"must have {n} values, got {len(value)}: {_shown(value)}")
 
     def points(self, field: str, value, min_count: int) -> None:
         if len(value) < min_count:
@@ -733,6 +778,21 @@ class _Checker:
         for i, p in enumerate(value):
             self.length(f"{field}[{i}]", p, 2)
             self.finite(f"{field}[{i}]", p)
+
+
+def _shown(value) -> str:
+    """A value of the scenario as an error message repeats it (:func:`~drake_social.textfile.shorten`)."""
+    return shorten(repr(value) if isinstance(value, str) else str(value))
+
+
+def period_count(duration: float, period: float) -> int:
+    """How many periods of ``period`` seconds a run of ``duration`` seconds
+    takes (the ratio rounded up; a ratio within 1e-9 of an integer counts as
+    that integer, so 270 s / 0.0045 s is 60,000 periods although it computes
+    to 60000.00000000001)."""
+    ratio = duration / period
+    nearest = round(ratio)
+    return int(nearest) if abs(ratio - nearest) <= 1e-9 * max(1.0, ratio) else math.ceil(ratio)
 
 
 def interest_point_count(obj: Union[Bar, LShape, Polyline]) -> int:
@@ -787,12 +847,12 @@ def time_limit_problem(time_limit: float, execution: ExecutionOptions, argument:
              (e.plant_time_step, "execution.plant_time_step", None, MAX_PLANT_STEPS,
               f"a run may take at most {MAX_PLANT_STEPS:,} plant steps"))
     for length, field, fewest, most, why in rules:
-        if fewest is not None and limit < fewest * length:
+        if fewest is not None and limit < fewest * length * (1 - 1e-9):  # whole periods, up to rounding
             if argument:
                 return argument, (f"must be >= {fewest} * {field} {length} = {fewest * length:.6g} s ({why}), "
                                   f"got {time_limit}")
             return field, f"must be <= execution.time_limit / {fewest} = {limit / fewest:.6g} s ({why}), got {length}"
-        if most is not None and limit / length > most:
+        if most is not None and period_count(limit, length) > most:
             if argument:
                 return argument, (f"must be <= {most:,} * {field} {length} = {most * length:.6g} s ({why}), "
                                   f"got {time_limit}")
@@ -909,24 +969,24 @@ def validate_scenario(scenario: Scenario, source: str = "<scenario>") -> None:
 
     p = scenario.planner
     if p.algorithm not in ALGORITHMS:
-        c.fail("planner.algorithm", f"unknown algorithm {p.algorithm!r}; allowed: {', '.join(ALGORITHMS)}")
+        c.fail("planner.algorithm", f"unknown algorithm {_shown(p.algorithm)}; allowed: {', '.join(ALGORITHMS)}")
     if not 1 <= p.iterations <= MAX_ITERATIONS:
         c.fail("planner.iterations", f"must be in [1, {MAX_ITERATIONS}], got {p.iterations}")
     if p.near_radius_mode not in NEAR_RADIUS_MODES:
         c.fail("planner.near_radius_mode",
-               f"unknown mode {p.near_radius_mode!r}; allowed: {', '.join(NEAR_RADIUS_MODES)}")
+               f"unknown mode {_shown(p.near_radius_mode)}; allowed: {', '.join(NEAR_RADIUS_MODES)}")
     c.finite("planner.near_radius_gamma", p.near_radius_gamma)
     if p.near_radius_gamma < 0:
         c.fail("planner.near_radius_gamma", f"must be >= 0 (0: computed from the space), got {p.near_radius_gamma}")
     if not isinstance(p.optimize, bool):
-        c.fail("planner.optimize", f"must be true or false, got {p.optimize!r}")
+        c.fail("planner.optimize", f"must be true or false, got {_shown(p.optimize)}")
     c.positive("planner.planning_range", p.planning_range)
     c.positive("planner.near_radius", p.near_radius)
     c.finite("planner.goal_bias", p.goal_bias)
     if not 0.0 <= p.goal_bias < 1.0:
         c.fail("planner.goal_bias", f"must be in [0, 1), got {p.goal_bias}")
     if p.informed_mode not in INFORMED_MODES:
-        c.fail("planner.informed_mode", f"unknown mode {p.informed_mode!r}; allowed: {', '.join(INFORMED_MODES)}")
+        c.fail("planner.informed_mode", f"unknown mode {_shown(p.informed_mode)}; allowed: {', '.join(INFORMED_MODES)}")
     if p.informed_mode == "admissible" and p.algorithm.startswith("informed") and s.length_weight <= 0:
         c.fail("planner.informed_mode", "'admissible' needs social.length_weight > 0")
     c.length("planner.distance_weights", p.distance_weights, 4)
@@ -934,9 +994,9 @@ def validate_scenario(scenario: Scenario, source: str = "<scenario>") -> None:
     c.positive("planner.collision_resolution", p.collision_resolution)
     e = scenario.execution
     if e.mode not in SIM_MODES:
-        c.fail("execution.mode", f"unknown mode {e.mode!r}; allowed: {', '.join(SIM_MODES)}")
+        c.fail("execution.mode", f"unknown mode {_shown(e.mode)}; allowed: {', '.join(SIM_MODES)}")
     if e.execution not in EXECUTIONS:
-        c.fail("execution.execution", f"unknown execution {e.execution!r}; allowed: {', '.join(EXECUTIONS)}")
+        c.fail("execution.execution", f"unknown execution {_shown(e.execution)}; allowed: {', '.join(EXECUTIONS)}")
     for name in ("kp", "max_base_speed", "max_base_acceleration", "max_base_jerk", "wheel_radius",
                  "max_wheel_speed", "base_tolerance", "joint_tolerance", "control_period",
                  "plant_time_step", "time_limit", "replay_fps"):

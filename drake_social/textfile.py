@@ -8,7 +8,7 @@ through :func:`read_text_file`, so all of them are refused the same way:
   file is opened, so a FIFO is never opened for reading (that would block
   until a writer appears) and ``/dev/zero`` is never read (it never ends);
 * a file larger than its limit (:data:`MAX_YAML_FILE_BYTES` for scenario
-  and sweep files, :data:`MAX_TEXT_FILE_BYTES` for the others) is refused
+  and sweep files, :data:`MAX_PATH_FILE_BYTES` for path CSVs) is refused
   with the limit stated, before anything is read;
 * the text must be UTF-8; the error names the byte offset at fault.
 
@@ -23,11 +23,19 @@ import os
 import stat
 from pathlib import Path
 
-__all__ = ["MAX_TEXT_FILE_BYTES", "MAX_YAML_FILE_BYTES", "check_regular_file", "read_text_file", "read_yaml_file"]
+from drake_social.limits import MAX_WAYPOINTS
 
-#: Largest text file read by default (path CSVs), bytes: 64 MiB (a path CSV
-#: of 100,000 waypoints is about 7 MB).
-MAX_TEXT_FILE_BYTES = 64 * 1024 * 1024
+__all__ = ["MAX_PATH_FILE_BYTES", "MAX_YAML_FILE_BYTES", "check_regular_file", "read_text_file", "read_yaml_file",
+           "describe_mode", "shorten"]
+
+#: Bytes allowed per row of a path CSV: four numbers of 17 significant digits
+#: with exponent and sign take at most 4 x 24 + 3 commas + CRLF = 101 bytes;
+#: this leaves room for spaces.
+PATH_ROW_BYTES = 256
+#: Largest path CSV (``simulate --path``), bytes: the header and
+#: :data:`~drake_social.limits.MAX_WAYPOINTS` rows of :data:`PATH_ROW_BYTES`
+#: (2.56 MB; a path of that many waypoints written by ``plan`` is about 0.5 MB).
+MAX_PATH_FILE_BYTES = (MAX_WAYPOINTS + 1) * PATH_ROW_BYTES
 #: Largest scenario or sweep file, bytes: 4 MiB. The shipped ones are a few
 #: kilobytes, a room with 2,000 obstacles about 120 kB; PyYAML reads about
 #: 2 MB/s, so this also bounds the time spent parsing.
@@ -42,16 +50,44 @@ _KINDS = (
 )
 
 
-def _error(path: Path, message: str, option: str | None):
+#: Most characters of the user's input an error message repeats (:func:`shorten`).
+SHOWN_CHARACTERS = 80
+#: Most characters of a file name an error message repeats.
+SHOWN_PATH_CHARACTERS = 300
+
+
+def shorten(text: str, limit: int = SHOWN_CHARACTERS) -> str:
+    """``text`` as an error message repeats it: whole up to ``limit`` characters,
+    else its first ``limit`` characters, an ellipsis and its length.
+
+    Args:
+        text: the input to repeat (a value's repr, a line, an override).
+        limit: the most characters repeated.
+
+    Returns:
+        e.g. ``"'aaaa... (4,000 characters)"``.
+    """
+    if len(text) <= limit:
+        return text
+    return f"{text[:limit]}... ({len(text):,} characters)"
+
+
+def _error(path: Path | str, message: str, option: str | None):
     from drake_social.scenario import ScenarioError  # scenario.py imports this module
 
-    return ScenarioError(f"{path}: {message}" + ("" if option is None else f" ({option})"))
+    return ScenarioError(f"{shorten(str(path), SHOWN_PATH_CHARACTERS)}: {message}"
+                         + ("" if option is None else f" ({option})"))
 
 
 def _not_regular(path: Path, mode: int, what: str, option: str | None):
     if stat.S_ISDIR(mode):
         return _error(path, f"is a directory, not a {what} file", option)
     return _error(path, f"not a regular file ({_kind(mode)}); a {what} file must be a regular file", option)
+
+
+def describe_mode(mode: int) -> str:
+    """What a file of ``os.stat`` mode ``mode`` is, for messages: "a directory", "a FIFO", ..."""
+    return _kind(mode)
 
 
 def _kind(mode: int) -> str:
@@ -75,8 +111,10 @@ def check_regular_file(path: str | Path, what: str, option: str | None = None) -
     Raises:
         ScenarioError: ``<path>: no such <what> file``, ``<path>: not a
             regular file (a FIFO)`` (or a directory, a character device, ...),
-            or ``<path>: cannot be read (...)``.
+            ``<path>: cannot be read (...)`` or ``'<path>': not a valid file name (...)``.
     """
+    if str(path) == "":  # Path("") would be the working directory
+        raise _error(repr(""), f"an empty file name; a {what} file is needed", option)
     path = Path(path)
     try:
         st = os.stat(path)
@@ -84,13 +122,14 @@ def check_regular_file(path: str | Path, what: str, option: str | None = None) -
         raise _error(path, f"no such {what} file", option) from None
     except OSError as e:
         raise _error(path, f"cannot be read ({e.strerror or e})", option) from None
+    except ValueError as e:  # a NUL in the name, or a character the file system's encoding lacks
+        raise _error(repr(str(path)), f"not a valid file name ({e})", option) from None
     if not stat.S_ISREG(st.st_mode):
         raise _not_regular(path, st.st_mode, what, option)
     return st
 
 
-def read_text_file(path: str | Path, what: str, option: str | None = None, *,
-                   limit: int = MAX_TEXT_FILE_BYTES) -> str:
+def read_text_file(path: str | Path, what: str, option: str | None = None, *, limit: int) -> str:
     """The UTF-8 text of a regular file of at most ``limit`` bytes.
 
     The file is checked with :func:`check_regular_file` before it is opened,
@@ -111,8 +150,8 @@ def read_text_file(path: str | Path, what: str, option: str | None = None, *,
         ScenarioError: the file is missing, not a regular file, larger than
             ``limit``, unreadable or not UTF-8; the message names the file.
     """
-    path = Path(path)
     st = check_regular_file(path, what, option)
+    path = Path(path)
     too_big = f"a {what} file may have at most {limit:,} bytes"
     if st.st_size > limit:
         raise _error(path, f"{st.st_size:,} bytes; {too_big}", option)

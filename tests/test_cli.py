@@ -161,3 +161,68 @@ def test_overrides_reach_the_picture(tmp_path):
         rgb = rgb[:, : 3 * rgb.shape[1] // 4]
         reds.append(((rgb[..., 0] > 0.5) & (rgb[..., 1] < 0.3) & (rgb[..., 2] < 0.3)).mean())
     assert reds[0] > 0.05 and reds[1] == 0.0
+
+
+# ---- counts and folders of the command line are bounded and named (review of the loader, "outside the loader")
+
+_TINY = Path(__file__).resolve().parent.parent / "scenarios" / "tiny.yaml"
+
+
+@pytest.mark.parametrize("argv, message", [
+    (["bench", "--seeds", "1000000000"], "argument --seeds: must be an integer in [1, 10,000], got 1000000000"),
+    (["bench", "--repeats", "1000000000"], "argument --repeats: must be an integer in [1, 100], got 1000000000"),
+    (["experiment", "sweep", "x.yaml", "--workers", "1000000000"],
+     "argument --workers: must be an integer in [1, 64], got 1000000000"),
+    (["experiment", "paper", "--workers", "65"], "argument --workers: must be an integer in [1, 64], got 65"),
+])
+def test_counts_of_the_command_line_are_bounded(capsys, argv, message):
+    assert main(argv) == 2
+    assert capsys.readouterr().err.endswith(f"error: {message}\n")
+
+
+def test_the_bounds_are_stated_in_the_help(capsys):
+    from drake_social.cli import MAX_BENCH_REPEATS, MAX_BENCH_SEEDS, MAX_WORKERS
+
+    assert (MAX_BENCH_SEEDS, MAX_BENCH_REPEATS, MAX_WORKERS) == (10_000, 100, 64)
+    assert main(["bench", "--help"]) == 0
+    text = " ".join(capsys.readouterr().out.split())
+    assert "seeds 0..N-1 per planner, at most 10,000" in text and "(at most 100)" in text
+    assert main(["experiment", "sweep", "--help"]) == 0
+    assert "parallel worker processes, at most 64" in " ".join(capsys.readouterr().out.split())
+
+
+@pytest.mark.parametrize("command", [["show"], ["plan"], ["simulate"]])
+def test_an_out_that_is_not_a_folder_names_the_option(tmp_path, capsys, command):
+    """An output that cannot be written (exit 1), named as the option's fault."""
+    assert main([*command, str(_TINY), "--out", "/dev/null"]) == 1
+    assert capsys.readouterr().err == ("drake-social: error: /dev/null: --out must be a folder (its outputs are written "
+                                       "inside it); it is a character device\n")
+    plain = tmp_path / "plain.txt"
+    plain.write_text("x")
+    assert main([*command, str(_TINY), "--out", str(plain / "sub")]) == 1
+    assert capsys.readouterr().err == (f"drake-social: error: {plain / 'sub'}: --out must be a folder (its outputs are "
+                                       f"written inside it); {plain} is a file\n")
+
+
+def test_an_experiment_out_that_is_a_file_is_refused_before_any_run(tmp_path, capsys):
+    plain = tmp_path / "plain.txt"
+    plain.write_text("x")
+    assert main(["experiment", "sweep", str(tmp_path / "none.yaml"), "--out", str(plain)]) == 1
+    assert capsys.readouterr().err == (f"drake-social: error: {plain}: --out must be a folder (its outputs are written "
+                                       f"inside it); it is a file\n")
+
+
+def test_a_long_argument_is_not_repeated_whole(capsys):
+    for text in ("x" * 5000, "9" * 5000, "1" * 100):
+        assert main(["experiment", "paper", "--runs", text]) == 2
+        err = capsys.readouterr().err.splitlines()[-1]
+        assert len(err) < 250 and err.endswith("characters)"), err
+
+
+def test_a_long_api_argument_is_not_repeated_whole():
+    from drake_social.arguments import require_choice
+
+    with pytest.raises(ValueError) as info:
+        require_choice("x" * 5000, "make_checker", "kind", ("planar", "drake"))
+    assert str(info.value) == (f"make_checker: unknown kind {repr('x' * 5000)[:80]}... (5,002 characters); allowed: "
+                               f"planar, drake")

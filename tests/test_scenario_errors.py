@@ -13,6 +13,7 @@ import pytest
 
 from drake_social.cli import load_with_overrides, main, read_path_csv
 from drake_social.scenario import ScenarioError, check_yaml, load_scenario
+from drake_social.textfile import shorten
 
 TINY = Path(__file__).resolve().parent.parent / "scenarios" / "tiny.yaml"
 PEOPLE = 'people:\n  - {x: 4.0, y: 3.8, theta: -1.5708, radius: 0.25, name: "standing"}  # faces south'
@@ -199,7 +200,7 @@ def test_an_alias_bomb_is_refused_while_it_is_read(tmp_path, field):
     assert time.perf_counter() - t0 < 5
     assert message == _nodes_message(dut, 7)  # the level of 9^6 leaves
     text = "{" + ", ".join(lines) + "}"
-    assert _message(TINY, [text]) == _nodes_message(f"{TINY} (--set {text!r})", 1)
+    assert _message(TINY, [text]) == _nodes_message(f"{TINY} (--set {shorten(repr(text))})", 1)
 
 
 def test_a_merge_key_bomb_is_refused(tmp_path):
@@ -223,9 +224,9 @@ def test_deep_flow_nesting_is_refused_not_a_recursion_error(tmp_path, depth):
     dut.write_text("start: " + "[" * depth + "]" * depth + "\n")
     assert _message(dut) == _depth_message(dut, 1)
     text = "social: {weights: " + "[" * depth + "]" * depth + "}"
-    assert _message(TINY, [text]) == _depth_message(f"{TINY} (--set {text!r})", 1)
+    assert _message(TINY, [text]) == _depth_message(f"{TINY} (--set {shorten(repr(text))})", 1)
     text = "{a: " * depth + "}" * depth
-    assert _message(TINY, [text]) == _depth_message(f"{TINY} (--set {text!r})", 1)
+    assert _message(TINY, [text]) == _depth_message(f"{TINY} (--set {shorten(repr(text))})", 1)
 
 
 def test_deep_block_nesting_is_refused(tmp_path):
@@ -304,3 +305,183 @@ def test_simulate_refuses_a_time_limit_beyond_the_bound(tiny_scenario):
     with pytest.raises(ValueError, match=r"^simulate: time_limit must be <= 60,000 \* execution.control_period 0.005 "
                                          r"= 300 s \(a run may take at most 60,000 control periods\), got 600.0$"):
         simulate(fine, waypoints=np.array([fine.start, fine.goal]), time_limit=600.0, analyze=False)
+
+
+# ---- review of the loader: characters YAML refuses, unusual keys and tags (exit 2, never a traceback)
+
+
+@pytest.mark.parametrize("char, code", [("\x00", "#x0000"), ("\x01", "#x0001"), ("\x7f", "#x007f"),
+                                        ("\udcff", "#xdcff")])
+def test_a_control_character_or_nul_is_refused_in_a_file_and_a_set(tmp_path, capsys, char, code):
+    dut = tmp_path / "nul.yaml"
+    if char != "\udcff":
+        dut.write_text(f"description: a{char}b\n")
+        assert main(["show", str(dut), "--out", str(tmp_path / "o")]) == 2
+        assert capsys.readouterr().err == (f"drake-social: error: {dut}: not valid YAML: unacceptable character "
+                                           f"{code}: special characters are not allowed\n  in \"<unicode string>\", "
+                                           f"position 14\n")
+    # a --set as the shell passes it (an invalid byte arrives as a lone surrogate)
+    assert main(["show", str(TINY), "--set", f"description: {char}", "--out", str(tmp_path / "o")]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith(f"drake-social: error: {TINY} (--set ") and f"not valid YAML: unacceptable character {code}" in err
+    assert "Traceback" not in err
+
+
+def test_a_sparse_file_of_nuls_at_the_size_limit_is_refused(tmp_path, capsys):
+    from drake_social.textfile import MAX_YAML_FILE_BYTES
+
+    dut = tmp_path / "zeros.yaml"
+    with open(dut, "wb") as f:
+        f.truncate(MAX_YAML_FILE_BYTES)
+    assert main(["show", str(dut), "--out", str(tmp_path / "o")]) == 2
+    assert capsys.readouterr().err.startswith(f"drake-social: error: {dut}: not valid YAML: unacceptable character "
+                                              f"#x0000")
+
+
+@pytest.mark.parametrize("override, message", [
+    ("? [a]\n: 1", "line 1: a key must be a field name (description, world, people, robot, object, start, goal, "
+                   "social, planner, execution, random_seed), got a list"),
+    ("{a: 1}: 2", "line 1: a key must be a field name (description, world, people, robot, object, start, goal, "
+                  "social, planner, execution, random_seed), got a mapping"),
+    ("world: {? [1]: 2}", "line 1: world: a key must be a field name (bounds, obstacles, wall_thickness), got a list"),
+    ("social: {weights: {? [1]: 2}}", "line 1: social.weights: must be a list of numbers, got a mapping"),
+    ("!Foo 3: 1", "line 1: 3: unknown field at the top level; allowed: description, world, people, robot, object, "
+                  "start, goal, social, planner, execution, random_seed"),
+])
+def test_keys_that_are_not_field_names(override, message):
+    assert _message(TINY, [override]) == f"{TINY} (--set {override!r}): {message}"
+
+
+@pytest.mark.parametrize("override, message", [
+    ("description: !!python/object:os.system x", "description: must be a string, got !!python/object:os.system 'x'"),
+    ("description: !!python/name:os.system x", "description: must be a string, got !!python/name:os.system 'x'"),
+    ("description: !!binary \"a\"", "description: must be a string, got !!binary 'a'"),
+    ("random_seed: !!int abc", "random_seed: must be an integer, got !!int 'abc'"),
+    ("random_seed: !!int 0x", "random_seed: must be an integer, got !!int '0x'"),
+    ("social: {threshold: !!float abc}", "social.threshold: must be a number, got !!float 'abc'"),
+    ("social: {threshold: !!float .}", "social.threshold: must be a number, got !!float '.'"),
+    ("planner: {optimize: !!bool maybe}", "planner.optimize: must be true or false, got !!bool 'maybe'"),
+    ("execution: {time_limit: !!timestamp x}", "execution.time_limit: must be a number, got !!timestamp 'x'"),
+    ("execution: {time_limit: !!timestamp 2001-01-01}",
+     "execution.time_limit: must be a number, got '2001-01-01'"),
+    ("description: !Foo x", "description: must be a string without a tag, got !Foo 'x'"),
+    ("world: !Bar {}", "world: must be a mapping (World: bounds, obstacles, wall_thickness) without a tag, got !Bar "
+                       "a mapping"),
+    ("world: !!set {a}", "world: must be a mapping (World: bounds, obstacles, wall_thickness) without a tag, got "
+                         "!!set a mapping"),
+    ("people: !!omap []", "people: must be a list of mappings (Person: x, y, theta, radius, name) without a tag, got "
+                          "!!omap a list"),
+    ("start: !Bar [1, 1, 0, 0]", "start: must be a list of numbers without a tag, got !Bar a list"),
+])
+def test_tags_whose_value_does_not_fit_are_named(override, message):
+    assert _message(TINY, [override]) == f"{TINY} (--set {override!r}): line 1: {message}"
+
+
+def test_standard_tags_that_fit_still_load():
+    scenario = load_with_overrides(TINY, ["random_seed: !!int 7", "description: !!str 12",
+                                          "social: {threshold: !!float 0.25}", "object: !Bar {length: 1.0}"])
+    assert (scenario.random_seed, scenario.description, scenario.social.threshold) == (7, "12", 0.25)
+
+
+# ---- error messages repeat at most 80 characters of the input (review item 7)
+
+
+def _short(message: str, total: int) -> None:
+    assert len(message) < 500, message[:1000]
+    assert f"... ({total:,} characters)" in message
+
+
+def test_a_long_list_is_not_repeated_whole():
+    override = f"social: {{weights: [{', '.join(['1'] * 99_000)}]}}"
+    message = _message(TINY, [override])
+    assert message.startswith(f"{TINY} (--set '{override[:79]}... ({len(override) + 2:,} characters)): "
+                              f"social.weights: must have 5 values, got 99000: [1.0, 1.0, ")
+    _short(message, len(str([1.0] * 99_000)))
+
+
+def test_a_long_set_and_long_words_are_cut_short():
+    override = "random_seed: -1\ndescription: '" + "a" * 4000 + "'"
+    message = _message(TINY, [override])
+    assert message == f"{TINY} (--set {repr(override)[:80]}... ({len(repr(override)):,} characters)): random_seed: " \
+                      f"must be >= 0, got -1"
+    long = "x" * 5000
+    _short(_message(TINY, [f"planner: {{algorithm: {long}}}"]), 5002)
+    _short(_message(TINY, [f"planner: {{{long[:1000]}: 1}}"]), 1000)
+    _short(_message(TINY, [f"random_seed: {long}"]), 5002)
+    _short(_message(TINY, [f"world: {{obstacles: [{{center: [{', '.join(['1'] * 3000)}]}}]}}"]),
+           len(str([1.0] * 3000)))
+
+
+def test_a_long_path_line_is_cut_short(tmp_path, tiny_scenario, capsys):
+    dut = tmp_path / "path.csv"
+    dut.write_text("x" * 1_000_000 + "\n")
+    with pytest.raises(ScenarioError) as info:
+        read_path_csv(dut, tiny_scenario)
+    _short(str(info.value), 1_000_002)
+    assert str(info.value).endswith(" (--path)")
+    dut.write_text("x,y,psi1,psi2\n" + "1," * 100_000 + "\n")
+    with pytest.raises(ScenarioError) as info:
+        read_path_csv(dut, tiny_scenario)
+    _short(str(info.value), 200_002)
+
+
+# ---- --path files: a byte limit of MAX_WAYPOINTS rows, LF/CRLF lines only, a BOM skipped (review item 8)
+
+
+def test_the_path_byte_limit_follows_the_waypoint_limit(tmp_path, tiny_scenario):
+    from drake_social.limits import MAX_WAYPOINTS
+    from drake_social.textfile import MAX_PATH_FILE_BYTES
+
+    assert MAX_PATH_FILE_BYTES == (MAX_WAYPOINTS + 1) * 256 < 3_000_000
+    # the longest rows plan writes (17 significant digits, exponents, signs) fit with room to spare
+    row = ",".join(["-1.2345678901234567e-300"] * 4) + "\r\n"
+    assert len(row) * (MAX_WAYPOINTS + 1) < MAX_PATH_FILE_BYTES / 2
+    dut = tmp_path / "big.csv"
+    with open(dut, "wb") as f:
+        f.truncate(MAX_PATH_FILE_BYTES + 1)
+    with pytest.raises(ScenarioError) as info:
+        read_path_csv(dut, tiny_scenario)
+    assert str(info.value) == (f"{dut}: {MAX_PATH_FILE_BYTES + 1:,} bytes; a path file may have at most "
+                               f"{MAX_PATH_FILE_BYTES:,} bytes (--path)")
+
+
+@pytest.mark.parametrize("separator", ["\x0c", "\x0b", "\x1c", "\u2028", "\x85"])
+def test_only_lf_and_crlf_end_a_path_line(tmp_path, tiny_scenario, separator):
+    dut = tmp_path / "path.csv"
+    dut.write_text(f"x,y,psi1,psi2\r\n1.0,2.5,0.0,1.5708\r\n{separator}\r\n6.5,2.5,0.0,nan\r\n", newline="")
+    with pytest.raises(ScenarioError) as info:
+        read_path_csv(dut, tiny_scenario)
+    assert str(info.value) == f"{dut}: line 4: psi2: must be a finite number, got 'nan' (--path)"
+
+
+def test_a_byte_order_mark_is_skipped_and_the_header_error_names_the_option(tmp_path, tiny_scenario):
+    dut = tmp_path / "path.csv"
+    dut.write_text("\ufeffx,y,psi1,psi2\r\n1.0,2.5,0.0,1.5708\r\n6.5,2.5,0.0,1.5708\r\n", newline="")
+    np.testing.assert_array_equal(read_path_csv(dut, tiny_scenario), [[1.0, 2.5, 0.0, 1.5708], [6.5, 2.5, 0.0, 1.5708]])
+    dut.write_text("x;y;psi1;psi2\n")
+    with pytest.raises(ScenarioError) as info:
+        read_path_csv(dut, tiny_scenario)
+    assert str(info.value) == f"{dut}: line 1: the header must be 'x,y,psi1,psi2', got 'x;y;psi1;psi2' (--path)"
+
+
+def test_an_alias_error_names_the_aliass_line():
+    override = "random_seed: &a 1\nstart: *a"
+    assert _message(TINY, [override]) == (f"{TINY} (--set {override!r}): line 2: start: must be a list of numbers, "
+                                          f"got '1'")
+
+
+@pytest.mark.parametrize("time_limit, period", [(270, 0.0045), (9, 0.00015), (37, 37 / 60_000), (600, 0.01)])
+def test_exactly_the_most_control_periods_is_accepted(time_limit, period):
+    scenario = load_with_overrides(TINY, [f"execution: {{time_limit: {time_limit}, control_period: {period!r}, "
+                                          f"plant_time_step: {period!r}}}"])
+    assert scenario.execution.control_period == period
+    with pytest.raises(ScenarioError, match="a run may take at most 60,000 control periods"):
+        load_with_overrides(TINY, [f"execution: {{time_limit: {time_limit}, control_period: {period * 0.999!r}, "
+                                   f"plant_time_step: {period * 0.999!r}}}"])
+
+
+@pytest.mark.parametrize("time_limit, step", [(270, 0.0009), (151, 151 / 300_000), (302, 302 / 300_000)])
+def test_exactly_the_most_plant_steps_is_accepted(time_limit, step):
+    scenario = load_with_overrides(TINY, [f"execution: {{time_limit: {time_limit}, plant_time_step: {step!r}, "
+                                          f"control_period: {min(0.01, time_limit / 100)!r}}}"])
+    assert scenario.execution.plant_time_step == step

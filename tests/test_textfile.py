@@ -18,7 +18,7 @@ import pytest
 from drake_social.cli import main
 from drake_social.experiments.study import load_sweep
 from drake_social.scenario import ScenarioError, load_scenario
-from drake_social.textfile import MAX_TEXT_FILE_BYTES, MAX_YAML_FILE_BYTES, read_text_file
+from drake_social.textfile import MAX_PATH_FILE_BYTES, MAX_YAML_FILE_BYTES, read_text_file
 
 TINY = Path(__file__).resolve().parent / ".." / "scenarios" / "tiny.yaml"
 
@@ -118,10 +118,10 @@ def test_a_symbolic_link_to_a_device_is_refused(tmp_path):
 def test_files_over_the_limit_are_refused_before_reading(tmp_path, capsys):
     big = tmp_path / "big.csv"
     with open(big, "wb") as f:  # sparse: no disk space used
-        f.truncate(MAX_TEXT_FILE_BYTES + 1)
+        f.truncate(MAX_PATH_FILE_BYTES + 1)
     code, err = _cli(capsys, ["simulate", str(TINY), "--path", str(big), "--no-replay", "--out", str(tmp_path / "o")])
-    assert (code, err) == (2, f"drake-social: error: {big}: {MAX_TEXT_FILE_BYTES + 1:,} bytes; a path file may have "
-                              f"at most {MAX_TEXT_FILE_BYTES:,} bytes (--path)\n")
+    assert (code, err) == (2, f"drake-social: error: {big}: {MAX_PATH_FILE_BYTES + 1:,} bytes; a path file may have "
+                              f"at most {MAX_PATH_FILE_BYTES:,} bytes (--path)\n")
     scenario = tmp_path / "big.yaml"
     scenario.write_text(TINY.read_text() + "#" * MAX_YAML_FILE_BYTES)
     size = scenario.stat().st_size
@@ -165,3 +165,14 @@ def test_a_missing_file_and_an_unreadable_one(tmp_path):
         with pytest.raises(ScenarioError, match="cannot be read"):
             load_scenario(locked)
         locked.chmod(stat.S_IRUSR | stat.S_IWUSR)
+
+
+def test_a_nul_or_empty_file_name_is_refused_by_name():
+    from drake_social.scenario import load_scenario
+
+    with pytest.raises(ScenarioError) as info:
+        load_scenario("a\0b.yaml")
+    assert str(info.value) == "'a\\x00b.yaml': not a valid file name (embedded null byte)"
+    with pytest.raises(ScenarioError) as info:
+        load_scenario("")
+    assert str(info.value) == "'': an empty file name; a scenario file is needed"

@@ -314,7 +314,7 @@ def boxplot_values(records: Sequence[dict], group: str, algorithms: Sequence[str
 
 def write_figures(result, out: Path) -> list[str]:
     """Boxplots of F per group, cost against distance and best paths; returns the file names."""
-    from drake_social.experiments.study import _group_scenario, best_runs
+    from drake_social.experiments.study import best_runs
     from drake_social.viz.path import cost_profile_figure
     from drake_social.viz.study import boxplot_figure, paths_side_by_side
 
@@ -322,7 +322,7 @@ def write_figures(result, out: Path) -> list[str]:
     best = best_runs(result.records)
 
     def scenario_of(g):
-        return _group_scenario(g)[1]
+        return result.scenario(g.name)
 
     def save(fig, name):
         fig.savefig(out / name, dpi=110)

@@ -27,9 +27,11 @@ from __future__ import annotations
 import csv
 import dataclasses as dc
 import functools
+import hashlib
 import io
 import json
 import logging
+import os
 import re
 import tempfile
 import time
@@ -38,10 +40,11 @@ from typing import Callable, Optional, Sequence
 
 import numpy as np
 
-from drake_social.scenario import ALGORITHMS, Scenario, ScenarioError
-from drake_social.textfile import check_regular_file, read_yaml_file
+from drake_social.scenario import ALGORITHMS, CHECKERS, Scenario, ScenarioError
+from drake_social.textfile import SHOWN_PATH_CHARACTERS, check_regular_file, read_yaml_file, shorten
 
 __all__ = [
+    "MAX_PAPER_RUNS",
     "MAX_RUNS",
     "MAX_STUDY_TASKS",
     "NAME_PATTERN",
@@ -163,13 +166,17 @@ def paper_study(*, runs: int = 10, iterations: int = 2000, seed: int = 0, simula
     return study
 
 
-#: Validity checkers of a study (= ``drake_social.model.checker.CHECKERS``; that module imports Drake).
-CHECKERS = ("planar", "drake", "numpy")
 #: Most runs per (group, algorithm) of a study (each run's seed is drawn up front).
 MAX_RUNS = 10_000
 #: Most tasks of a study (groups x algorithms x runs): every run's record is
 #: kept in memory until the study is written (a few kilobytes each).
 MAX_STUDY_TASKS = 100_000
+#: (group, algorithm) pairs of :func:`paper_study`: A and B with the paper's
+#: five planners, D with Social Risk-RRT* under three weightings.
+PAPER_PAIRS = 2 * len(PAPER_ALGORITHMS) + len(paper_weights(5))
+#: Most runs of :func:`paper_study` (``experiment paper --runs``): its
+#: :data:`PAPER_PAIRS` pairs x runs stay within :data:`MAX_STUDY_TASKS`.
+MAX_PAPER_RUNS = min(MAX_RUNS, MAX_STUDY_TASKS // PAPER_PAIRS)
 #: Study, group and variant names: a letter, digit or ``_`` first, then
 #: letters, digits, ``_``, ``-`` and ``.``; at most 100 characters. They name
 #: output files (``arena_<group>.log``) and the default folder ``out/<study>``.
@@ -205,8 +212,45 @@ class Sweep:
     variants: dict[str, Optional[Scenario]] = dc.field(default_factory=lambda: {"default": None})
 
 
+def _shown(value) -> str:
+    """A value of the user's as an error message repeats it (its repr, shortened)."""
+    return shorten(repr(value))
+
+
 def _valid_name(name: str) -> bool:
     return re.fullmatch(NAME_PATTERN, name) is not None
+
+
+def _settings_problem(name, runs, iterations, seed, simulate, checker) -> tuple[str, str] | None:
+    """The first of a study's settings that is not allowed, as (field, what is
+    allowed and what it is), or None: the one check of a :class:`Study` and a sweep file."""
+    from drake_social.scenario import MAX_ITERATIONS
+
+    for field, value, low, high in (("runs", runs, 1, MAX_RUNS), ("iterations", iterations, 1, MAX_ITERATIONS)):
+        if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or not low <= value <= high:
+            return field, f"must be an integer in [{low}, {high:,}], got {_shown(value)}"
+    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
+        return "seed", f"must be an integer >= 0, got {_shown(seed)}"
+    if not isinstance(simulate, bool):
+        return "simulate", f"must be true or false, got {_shown(simulate)}"
+    if checker not in CHECKERS:
+        return "checker", f"unknown checker {_shown(checker)}; allowed: {', '.join(CHECKERS)}"
+    if not isinstance(name, str) or not _valid_name(name):
+        return "name", f"{_shown(name)}: a study name {_NAME_RULE}"
+    return None
+
+
+def _algorithms_problem(algorithms: Sequence[str]) -> tuple[Optional[int], str] | None:
+    """The first problem of a list of planners, as (its index or None, what is
+    wrong), or None: at least one, each of ALGORITHMS, none twice."""
+    if not algorithms:
+        return None, f"needs at least one of {', '.join(ALGORITHMS)}"
+    for i, a in enumerate(algorithms):
+        if a not in ALGORITHMS:
+            return i, f"unknown algorithm {_shown(a)}; allowed: {', '.join(ALGORITHMS)}"
+        if a in algorithms[:i]:
+            return i, f"{a} is listed twice (its runs would be recorded twice)"
+    return None
 
 
 def check_study(study: Study, source: str = "study") -> None:
@@ -221,53 +265,44 @@ def check_study(study: Study, source: str = "study") -> None:
         ScenarioError: ``<source>: <field>: <what is allowed>, got <value>``,
             or the scenario error of a group (naming its file and overrides).
     """
-    from drake_social.scenario import MAX_ITERATIONS
-
     def fail(field: str, message: str):
         raise ScenarioError(f"{source}: {field}: {message}")
 
-    for field, value, low, high in (("runs", study.runs, 1, MAX_RUNS),
-                                    ("iterations", study.iterations, 1, MAX_ITERATIONS)):
-        if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or not low <= value <= high:
-            fail(field, f"must be an integer in [{low}, {high:,}], got {value!r}")
-    if isinstance(study.seed, bool) or not isinstance(study.seed, (int, np.integer)) or study.seed < 0:
-        fail("seed", f"must be an integer >= 0, got {study.seed!r}")
-    if not isinstance(study.simulate, bool):
-        fail("simulate", f"must be true or false, got {study.simulate!r}")
-    if study.checker not in CHECKERS:
-        fail("checker", f"unknown checker {study.checker!r}; allowed: {', '.join(CHECKERS)}")
-    if not isinstance(study.name, str) or not _valid_name(study.name):
-        fail("name", f"{study.name!r}: a study name {_NAME_RULE}")
+    problem = _settings_problem(study.name, study.runs, study.iterations, study.seed, study.simulate, study.checker)
+    if problem is not None:
+        fail(*problem)
     if not study.groups:
         fail("groups", "a study needs at least one group")
     seen: set[str] = set()
     for g in study.groups:
         if not isinstance(g.name, str) or not _valid_name(g.name):
-            fail(f"group {g.name!r}", f"a group name {_NAME_RULE}")
-        if g.name in seen:
-            fail(f"group {g.name!r}", "two groups have this name; their records and arena logs would mix")
-        seen.add(g.name)
-        if not g.algorithms:
-            fail(f"group {g.name!r}: algorithms", "needs at least one algorithm")
-        for a in g.algorithms:
-            if a not in ALGORITHMS:
-                fail(f"group {g.name!r}: algorithms", f"unknown algorithm {a!r}; allowed: {', '.join(ALGORITHMS)}")
-        if len(set(g.algorithms)) != len(g.algorithms):
-            twice = sorted({a for a in g.algorithms if g.algorithms.count(a) > 1})
-            fail(f"group {g.name!r}: algorithms", f"{', '.join(twice)} listed more than once (each would be "
-                                                   f"run and recorded twice)")
+            fail(f"group {_shown(g.name)}", f"a group name {_NAME_RULE}")
+        if g.name.casefold() in seen:
+            fail(f"group {_shown(g.name)}", "two groups have this name (letter case aside); their records and arena "
+                                            "logs would mix")
+        seen.add(g.name.casefold())
+        problem = _algorithms_problem(g.algorithms)
+        if problem is not None:
+            i, message = problem
+            fail(f"group {_shown(g.name)}: algorithms" + ("" if i is None else f"[{i}]"), message)
     tasks = study.runs * sum(len(g.algorithms) for g in study.groups)
     if tasks > MAX_STUDY_TASKS:
         fail("runs", f"{len(study.groups)} groups x their algorithms x {study.runs} runs = {tasks:,} runs; a study "
                      f"may have at most {MAX_STUDY_TASKS:,}")
+    _group_texts(study)
+
+
+def _group_texts(study: Study) -> dict[str, str]:
+    """Group name -> its scenario file's text, each file read once, each
+    group's scenario and overrides checked to load (:func:`_check_load`)."""
+    files: dict[str, str] = {}
+    texts = {}
     for g in study.groups:
-        _group_scenario(g)
-
-
-def _group_scenario(group: Group):
-    """A group's scenario text and loaded scenario (errors name its file and the group)."""
-    text = read_yaml_file(group.scenario, "scenario")
-    return text, _load(group.scenario, text, tuple(group.overrides), f"group {group.name}")
+        if g.scenario not in files:
+            files[g.scenario] = read_yaml_file(g.scenario, "scenario")
+        texts[g.name] = files[g.scenario]
+        _check_load(g.scenario, texts[g.name], tuple(g.overrides), f"group {g.name}")
+    return texts
 
 
 def _flow(node, yaml, seen=None) -> None:
@@ -280,6 +315,58 @@ def _flow(node, yaml, seen=None) -> None:
     for child in node.value:
         for n in (child if isinstance(child, tuple) else (child,)):
             _flow(n, yaml, seen)
+
+
+def _sweep_scenario(sweep: Path, name: str) -> Path:
+    """The regular file a sweep's ``scenarios`` entry names: relative to the
+    sweep's folder if it is there, else to the working directory.
+
+    Raises:
+        ScenarioError: as :func:`~drake_social.textfile.check_regular_file`; a
+            file in neither place is named in both.
+    """
+    if name == "" or Path(name).is_absolute():
+        check_regular_file(name, "scenario")
+        return Path(name)
+    local = sweep.parent / name
+    if os.path.lexists(local) or not os.path.lexists(name):  # lexists: False for a name with a NUL, too
+        if not os.path.lexists(local) and local != Path(name) and "\0" not in name:
+            raise ScenarioError(f"{shorten(name, SHOWN_PATH_CHARACTERS)}: no such scenario file, neither beside the sweep "
+                                f"({shorten(str(local), SHOWN_PATH_CHARACTERS)}) nor in the "
+                                f"working directory ({Path.cwd() / name})")
+        check_regular_file(local, "scenario")
+        return local
+    check_regular_file(name, "scenario")
+    return Path(name)
+
+
+#: Scenario fields a study sets for every run (``run_task``), with what a sweep sets them by.
+_STUDY_SETTINGS = {
+    ("random_seed",): "the sweep's seed: (each run's planner seed is drawn from it)",
+    ("planner", "iterations"): "the sweep's iterations:",
+    ("planner", "algorithm"): "the sweep's algorithms:",
+    ("execution", "mode"): "nothing: a study simulates every run in kinematic mode",
+}
+
+
+def _refuse_study_settings(node, field: str, source: str, yaml) -> None:
+    """Refuses a variant that sets a field the study sets for every run
+    (:data:`_STUDY_SETTINGS`): it would be ignored without a word."""
+    if not isinstance(node, yaml.MappingNode):
+        return
+    for key_node, value_node in node.value:
+        for path, instead in _STUDY_SETTINGS.items():
+            at = key_node
+            if key_node.value != path[0]:
+                continue
+            if len(path) == 2:
+                if not isinstance(value_node, yaml.MappingNode):
+                    continue
+                at = next((k for k, _ in value_node.value if k.value == path[1]), None)
+                if at is None:
+                    continue
+            raise ScenarioError(f"{source}: line {at.start_mark.line + 1}: {field}.{'.'.join(path)}: a study sets it "
+                                f"for every run, so a variant cannot: use {instead}")
 
 
 def load_sweep(path: str | Path) -> Study:
@@ -309,7 +396,7 @@ def load_sweep(path: str | Path) -> Study:
     """
     import yaml
 
-    from drake_social.scenario import MAX_ITERATIONS, check_node, compose_yaml
+    from drake_social.scenario import check_node, compose_yaml
 
     path = Path(path)
     root = compose_yaml(read_yaml_file(path, "sweep"), str(path))
@@ -323,91 +410,95 @@ def load_sweep(path: str | Path) -> Study:
         line = f"line {node.start_mark.line + 1}: " if node is not None else ""
         raise ScenarioError(f"{path}: {line}{key}: {message}")
 
-    def value(key: str):
+    def value(key: str):  # the schema check above has checked its type
         if key not in nodes:
             return getattr(Sweep(), key)
-        try:
-            return yaml.SafeLoader("").construct_object(nodes[key], deep=True)
-        except yaml.YAMLError as e:  # a tag of no YAML type, e.g. `name: !Bar x`
-            fail(key, f"{e.problem}")
+        return yaml.SafeLoader("").construct_object(nodes[key], deep=True)
 
-    runs, iterations, seed = int(value("runs")), int(value("iterations")), int(value("seed"))
-    if not 1 <= runs <= MAX_RUNS:
-        fail("runs", f"must be in [1, {MAX_RUNS:,}], got {runs}")
-    if not 1 <= iterations <= MAX_ITERATIONS:
-        fail("iterations", f"must be in [1, {MAX_ITERATIONS:,}] (K of every run), got {iterations}")
-    if seed < 0:
-        fail("seed", f"must be >= 0, got {seed}")
-    checker = value("checker")
-    if checker not in CHECKERS:
-        fail("checker", f"unknown checker {checker!r}; allowed: {', '.join(CHECKERS)}")
+    runs, iterations, seed = int(value("runs")), int(value("iterations")), int(value("seed"))  # 1e3 is an integer
+    checker, simulate = value("checker"), value("simulate")
     name = value("name") or path.stem
-    if not _valid_name(name):
-        fail("name", f"{name!r}: a study name {_NAME_RULE}" + ("" if "name" in nodes else
-                                                                " (it is the file's stem: set name:)"))
+    problem = _settings_problem(name, runs, iterations, seed, simulate, checker)
+    if problem is not None:
+        field, message = problem
+        fail(field, message + ("" if field != "name" or "name" in nodes else " (it is the file's stem: set name:)"))
     algorithms = value("algorithms")
-    if not algorithms:
-        fail("algorithms", f"needs at least one of {', '.join(ALGORITHMS)}")
-    for i, a in enumerate(algorithms):
-        at = nodes["algorithms"].value[i] if "algorithms" in nodes else None
-        if a not in ALGORITHMS:
-            fail(f"algorithms[{i}]", f"unknown algorithm {a!r}; allowed: {', '.join(ALGORITHMS)}", at)
-        if a in algorithms[:i]:
-            fail(f"algorithms[{i}]", f"{a} is listed twice (its runs would be recorded twice)", at)
+    problem = _algorithms_problem(algorithms)
+    if problem is not None:
+        i, message = problem
+        fail("algorithms" if i is None else f"algorithms[{i}]", message,
+             None if i is None or "algorithms" not in nodes else nodes["algorithms"].value[i])
 
     scenarios = value("scenarios")
     if not scenarios:
         fail("scenarios", "needs at least one scenario file")
     files: list[Path] = []
-    stems: dict[str, int] = {}
+    stems: dict[str, int] = {}  # file name, letter case aside -> its index
     for i, s in enumerate(scenarios):
-        local = path.parent / s
-        candidate = local if not Path(s).is_absolute() and (local.exists() or local.is_symlink()) else Path(s)
         try:
-            check_regular_file(candidate, "scenario")
+            candidate = _sweep_scenario(path, s)
         except ScenarioError as e:
             fail(f"scenarios[{i}]", str(e), nodes["scenarios"].value[i])
-        if candidate.stem in stems:
-            fail(f"scenarios[{i}]", f"{candidate} has the same name {candidate.stem!r} as scenarios[{stems[candidate.stem]}] "
-                 f"({files[stems[candidate.stem]]}); groups are named <scenario file name>-<variant>, so the "
-                 f"scenario files of a sweep need distinct names", nodes["scenarios"].value[i])
-        stems[candidate.stem] = i
+        j = stems.get(candidate.stem.casefold())
+        if j is not None:
+            same = "the same name" if files[j].stem == candidate.stem else "the same name, letter case aside,"
+            fail(f"scenarios[{i}]", f"{candidate} has {same} {_shown(candidate.stem)} as scenarios[{j}] ({files[j]}); "
+                 f"groups are named <scenario file name>-<variant>, so the scenario files of a sweep need distinct "
+                 f"names (output files would collide on a file system that ignores case)", nodes["scenarios"].value[i])
+        stems[candidate.stem.casefold()] = i
         files.append(candidate)
 
     variants: dict[str, tuple[str, ...]] = {}
     variant_nodes = {k.value: (k, v) for k, v in nodes["variants"].value} if "variants" in nodes else {}
     if "variants" in nodes and not variant_nodes:
         fail("variants", "needs at least one variant (e.g. default: {})")
+    folded: dict[str, str] = {}  # variant name, letter case aside -> the name
     for vname, (key_node, node) in variant_nodes.items():
         if not _valid_name(vname):
-            fail(f"variants.{vname}", f"a variant name {_NAME_RULE}", key_node)
+            fail(f"variants.{shorten(vname)}", f"a variant name {_NAME_RULE}", key_node)
+        if vname.casefold() in folded:
+            fail(f"variants.{vname}", f"differs from variants.{folded[vname.casefold()]} only in letter case; their "
+                 f"output files would collide on a file system that ignores case", key_node)
+        folded[vname.casefold()] = vname
+        _refuse_study_settings(node, f"variants.{vname}", str(path), yaml)
         empty = (isinstance(node, yaml.ScalarNode) or not node.value)  # null (checked by the schema) or {}
         if not empty:
             _flow(node, yaml)
         variants[vname] = () if empty else (yaml.serialize(node, width=10**9).strip(),)
     if not variant_nodes:
         variants = {"default": ()}
+    for i, f in enumerate(files):  # names first: they are cheaper to check than the scenarios
+        for vname in variants:
+            group = f"{f.stem}-{vname}"
+            if _valid_name(group):
+                continue
+            if not _valid_name(f.stem):
+                fail(f"scenarios[{i}]", f"the group name {_shown(group)} (<scenario file name>-<variant>) "
+                     f"{_NAME_RULE}: rename {f}", nodes["scenarios"].value[i])
+            fail(f"variants.{vname}", f"the group name {_shown(group)} (<scenario file name>-<variant>) has "
+                 f"{len(group)} characters; at most 100 are allowed: shorten the variant's name (or rename {f})",
+                 variant_nodes[vname][0])
 
     groups = []
     for i, f in enumerate(files):
-        text = read_yaml_file(f, "scenario")
         try:
-            _load(str(f), text, ())
+            text = read_yaml_file(f, "scenario")
         except ScenarioError as e:
             fail(f"scenarios[{i}]", str(e), nodes["scenarios"].value[i])
         for vname, texts in variants.items():
-            try:  # every override is checked before any run
-                _load(str(f), text, texts, f"variants.{vname}")
+            # Every group is loaded before any run, the file with its variant
+            # (a variant may make a value of the file valid); an error names
+            # the stage at fault, the file or the variant.
+            try:
+                _check_load(str(f), text, texts, f"variants.{vname}")
             except ScenarioError as e:
-                raise ScenarioError(f"{path}: {e}") from None
+                if str(e).startswith(f"{f} (variants.{vname} "):
+                    raise ScenarioError(f"{path}: {e}") from None
+                fail(f"scenarios[{i}]", str(e), nodes["scenarios"].value[i])
             group = f"{f.stem}-{vname}"
-            if not _valid_name(group):
-                fail(f"scenarios[{i}]", f"the group name {group!r} (<scenario file name>-<variant>) {_NAME_RULE}: "
-                     f"rename {f}", nodes["scenarios"].value[i])
             groups.append(Group(group, str(f), overrides=texts, algorithms=tuple(algorithms),
                                 label=f"{f.stem}, {vname}" + (f": {texts[0]}" if texts else "")))
-    study = Study(name, tuple(groups), runs=runs, iterations=iterations, seed=seed, simulate=bool(value("simulate")),
-                  checker=checker)
+    study = Study(name, tuple(groups), runs=runs, iterations=iterations, seed=seed, simulate=simulate, checker=checker)
     check_study(study, str(path))
     return study
 
@@ -420,7 +511,7 @@ def study_tasks(study: Study) -> list[dict]:
             scenario or overrides are: nothing has run yet.
     """
     check_study(study)
-    texts = {group.name: _group_scenario(group)[0] for group in study.groups}
+    texts = _group_texts(study)
     seeds = study.run_seeds()
     tasks = []
     for group in study.groups:
@@ -444,7 +535,29 @@ def _load(source: str, text: str, overrides: tuple[str, ...], overrides_name: st
     """The scenario of a task (loaded once per process and overrides); errors name ``source``."""
     from drake_social.scenario import load_scenario_text
 
-    return load_scenario_text(text, source, list(overrides), overrides_name=overrides_name)
+    scenario = load_scenario_text(text, source, list(overrides), overrides_name=overrides_name)
+    _loads.add(_load_key(text, overrides))
+    return scenario
+
+
+#: Digests of the (scenario text, overrides) pairs this process has loaded
+#: without error: a study's check loads each once, however often it is checked
+#: and whatever its groups are called.
+_loads: set[bytes] = set()
+
+
+def _load_key(text: str, overrides: tuple[str, ...]) -> bytes:
+    digest = hashlib.sha256()
+    for part in (text, *overrides):
+        data = part.encode("utf-8", "surrogatepass")
+        digest.update(len(data).to_bytes(8, "little") + data)
+    return digest.digest()
+
+
+def _check_load(source: str, text: str, overrides: tuple[str, ...], overrides_name: str) -> None:
+    """Checks that ``text`` with ``overrides`` loads (:func:`_load`, once per pair and process)."""
+    if _load_key(text, overrides) not in _loads:
+        _load(source, text, overrides, overrides_name)
 
 
 @functools.lru_cache(maxsize=16)
@@ -555,9 +668,17 @@ class StudyResult:
     wall_time: float
     executor: str = "process"
     workers: int = 1
+    #: Group name -> the scenario text its runs loaded (read once, before the first run).
+    scenario_texts: dict[str, str] = dc.field(default_factory=dict)
 
     def group(self, name: str) -> Group:
         return next(g for g in self.study.groups if g.name == name)
+
+    def scenario(self, name: str) -> Scenario:
+        """The scenario group ``name`` ran on, from the text read before the runs (the file may have changed since)."""
+        g = self.group(name)
+        text = self.scenario_texts[name] if name in self.scenario_texts else read_yaml_file(g.scenario, "scenario")
+        return _load(g.scenario, text, tuple(g.overrides), f"group {g.name}")
 
 
 def run_study(study: Study, *, executor: str = "process", workers: int = 1, scheduler: str | None = None,
@@ -571,7 +692,8 @@ def run_study(study: Study, *, executor: str = "process", workers: int = 1, sche
                         progress=progress)
     wall = time.perf_counter() - t0
     _log.info("study %s: %d runs in %.1f s", study.name, len(records), wall)
-    return StudyResult(study, records, wall, executor, workers)
+    texts = {task["group"]: task["scenario_text"] for task in tasks}
+    return StudyResult(study, records, wall, executor, workers, scenario_texts=texts)
 
 
 def best_runs(records: Sequence[dict]) -> dict[tuple[str, str], dict]:

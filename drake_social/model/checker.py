@@ -60,13 +60,10 @@ from drake_social.model.plant import (
     registration_order,
 )
 from drake_social.planning.geometric import CheckerBase
-from drake_social.scenario import Scenario, ScenarioError
+from drake_social.scenario import CHECKERS, Scenario, ScenarioError
 
 __all__ = ["CHECKERS", "Contact", "SceneGraphChecker", "check_start_goal", "local_checkers", "make_checker",
            "near_environment", "valid_configurations", "verify_path"]
-
-#: Names of the validity checkers :func:`make_checker` builds; the first is the default.
-CHECKERS = ("planar", "drake", "numpy")
 
 
 @dc.dataclass(frozen=True)

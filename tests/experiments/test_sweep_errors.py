@@ -21,6 +21,7 @@ from drake_social.experiments.study import (
     study_tasks,
 )
 from drake_social.scenario import ScenarioError
+from drake_social.textfile import shorten
 
 TINY = Path(__file__).resolve().parent.parent.parent / "scenarios" / "tiny.yaml"
 NAME_RULE = ("may contain only letters, digits, '_', '-' and '.' (not first), at most 100 characters, as it names "
@@ -46,10 +47,10 @@ def _error(path: Path) -> str:
 
 def test_a_billion_runs_is_refused_at_once(tmp_path, capsys):
     dut = _sweep(tmp_path, "", head=f"runs: 1000000000\nscenarios: [{TINY}]\n")
-    assert _error(dut) == f"{dut}: line 1: runs: must be in [1, 10,000], got 1000000000"
+    assert _error(dut) == f"{dut}: line 1: runs: must be an integer in [1, 10,000], got 1000000000"
     assert MAX_RUNS == 10_000
     assert main(["experiment", "paper", "--runs", "1000000000", "--out", str(tmp_path / "o")]) == 2
-    assert capsys.readouterr().err.endswith("argument --runs: must be an integer in [1, 10,000], got 1000000000\n")
+    assert capsys.readouterr().err.endswith("argument --runs: must be an integer in [1, 7,692], got 1000000000\n")
     with pytest.raises(ScenarioError) as info:
         paper_study(runs=10**9, scenario_dir=TINY.parent)
     assert str(info.value) == "paper study: runs: must be an integer in [1, 10,000], got 1000000000"
@@ -68,7 +69,7 @@ def test_the_total_number_of_runs_is_bounded(tmp_path):
 
 def test_iterations_beyond_the_planner_limit_name_the_sweep(tmp_path):
     dut = _sweep(tmp_path, "", head=f"iterations: 100000000\nscenarios: [{TINY}]\n")
-    assert _error(dut) == f"{dut}: line 1: iterations: must be in [1, 10,000,000] (K of every run), got 100000000"
+    assert _error(dut) == f"{dut}: line 1: iterations: must be an integer in [1, 10,000,000], got 100000000"
 
 
 def test_an_alias_bomb_in_a_sweep_is_refused_like_in_a_scenario(tmp_path):
@@ -139,7 +140,8 @@ def test_two_scenarios_with_the_same_file_name_are_refused(tmp_path):
     dut = _sweep(tmp_path, "", head="scenarios: [a/tiny.yaml, b/tiny.yaml]\n")
     assert _error(dut) == (f"{dut}: line 1: scenarios[1]: {tmp_path / 'b' / 'tiny.yaml'} has the same name 'tiny' "
                            f"as scenarios[0] ({tmp_path / 'a' / 'tiny.yaml'}); groups are named <scenario file "
-                           f"name>-<variant>, so the scenario files of a sweep need distinct names")
+                           f"name>-<variant>, so the scenario files of a sweep need distinct names (output files would "
+                           f"collide on a file system that ignores case)")
     dut = _sweep(tmp_path, "", head=f"scenarios: [{TINY}, {TINY}]\n")
     assert "scenarios[1]: " in _error(dut) and "has the same name 'tiny' as scenarios[0]" in _error(dut)
 
@@ -147,7 +149,7 @@ def test_two_scenarios_with_the_same_file_name_are_refused(tmp_path):
 @pytest.mark.parametrize("name", ["a/b", "..", ".hidden", "two words", "a\\\\b", "x" * 101, "é"])
 def test_a_variant_name_that_cannot_name_a_file_is_refused_before_running(tmp_path, name):
     dut = _sweep(tmp_path, f'variants: {{"{name}": {{}}}}\n')
-    shown = name.replace("\\\\", "\\")
+    shown = shorten(name.replace("\\\\", "\\"))
     assert _error(dut) == f"{dut}: line 4: variants.{shown}: a variant name {NAME_RULE}"
 
 
@@ -165,9 +167,11 @@ def test_group_names_and_planners_are_checked_at_the_door_of_run_study():
     for groups, message in [
         ((Group("a/b", str(TINY), algorithms=("rrt_star",)),), f"group 'a/b': a group name {NAME_RULE}"),
         ((Group("g", str(TINY), algorithms=("rrt_star",)), Group("g", str(TINY), algorithms=("rrt_star",))),
-         "group 'g': two groups have this name; their records and arena logs would mix"),
+         "group 'g': two groups have this name (letter case aside); their records and arena logs would mix"),
+        ((Group("g", str(TINY), algorithms=("rrt_star",)), Group("G", str(TINY), algorithms=("rrt_star",))),
+         "group 'G': two groups have this name (letter case aside); their records and arena logs would mix"),
         ((Group("g", str(TINY), algorithms=("rrt_star", "rrt_star")),),
-         "group 'g': algorithms: rrt_star listed more than once (each would be run and recorded twice)"),
+         "group 'g': algorithms[1]: rrt_star is listed twice (its runs would be recorded twice)"),
     ]:
         with pytest.raises(ScenarioError) as info:
             run_study(Study("s", groups, runs=1, iterations=10))
@@ -220,7 +224,209 @@ def test_paper_scenario_dir_errors_name_the_folder(tmp_path, capsys):
 
 def test_a_tag_of_no_yaml_type_and_a_bad_file_stem_are_named(tmp_path):
     dut = _sweep(tmp_path, "name: !Foo x\n")
-    assert _error(dut) == f"{dut}: line 4: name: could not determine a constructor for the tag '!Foo'"
+    assert _error(dut) == f"{dut}: line 4: name: must be a string without a tag, got !Foo 'x'"
     dut = tmp_path / "my sweep.yaml"
     dut.write_text(f"scenarios: [{TINY}]\n")
     assert _error(dut) == f"{dut}: name: 'my sweep': a study name {NAME_RULE} (it is the file's stem: set name:)"
+
+
+# ---- review of the loader: bad characters, tags and file names in a sweep
+
+
+def test_a_nul_or_control_character_in_a_sweep_file_is_refused(tmp_path):
+    for char, code in (("\x00", "#x0000"), ("\x1b", "#x001b")):
+        dut = _sweep(tmp_path, f"name: a{char}b\n")
+        assert _error(dut).startswith(f"{dut}: not valid YAML: unacceptable character {code}: special characters are "
+                                      f"not allowed")
+
+
+@pytest.mark.parametrize("body, message", [
+    ("seed: !!int abc\n", "line 4: seed: must be an integer, got !!int 'abc'"),
+    ("simulate: !!bool maybe\n", "line 4: simulate: must be true or false, got !!bool 'maybe'"),
+    ("name: !!python/name:os.system x\n", "line 4: name: must be a string, got !!python/name:os.system 'x'"),
+    ("? [a]\n: 1\n", "line 4: a key must be a field name (name, runs, iterations, seed, simulate, checker, scenarios, "
+                     "algorithms, variants), got a list"),
+    ("variants: {? [a]: {}}\n", "line 4: variants: names must be non-empty strings, got a list"),
+    ("variants: !!set {a}\n", "line 4: variants: must be a mapping of names to mappings (Scenario: description, "
+                              "world, people, robot, object, start, goal, social, planner, execution, random_seed) "
+                              "or nulls without a tag, got !!set a mapping"),
+    ("variants: {a: {world: !Bar {}}}\n", "line 4: variants.a.world: must be a mapping (World: bounds, obstacles, "
+                                          "wall_thickness) without a tag, got !Bar a mapping"),
+])
+def test_unusual_yaml_in_a_sweep_is_named(tmp_path, body, message):
+    dut = _sweep(tmp_path, body)
+    assert _error(dut) == f"{dut}: {message}"
+
+
+def test_a_nul_in_a_scenario_name_is_refused(tmp_path, capsys):
+    dut = _sweep(tmp_path, "", head='runs: 1\nscenarios: ["a\\0b.yaml"]\n')
+    local = str(tmp_path / "a\0b.yaml")
+    assert _error(dut) == f"{dut}: line 2: scenarios[0]: {local!r}: not a valid file name (embedded null byte)"
+    assert main(["experiment", "sweep", str(dut), "--out", str(tmp_path / "o")]) == 2
+    assert "Traceback" not in capsys.readouterr().err
+
+
+def test_an_empty_scenario_name_is_not_the_working_directory(tmp_path):
+    dut = _sweep(tmp_path, "", head='runs: 1\nscenarios: [""]\n')
+    assert _error(dut) == f"{dut}: line 2: scenarios[0]: '': an empty file name; a scenario file is needed"
+
+
+def test_a_missing_scenario_names_both_places_searched(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "studies").mkdir()
+    dut = _sweep(tmp_path / "studies", "", head="runs: 1\nscenarios: [sub/none.yaml]\n")
+    assert _error(dut) == (f"{dut}: line 2: scenarios[0]: sub/none.yaml: no such scenario file, neither beside the "
+                           f"sweep ({tmp_path / 'studies' / 'sub' / 'none.yaml'}) nor in the working directory "
+                           f"({tmp_path / 'sub' / 'none.yaml'})")
+
+
+def test_a_listed_scenario_too_big_or_not_utf8_names_the_sweep(tmp_path):
+    huge = tmp_path / "huge.yaml"
+    with open(huge, "wb") as f:
+        f.truncate(5_000_000)
+    dut = _sweep(tmp_path, "", head=f"runs: 1\nscenarios: [{TINY}, huge.yaml]\n")
+    assert _error(dut) == (f"{dut}: line 2: scenarios[1]: {huge}: 5,000,000 bytes; a scenario file may have at most "
+                           f"4,194,304 bytes")
+    huge.write_bytes(TINY.read_bytes() + b"# \xff\n")
+    assert _error(dut).startswith(f"{dut}: line 2: scenarios[1]: {huge}: not a text (UTF-8) file: byte ")
+
+
+def test_a_variant_may_make_the_file_valid(tmp_path):
+    kpneg = tmp_path / "kpneg.yaml"
+    kpneg.write_text(TINY.read_text() + "execution: {kp: -1.0}\n")
+    dut = _sweep(tmp_path, "variants: {a: {execution: {kp: 1.5}}}\n", head="runs: 1\nscenarios: [kpneg.yaml]\n")
+    study = load_sweep(dut)
+    assert [g.name for g in study.groups] == ["kpneg-a"]
+    # a variant that leaves the file's value as it is: the file is named, as the scenario at fault
+    dut = _sweep(tmp_path, "variants: {a: {execution: {kp: 1.5}}, b: {}}\n", head="runs: 1\nscenarios: [kpneg.yaml]\n")
+    assert _error(dut) == f"{dut}: line 2: scenarios[0]: {kpneg}: execution.kp: must be > 0, got -1.0"
+
+
+def test_each_scenario_and_variant_is_loaded_once(tmp_path, monkeypatch):
+    import drake_social.scenario as scenario_module
+    from drake_social.experiments import study as study_module
+
+    calls = []
+    real = scenario_module.load_scenario_text
+
+    def counted(text, source, overrides=None, **kw):
+        calls.append((source, tuple(overrides or ())))
+        return real(text, source, overrides, **kw)
+
+    monkeypatch.setattr(scenario_module, "load_scenario_text", counted)
+    monkeypatch.setattr(study_module, "_loads", set())
+    study_module._load.cache_clear()
+    variants = ", ".join(f"v{i}: {{social: {{length_weight: {i / 10}}}}}" for i in range(20))
+    dut = _sweep(tmp_path, f"variants: {{{variants}}}\n")
+    study = load_sweep(dut)
+    tasks = study_tasks(study)
+    assert len(study.groups) == 20 and len(tasks) == 20 * 5
+    assert len(calls) == 20 and len(set(calls)) == 20
+
+
+def test_figures_use_the_scenario_the_runs_loaded(tmp_path):
+    scenario = tmp_path / "tiny.yaml"
+    scenario.write_text(TINY.read_text())
+    result = run_study(Study("s", (Group("g", str(scenario), algorithms=("rrt_star",)),), runs=1, iterations=10))
+    scenario.write_text(TINY.read_text().replace("bounds: [0.0, 0.0, 8.0, 5.0]", "bounds: [0.0, 0.0, 9.0, 5.0]"))
+    assert result.scenario("g").world.bounds == [0.0, 0.0, 8.0, 5.0]
+    scenario.unlink()
+    assert result.scenario("g").world.bounds == [0.0, 0.0, 8.0, 5.0]
+
+
+# ---- settings a study makes for every run, names that differ in case, long names (review items 9, 10, 11)
+
+
+@pytest.mark.parametrize("variant, field, instead", [
+    ("{planner: {iterations: 5}}", "planner.iterations", "the sweep's iterations:"),
+    ("{planner: {goal_bias: 0.1, algorithm: rrt_star}}", "planner.algorithm", "the sweep's algorithms:"),
+    ("{random_seed: 3}", "random_seed", "the sweep's seed: (each run's planner seed is drawn from it)"),
+    ("{execution: {mode: dynamic}}", "execution.mode", "nothing: a study simulates every run in kinematic mode"),
+])
+def test_a_variant_may_not_set_what_the_study_sets_for_every_run(tmp_path, variant, field, instead):
+    dut = _sweep(tmp_path, f"variants:\n  fine: {{}}\n  a: {variant}\n")
+    assert _error(dut) == (f"{dut}: line 6: variants.a.{field}: a study sets it for every run, so a variant "
+                           f"cannot: use {instead}")
+
+
+def test_variant_and_scenario_names_that_differ_only_in_case_are_refused(tmp_path):
+    dut = _sweep(tmp_path, "variants: {a: {}, A: {social: {length_weight: 1.0}}}\n")
+    assert _error(dut) == (f"{dut}: line 4: variants.A: differs from variants.a only in letter case; their output "
+                           f"files would collide on a file system that ignores case")
+    (tmp_path / "sub").mkdir()
+    for name in ("tiny.yaml", "Tiny.yaml"):
+        (tmp_path / "sub" / name).write_text(TINY.read_text())
+    dut = _sweep(tmp_path, "", head="runs: 1\nscenarios: [sub/tiny.yaml, sub/Tiny.yaml]\n")
+    assert _error(dut) == (f"{dut}: line 2: scenarios[1]: {tmp_path / 'sub' / 'Tiny.yaml'} has the same name, letter "
+                           f"case aside, 'Tiny' as scenarios[0] ({tmp_path / 'sub' / 'tiny.yaml'}); groups are named "
+                           f"<scenario file name>-<variant>, so the scenario files of a sweep need distinct names "
+                           f"(output files would collide on a file system that ignores case)")
+
+
+def test_a_long_variant_name_is_blamed_for_a_long_group_name(tmp_path):
+    name = "v" * 100
+    dut = _sweep(tmp_path, f"variants:\n  ok: {{}}\n  {name}: {{}}\n")
+    group = f"tiny-{name}"
+    assert _error(dut) == (f"{dut}: line 6: variants.{name}: the group name {shorten(repr(group))} (<scenario file "
+                           f"name>-<variant>) has 105 characters; at most 100 are allowed: shorten the variant's name "
+                           f"(or rename {TINY})")
+
+
+def test_the_paper_runs_argument_bound_is_the_real_one(tmp_path, capsys):
+    from drake_social.cli import build_parser
+    from drake_social.experiments.study import MAX_PAPER_RUNS
+
+    study = paper_study(runs=MAX_PAPER_RUNS)  # the largest the argument allows passes the study's own check
+    assert study.runs * sum(len(g.algorithms) for g in study.groups) <= MAX_STUDY_TASKS
+    with pytest.raises(ScenarioError):
+        paper_study(runs=MAX_PAPER_RUNS + 1)
+    assert MAX_PAPER_RUNS == 100_000 // 13
+    assert main(["experiment", "paper", "--runs", str(MAX_PAPER_RUNS + 1), "--out", str(tmp_path / "o")]) == 2
+    assert capsys.readouterr().err.endswith("argument --runs: must be an integer in [1, 7,692], got 7693\n")
+    parser = build_parser()
+    experiment = parser._subparsers._group_actions[0].choices["experiment"]
+    paper = experiment._subparsers._group_actions[0].choices["paper"]
+    assert "at most 7,692 (the study's 13 group x algorithm pairs x N runs stay within 100,000" in \
+        " ".join(paper.format_help().split())
+
+
+def test_an_alias_error_names_the_aliass_line(tmp_path):
+    dut = _sweep(tmp_path, "", head=f"seed: &n 0\nscenarios: [{TINY}]\nruns: *n\n")
+    assert _error(dut) == f"{dut}: line 3: runs: must be an integer in [1, 10,000], got 0"
+
+
+@pytest.mark.parametrize("field, text, value", [
+    ("runs", "0", 0), ("iterations", "100000000", 10**8), ("seed", "-1", -1), ("checker", "plnar", "plnar"),
+    ("name", "a/b", "a/b"),
+])
+def test_a_sweep_and_a_study_check_their_settings_with_the_same_words(tmp_path, field, text, value):
+    dut = _sweep(tmp_path, f"{field}: {text}\n", head=f"scenarios: [{TINY}]\n")
+    settings = {"runs": 1, "iterations": 10, **{field: value}}
+    name = settings.pop("name", "s")
+    with pytest.raises(ScenarioError) as info:
+        study_tasks(Study(name, (Group("g", str(TINY), algorithms=("rrt_star",)),), **settings))
+    assert str(info.value).startswith(f"study: {field}: ")
+    assert _error(dut) == f"{dut}: line 2: {field}: " + str(info.value).removeprefix(f"study: {field}: ")
+
+
+def test_the_checkers_have_one_home():
+    from drake_social import cli, scenario
+    from drake_social.experiments import study
+    from drake_social.model import checker
+
+    assert cli.CHECKERS is study.CHECKERS is checker.CHECKERS is scenario.CHECKERS
+
+
+def test_the_depth_limit_leaves_room_for_what_the_comment_says(tmp_path):
+    import yaml
+
+    from drake_social.scenario import MAX_YAML_DEPTH, _limited_loader
+
+    def depth(text):
+        loader = _limited_loader(yaml)(text)
+        return loader._height[id(loader.get_single_node())]
+
+    root = TINY.parent.parent
+    assert depth((root / "scenarios" / "office_bar.yaml").read_text()) == 6
+    assert depth((root / "studies" / "example_sweep.yaml").read_text()) == 6
+    assert depth("variants: {a: {world: {obstacles: [{center: [1, 2]}]}}}") == 8 <= MAX_YAML_DEPTH
