@@ -588,7 +588,8 @@ def _run_simulate(args: argparse.Namespace) -> int:
         names += ["executed.csv", "tracking.png", "sim.json"]
     print(f"wrote {out}/: {', '.join(names)}")
     if meshcat is not None:
-        print(f"open {(out / 'replay.html').resolve().as_uri()} in a browser to watch the replay")
+        # The folder resolved, not the link: the link outlives this run's generation folder.
+        print(f"open {(out.resolve() / 'replay.html').as_uri()} in a browser to watch the replay")
     if run.planner is not None and not run.planner.success:
         print(f"drake-social: no path from start to goal ({run.planner.message}); nothing was executed",
               file=sys.stderr)

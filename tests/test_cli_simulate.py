@@ -3,6 +3,8 @@ a browser against the executed trajectory, its exit codes and input errors."""
 
 from __future__ import annotations
 
+import contextlib
+import io
 import json
 import sys
 from pathlib import Path
@@ -27,13 +29,17 @@ def planned(tmp_path_factory, tiny_scenario_path):
 @pytest.fixture(scope="module")
 def simulated(tmp_path_factory, tiny_scenario_path, planned):
     out = tmp_path_factory.mktemp("simulate")
-    code = main(["simulate", str(tiny_scenario_path), "--path", str(planned), "--out", str(out)])
-    return code, out
+    stdout = io.StringIO()
+    with contextlib.redirect_stdout(stdout):
+        code = main(["simulate", str(tiny_scenario_path), "--path", str(planned), "--out", str(out)])
+    return code, out, stdout.getvalue()
 
 
 def test_simulate_writes_its_files(simulated, planned):
-    code, out = simulated
+    code, out, stdout = simulated
     assert code == 0
+    # The page to open is the folder's link, which stays valid after the next run.
+    assert stdout.splitlines()[-1] == f"open {(out.resolve() / 'replay.html').as_uri()} in a browser to watch the replay"
     names = sorted(p.name for p in out.iterdir() if not p.name.startswith("."))
     assert names == ["executed.csv", "replay.html", "sim.json", "tracking.png"]
     record = json.loads((out / "sim.json").read_text())
@@ -51,7 +57,7 @@ def test_simulate_writes_its_files(simulated, planned):
 
 def test_replay_shows_the_executed_trajectory(simulated):
     browser.require_chromium()
-    _, out = simulated
+    _, out, _ = simulated
     executed = np.loadtxt(out / "executed.csv", delimiter=",", skiprows=1)
     t_end = executed[-1, 0]
     times = [round(0.2 * t_end, 2), round(0.5 * t_end, 2), round(0.8 * t_end, 2)]
@@ -70,7 +76,7 @@ def test_replay_shows_the_executed_trajectory(simulated):
 
 def test_replay_first_view_is_the_whole_map(simulated, tmp_path):
     browser.require_chromium()
-    _, out = simulated
+    _, out, _ = simulated
     png = browser.screenshot(out / "replay.html", tmp_path / "first.png", (1280, 720))
     image = np.round(imread(png)[:, :, :3] * 255).astype(int)
     assert len(np.unique(image.reshape(-1, 3), axis=0)) > 200
