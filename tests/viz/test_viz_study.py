@@ -33,32 +33,63 @@ def test_rrt_star_is_shown_when_it_fits_the_others_axis():
     assert note is None
     assert list(values) == ["rrt_star", "social_rrt_star", "base_rrt_star"]
     assert values["rrt_star"] == costs["rrt_star"]  # failed runs are not drawn
-    assert axis_stretch(costs["rrt_star"], costs["social_rrt_star"] + costs["base_rrt_star"]) == pytest.approx(1.0)
+    # The axis stays 20-92 (72) against the others' size 92.
+    assert axis_stretch(costs["rrt_star"], costs["social_rrt_star"] + costs["base_rrt_star"]) == pytest.approx(72 / 92)
 
 
 def test_rrt_star_is_left_out_only_beyond_the_stated_stretch():
     costs = _lobby_costs()
-    others = costs["social_rrt_star"] + costs["base_rrt_star"]  # range 20-92: 72
-    # RRT* reaching 20 + 72 * 3 = 236 stretches the axis exactly 3x: still shown.
-    costs["rrt_star"] = [100.0, 150.0, 20.0 + 72.0 * OFF_SCALE_FACTOR]
+    others = costs["social_rrt_star"] + costs["base_rrt_star"]  # range 20-92 (72), largest 92: size 92
+    # RRT* reaching 20 + 92 * 3 = 296 stretches the axis exactly 3x: still shown.
+    costs["rrt_star"] = [100.0, 150.0, 20.0 + 92.0 * OFF_SCALE_FACTOR]
     assert axis_stretch(costs["rrt_star"], others) == pytest.approx(OFF_SCALE_FACTOR)
     values, note = boxplot_values(_records("lobby", costs), "lobby", list(costs))
     assert note is None and "rrt_star" in values
-    # Beyond it (the axis would be 20-2000: 27.5x): left out, and the note says why with the median.
+    # Beyond it (the axis would be 20-2000: 1980 / 92 = 21.5x): left out, and the note says why with the median.
     costs["rrt_star"] = [900.0, 1500.0, 2000.0]
     values, note = boxplot_values(_records("lobby", costs), "lobby", list(costs))
     assert list(values) == ["social_rrt_star", "base_rrt_star"]
-    assert note == ("RRT* not shown: its median F = 1500; its runs would stretch the axis 27.5x the others' "
-                    "range 20-92 (shown up to 3x)")
+    assert note == ("RRT* not shown: its median F = 1500; its runs would stretch the axis 21.5x the others' "
+                    "size (range 20 to 92; shown up to 3x)")
+
+
+@pytest.mark.parametrize("rrt, others", [
+    ([16.6], [10.3]),                 # runs: 1, two algorithms: an axis 10.3-16.6
+    ([2.5], [1.0]),                   # one other run at 1.0: an axis 1-2.5
+    ([16.6], [10.3, 10.3, 10.3]),     # equal runs of the others
+    ([40.0, 41.0], [10.0, 10.5, 11.0]),  # the others nearly equal: an axis 10-41
+    ([3.0], [0.0, 0.0]),              # the others all 0: drawn at 0 on any axis
+    ([-1.0], [-2.0, -2.0]),           # negative values: an axis -2 to -1
+])
+def test_rrt_star_is_shown_when_the_combined_axis_is_readable(rrt, others):
+    costs = {"rrt_star": rrt, "social_rrt_star": others}
+    values, note = boxplot_values(_records("g", costs), "g", list(costs))
+    assert note is None and values["rrt_star"] == rrt
+    assert axis_stretch(rrt, others) <= OFF_SCALE_FACTOR
+
+
+@pytest.mark.parametrize("rrt, others, note", [
+    ([1500.0], [10.0, 10.0], "RRT* not shown: its median F = 1500; its runs would stretch the axis 149x the "
+                              "others' size (runs all at 10; shown up to 3x)"),
+    ([30.0], [-2.0, -1.0], "RRT* not shown: its median F = 30; its runs would stretch the axis 16x the "
+                            "others' size (range -2 to -1; shown up to 3x)"),
+    ([500.0], [10.0, 10.0001], "RRT* not shown: its median F = 500; its runs would stretch the axis 49x the "
+                                "others' size (runs all near 10; shown up to 3x)"),
+])
+def test_note_names_the_others_runs_without_degenerate_ranges(rrt, others, note):
+    costs = {"rrt_star": rrt, "social_rrt_star": others}
+    values, got = boxplot_values(_records("g", costs), "g", list(costs))
+    assert list(values) == ["social_rrt_star"] and got == note
 
 
 def test_axis_stretch_edges():
     assert axis_stretch([5.0], []) == 1.0 and axis_stretch([], [5.0]) == 1.0
     assert axis_stretch([None, float("nan")], [1.0, 2.0]) == 1.0
-    # Equal other values: the range counts as 10% of their magnitude (50 +- 5 fits, 100 does not).
-    assert axis_stretch([52.0], [50.0, 50.0]) == pytest.approx(2.0 / 5.0)
-    assert axis_stretch([100.0], [50.0, 50.0]) == pytest.approx(10.0)
-    assert axis_stretch([0.0], [0.0]) == 1.0 and axis_stretch([1.0], [0.0]) == float("inf")
+    # Equal other values: their size is their magnitude (50 beside 52 or 100 fits, 250 does not).
+    assert axis_stretch([52.0], [50.0, 50.0]) == pytest.approx(2.0 / 50.0)
+    assert axis_stretch([100.0], [50.0, 50.0]) == pytest.approx(1.0)
+    assert axis_stretch([250.0], [50.0, 50.0]) == pytest.approx(4.0)
+    assert axis_stretch([0.0], [0.0]) == 1.0 and axis_stretch([1.0], [0.0]) == 1.0
 
 
 def _markers(ax) -> int:
