@@ -29,7 +29,7 @@ from drake_social.cost import SocialCost
 from drake_social.kinematics import ArmGeometry, config_distance, cumulative_distance
 from drake_social.planning.result import PlannerResult
 from drake_social.scenario import Scenario
-from drake_social.viz.labels import fit_text
+from drake_social.viz.labels import fit_text, fit_width
 from drake_social.viz.robot import RobotStyle, draw_robot
 from drake_social.viz.show import scene_with_field
 
@@ -312,7 +312,8 @@ def cost_profile_figure(scenario: Scenario, paths: Mapping[str, np.ndarray], *, 
     if len(paths) > len(missing):
         ax.legend(fontsize=8, loc="upper right")
     names = ", ".join(n for n, w in zip(cost.geometry.interest_names, cost.weights) if w > 0)
-    ax.set_title(title if title is not None else f"social cost along the path (points: {names})", fontsize=9)
+    ax.set_title(fit_width(title if title is not None else f"social cost along the path (points: {names})",
+                           0.89 * 8.0, 9, max_lines=2), fontsize=9)
     return fig
 
 

@@ -159,3 +159,48 @@ def test_boxplot_labels_and_note_inside_the_figure():
     for _, text, box in _text_boxes(fig):
         assert fig.bbox.x0 - 0.5 <= box.x0 and box.x1 <= fig.bbox.x1 + 0.5, f"{text.get_text()!r} is clipped"
         assert fig.bbox.y0 - 0.5 <= box.y0 and box.y1 <= fig.bbox.y1 + 0.5, f"{text.get_text()!r} is clipped"
+
+
+def _assert_inside(fig) -> None:
+    for _, text, box in _text_boxes(fig):
+        assert fig.bbox.x0 - 0.5 <= box.x0 and box.x1 <= fig.bbox.x1 + 0.5, f"{text.get_text()!r} is clipped: {box}"
+        assert fig.bbox.y0 - 0.5 <= box.y0 and box.y1 <= fig.bbox.y1 + 0.5, f"{text.get_text()!r} is clipped: {box}"
+
+
+_LONG_GROUP = "office_bar-" + "very_long_variant_name_" * 4 + "x" * 8  # 111 characters, no space
+
+
+@pytest.mark.parametrize("algorithms", [["social_rrt_star", "base_rrt_star"],
+                                        ["social_rrt_star", "informed_social_rrt_star", "informed_base_rrt_star"]])
+@pytest.mark.parametrize("group", ["office_bar, paper", _LONG_GROUP])
+def test_boxplot_with_few_algorithms_fits_title_note_and_ticks(algorithms, group):
+    costs = {a: [10.0 + k, 12.0 + k, 15.0 + k] for k, a in enumerate(algorithms)}
+    costs["rrt_star"] = [1e5]
+    values, note = boxplot_values(_records(group, costs), group, ["rrt_star"] + algorithms)
+    assert note is not None and len(note) > 100
+    title = f"{group}: final cost F(q_end), all interest points, 20 runs of K = 2000"
+    fig = boxplot_figure(values, title=title, ylabel="F(q_end)  (weights 1 on every point)", note=note)
+    FigureCanvasAgg(fig)
+    _assert_inside(fig)
+    ax = fig.axes[0]
+    drawn = fig.texts[0].get_text()
+    assert drawn.replace("\n", " ") == note  # wrapped, nothing left out
+    assert ax.title.get_text().replace("\n", "") .replace(" ", "") == title.replace(" ", "")
+    renderer = fig.canvas.get_renderer()  # the note and the title clear of the axes and the tick labels
+    note_box, title_box = fig.texts[0].get_window_extent(renderer), ax.title.get_window_extent(renderer)
+    assert title_box.y0 >= ax.get_window_extent().y1
+    ticks = [t.label1.get_window_extent(renderer) for t in ax.xaxis.get_major_ticks()]
+    assert all(note_box.y1 <= b.y0 for b in ticks)
+    assert not any(a.overlaps(b) for i, a in enumerate(ticks) for b in ticks[i + 1:])
+
+
+def test_study_figure_titles_fit_their_figures(tiny_scenario):
+    from drake_social.viz.path import cost_profile_figure
+
+    wp = np.array([tiny_scenario.start, [3.0, 2.5, 0.5, 1.5], tiny_scenario.goal], float)
+    long = f"{_LONG_GROUP}: social cost S(q) along the best run of each algorithm (all points)"
+    for fig in (cost_profile_figure(tiny_scenario, {"rrt_star": wp, "social_rrt_star": wp}, title=long),
+                paths_side_by_side(tiny_scenario, {f"{_LONG_GROUP}: F = 12.3": wp, "b: F = 1": wp},
+                                   title=f"{_LONG_GROUP}: best paths " + "and more words " * 8)):
+        FigureCanvasAgg(fig)
+        _assert_inside(fig)
