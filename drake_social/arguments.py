@@ -23,11 +23,11 @@ from typing import Any
 
 import numpy as np
 
-from drake_social.planning.validity import ValidityChecker
 from drake_social.scenario import ExecutionOptions, Scenario
 from drake_social.textfile import shorten
 
 __all__ = [
+    "CHECKER_METHODS",
     "real_array",
     "require_callable",
     "require_checker",
@@ -90,6 +90,12 @@ def require_execution_options(value: Any, who: str, argument: str = "execution_o
                      "a drake_social.scenario.ExecutionOptions (a scenario's execution section, scenario.execution)")
 
 
+#: The methods of :class:`~drake_social.planning.validity.ValidityChecker`,
+#: checked by name so that this module does not import the planning package
+#: (which imports this one).
+CHECKER_METHODS = ("is_valid", "are_valid", "is_motion_valid", "are_motions_valid", "clearance")
+
+
 def require_checker(value: Any, who: str, argument: str = "checker", *, optional: bool = False) -> None:
     """Refuses anything but a validity checker (an object with the methods of
     :class:`~drake_social.planning.validity.ValidityChecker`); a checker's
@@ -98,7 +104,7 @@ def require_checker(value: Any, who: str, argument: str = "checker", *, optional
     Raises:
         TypeError: naming ``who``, ``argument``, the missing methods and what was given.
     """
-    if (value is None and optional) or isinstance(value, ValidityChecker):
+    if (value is None and optional) or all(callable(getattr(value, m, None)) for m in CHECKER_METHODS):
         return
     allowed = ("a validity checker object (drake_social.model.checker.make_checker(scenario, kind), "
                "with is_valid, are_valid, is_motion_valid, are_motions_valid and clearance)")

@@ -19,6 +19,7 @@ import dataclasses as dc
 
 import numpy as np
 
+from drake_social.arguments import require_scenario
 from drake_social.scenario import Bar, LShape, Polyline, Scenario
 
 __all__ = [
@@ -89,8 +90,6 @@ class ArmGeometry:
 
     @classmethod
     def from_scenario(cls, scenario: Scenario) -> "ArmGeometry":
-        from drake_social.arguments import require_scenario  # it imports the planning package
-
         require_scenario(scenario, "ArmGeometry.from_scenario")
         r, o = scenario.robot, scenario.object
         return cls(

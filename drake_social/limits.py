@@ -5,6 +5,11 @@ A module of its own so that the kernels can compile its constants in and
 changes (it hashes this file with the kernel sources). No imports.
 """
 
+#: Largest iteration budget K of a planner (``planner.iterations``,
+#: ``--iterations``, ``RrtStarOptions.iterations``): the tree grows with the
+#: nodes added, but K samples still take time (10^7 is hours of planning).
+MAX_ITERATIONS = 10_000_000
+
 #: The most trapezoid steps of ``social.resolution`` one motion's social cost
 #: may take (its samples are held in memory): 100 km at the default 0.1 m.
 #: ``validate_scenario`` refuses a resolution that a motion in the room could

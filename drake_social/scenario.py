@@ -25,7 +25,7 @@ from typing import Optional, Sequence, Union
 
 import numpy as np
 
-from drake_social.limits import MAX_MOTION_STEPS
+from drake_social.limits import MAX_ITERATIONS, MAX_MOTION_STEPS
 from drake_social.textfile import read_yaml_file, shorten
 
 __all__ = [
@@ -62,9 +62,6 @@ __all__ = [
     "validate_scenario",
 ]
 
-#: Largest ``planner.iterations`` accepted (the tree grows with the nodes
-#: added, but K samples still take time: 10^7 is hours of planning).
-MAX_ITERATIONS = 10_000_000
 #: Largest ``execution.time_limit``, seconds: twice the default (300 s) and
 #: eight times the longest run of the shipped scenarios (office_bar reaches
 #: its goal at 73-76 s in both modes and executions). Logs and the replay grow with it (a 1,200 s run held

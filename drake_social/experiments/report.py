@@ -30,7 +30,8 @@ __all__ = ["ALPHA", "OFF_SCALE_FACTOR", "Claim", "Comparison", "axis_stretch", "
 ALPHA = 0.05
 #: A group's boxplot leaves RRT* out (and gives its median in a note) only
 #: when its runs would stretch the value axis to more than this many times
-#: the range of the other algorithms' runs (:func:`axis_stretch`).
+#: the other algorithms' size: the range of their runs, or their largest
+#: magnitude when that is larger (:func:`axis_stretch`).
 OFF_SCALE_FACTOR = 3.0
 _ORDER = ("supported", "not significant", "not supported")
 _SHORT = {"rrt_star": "RRT*", "social_rrt_star": "Risk-RRT* (multi-point)", "base_rrt_star": "Risk-RRT* (base-only)",
@@ -262,21 +263,30 @@ def _finite(values) -> np.ndarray:
 def axis_stretch(values: Sequence[float], others: Sequence[float]) -> float:
     """How many times wider a value axis becomes when ``values`` join ``others``.
 
-    The range of both together over the range of ``others``. A range below
-    10% of the others' largest magnitude counts as that much, so that runs of
-    equal values do not make every other value "off the scale". None and NaN
-    are left out; 1 when either side has no value (nothing is stretched).
+    The range of both together over the others' size: their range, or their
+    largest magnitude when that is larger. A combined axis at most a few times
+    the others' size keeps them readable, whether their runs are spread
+    (their range) or (nearly) equal, e.g. one run each (their magnitude: 10.3
+    beside 16.6, or 1 beside 2.5, both fit). None and NaN are left out; 1
+    when either side has no value, or when every other value is 0 (drawn at 0
+    on any axis: nothing of them is squeezed).
     """
     v, o = _finite(values), _finite(others)
     if not len(v) or not len(o):
         return 1.0
-    span = float(o.max() - o.min())
+    size = max(float(o.max() - o.min()), float(np.abs(o).max()))
+    if size == 0.0:
+        return 1.0
     both = float(max(v.max(), o.max()) - min(v.min(), o.min()))
-    floor = 0.1 * float(np.abs(o).max())
-    reference = max(span, floor)
-    if reference == 0.0:  # every other value is 0
-        return 1.0 if both == 0.0 else math.inf
-    return both / reference
+    return both / size
+
+
+def _describe_runs(values: np.ndarray) -> str:
+    """``"range 20 to 92"``, or ``"runs all at 10.3"`` when they are equal."""
+    lo, hi = float(values.min()), float(values.max())
+    if f"{lo:.3g}" == f"{hi:.3g}":
+        return f"runs all at {lo:.3g}" if lo == hi else f"runs all near {lo:.3g}"
+    return f"range {lo:.3g} to {hi:.3g}"
 
 
 def boxplot_values(records: Sequence[dict], group: str, algorithms: Sequence[str],
@@ -309,7 +319,7 @@ def boxplot_values(records: Sequence[dict], group: str, algorithms: Sequence[str
     med = _median(records, group, "rrt_star", "F_multi")
     del values["rrt_star"]
     return values, (f"RRT* not shown: its median F = {med:.4g}; its runs would stretch the axis "
-                    f"{stretch:.3g}x the others' range {o.min():.3g}-{o.max():.3g} (shown up to {factor:g}x)")
+                    f"{stretch:.3g}x the others' size ({_describe_runs(o)}; shown up to {factor:g}x)")
 
 
 def write_figures(result, out: Path) -> list[str]:

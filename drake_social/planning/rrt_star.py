@@ -41,6 +41,7 @@ from typing import Callable
 import numpy as np
 
 from drake_social.arguments import real_array, require_callable, require_checker, require_instance
+from drake_social.limits import MAX_ITERATIONS
 from drake_social.planning.objective import Objective
 from drake_social.planning.result import PlannerResult, PlanningInputError
 from drake_social.planning.sampling import EllipseSampler, transverse_diameter
@@ -49,8 +50,6 @@ from drake_social.planning.validity import ValidityChecker
 
 __all__ = ["MAX_ITERATIONS", "NEAR_RADIUS_MODES", "RrtStar", "RrtStarOptions", "default_gamma"]
 
-#: Largest iteration budget accepted (as ``scenario.MAX_ITERATIONS``).
-MAX_ITERATIONS = 10_000_000
 #: Allowed ``RrtStarOptions.near_radius_mode`` values.
 NEAR_RADIUS_MODES = ("fixed", "shrinking")
 #: Iterations per call of the compiled loop (Ctrl-C is noticed between calls).

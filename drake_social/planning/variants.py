@@ -33,7 +33,8 @@ from drake_social.planning.result import PlannerResult
 from drake_social.planning.rrt_star import RrtStar, RrtStarOptions
 from drake_social.planning.space import ConfigurationSpace
 from drake_social.planning.validity import ValidityChecker
-from drake_social.scenario import ALGORITHMS, MAX_ITERATIONS
+from drake_social.limits import MAX_ITERATIONS
+from drake_social.scenario import ALGORITHMS
 
 __all__ = ["base_only_weights", "evaluate_path", "make_objective", "make_planner", "plan"]
 

@@ -29,9 +29,9 @@ from drake_social.cost import SocialCost
 from drake_social.kinematics import ArmGeometry, config_distance, cumulative_distance
 from drake_social.planning.result import PlannerResult
 from drake_social.scenario import Scenario
-from drake_social.viz.labels import fit_text
+from drake_social.viz.labels import fit_width
 from drake_social.viz.robot import RobotStyle, draw_robot
-from drake_social.viz.show import scene_with_field
+from drake_social.viz.show import map_titles, scene_with_field
 
 __all__ = [
     "PATH_COLOR",
@@ -234,7 +234,7 @@ def path_figure(
         result: the planner's result; without a path, the map shows start,
             goal and the tree explored.
         title: the figure title; None = the scenario's description (either
-            cut to one line by :func:`~drake_social.viz.labels.fit_text`).
+            fitted to one line by :func:`~drake_social.viz.show.map_titles`).
         poses: see :func:`draw_path`.
         tree: draw the tree's base edges; None = only when there is no path.
         resolution: heat-map cell size, metres; None = picked from the
@@ -243,19 +243,16 @@ def path_figure(
     fig, ax, full, geometry = scene_with_field(scenario, resolution)
     if tree if tree is not None else not result.success:
         draw_tree(ax, result.tree_nodes, result.tree_parents)
+    name = title if title is not None else scenario.description or "scenario"
     if result.success:
         draw_path(ax, geometry, result.waypoints, poses=poses, distance_weights=full.distance_weights)
-        ax.set_title(
-            f"{result.algorithm}: social cost {result.social_cost_full:.3g} (all points), "
-            f"base path {result.base_length:.1f} m, configuration path {result.path_length:.1f}",
-            fontsize=9,
-        )
+        map_titles(fig, ax, name, f"{result.algorithm}: social cost {result.social_cost_full:.3g} (all points), "
+                   f"base path {result.base_length:.1f} m, configuration path {result.path_length:.1f}")
     else:
         draw_robot(ax, geometry, np.asarray(scenario.start, float), labels=True)
         draw_robot(ax, geometry, np.asarray(scenario.goal, float))
-        ax.set_title(f"{result.algorithm}: no path found; {result.tree_size} tree nodes", fontsize=9,
-                     color="#b00000")
-    fig.suptitle(fit_text(title if title is not None else scenario.description or "scenario", max_lines=1))
+        map_titles(fig, ax, name, f"{result.algorithm}: no path found; {result.tree_size} tree nodes",
+                   subtitle_color="#b00000")
     fig.legend(loc="lower center", bbox_to_anchor=(0.5, 0.0), ncol=5, fontsize=8, frameon=False)
     return fig
 
@@ -312,7 +309,8 @@ def cost_profile_figure(scenario: Scenario, paths: Mapping[str, np.ndarray], *, 
     if len(paths) > len(missing):
         ax.legend(fontsize=8, loc="upper right")
     names = ", ".join(n for n, w in zip(cost.geometry.interest_names, cost.weights) if w > 0)
-    ax.set_title(title if title is not None else f"social cost along the path (points: {names})", fontsize=9)
+    ax.set_title(fit_width(title if title is not None else f"social cost along the path (points: {names})",
+                           0.89 * 8.0, 9, max_lines=2), fontsize=9)
     return fig
 
 

@@ -14,7 +14,7 @@ from matplotlib.patches import Circle
 from drake_social.cost import SocialCost
 from drake_social.kinematics import ArmGeometry
 from drake_social.scenario import Scenario
-from drake_social.viz.labels import fit_text
+from drake_social.viz.labels import fit_width
 from drake_social.viz.robot import draw_robot
 from drake_social.viz.world import VIEW_MARGIN, draw_social_field, draw_world
 
@@ -26,6 +26,12 @@ _log = logging.getLogger(__name__)
 START_COLOR = "#e6c200"
 #: Ring around the base at the goal (the paper: a green circle).
 GOAL_COLOR = "#2ca02c"
+#: Narrowest map figure, inches: a tall room's map is centred in it, so that
+#: the titles (one line each) and the two-row legend below have room.
+MIN_FIGURE_WIDTH = 8.5
+#: Room of the figure and axes titles, inches less than the figure's width
+#: (the map axes are centred 0.2 inches left of the figure's centre).
+_TITLE_MARGIN = 0.7
 
 
 def scene_figure(scenario: Scenario, *, width: float = 11.0, max_map_height: float = 8.5) -> tuple[Figure, Axes]:
@@ -34,7 +40,8 @@ def scene_figure(scenario: Scenario, *, width: float = 11.0, max_map_height: flo
     The layout is fixed (no layout engine, so every rendering is identical):
     margins in inches leave room for the axis labels, the titles, a colour
     bar drawn by :func:`~drake_social.viz.world.draw_social_field` on the
-    right, and a legend of two rows at the bottom.
+    right, and a legend of two rows at the bottom. A figure is at least
+    :data:`MIN_FIGURE_WIDTH` wide (a tall map is centred in it).
 
     Args:
         scenario: gives the map bounds and wall thickness.
@@ -47,7 +54,8 @@ def scene_figure(scenario: Scenario, *, width: float = 11.0, max_map_height: flo
     left, right, bottom, top = 0.75, 1.15, 1.0, 0.62  # inches
     map_w = min(width - left - right, max_map_height * view_w / view_h)
     map_h = map_w * view_h / view_w
-    fig_w, fig_h = left + map_w + right, bottom + map_h + top
+    fig_w, fig_h = max(MIN_FIGURE_WIDTH, left + map_w + right), bottom + map_h + top
+    left += (fig_w - (left + map_w + right)) / 2
     fig = Figure(figsize=(fig_w, fig_h))
     ax = fig.add_axes((left / fig_w, bottom / fig_h, map_w / fig_w, map_h / fig_h))
     return fig, ax
@@ -62,6 +70,15 @@ def draw_start_goal(ax: Axes, scenario: Scenario, *, labels: bool = True) -> lis
                        label=text if labels else None)
         artists.append(ax.add_patch(patch))
     return artists
+
+
+def map_titles(fig: Figure, ax: Axes, title: str, subtitle: str, *, subtitle_color: str | None = None) -> None:
+    """The figure's title (12 pt) and the map's title (9 pt), each fitted to
+    one line of the figure's width by :func:`~drake_social.viz.labels.fit_width`."""
+    room = fig.get_figwidth() - _TITLE_MARGIN
+    fig.suptitle(fit_width(title, room, 12, max_lines=1), fontsize=12)
+    ax.set_title(fit_width(subtitle, room, 9, max_lines=1), fontsize=9,
+                 **({"color": subtitle_color} if subtitle_color else {}))
 
 
 def scene_with_field(scenario: Scenario, resolution: float | None = None) -> tuple[Figure, Axes, SocialCost, ArmGeometry]:
@@ -88,7 +105,7 @@ def show_figure(scenario: Scenario, *, title: str | None = None, resolution: flo
     Args:
         scenario: a validated scenario.
         title: the figure title; None = the scenario's description (either
-            cut to one line by :func:`~drake_social.viz.labels.fit_text`).
+            fitted to one line by :func:`map_titles`).
         resolution: heat-map cell size, metres; None = picked from the
             world's size (a bounded number of cells).
 
@@ -99,10 +116,10 @@ def show_figure(scenario: Scenario, *, title: str | None = None, resolution: flo
     draw_robot(ax, geometry, np.asarray(scenario.start, float), labels=True)
     draw_robot(ax, geometry, np.asarray(scenario.goal, float))
     s_start, s_goal = cost(np.array([scenario.start, scenario.goal], float))
-    fig.suptitle(fit_text(title if title is not None else scenario.description or "scenario", max_lines=1))
     n = len(scenario.people)
     people = "1 person" if n == 1 else f"{n} people"
-    ax.set_title(f"{people}; social cost S(start) = {s_start:.2f}, S(goal) = {s_goal:.2f}", fontsize=9)
+    map_titles(fig, ax, title if title is not None else scenario.description or "scenario",
+               f"{people}; social cost S(start) = {s_start:.2f}, S(goal) = {s_goal:.2f}")
     fig.legend(loc="lower center", bbox_to_anchor=(0.5, 0.0), ncol=5, fontsize=8, frameon=False)
     return fig
 

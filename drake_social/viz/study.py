@@ -14,6 +14,7 @@ from matplotlib.figure import Figure
 from drake_social.cost import SocialCost
 from drake_social.kinematics import ArmGeometry
 from drake_social.scenario import Scenario
+from drake_social.viz.labels import fit_width
 from drake_social.viz.path import draw_path
 from drake_social.viz.show import draw_start_goal
 from drake_social.viz.world import VIEW_MARGIN, draw_social_field, draw_world
@@ -33,14 +34,27 @@ def boxplot_figure(values: Mapping[str, Sequence[float]], *, title: str, ylabel:
     Args:
         values: label -> the runs' values (NaN and None left out; an empty
             list is drawn as "no run").
-        title: the axes title.
+        title: the axes title (wrapped to the axes' width, 3 lines at most).
         ylabel: the value's name and unit.
-        note: a line under the axes (e.g. what was left out).
+        note: a text under the axes (e.g. what was left out; wrapped to the
+            figure's width, 3 lines at most).
     """
     labels = list(values)
     data = [np.asarray([v for v in values[k] if v is not None and np.isfinite(v)], float) for k in labels]
-    fig = Figure(figsize=(max(5.0, 1.5 * len(labels) + 1.5), 4.4))
-    fig.subplots_adjust(left=0.12, right=0.98, bottom=0.24 if note else 0.2, top=0.9)
+    width, height = max(5.0, 1.5 * len(labels) + 1.5), 4.4  # inches
+    left, right = 0.12, 0.98
+    # Title, note and tick labels are wrapped to the room they have: the axes'
+    # width, the figure's, one box's slot; the margins grow with their lines.
+    title = fit_width(title, (right - left) * width, 9, max_lines=3)
+    note = fit_width(note, width - 0.2, 8, max_lines=3) if note else None
+    slot = (right - left) * width / max(1, len(labels))
+    ticks = [fit_width(k, slot - 0.05, 8, max_lines=2) for k in labels]
+    title_pt = 9 * 1.25 * (title.count("\n") + 1) + 10
+    note_pt = 10 * (note.count("\n") + 1) + 2.7 if note else 0.0
+    tick_pt = 10 * max((t.count("\n") for t in ticks), default=0)
+    fig = Figure(figsize=(width, height))
+    fig.subplots_adjust(left=left, right=right, bottom=0.2 + (note_pt + tick_pt) / (72 * height),
+                        top=min(0.9, 1 - title_pt / (72 * height)))
     ax = fig.add_subplot()
     present = [k for k, d in enumerate(data) if len(d)]
     if present:
@@ -56,13 +70,13 @@ def boxplot_figure(values: Mapping[str, Sequence[float]], *, title: str, ylabel:
     for k, d in enumerate(data):
         if not len(d):
             ax.text(k + 1, 0.5, "no run", transform=ax.get_xaxis_transform(), ha="center", color="#b00000")
-    ax.set_xticks(range(1, len(labels) + 1), labels, fontsize=8, rotation=12)
+    ax.set_xticks(range(1, len(labels) + 1), ticks, fontsize=8, rotation=12)
     ax.set_xlim(0.4, len(labels) + 0.6)
     ax.set_ylabel(ylabel)
     ax.set_title(title, fontsize=9)
     ax.grid(True, axis="y", alpha=0.3)
     if note:
-        fig.text(0.5, 0.02, note, ha="center", fontsize=8, color="#444444")
+        fig.text(0.5, 4 / (72 * height), note, ha="center", va="bottom", fontsize=8, color="#444444")
     return fig
 
 
@@ -104,10 +118,10 @@ def paths_side_by_side(scenario: Scenario, paths: Mapping[str, np.ndarray], *, t
                       distance_weights=cost.distance_weights, numbers=False, labels=False)
         else:
             ax.text(0.5, 0.5, "no path", transform=ax.transAxes, ha="center", color="#b00000", fontsize=12)
-        ax.set_title(label, fontsize=9)
+        ax.set_title(fit_width(label, width - 0.2, 9, max_lines=2), fontsize=9)
         ax.tick_params(labelsize=7)
     for ax in axes:
         ax.label_outer()
     if title:
-        fig.suptitle(title, fontsize=10)
+        fig.suptitle(fit_width(title, n * width + 0.2, 10, max_lines=2), fontsize=10)
     return fig

@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 from matplotlib.figure import Figure
 
-from drake_social.viz.labels import fit_text
+from drake_social.viz.labels import fit_width
 
 __all__ = ["tracking_figure"]
 
@@ -27,14 +27,15 @@ def tracking_figure(run, *, max_base_speed: float | None = None, max_wheel_speed
             ``v``, ``wheel_speeds``, ``target_index``).
         max_base_speed: drawn as a limit line on the speed panel (m/s).
         max_wheel_speed: drawn as +- limit lines on the wheel panel (rad/s).
-        title: the figure title (default: mode, execution and outcome); cut by
-            :func:`~drake_social.viz.labels.fit_text`.
+        title: the figure title (default: mode, execution and outcome);
+            fitted to two lines of the figure's width by
+            :func:`~drake_social.viz.labels.fit_width`.
     """
     t = np.asarray(run.times, float)
     fig = Figure(figsize=(9.0, 8.5))
     fig.subplots_adjust(left=0.1, right=0.97, bottom=0.06, top=0.93, hspace=0.32)
     axes = fig.subplots(4, 1, sharex=True)
-    fig.suptitle(fit_text(title if title is not None else f"{run.mode} / {run.execution}: {run.message}"),
+    fig.suptitle(fit_width(title if title is not None else f"{run.mode} / {run.execution}: {run.message}", 8.7, 10),
                  fontsize=10)
     if len(t) == 0:
         axes[0].text(0.5, 0.5, "nothing was executed", transform=axes[0].transAxes, ha="center")

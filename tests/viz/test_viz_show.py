@@ -137,3 +137,41 @@ def test_figures_of_a_huge_world_have_a_bounded_number_of_cells(tiny_scenario, m
     assert np.asarray(path.axes[0].images[0].get_array()).shape == (171, 512)
     # A small room keeps the fine 0.05 m cells.
     assert np.asarray(show_figure(tiny_scenario).axes[0].images[0].get_array()).shape == (100, 160)
+
+
+_TALL = """description: "{description}"
+world:
+  bounds: [0.0, 0.0, {w}, {h}]
+people:
+  - {{x: 1.5, y: 1.0, theta: 3.14, radius: 0.25, name: "standing"}}
+robot: {{base_radius: 0.35, link_lengths: [0.6, 0.5], link_width: 0.08}}
+object: !Bar {{length: 1.0, thickness: 0.05}}
+start: [1.5, 3.0, 1.5708, 0.0]
+goal: [1.5, 5.0, 1.5708, 0.0]
+"""
+
+
+@pytest.mark.parametrize("w, h", [(3.0, 20.0), (3.0, 60.0), (8.0, 5.0)])
+def test_map_titles_and_legend_fit_a_tall_room(tmp_path, w, h):
+    from drake_social.scenario import load_scenario
+    from drake_social.viz.show import MIN_FIGURE_WIDTH
+
+    description = "tall: a corridor-like room with one person standing near the middle and " + "W" * 47
+    assert len(description) == 119
+    (tmp_path / "tall.yaml").write_text(_TALL.format(description=description, w=w, h=h))
+    fig = show_figure(load_scenario(tmp_path / "tall.yaml"))
+    assert fig.get_figwidth() >= MIN_FIGURE_WIDTH
+    FigureCanvasAgg(fig).draw()
+    renderer = fig.canvas.get_renderer()
+    ax = fig.axes[0]
+    boxes = [(fig.get_suptitle(), fig._suptitle.get_window_extent(renderer)),
+             (ax.get_title(), ax.title.get_window_extent(renderer))]
+    boxes += [(f"legend ({len(legend.get_texts())} entries)", legend.get_window_extent(renderer))
+              for legend in fig.legends]
+    assert len(boxes) == 3
+    for text, box in boxes:
+        assert fig.bbox.x0 - 0.5 <= box.x0 and box.x1 <= fig.bbox.x1 + 0.5, f"{text!r} is clipped: {box}"
+        assert fig.bbox.y0 - 0.5 <= box.y0 and box.y1 <= fig.bbox.y1 + 0.5, f"{text!r} is clipped: {box}"
+    assert fig.get_suptitle().endswith("\u2026") and fig.get_suptitle()[:-1] in description
+    # The map stays centred and the title clear of it.
+    assert boxes[0][1].y0 >= boxes[1][1].y1 - 0.5 and boxes[1][1].y0 >= ax.get_window_extent().y1 - 0.5

@@ -33,32 +33,63 @@ def test_rrt_star_is_shown_when_it_fits_the_others_axis():
     assert note is None
     assert list(values) == ["rrt_star", "social_rrt_star", "base_rrt_star"]
     assert values["rrt_star"] == costs["rrt_star"]  # failed runs are not drawn
-    assert axis_stretch(costs["rrt_star"], costs["social_rrt_star"] + costs["base_rrt_star"]) == pytest.approx(1.0)
+    # The axis stays 20-92 (72) against the others' size 92.
+    assert axis_stretch(costs["rrt_star"], costs["social_rrt_star"] + costs["base_rrt_star"]) == pytest.approx(72 / 92)
 
 
 def test_rrt_star_is_left_out_only_beyond_the_stated_stretch():
     costs = _lobby_costs()
-    others = costs["social_rrt_star"] + costs["base_rrt_star"]  # range 20-92: 72
-    # RRT* reaching 20 + 72 * 3 = 236 stretches the axis exactly 3x: still shown.
-    costs["rrt_star"] = [100.0, 150.0, 20.0 + 72.0 * OFF_SCALE_FACTOR]
+    others = costs["social_rrt_star"] + costs["base_rrt_star"]  # range 20-92 (72), largest 92: size 92
+    # RRT* reaching 20 + 92 * 3 = 296 stretches the axis exactly 3x: still shown.
+    costs["rrt_star"] = [100.0, 150.0, 20.0 + 92.0 * OFF_SCALE_FACTOR]
     assert axis_stretch(costs["rrt_star"], others) == pytest.approx(OFF_SCALE_FACTOR)
     values, note = boxplot_values(_records("lobby", costs), "lobby", list(costs))
     assert note is None and "rrt_star" in values
-    # Beyond it (the axis would be 20-2000: 27.5x): left out, and the note says why with the median.
+    # Beyond it (the axis would be 20-2000: 1980 / 92 = 21.5x): left out, and the note says why with the median.
     costs["rrt_star"] = [900.0, 1500.0, 2000.0]
     values, note = boxplot_values(_records("lobby", costs), "lobby", list(costs))
     assert list(values) == ["social_rrt_star", "base_rrt_star"]
-    assert note == ("RRT* not shown: its median F = 1500; its runs would stretch the axis 27.5x the others' "
-                    "range 20-92 (shown up to 3x)")
+    assert note == ("RRT* not shown: its median F = 1500; its runs would stretch the axis 21.5x the others' "
+                    "size (range 20 to 92; shown up to 3x)")
+
+
+@pytest.mark.parametrize("rrt, others", [
+    ([16.6], [10.3]),                 # runs: 1, two algorithms: an axis 10.3-16.6
+    ([2.5], [1.0]),                   # one other run at 1.0: an axis 1-2.5
+    ([16.6], [10.3, 10.3, 10.3]),     # equal runs of the others
+    ([40.0, 41.0], [10.0, 10.5, 11.0]),  # the others nearly equal: an axis 10-41
+    ([3.0], [0.0, 0.0]),              # the others all 0: drawn at 0 on any axis
+    ([-1.0], [-2.0, -2.0]),           # negative values: an axis -2 to -1
+])
+def test_rrt_star_is_shown_when_the_combined_axis_is_readable(rrt, others):
+    costs = {"rrt_star": rrt, "social_rrt_star": others}
+    values, note = boxplot_values(_records("g", costs), "g", list(costs))
+    assert note is None and values["rrt_star"] == rrt
+    assert axis_stretch(rrt, others) <= OFF_SCALE_FACTOR
+
+
+@pytest.mark.parametrize("rrt, others, note", [
+    ([1500.0], [10.0, 10.0], "RRT* not shown: its median F = 1500; its runs would stretch the axis 149x the "
+                              "others' size (runs all at 10; shown up to 3x)"),
+    ([30.0], [-2.0, -1.0], "RRT* not shown: its median F = 30; its runs would stretch the axis 16x the "
+                            "others' size (range -2 to -1; shown up to 3x)"),
+    ([500.0], [10.0, 10.0001], "RRT* not shown: its median F = 500; its runs would stretch the axis 49x the "
+                                "others' size (runs all near 10; shown up to 3x)"),
+])
+def test_note_names_the_others_runs_without_degenerate_ranges(rrt, others, note):
+    costs = {"rrt_star": rrt, "social_rrt_star": others}
+    values, got = boxplot_values(_records("g", costs), "g", list(costs))
+    assert list(values) == ["social_rrt_star"] and got == note
 
 
 def test_axis_stretch_edges():
     assert axis_stretch([5.0], []) == 1.0 and axis_stretch([], [5.0]) == 1.0
     assert axis_stretch([None, float("nan")], [1.0, 2.0]) == 1.0
-    # Equal other values: the range counts as 10% of their magnitude (50 +- 5 fits, 100 does not).
-    assert axis_stretch([52.0], [50.0, 50.0]) == pytest.approx(2.0 / 5.0)
-    assert axis_stretch([100.0], [50.0, 50.0]) == pytest.approx(10.0)
-    assert axis_stretch([0.0], [0.0]) == 1.0 and axis_stretch([1.0], [0.0]) == float("inf")
+    # Equal other values: their size is their magnitude (50 beside 52 or 100 fits, 250 does not).
+    assert axis_stretch([52.0], [50.0, 50.0]) == pytest.approx(2.0 / 50.0)
+    assert axis_stretch([100.0], [50.0, 50.0]) == pytest.approx(1.0)
+    assert axis_stretch([250.0], [50.0, 50.0]) == pytest.approx(4.0)
+    assert axis_stretch([0.0], [0.0]) == 1.0 and axis_stretch([1.0], [0.0]) == 1.0
 
 
 def _markers(ax) -> int:
@@ -128,3 +159,48 @@ def test_boxplot_labels_and_note_inside_the_figure():
     for _, text, box in _text_boxes(fig):
         assert fig.bbox.x0 - 0.5 <= box.x0 and box.x1 <= fig.bbox.x1 + 0.5, f"{text.get_text()!r} is clipped"
         assert fig.bbox.y0 - 0.5 <= box.y0 and box.y1 <= fig.bbox.y1 + 0.5, f"{text.get_text()!r} is clipped"
+
+
+def _assert_inside(fig) -> None:
+    for _, text, box in _text_boxes(fig):
+        assert fig.bbox.x0 - 0.5 <= box.x0 and box.x1 <= fig.bbox.x1 + 0.5, f"{text.get_text()!r} is clipped: {box}"
+        assert fig.bbox.y0 - 0.5 <= box.y0 and box.y1 <= fig.bbox.y1 + 0.5, f"{text.get_text()!r} is clipped: {box}"
+
+
+_LONG_GROUP = "office_bar-" + "very_long_variant_name_" * 4 + "x" * 8  # 111 characters, no space
+
+
+@pytest.mark.parametrize("algorithms", [["social_rrt_star", "base_rrt_star"],
+                                        ["social_rrt_star", "informed_social_rrt_star", "informed_base_rrt_star"]])
+@pytest.mark.parametrize("group", ["office_bar, paper", _LONG_GROUP])
+def test_boxplot_with_few_algorithms_fits_title_note_and_ticks(algorithms, group):
+    costs = {a: [10.0 + k, 12.0 + k, 15.0 + k] for k, a in enumerate(algorithms)}
+    costs["rrt_star"] = [1e5]
+    values, note = boxplot_values(_records(group, costs), group, ["rrt_star"] + algorithms)
+    assert note is not None and len(note) > 100
+    title = f"{group}: final cost F(q_end), all interest points, 20 runs of K = 2000"
+    fig = boxplot_figure(values, title=title, ylabel="F(q_end)  (weights 1 on every point)", note=note)
+    FigureCanvasAgg(fig)
+    _assert_inside(fig)
+    ax = fig.axes[0]
+    drawn = fig.texts[0].get_text()
+    assert drawn.replace("\n", " ") == note  # wrapped, nothing left out
+    assert ax.title.get_text().replace("\n", "") .replace(" ", "") == title.replace(" ", "")
+    renderer = fig.canvas.get_renderer()  # the note and the title clear of the axes and the tick labels
+    note_box, title_box = fig.texts[0].get_window_extent(renderer), ax.title.get_window_extent(renderer)
+    assert title_box.y0 >= ax.get_window_extent().y1
+    ticks = [t.label1.get_window_extent(renderer) for t in ax.xaxis.get_major_ticks()]
+    assert all(note_box.y1 <= b.y0 for b in ticks)
+    assert not any(a.overlaps(b) for i, a in enumerate(ticks) for b in ticks[i + 1:])
+
+
+def test_study_figure_titles_fit_their_figures(tiny_scenario):
+    from drake_social.viz.path import cost_profile_figure
+
+    wp = np.array([tiny_scenario.start, [3.0, 2.5, 0.5, 1.5], tiny_scenario.goal], float)
+    long = f"{_LONG_GROUP}: social cost S(q) along the best run of each algorithm (all points)"
+    for fig in (cost_profile_figure(tiny_scenario, {"rrt_star": wp, "social_rrt_star": wp}, title=long),
+                paths_side_by_side(tiny_scenario, {f"{_LONG_GROUP}: F = 12.3": wp, "b: F = 1": wp},
+                                   title=f"{_LONG_GROUP}: best paths " + "and more words " * 8)):
+        FigureCanvasAgg(fig)
+        _assert_inside(fig)
