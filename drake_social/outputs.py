@@ -118,15 +118,58 @@ def current_set(out_dir: str | os.PathLike, command: str) -> CommittedSet | None
     """The set of ``command`` in ``out_dir`` (None: no set committed).
 
     Reads the ``.<command>.current`` link once, so the answer is one
-    generation even while another run commits.
+    generation even while another run commits. A set of plain files (written
+    where there are no symbolic links, or a folder copied with ``cp -rL``,
+    where ``.<command>.current`` is a plain folder) is the files of the plain
+    ``.<command>.manifest`` that are there, with ``generation`` empty.
     """
     out = Path(out_dir)
+    current = out / f".{command}.current"
     try:
-        generation = os.readlink(out / f".{command}.current")
+        generation = os.readlink(current)
+    except FileNotFoundError:
+        generation = None
+    except OSError as e:
+        if e.errno != errno.EINVAL:  # EINVAL: there, but not a link
+            raise
+        generation = None
+    if generation is None:
+        names = _plain_set(out, command)
+        return CommittedSet("", tuple(names)) if names is not None else None
+    try:
         names = (out / generation / _MANIFEST).read_text().splitlines()
     except FileNotFoundError:
         return None
     return CommittedSet(generation, tuple(n for n in names if n))
+
+
+def _plain_set(out: Path, command: str) -> list[str] | None:
+    """The files of a set of plain files: the names in a plain (not linked)
+    ``.<command>.manifest`` that are in ``out`` as plain files (or as the
+    set's links, left by an earlier generation; None: no such manifest)."""
+    manifest = out / f".{command}.manifest"
+    if manifest.is_symlink() or not manifest.is_file():
+        return None
+
+    def there(name: str) -> bool:
+        entry = out / name
+        if entry.is_symlink():
+            return os.readlink(entry) == f".{command}.current/{name}" and entry.is_file()
+        return entry.is_file()
+
+    return [n for n in manifest.read_text().splitlines()
+            if n and Path(n).name == n and not n.startswith(".") and there(n)]
+
+
+def _remove(entry: Path) -> None:
+    """Removes a file, link or folder tree (errors ignored: the next run retries)."""
+    if entry.is_dir() and not entry.is_symlink():
+        shutil.rmtree(entry, ignore_errors=True)
+    else:
+        try:
+            entry.unlink()
+        except OSError:
+            pass
 
 
 def _umask() -> int:
@@ -349,23 +392,28 @@ class OutputSet:
 
     def _adopt_plain_set(self) -> None:
         """Turns a set of plain files listed in a plain ``.<command>.manifest``
-        (written before generations) into a generation, hard links to the same
-        files, so that every file reads the same at every step."""
-        if self._manifest.is_symlink() or not self._manifest.is_file():
+        (written where there were no symbolic links, or a folder copied with
+        ``cp -rL``) into a generation, hard links to the same files, so that
+        every file reads the same at every step. A ``.<command>.current``
+        that is not a link (the copy's plain folder) is moved aside for the
+        generation's link and removed with the other leftovers."""
+        names = _plain_set(self.out_dir, self.command)
+        if names is None and (self._current.is_symlink() or not os.path.lexists(self._current)):
             return
-        names = [n for n in self._manifest.read_text().splitlines()
-                 if n and Path(n).name == n and not n.startswith(".")
-                 and ((self.out_dir / n).is_file() and not (self.out_dir / n).is_symlink() or self._ours(self.out_dir / n))]
         generation = Path(tempfile.mkdtemp(prefix=f".{self.command}.gen-", dir=self.out_dir))
-        for name in names:
+        for name in names or []:
             source = os.path.realpath(self.out_dir / name)
             try:
                 os.link(source, generation / name)
             except OSError:  # a file system without hard links
                 shutil.copy2(source, generation / name)
-        self._seal(generation, names)
+        self._seal(generation, names or [])
+        if os.path.lexists(self._current) and not self._current.is_symlink():
+            # Every visible name of such a set is a plain file: moving the
+            # plain .current aside changes no file a reader sees.
+            os.rename(self._current, self.out_dir / f".{self.command}.gen-{secrets.token_hex(6)}")
         self._swap(self._current, generation.name)
-        self._link_all([*names, self._manifest.name])
+        self._link_all([*(names or []), self._manifest.name])
         _fsync(self.out_dir)
 
     def _tidy(self) -> None:
@@ -380,10 +428,7 @@ class OutputSet:
             name = entry.name
             if name.startswith(f".staging-{self.command}-") or (
                     name.startswith(prefix + "gen-") and name != current):
-                if entry.is_symlink():
-                    entry.unlink()
-                else:
-                    shutil.rmtree(entry, ignore_errors=True)
+                _remove(entry)
             elif name.startswith(prefix + "new-"):
                 entry.unlink(missing_ok=True)
             elif not name.startswith(".") and name not in have and self._ours(entry):
