@@ -777,6 +777,7 @@ def _run_experiment(args: argparse.Namespace) -> int:
     out = args.out if args.out is not None else Path("out") / study.name
     result = None
     failure = None  # the error of an output after the records
+    interrupted = False  # Ctrl-C while writing the outputs after the runs
     try:
         with OutputSet(out, "experiment") as outputs:  # entered first: a busy --out is refused before any run
             bar = tqdm(total=1, desc=f"experiment {study.name}", unit="run", file=sys.stderr, dynamic_ncols=True,
@@ -794,8 +795,10 @@ def _run_experiment(args: argparse.Namespace) -> int:
                 bar.close()
             try:
                 names = write_study(result, outputs.folder)
-            except Exception as e:  # the finished runs are kept: the set becomes the records alone
-                failure = StudyOutputError(str(e).replace(str(outputs.folder), str(out)))
+            except (Exception, KeyboardInterrupt) as e:  # the finished runs are kept: the set becomes the records alone
+                interrupted = isinstance(e, KeyboardInterrupt)
+                failure = StudyOutputError("interrupted (Ctrl-C)" if interrupted
+                                           else str(e).replace(str(outputs.folder), str(out)))
                 for entry in outputs.folder.iterdir():
                     if entry.is_dir() and not entry.is_symlink():
                         shutil.rmtree(entry)
@@ -816,6 +819,11 @@ def _run_experiment(args: argparse.Namespace) -> int:
         raise StudyOutputError(f"{cause}; the records of its {_runs(result)} were saved to "
                                f"{rescued / 'results.json'} and {rescued / 'results.csv'} instead") from e
     print(f"{len(result.records)} runs in {result.wall_time:.1f} s ({args.workers} worker(s), {args.executor})")
+    if interrupted:
+        print(f"drake-social: experiment interrupted after its {_runs(result)}: their records were written to "
+              f"{out / 'results.json'} and {out / 'results.csv'} (the figures, REPORT.md and the arena files were "
+              "not written)", file=sys.stderr)
+        return 130
     if failure is not None:
         raise StudyOutputError(f"writing the study's outputs into {out} failed: {failure}; the records of its "
                                f"{_runs(result)} are in {out / 'results.json'} and {out / 'results.csv'} (the "

@@ -221,3 +221,29 @@ def test_a_figure_error_and_then_a_failed_commit_name_both_and_save_the_records(
         "the logs; then committing the records alone failed: [Errno 28] No space left on device; the records of its "
         f"2 runs were saved to {rescued / 'results.json'} and {rescued / 'results.csv'} instead\n")
     assert len(json.loads((rescued / "results.json").read_text())["runs"]) == 2
+
+
+def _interrupt(*args, **kwargs):
+    raise KeyboardInterrupt
+
+
+@pytest.mark.parametrize("where, name", [(report, "write_figures"), (arena, "write_logs"),
+                                         (report, "report_markdown")])
+def test_ctrl_c_after_the_runs_keeps_their_records_in_out(tmp_path, tiny_scenario_path, monkeypatch, capsys, where,
+                                                           name):
+    """A Ctrl-C while the figures, logs or report are written, after every
+    run finished: the records are committed alone, the message says so, exit 130."""
+    sweep = _sweep(tmp_path, tiny_scenario_path)
+    out = tmp_path / "out"
+    monkeypatch.setattr(where, name, _interrupt)
+    rc = main(["experiment", "sweep", str(sweep), "--out", str(out)])
+    captured = capsys.readouterr()
+    assert rc == 130
+    assert captured.err == (f"drake-social: experiment interrupted after its 2 runs: their records were written to "
+                            f"{out / 'results.json'} and {out / 'results.csv'} (the figures, REPORT.md and the arena "
+                            "files were not written)\n")
+    assert sorted(p.name for p in out.iterdir() if not p.name.startswith(".")) == ["results.csv", "results.json"]
+    assert current_set(out, "experiment").files == ("results.csv", "results.json")
+    records = json.loads((out / "results.json").read_text())["runs"]
+    assert [(r["group"], r["run"], r["success"]) for r in records] == [("tiny-default", 0, True),
+                                                                       ("tiny-wide", 0, True)]
