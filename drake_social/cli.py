@@ -60,6 +60,10 @@ MAX_BENCH_REPEATS = 100
 #: scenario's checker (a few hundred MB), so 64 already needs tens of GB; a
 #: cluster is the place for more (``--executor dask --scheduler``).
 MAX_WORKERS = 64
+#: The files ``plan`` writes into ``--out`` (a folder of such a name is refused before planning).
+PLAN_OUTPUTS = ("path.csv", "result.json", "path.png", "cost_profile.png", "convergence.png")
+#: The files ``simulate`` may write into ``--out`` (replay.html when Meshcat records).
+SIMULATE_OUTPUTS = ("replay.html", "executed.csv", "tracking.png", "sim.json")
 
 #: Exit code of ``plan`` when no path reaches the goal.
 EXIT_NO_PATH = 3
@@ -161,7 +165,7 @@ def _run_show(args: argparse.Namespace) -> int:
 
     scenario = load_with_overrides(args.scenario, args.set)
     out = args.out if args.out is not None else _default_out(args.scenario)
-    with OutputSet(out, "show") as outputs:
+    with OutputSet(out, "show", names=["scene.png"]) as outputs:
         write_show(scenario, outputs.folder, title=scenario.description or args.scenario.name)
     print(f"wrote {out / 'scene.png'}")
     return 0
@@ -340,7 +344,7 @@ def _run_plan(args: argparse.Namespace) -> int:
     iterations = args.iterations or scenario.planner.iterations
     # Entered before planning: an unwritable or busy --out fails early (exit 1),
     # and nothing of this run lands in --out unless all of it does.
-    with OutputSet(out, "plan") as outputs:
+    with OutputSet(out, "plan", names=PLAN_OUTPUTS) as outputs:
         bar = ProgressBar(iterations, sys.stderr) if _show_progress(args) else None
         try:
             result = plan(scenario, checker, algorithm=args.algorithm, iterations=iterations, seed=args.seed,
@@ -553,7 +557,7 @@ def _run_simulate(args: argparse.Namespace) -> int:
     def progress(t: float) -> None:
         bar.update(int(t * 10), f"t = {t:.1f} s")
 
-    with OutputSet(out, "simulate") as outputs:
+    with OutputSet(out, "simulate", names=SIMULATE_OUTPUTS) as outputs:
         try:
             # The scenario is validated (loaded) and the path checked with the checker above: once.
             opts = scenario.execution
@@ -668,7 +672,7 @@ def _run_bench(args: argparse.Namespace) -> int:
         bar.total = total
         bar.update(done, label)
 
-    with OutputSet(args.out, "bench") as outputs:  # held over the run: a second bench is refused at once
+    with OutputSet(args.out, "bench", names=["bench.json", "bench.md"]) as outputs:  # held over the run: a second bench is refused at once
         try:
             run_bench(
                 scenario_paths=list(args.scenarios),
@@ -747,8 +751,8 @@ def _add_experiment(subparsers) -> None:
 def _run_experiment(args: argparse.Namespace) -> int:
     from tqdm import tqdm
 
-    from drake_social.experiments.study import (StudyOutputError, load_sweep, paper_study, rescue_records,
-                                                run_study, write_records, write_study)
+    from drake_social.experiments.study import (RECORD_FILES, StudyOutputError, load_sweep, paper_study,
+                                                rescue_records, run_study, write_records, write_study)
     from drake_social.outputs import OutputSet
 
     if args.scheduler is not None and args.executor != "dask":
@@ -779,7 +783,7 @@ def _run_experiment(args: argparse.Namespace) -> int:
     failure = None  # the error of an output after the records
     interrupted = False  # Ctrl-C while writing the outputs after the runs
     try:
-        with OutputSet(out, "experiment") as outputs:  # entered first: a busy --out is refused before any run
+        with OutputSet(out, "experiment", names=[*RECORD_FILES, "REPORT.md", "arena.db"]) as outputs:  # entered first: a busy --out is refused before any run
             bar = tqdm(total=1, desc=f"experiment {study.name}", unit="run", file=sys.stderr, dynamic_ncols=True,
                        disable=not _show_progress(args))
 
@@ -795,6 +799,7 @@ def _run_experiment(args: argparse.Namespace) -> int:
                 bar.close()
             try:
                 names = write_study(result, outputs.folder)
+                outputs.check_names(names)  # a folder in the way of a figure or log: the records alone
             except (Exception, KeyboardInterrupt) as e:  # the finished runs are kept: the set becomes the records alone
                 interrupted = isinstance(e, KeyboardInterrupt)
                 failure = StudyOutputError("interrupted (Ctrl-C)" if interrupted

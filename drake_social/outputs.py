@@ -69,9 +69,11 @@ import shutil
 import signal
 import tempfile
 import threading
+from collections.abc import Iterable
 from pathlib import Path
 
-__all__ = ["CommittedSet", "InterruptedAfterCommit", "OutputBusyError", "OutputSet", "current_set"]
+__all__ = ["CommittedSet", "InterruptedAfterCommit", "OutputBusyError", "OutputInTheWayError", "OutputSet",
+           "current_set"]
 
 _log = logging.getLogger(__name__)
 
@@ -85,6 +87,14 @@ class OutputBusyError(OSError):
     """Another run is writing the same output set."""
 
     def __str__(self) -> str:  # the sentence, without OSError's "[Errno 16]"
+        return str(self.strerror)
+
+
+class OutputInTheWayError(IsADirectoryError):
+    """A folder (or another entry a file cannot replace) has the name of one
+    of the set's files."""
+
+    def __str__(self) -> str:  # the sentence, without OSError's "[Errno 21]"
         return str(self.strerror)
 
 
@@ -193,11 +203,16 @@ class OutputSet:
         out_dir: the output folder (created when missing).
         command: the set's name (e.g. ``"plan"``); sets of different names
             in one folder are independent.
+        names: the file names the set may hold, when known up front: a
+            folder of such a name in ``out_dir`` is refused on entering the
+            block (:class:`OutputInTheWayError`), before any work. The
+            commit checks the names actually written the same way.
     """
 
-    def __init__(self, out_dir: str | os.PathLike, command: str):
+    def __init__(self, out_dir: str | os.PathLike, command: str, names: Iterable[str] = ()):
         self.out_dir = Path(out_dir)
         self.command = command
+        self.names = tuple(names)
         self._lock_fd: int | None = None
         self._staging: Path | None = None
         self.committed: list[Path] = []
@@ -221,6 +236,7 @@ class OutputSet:
         try:
             # We hold the lock: what a killed run of this command left is removed.
             self._tidy()
+            self.check_names(self.names)
             self._staging = Path(tempfile.mkdtemp(prefix=f".staging-{self.command}-{os.getpid()}-",
                                                   dir=self.out_dir))
         except BaseException:
@@ -273,6 +289,21 @@ class OutputSet:
         p.write_text(text)
         return p
 
+    def check_names(self, names: Iterable[str]) -> None:
+        """Refuses names of the set that ``out_dir`` holds as a folder (not
+        ours to replace, and a rename cannot put a file there).
+
+        Raises:
+            OutputInTheWayError: ``<out_dir>/<name> is a folder in the way of
+                <command>'s output ...``.
+        """
+        for name in names:
+            entry = self.out_dir / name
+            if entry.is_dir() and not entry.is_symlink():
+                raise OutputInTheWayError(
+                    errno.EISDIR, f"{entry} is a folder in the way of {self.command}'s output {name}; remove or "
+                    "rename it, or choose another --out", str(entry))
+
     # ---- the folder's layout --------------------------------------------------
 
     @property
@@ -300,6 +331,9 @@ class OutputSet:
         os.symlink(target, tmp)
         try:
             os.replace(tmp, link)
+        except OSError as e:  # named by the user's path, not the temporary link's
+            tmp.unlink(missing_ok=True)
+            raise type(e)(e.errno, e.strerror, str(link)) from None
         except BaseException:
             tmp.unlink(missing_ok=True)
             raise
@@ -332,6 +366,7 @@ class OutputSet:
         if odd:  # never drop a writer's output silently
             raise RuntimeError(f"output set {self.command!r}: staged entries that are not plain files: {odd}")
         staged = sorted(p.name for p in entries)
+        self.check_names(staged)
         if not self._links_work():
             self._commit_file_by_file(staged)
             return

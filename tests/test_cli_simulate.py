@@ -151,3 +151,16 @@ def test_a_joint_limit_pass_exits_7_and_is_named_apart_from_collisions(tmp_path,
     assert "collision-free" in captured.out and "COLLIDES" not in captured.out
     assert "drake-social: the executed trajectory passes a joint limit: psi1 " in captured.err
     assert "collides" not in captured.err
+
+
+@pytest.mark.parametrize("name", ["sim.json", "executed.csv", "tracking.png", "replay.html"])
+def test_a_folder_named_like_an_output_is_refused_before_simulating(tmp_path, tiny_scenario_path, planned, capsys,
+                                                                    name):
+    out = tmp_path / "out"
+    (out / name).mkdir(parents=True)
+    code = main(["simulate", str(tiny_scenario_path), "--path", str(planned), "--no-replay", "--out", str(out)])
+    captured = capsys.readouterr()
+    assert code == 1 and captured.out == ""  # nothing simulated
+    assert captured.err == (f"drake-social: error: {out / name} is a folder in the way of simulate's output {name}; "
+                            "remove or rename it, or choose another --out\n")
+    assert sorted(p.name for p in out.iterdir() if not p.name.startswith(".")) == [name]

@@ -258,3 +258,23 @@ def test_a_plain_current_folder_without_a_manifest_is_replaced(tmp_path):
     _write_set(tmp_path, {"path.csv": "new"})
     assert _listing(tmp_path) == {"path.csv": b"new"}
     assert _hidden(tmp_path) == _tidy_hidden(tmp_path)
+
+
+def test_a_folder_named_like_an_output_is_refused_before_the_work_and_at_commit(tmp_path):
+    """A folder has the name of one of the set's files: refused on entering
+    the block when the name is declared, at commit otherwise, naming the
+    user's path; the old set is left whole either way."""
+    _write_set(tmp_path, {"path.csv": "old"})
+    (tmp_path / "path.png").mkdir()
+    with pytest.raises(outputs_module.OutputInTheWayError) as declared:
+        with OutputSet(tmp_path, "plan", names=["path.csv", "path.png"]):
+            raise AssertionError("the block must not run")
+    assert str(declared.value) == (f"{tmp_path / 'path.png'} is a folder in the way of plan's output path.png; "
+                                   "remove or rename it, or choose another --out")
+    with pytest.raises(outputs_module.OutputInTheWayError) as at_commit:
+        _write_set(tmp_path, {"path.csv": "new", "path.png": "new png"})
+    assert str(at_commit.value) == str(declared.value)
+    assert (tmp_path / "path.csv").read_text() == "old" and (tmp_path / "path.png").is_dir()
+    assert current_set(tmp_path, "plan").files == ("path.csv",)
+    assert not [p for p in tmp_path.iterdir() if p.name.startswith((".staging", ".plan.new-"))]
+    assert len(list(tmp_path.glob(".plan.gen-*"))) == 1

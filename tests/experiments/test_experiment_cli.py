@@ -247,3 +247,29 @@ def test_ctrl_c_after_the_runs_keeps_their_records_in_out(tmp_path, tiny_scenari
     records = json.loads((out / "results.json").read_text())["runs"]
     assert [(r["group"], r["run"], r["success"]) for r in records] == [("tiny-default", 0, True),
                                                                        ("tiny-wide", 0, True)]
+
+
+def test_a_folder_in_the_way_of_an_output_is_refused_before_the_runs_or_keeps_the_records(tmp_path,
+                                                                                        tiny_scenario_path, capsys):
+    """A folder named like a record file is refused before any run; one named
+    like a file known only after the runs (an arena log) leaves the records
+    committed alone, and the error names the user's path."""
+    sweep = _sweep(tmp_path, tiny_scenario_path)
+    out = tmp_path / "out"
+    (out / "results.json").mkdir(parents=True)
+    assert main(["experiment", "sweep", str(sweep), "--out", str(out)]) == 1
+    captured = capsys.readouterr()
+    assert captured.out == ""
+    assert captured.err == (f"drake-social: error: {out / 'results.json'} is a folder in the way of experiment's "
+                            "output results.json; remove or rename it, or choose another --out\n")
+    (out / "results.json").rmdir()
+    log = out / "arena_tiny-wide.log"
+    log.mkdir()
+    assert main(["experiment", "sweep", str(sweep), "--out", str(out)]) == 1
+    captured = capsys.readouterr()
+    assert captured.err == (f"drake-social: error: writing the study's outputs into {out} failed: {log} is a folder "
+                            "in the way of experiment's output arena_tiny-wide.log; remove or rename it, or choose "
+                            f"another --out; the records of its 2 runs are in {out / 'results.json'} and "
+                            f"{out / 'results.csv'} (the figures, REPORT.md and the arena files were not written)\n")
+    assert current_set(out, "experiment").files == ("results.csv", "results.json")
+    assert len(json.loads((out / "results.json").read_text())["runs"]) == 2
