@@ -45,7 +45,8 @@ import numpy as np
 
 from drake_social import __version__
 from drake_social.planning.result import PlanningInputError
-from drake_social.scenario import ALGORITHMS, CHECKERS, Scenario, ScenarioError, compose_yaml, load_scenario
+from drake_social.scenario import (ALGORITHMS, CHECKERS, Scenario, ScenarioError, compose_yaml, load_scenario,
+                                    plant_time_step_problem)
 from drake_social.textfile import check_regular_file, read_text_file, shorten
 
 __all__ = ["EXIT_NO_PATH", "ProgressBar", "main", "build_parser", "load_with_overrides"]
@@ -542,6 +543,10 @@ def _run_simulate(args: argparse.Namespace) -> int:
         scenario.planner.algorithm = args.algorithm or scenario.planner.algorithm
         scenario.random_seed = scenario.random_seed if args.seed is None else args.seed
         validate_scenario(scenario, source=f"{args.scenario} ({_listed(planning_only)})")
+    if args.mode is not None:  # the scenario's own mode was checked when it was loaded
+        problem = plant_time_step_problem(scenario.execution, args.mode)
+        if problem:
+            raise ScenarioError(f"{args.scenario} (--mode {args.mode}): {problem[0]}: {problem[1]}")
     out = args.out if args.out is not None else _default_out(args.scenario)
     parsed = _parse_path_csv(args.path) if args.path is not None else None  # a malformed file before the checker
     checker = _make_checker(scenario, args.checker, str(args.scenario))
