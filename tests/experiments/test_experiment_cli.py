@@ -58,10 +58,62 @@ def test_a_bad_scheduler_address_is_refused_before_anything_runs(tmp_path, tiny_
         map_tasks(len, [{}], executor="dask", scheduler=address)
 
 
+@pytest.fixture
+def tls_settings():
+    """Dask's TLS settings of a client (the files are read only on connecting)."""
+    import dask
+    import distributed  # noqa: F401  (its config defaults first, or dask.config.set shadows them)
+
+    with dask.config.set({"distributed.comm.tls.ca-file": "ca.pem", "distributed.comm.tls.client.cert": "me.pem"}):
+        yield
+
+
 @pytest.mark.parametrize("address", ["tcp://10.0.0.5:8786", "localhost:8786", "tls://scheduler.example.org:1",
-                                     "tcp://[::1]:65535", "127.0.0.1:8786"])
-def test_good_scheduler_addresses_pass(address):
+                                     "tcp://[::1]:65535", "127.0.0.1:8786", "dask_scheduler:8786",
+                                     "tcp://my_cluster.dask_scheduler_1:8786", "_host_:1"])
+def test_good_scheduler_addresses_pass(address, tls_settings):
     assert check_scheduler_address(address) == address
+
+
+@pytest.mark.parametrize("settings, missing", [
+    ({}, "distributed.comm.tls.ca-file and distributed.comm.tls.client.cert are"),
+    ({"distributed.comm.tls.ca-file": "ca.pem"}, "distributed.comm.tls.client.cert is"),
+    ({"distributed.comm.tls.client.cert": "me.pem"}, "distributed.comm.tls.ca-file is"),
+])
+def test_tls_without_dasks_tls_settings_is_refused_before_anything_runs(tmp_path, tiny_scenario_path, capsys,
+                                                                         settings, missing):
+    import dask
+    import distributed  # noqa: F401  (its config defaults first)
+
+    sweep = _sweep(tmp_path, tiny_scenario_path)
+    out = tmp_path / "out"
+    unset = {"distributed.comm.tls.ca-file": None, "distributed.comm.tls.client.cert": None}
+    with dask.config.set({**unset, **settings}):
+        rc = main(["experiment", "sweep", str(sweep), "--executor", "dask", "--scheduler", "tls://127.0.0.1:1",
+                   "--out", str(out)])
+    captured = capsys.readouterr()
+    assert rc == 2 and captured.out == "" and not out.exists()
+    assert captured.err == ("drake-social: error: --scheduler: scheduler address 'tls://127.0.0.1:1': tls:// needs "
+                            f"Dask's TLS settings, and {missing} not set (in the Dask config, or as "
+                            "DASK_DISTRIBUTED__COMM__TLS__... variables); or use tcp://\n")
+
+
+def test_tls_files_dask_cannot_use_are_one_error_line(tmp_path, tiny_scenario_path, capsys):
+    """Settings that pass the check but that Dask's client then refuses (a
+    key without its certificate, for one): one error line, exit 1, no traceback."""
+    import dask
+    import distributed  # noqa: F401  (its config defaults first)
+
+    sweep = _sweep(tmp_path, tiny_scenario_path)
+    out = tmp_path / "out"
+    with dask.config.set({"distributed.comm.tls.ca-file": str(tmp_path / "missing-ca.pem"),
+                          "distributed.comm.tls.client.cert": str(tmp_path / "missing-cert.pem")}):
+        rc = main(["experiment", "sweep", str(sweep), "--executor", "dask", "--scheduler", "tls://127.0.0.1:1",
+                   "--out", str(out)])
+    captured = capsys.readouterr()
+    assert rc == 1 and "Traceback" not in captured.err
+    assert captured.err == ("drake-social: error: cannot connect to the Dask scheduler at tls://127.0.0.1:1: "
+                            "[Errno 2] No such file or directory\n")
 
 
 # ---- Ctrl-C with the Dask executor ------------------------------------------------------
