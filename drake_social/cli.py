@@ -413,12 +413,12 @@ def _add_simulate(subparsers) -> None:
         "DIR/executed.csv (t,x,y,psi1,psi2 and velocities), DIR/tracking.png (references against actual "
         f"over time) and DIR/sim.json. Exit code {EXIT_NO_PATH} no path, {EXIT_NOT_REACHED} goal not reached "
         f"within execution.time_limit, {EXIT_COLLISION} the executed trajectory collides, {EXIT_LIMIT} it "
-        "passes a joint limit (files are written in every case; stderr names each finding).",
+        "passes a joint limit or a room bound (files are written in every case; stderr names each finding).",
     )
     _add_scenario_arguments(p)
     p.add_argument("--mode", choices=SIM_MODES,
                    help="kinematic (the base integrates its velocity, fast) or dynamic (the MultibodyPlant "
-                        "with PD-actuated joints); default: the scenario's execution.mode")
+                        "driven by a computed-torque servo); default: the scenario's execution.mode")
     p.add_argument("--execution", choices=EXECUTIONS,
                    help="synchronized (one phase-synchronized reference per segment, stays on the planned "
                         "segment) or paper (independent base P-control and arm trajectory, the paper's); "
@@ -615,7 +615,7 @@ def _run_simulate(args: argparse.Namespace) -> int:
         codes.append(EXIT_COLLISION)
     if run.report is not None and not run.report.within_limits:
         for violation in run.report.limit_violations:
-            print(f"drake-social: the executed trajectory passes a joint limit: {violation}", file=sys.stderr)
+            print(f"drake-social: the executed trajectory passes {violation.kind}: {violation}", file=sys.stderr)
         codes.append(EXIT_LIMIT)
     return codes[0] if codes else 0
 

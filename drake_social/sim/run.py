@@ -90,6 +90,11 @@ class LimitViolation:
     worst_time: float
     max_excess: float
 
+    @property
+    def kind(self) -> str:
+        """What was passed: ``"a room bound"`` (base) or ``"a joint limit"`` (arm)."""
+        return "a room bound" if self.joint.startswith("base") else "a joint limit"
+
     def __str__(self) -> str:
         unit = "m" if self.joint.startswith("base") else "rad"
         return (f"{self.joint} {self.max_excess:.3g} {unit} beyond its {self.bound} limit {self.limit:.6g} "
@@ -187,7 +192,7 @@ class SimulationResult:
                      f"max point deviation {r.max_point_deviation['max']:.3g} m; "
                      f"min clearance {r.min_clearance:.3g} m; "
                      f"{'collision-free' if r.collision_free else 'COLLIDES'}; "
-                     + ("within the joint limits" if r.within_limits else
+                     + ("within the joint limits and room bounds" if r.within_limits else
                         "BEYOND A LIMIT: " + "; ".join(str(v) for v in r.limit_violations)))
         return line + f"; {self.realtime_factor:.0f}x realtime"
 

@@ -105,6 +105,7 @@ def test_limit_violations_name_each_joint_and_bound_by_hand(tiny_scenario):
         LimitViolation("psi2", "lower", -math.pi, 0.0, 0.0, pytest.approx(3.2 - math.pi)),
     ]
     assert "base_x 0.1 m beyond its lower limit 0 at t = 0.00 s" in str(found[0])
+    assert [v.kind for v in found] == ["a room bound", "a room bound", "a joint limit"]
     assert limit_violations(tiny_scenario, np.array([0.0]), np.array([[8.0, 5.0, math.pi, -math.pi]])) == []
 
 
