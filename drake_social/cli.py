@@ -828,7 +828,9 @@ def _run_experiment(args: argparse.Namespace) -> int:
                                    f"directory failed too: {second}") from e
         raise StudyOutputError(f"{cause}; the records of its {_runs(result)} were saved to "
                                f"{rescued / 'results.json'} and {rescued / 'results.csv'} instead") from e
-    print(f"{len(result.records)} runs in {result.wall_time:.1f} s ({args.workers} worker(s), {args.executor})")
+    where = (f"on the Dask scheduler at {args.scheduler}" if args.scheduler is not None
+             else f"{args.workers} worker(s), {args.executor}")
+    print(f"{len(result.records)} runs in {result.wall_time:.1f} s ({where})")
     if interrupted:
         print(f"drake-social: experiment interrupted after its {_runs(result)}: their records were written to "
               f"{out / 'results.json'} and {out / 'results.csv'} (the figures, REPORT.md and the arena files were "

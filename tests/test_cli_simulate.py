@@ -202,3 +202,16 @@ def test_simulate_help_describes_the_computed_torque_servo(capsys):
     assert "PD" not in text
     assert "dynamic (the MultibodyPlant driven by a computed-torque servo)" in text
     assert "passes a joint limit or a room bound" in text
+
+
+def test_a_simulate_that_finds_no_path_shows_no_realtime_factor(tmp_path, capsys):
+    """Nothing was simulated: the summary has no "nanx realtime"."""
+    from test_cli_plan import WALLED
+
+    scenario = tmp_path / "walled.yaml"
+    scenario.write_text(WALLED)
+    code = main(["simulate", str(scenario), "--checker", "numpy", "--iterations", "60", "--no-replay", "--out",
+                 str(tmp_path / "out")])
+    captured = capsys.readouterr()
+    assert code == 3
+    assert "no path to execute" in captured.out and "nan" not in captured.out and "realtime" not in captured.out

@@ -194,7 +194,9 @@ class SimulationResult:
                      f"{'collision-free' if r.collision_free else 'COLLIDES'}; "
                      + ("within the joint limits and room bounds" if r.within_limits else
                         "BEYOND A LIMIT: " + "; ".join(str(v) for v in r.limit_violations)))
-        return line + f"; {self.realtime_factor:.0f}x realtime"
+        if self.sim_time > 0 and math.isfinite(self.realtime_factor):  # nothing simulated: no factor to show
+            line += f"; {self.realtime_factor:.0f}x realtime"
+        return line
 
     def to_json_dict(self) -> dict[str, Any]:
         """JSON-ready summary (the logged arrays are left out)."""

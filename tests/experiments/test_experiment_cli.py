@@ -325,3 +325,16 @@ def test_a_folder_in_the_way_of_an_output_is_refused_before_the_runs_or_keeps_th
                             f"{out / 'results.csv'} (the figures, REPORT.md and the arena files were not written)\n")
     assert current_set(out, "experiment").files == ("results.csv", "results.json")
     assert len(json.loads((out / "results.json").read_text())["runs"]) == 2
+
+
+def test_a_study_on_a_scheduler_says_so_not_the_workers_default(tmp_path, tiny_scenario_path, capsys):
+    distributed = pytest.importorskip("distributed")
+    sweep = _sweep(tmp_path, tiny_scenario_path)
+    with distributed.LocalCluster(n_workers=2, processes=False, protocol="tcp://", dashboard_address=None) as cluster:
+        address = cluster.scheduler_address
+        rc = main(["experiment", "sweep", str(sweep), "--executor", "dask", "--scheduler", address,
+                   "--out", str(tmp_path / "out")])
+    captured = capsys.readouterr()
+    assert rc == 0, captured.err
+    first = captured.out.splitlines()[0]
+    assert first.startswith("2 runs in ") and first.endswith(f" s (on the Dask scheduler at {address})"), first
