@@ -236,7 +236,7 @@ class OutputSet:
         try:
             # We hold the lock: what a killed run of this command left is removed.
             self._tidy()
-            self.check_names(self.names)
+            self.check_names([*self.names, self._manifest.name])
             self._staging = Path(tempfile.mkdtemp(prefix=f".staging-{self.command}-{os.getpid()}-",
                                                   dir=self.out_dir))
         except BaseException:

@@ -278,3 +278,8 @@ def test_a_folder_named_like_an_output_is_refused_before_the_work_and_at_commit(
     assert current_set(tmp_path, "plan").files == ("path.csv",)
     assert not [p for p in tmp_path.iterdir() if p.name.startswith((".staging", ".plan.new-"))]
     assert len(list(tmp_path.glob(".plan.gen-*"))) == 1
+    # The set's manifest link too.
+    (tmp_path / "path.png").rmdir()
+    (tmp_path / "fresh" / ".plan.manifest").mkdir(parents=True)
+    with pytest.raises(outputs_module.OutputInTheWayError, match=r"fresh/\.plan\.manifest is a folder in the way"):
+        _write_set(tmp_path / "fresh", {"path.csv": "new"})
