@@ -45,7 +45,8 @@ import numpy as np
 
 from drake_social import __version__
 from drake_social.planning.result import PlanningInputError
-from drake_social.scenario import ALGORITHMS, CHECKERS, Scenario, ScenarioError, compose_yaml, load_scenario
+from drake_social.scenario import (ALGORITHMS, CHECKERS, Scenario, ScenarioError, compose_yaml, load_scenario,
+                                    plant_time_step_problem)
 from drake_social.textfile import check_regular_file, read_text_file, shorten
 
 __all__ = ["EXIT_NO_PATH", "ProgressBar", "main", "build_parser", "load_with_overrides"]
@@ -60,6 +61,10 @@ MAX_BENCH_REPEATS = 100
 #: scenario's checker (a few hundred MB), so 64 already needs tens of GB; a
 #: cluster is the place for more (``--executor dask --scheduler``).
 MAX_WORKERS = 64
+#: The files ``plan`` writes into ``--out`` (a folder of such a name is refused before planning).
+PLAN_OUTPUTS = ("path.csv", "result.json", "path.png", "cost_profile.png", "convergence.png")
+#: The files ``simulate`` may write into ``--out`` (replay.html when Meshcat records).
+SIMULATE_OUTPUTS = ("replay.html", "executed.csv", "tracking.png", "sim.json")
 
 #: Exit code of ``plan`` when no path reaches the goal.
 EXIT_NO_PATH = 3
@@ -161,7 +166,7 @@ def _run_show(args: argparse.Namespace) -> int:
 
     scenario = load_with_overrides(args.scenario, args.set)
     out = args.out if args.out is not None else _default_out(args.scenario)
-    with OutputSet(out, "show") as outputs:
+    with OutputSet(out, "show", names=["scene.png"]) as outputs:
         write_show(scenario, outputs.folder, title=scenario.description or args.scenario.name)
     print(f"wrote {out / 'scene.png'}")
     return 0
@@ -340,7 +345,7 @@ def _run_plan(args: argparse.Namespace) -> int:
     iterations = args.iterations or scenario.planner.iterations
     # Entered before planning: an unwritable or busy --out fails early (exit 1),
     # and nothing of this run lands in --out unless all of it does.
-    with OutputSet(out, "plan") as outputs:
+    with OutputSet(out, "plan", names=PLAN_OUTPUTS) as outputs:
         bar = ProgressBar(iterations, sys.stderr) if _show_progress(args) else None
         try:
             result = plan(scenario, checker, algorithm=args.algorithm, iterations=iterations, seed=args.seed,
@@ -408,12 +413,12 @@ def _add_simulate(subparsers) -> None:
         "DIR/executed.csv (t,x,y,psi1,psi2 and velocities), DIR/tracking.png (references against actual "
         f"over time) and DIR/sim.json. Exit code {EXIT_NO_PATH} no path, {EXIT_NOT_REACHED} goal not reached "
         f"within execution.time_limit, {EXIT_COLLISION} the executed trajectory collides, {EXIT_LIMIT} it "
-        "passes a joint limit (files are written in every case; stderr names each finding).",
+        "passes a joint limit or a room bound (files are written in every case; stderr names each finding).",
     )
     _add_scenario_arguments(p)
     p.add_argument("--mode", choices=SIM_MODES,
                    help="kinematic (the base integrates its velocity, fast) or dynamic (the MultibodyPlant "
-                        "with PD-actuated joints); default: the scenario's execution.mode")
+                        "driven by a computed-torque servo); default: the scenario's execution.mode")
     p.add_argument("--execution", choices=EXECUTIONS,
                    help="synchronized (one phase-synchronized reference per segment, stays on the planned "
                         "segment) or paper (independent base P-control and arm trajectory, the paper's); "
@@ -538,6 +543,10 @@ def _run_simulate(args: argparse.Namespace) -> int:
         scenario.planner.algorithm = args.algorithm or scenario.planner.algorithm
         scenario.random_seed = scenario.random_seed if args.seed is None else args.seed
         validate_scenario(scenario, source=f"{args.scenario} ({_listed(planning_only)})")
+    if args.mode is not None:  # the scenario's own mode was checked when it was loaded
+        problem = plant_time_step_problem(scenario.execution, args.mode)
+        if problem:
+            raise ScenarioError(f"{args.scenario} (--mode {args.mode}): {problem[0]}: {problem[1]}")
     out = args.out if args.out is not None else _default_out(args.scenario)
     parsed = _parse_path_csv(args.path) if args.path is not None else None  # a malformed file before the checker
     checker = _make_checker(scenario, args.checker, str(args.scenario))
@@ -553,7 +562,7 @@ def _run_simulate(args: argparse.Namespace) -> int:
     def progress(t: float) -> None:
         bar.update(int(t * 10), f"t = {t:.1f} s")
 
-    with OutputSet(out, "simulate") as outputs:
+    with OutputSet(out, "simulate", names=SIMULATE_OUTPUTS) as outputs:
         try:
             # The scenario is validated (loaded) and the path checked with the checker above: once.
             opts = scenario.execution
@@ -606,7 +615,7 @@ def _run_simulate(args: argparse.Namespace) -> int:
         codes.append(EXIT_COLLISION)
     if run.report is not None and not run.report.within_limits:
         for violation in run.report.limit_violations:
-            print(f"drake-social: the executed trajectory passes a joint limit: {violation}", file=sys.stderr)
+            print(f"drake-social: the executed trajectory passes {violation.kind}: {violation}", file=sys.stderr)
         codes.append(EXIT_LIMIT)
     return codes[0] if codes else 0
 
@@ -668,7 +677,7 @@ def _run_bench(args: argparse.Namespace) -> int:
         bar.total = total
         bar.update(done, label)
 
-    with OutputSet(args.out, "bench") as outputs:  # held over the run: a second bench is refused at once
+    with OutputSet(args.out, "bench", names=["bench.json", "bench.md"]) as outputs:  # held over the run: a second bench is refused at once
         try:
             run_bench(
                 scenario_paths=list(args.scenarios),
@@ -747,8 +756,8 @@ def _add_experiment(subparsers) -> None:
 def _run_experiment(args: argparse.Namespace) -> int:
     from tqdm import tqdm
 
-    from drake_social.experiments.study import (StudyOutputError, load_sweep, paper_study, rescue_records,
-                                                run_study, write_records, write_study)
+    from drake_social.experiments.study import (RECORD_FILES, StudyOutputError, load_sweep, paper_study,
+                                                rescue_records, run_study, write_records, write_study)
     from drake_social.outputs import OutputSet
 
     if args.scheduler is not None and args.executor != "dask":
@@ -777,8 +786,9 @@ def _run_experiment(args: argparse.Namespace) -> int:
     out = args.out if args.out is not None else Path("out") / study.name
     result = None
     failure = None  # the error of an output after the records
+    interrupted = False  # Ctrl-C while writing the outputs after the runs
     try:
-        with OutputSet(out, "experiment") as outputs:  # entered first: a busy --out is refused before any run
+        with OutputSet(out, "experiment", names=[*RECORD_FILES, "REPORT.md", "arena.db"]) as outputs:  # entered first: a busy --out is refused before any run
             bar = tqdm(total=1, desc=f"experiment {study.name}", unit="run", file=sys.stderr, dynamic_ncols=True,
                        disable=not _show_progress(args))
 
@@ -794,8 +804,11 @@ def _run_experiment(args: argparse.Namespace) -> int:
                 bar.close()
             try:
                 names = write_study(result, outputs.folder)
-            except Exception as e:  # the finished runs are kept: the set becomes the records alone
-                failure = StudyOutputError(str(e).replace(str(outputs.folder), str(out)))
+                outputs.check_names(names)  # a folder in the way of a figure or log: the records alone
+            except (Exception, KeyboardInterrupt) as e:  # the finished runs are kept: the set becomes the records alone
+                interrupted = isinstance(e, KeyboardInterrupt)
+                failure = StudyOutputError("interrupted (Ctrl-C)" if interrupted
+                                           else str(e).replace(str(outputs.folder), str(out)))
                 for entry in outputs.folder.iterdir():
                     if entry.is_dir() and not entry.is_symlink():
                         shutil.rmtree(entry)
@@ -815,7 +828,14 @@ def _run_experiment(args: argparse.Namespace) -> int:
                                    f"directory failed too: {second}") from e
         raise StudyOutputError(f"{cause}; the records of its {_runs(result)} were saved to "
                                f"{rescued / 'results.json'} and {rescued / 'results.csv'} instead") from e
-    print(f"{len(result.records)} runs in {result.wall_time:.1f} s ({args.workers} worker(s), {args.executor})")
+    where = (f"on the Dask scheduler at {args.scheduler}" if args.scheduler is not None
+             else f"{args.workers} worker(s), {args.executor}")
+    print(f"{len(result.records)} runs in {result.wall_time:.1f} s ({where})")
+    if interrupted:
+        print(f"drake-social: experiment interrupted after its {_runs(result)}: their records were written to "
+              f"{out / 'results.json'} and {out / 'results.csv'} (the figures, REPORT.md and the arena files were "
+              "not written)", file=sys.stderr)
+        return 130
     if failure is not None:
         raise StudyOutputError(f"writing the study's outputs into {out} failed: {failure}; the records of its "
                                f"{_runs(result)} are in {out / 'results.json'} and {out / 'results.csv'} (the "

@@ -69,9 +69,11 @@ import shutil
 import signal
 import tempfile
 import threading
+from collections.abc import Iterable
 from pathlib import Path
 
-__all__ = ["CommittedSet", "InterruptedAfterCommit", "OutputBusyError", "OutputSet", "current_set"]
+__all__ = ["CommittedSet", "InterruptedAfterCommit", "OutputBusyError", "OutputInTheWayError", "OutputSet",
+           "current_set"]
 
 _log = logging.getLogger(__name__)
 
@@ -85,6 +87,14 @@ class OutputBusyError(OSError):
     """Another run is writing the same output set."""
 
     def __str__(self) -> str:  # the sentence, without OSError's "[Errno 16]"
+        return str(self.strerror)
+
+
+class OutputInTheWayError(IsADirectoryError):
+    """A folder (or another entry a file cannot replace) has the name of one
+    of the set's files."""
+
+    def __str__(self) -> str:  # the sentence, without OSError's "[Errno 21]"
         return str(self.strerror)
 
 
@@ -118,15 +128,58 @@ def current_set(out_dir: str | os.PathLike, command: str) -> CommittedSet | None
     """The set of ``command`` in ``out_dir`` (None: no set committed).
 
     Reads the ``.<command>.current`` link once, so the answer is one
-    generation even while another run commits.
+    generation even while another run commits. A set of plain files (written
+    where there are no symbolic links, or a folder copied with ``cp -rL``,
+    where ``.<command>.current`` is a plain folder) is the files of the plain
+    ``.<command>.manifest`` that are there, with ``generation`` empty.
     """
     out = Path(out_dir)
+    current = out / f".{command}.current"
     try:
-        generation = os.readlink(out / f".{command}.current")
+        generation = os.readlink(current)
+    except FileNotFoundError:
+        generation = None
+    except OSError as e:
+        if e.errno != errno.EINVAL:  # EINVAL: there, but not a link
+            raise
+        generation = None
+    if generation is None:
+        names = _plain_set(out, command)
+        return CommittedSet("", tuple(names)) if names is not None else None
+    try:
         names = (out / generation / _MANIFEST).read_text().splitlines()
     except FileNotFoundError:
         return None
     return CommittedSet(generation, tuple(n for n in names if n))
+
+
+def _plain_set(out: Path, command: str) -> list[str] | None:
+    """The files of a set of plain files: the names in a plain (not linked)
+    ``.<command>.manifest`` that are in ``out`` as plain files (or as the
+    set's links, left by an earlier generation; None: no such manifest)."""
+    manifest = out / f".{command}.manifest"
+    if manifest.is_symlink() or not manifest.is_file():
+        return None
+
+    def there(name: str) -> bool:
+        entry = out / name
+        if entry.is_symlink():
+            return os.readlink(entry) == f".{command}.current/{name}" and entry.is_file()
+        return entry.is_file()
+
+    return [n for n in manifest.read_text().splitlines()
+            if n and Path(n).name == n and not n.startswith(".") and there(n)]
+
+
+def _remove(entry: Path) -> None:
+    """Removes a file, link or folder tree (errors ignored: the next run retries)."""
+    if entry.is_dir() and not entry.is_symlink():
+        shutil.rmtree(entry, ignore_errors=True)
+    else:
+        try:
+            entry.unlink()
+        except OSError:
+            pass
 
 
 def _umask() -> int:
@@ -150,11 +203,16 @@ class OutputSet:
         out_dir: the output folder (created when missing).
         command: the set's name (e.g. ``"plan"``); sets of different names
             in one folder are independent.
+        names: the file names the set may hold, when known up front: a
+            folder of such a name in ``out_dir`` is refused on entering the
+            block (:class:`OutputInTheWayError`), before any work. The
+            commit checks the names actually written the same way.
     """
 
-    def __init__(self, out_dir: str | os.PathLike, command: str):
+    def __init__(self, out_dir: str | os.PathLike, command: str, names: Iterable[str] = ()):
         self.out_dir = Path(out_dir)
         self.command = command
+        self.names = tuple(names)
         self._lock_fd: int | None = None
         self._staging: Path | None = None
         self.committed: list[Path] = []
@@ -178,6 +236,7 @@ class OutputSet:
         try:
             # We hold the lock: what a killed run of this command left is removed.
             self._tidy()
+            self.check_names([*self.names, self._manifest.name])
             self._staging = Path(tempfile.mkdtemp(prefix=f".staging-{self.command}-{os.getpid()}-",
                                                   dir=self.out_dir))
         except BaseException:
@@ -230,6 +289,21 @@ class OutputSet:
         p.write_text(text)
         return p
 
+    def check_names(self, names: Iterable[str]) -> None:
+        """Refuses names of the set that ``out_dir`` holds as a folder (not
+        ours to replace, and a rename cannot put a file there).
+
+        Raises:
+            OutputInTheWayError: ``<out_dir>/<name> is a folder in the way of
+                <command>'s output ...``.
+        """
+        for name in names:
+            entry = self.out_dir / name
+            if entry.is_dir() and not entry.is_symlink():
+                raise OutputInTheWayError(
+                    errno.EISDIR, f"{entry} is a folder in the way of {self.command}'s output {name}; remove or "
+                    "rename it, or choose another --out", str(entry))
+
     # ---- the folder's layout --------------------------------------------------
 
     @property
@@ -257,6 +331,9 @@ class OutputSet:
         os.symlink(target, tmp)
         try:
             os.replace(tmp, link)
+        except OSError as e:  # named by the user's path, not the temporary link's
+            tmp.unlink(missing_ok=True)
+            raise type(e)(e.errno, e.strerror, str(link)) from None
         except BaseException:
             tmp.unlink(missing_ok=True)
             raise
@@ -289,6 +366,7 @@ class OutputSet:
         if odd:  # never drop a writer's output silently
             raise RuntimeError(f"output set {self.command!r}: staged entries that are not plain files: {odd}")
         staged = sorted(p.name for p in entries)
+        self.check_names(staged)
         if not self._links_work():
             self._commit_file_by_file(staged)
             return
@@ -349,23 +427,28 @@ class OutputSet:
 
     def _adopt_plain_set(self) -> None:
         """Turns a set of plain files listed in a plain ``.<command>.manifest``
-        (written before generations) into a generation, hard links to the same
-        files, so that every file reads the same at every step."""
-        if self._manifest.is_symlink() or not self._manifest.is_file():
+        (written where there were no symbolic links, or a folder copied with
+        ``cp -rL``) into a generation, hard links to the same files, so that
+        every file reads the same at every step. A ``.<command>.current``
+        that is not a link (the copy's plain folder) is moved aside for the
+        generation's link and removed with the other leftovers."""
+        names = _plain_set(self.out_dir, self.command)
+        if names is None and (self._current.is_symlink() or not os.path.lexists(self._current)):
             return
-        names = [n for n in self._manifest.read_text().splitlines()
-                 if n and Path(n).name == n and not n.startswith(".")
-                 and ((self.out_dir / n).is_file() and not (self.out_dir / n).is_symlink() or self._ours(self.out_dir / n))]
         generation = Path(tempfile.mkdtemp(prefix=f".{self.command}.gen-", dir=self.out_dir))
-        for name in names:
+        for name in names or []:
             source = os.path.realpath(self.out_dir / name)
             try:
                 os.link(source, generation / name)
             except OSError:  # a file system without hard links
                 shutil.copy2(source, generation / name)
-        self._seal(generation, names)
+        self._seal(generation, names or [])
+        if os.path.lexists(self._current) and not self._current.is_symlink():
+            # Every visible name of such a set is a plain file: moving the
+            # plain .current aside changes no file a reader sees.
+            os.rename(self._current, self.out_dir / f".{self.command}.gen-{secrets.token_hex(6)}")
         self._swap(self._current, generation.name)
-        self._link_all([*names, self._manifest.name])
+        self._link_all([*(names or []), self._manifest.name])
         _fsync(self.out_dir)
 
     def _tidy(self) -> None:
@@ -380,10 +463,7 @@ class OutputSet:
             name = entry.name
             if name.startswith(f".staging-{self.command}-") or (
                     name.startswith(prefix + "gen-") and name != current):
-                if entry.is_symlink():
-                    entry.unlink()
-                else:
-                    shutil.rmtree(entry, ignore_errors=True)
+                _remove(entry)
             elif name.startswith(prefix + "new-"):
                 entry.unlink(missing_ok=True)
             elif not name.startswith(".") and name not in have and self._ours(entry):

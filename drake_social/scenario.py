@@ -75,6 +75,17 @@ MAX_CONTROL_STEPS = 60_000
 #: Most plant steps in one dynamic run (``time_limit / plant_time_step``):
 #: MAX_TIME_LIMIT at the default 0.002 s step.
 MAX_PLANT_STEPS = 300_000
+#: The dynamic mode's servo (:func:`drake_social.sim.diagram.servo_gains`):
+#: the arm joints' critically damped bandwidth, rad/s, and the base joints'
+#: velocity time constant, seconds.
+SERVO_BANDWIDTH = 60.0
+SERVO_BASE_TIME_CONSTANT = 0.02
+#: Largest ``execution.plant_time_step`` of a dynamic run, seconds: the
+#: discrete plant applies the servo's force explicitly, stable while its
+#: largest damping gain times the step, ``max(2 * SERVO_BANDWIDTH, 1 /
+#: SERVO_BASE_TIME_CONSTANT) * dt``, is at most 1 (1/120 s; tiny.yaml's run
+#: still tracked at 1.5 and blew up at 1.92).
+MAX_DYNAMIC_PLANT_TIME_STEP = 1.0 / max(2.0 * SERVO_BANDWIDTH, 1.0 / SERVO_BASE_TIME_CONSTANT)
 #: Fewest control periods in one run (``time_limit / control_period``). The
 #: sequencer and the controllers act once per period and the time to goal
 #: is known to one period; with fewer than 10 a run is decided by its
@@ -812,6 +823,22 @@ def _longest_motion_bound(scenario: Scenario) -> float:
     return float(displacement_bound(extent, ArmGeometry.from_scenario(scenario).lever()))
 
 
+def plant_time_step_problem(execution: ExecutionOptions, mode: str) -> tuple[str, str] | None:
+    """What is wrong with ``execution.plant_time_step`` for a run in ``mode``
+    (a dynamic run's servo is stable only up to
+    :data:`MAX_DYNAMIC_PLANT_TIME_STEP`), or None.
+
+    Returns:
+        (the field at fault, what is allowed and what was given), or None.
+    """
+    step = execution.plant_time_step
+    if mode == "dynamic" and step > MAX_DYNAMIC_PLANT_TIME_STEP:
+        return "execution.plant_time_step", (
+            f"must be <= {MAX_DYNAMIC_PLANT_TIME_STEP:.6g} s in dynamic mode (the servo's damping gain "
+            f"{2 * SERVO_BANDWIDTH:g} /s times the step must be <= 1 for the plant to stay stable), got {step}")
+    return None
+
+
 def time_limit_problem(time_limit: float, execution: ExecutionOptions, argument: str | None = None
                        ) -> tuple[str, str] | None:
     """What is wrong with a run of ``time_limit`` seconds under ``execution``
@@ -1005,6 +1032,9 @@ def validate_scenario(scenario: Scenario, source: str = "<scenario>") -> None:
         c.fail("execution.plant_time_step",
                f"must be <= execution.control_period {e.control_period}, got {e.plant_time_step}")
     problem = time_limit_problem(e.time_limit, e)
+    if problem:
+        c.fail(*problem)
+    problem = plant_time_step_problem(e, e.mode)
     if problem:
         c.fail(*problem)
     if e.kp * e.control_period >= 2.0:

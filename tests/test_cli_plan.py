@@ -247,3 +247,15 @@ def test_cli_offers_exactly_the_library_checkers():
     from drake_social.model.checker import CHECKERS
 
     assert cli.CHECKERS == CHECKERS
+
+
+@pytest.mark.parametrize("name", ["path.csv", "result.json", "path.png", "cost_profile.png", "convergence.png"])
+def test_a_folder_named_like_an_output_is_refused_before_planning(tmp_path, capsys, name):
+    out = tmp_path / "out"
+    (out / name).mkdir(parents=True)
+    rc = main(["plan", str(TINY), "--checker", "numpy", "--iterations", "50", "--out", str(out)])
+    captured = capsys.readouterr()
+    assert rc == 1 and captured.out == ""  # nothing planned
+    assert captured.err == (f"drake-social: error: {out / name} is a folder in the way of plan's output {name}; "
+                            "remove or rename it, or choose another --out\n")
+    assert sorted(p.name for p in out.iterdir() if not p.name.startswith(".")) == [name]

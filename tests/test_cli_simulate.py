@@ -151,3 +151,67 @@ def test_a_joint_limit_pass_exits_7_and_is_named_apart_from_collisions(tmp_path,
     assert "collision-free" in captured.out and "COLLIDES" not in captured.out
     assert "drake-social: the executed trajectory passes a joint limit: psi1 " in captured.err
     assert "collides" not in captured.err
+
+
+@pytest.mark.parametrize("name", ["sim.json", "executed.csv", "tracking.png", "replay.html"])
+def test_a_folder_named_like_an_output_is_refused_before_simulating(tmp_path, tiny_scenario_path, planned, capsys,
+                                                                    name):
+    out = tmp_path / "out"
+    (out / name).mkdir(parents=True)
+    code = main(["simulate", str(tiny_scenario_path), "--path", str(planned), "--no-replay", "--out", str(out)])
+    captured = capsys.readouterr()
+    assert code == 1 and captured.out == ""  # nothing simulated
+    assert captured.err == (f"drake-social: error: {out / name} is a folder in the way of simulate's output {name}; "
+                            "remove or rename it, or choose another --out\n")
+    assert sorted(p.name for p in out.iterdir() if not p.name.startswith(".")) == [name]
+
+
+def test_a_room_bound_pass_is_named_as_such(tmp_path, tiny_scenario_path, planned, capsys, monkeypatch):
+    """A run whose base passes a room bound (the finding put into a real
+    run's report): stderr and the summary name a room bound, not a joint limit."""
+    import drake_social.sim.run as sim_run
+    from drake_social.sim.run import LimitViolation
+
+    real = sim_run.run_checked
+
+    def passing_a_wall(*args, **kwargs):
+        run = real(*args, **kwargs)
+        run.report.within_limits = False
+        run.report.limit_violations = [LimitViolation("base_x", "upper", 8.0, 1.0, 1.5, 0.01)]
+        return run
+
+    monkeypatch.setattr(sim_run, "run_checked", passing_a_wall)
+    code = main(["simulate", str(tiny_scenario_path), "--path", str(planned), "--no-replay", "--out",
+                 str(tmp_path / "out")])
+    captured = capsys.readouterr()
+    assert code == 7
+    assert ("drake-social: the executed trajectory passes a room bound: base_x 0.01 m beyond its upper limit 8 at "
+            "t = 1.50 s (first at t = 1.00 s)\n") in captured.err
+    assert "joint limit" not in captured.err and "joint limits" not in captured.out
+    assert "BEYOND A LIMIT: base_x 0.01 m" in captured.out
+
+
+def test_a_run_within_its_limits_says_joint_limits_and_room_bounds(simulated):
+    code, out, stdout = simulated
+    assert code == 0 and "; collision-free; within the joint limits and room bounds; " in stdout
+
+
+def test_simulate_help_describes_the_computed_torque_servo(capsys):
+    assert main(["simulate", "--help"]) == 0
+    text = " ".join(capsys.readouterr().out.split()).replace("- ", "-")  # argparse wraps at hyphens too
+    assert "PD" not in text
+    assert "dynamic (the MultibodyPlant driven by a computed-torque servo)" in text
+    assert "passes a joint limit or a room bound" in text
+
+
+def test_a_simulate_that_finds_no_path_shows_no_realtime_factor(tmp_path, capsys):
+    """Nothing was simulated: the summary has no "nanx realtime"."""
+    from test_cli_plan import WALLED
+
+    scenario = tmp_path / "walled.yaml"
+    scenario.write_text(WALLED)
+    code = main(["simulate", str(scenario), "--checker", "numpy", "--iterations", "60", "--no-replay", "--out",
+                 str(tmp_path / "out")])
+    captured = capsys.readouterr()
+    assert code == 3
+    assert "no path to execute" in captured.out and "nan" not in captured.out and "realtime" not in captured.out

@@ -224,3 +224,62 @@ def test_a_generation_removed_by_hand_is_replaced_by_the_next_set(tmp_path):
 
 def _listing_readable(folder: Path) -> dict[str, bytes]:
     return {p.name: p.read_bytes() for p in folder.iterdir() if not p.name.startswith(".") and p.exists()}
+
+
+@pytest.mark.parametrize("copy", ["cp -rL", "current is a plain file"])
+def test_a_dereferenced_copy_is_read_and_written_like_a_plain_set(tmp_path, copy):
+    """`cp -rL` turns every link into a file and `.plan.current` into a
+    plain folder: the copy reads as its plain files, and a new set replaces
+    it as a whole (the plain folder and the copied generations go)."""
+    _write_set(tmp_path / "src", {"path.csv": "old", "path.png": "old png", "stale.png": "old stale"})
+    copied = tmp_path / "copy"
+    subprocess.run(["cp", "-rL", str(tmp_path / "src"), str(copied)], check=True)
+    assert (copied / ".plan.current").is_dir() and not (copied / ".plan.current").is_symlink()
+    if copy == "current is a plain file":
+        shutil.rmtree(copied / ".plan.current")
+        (copied / ".plan.current").write_text("not a link")
+    shown = current_set(copied, "plan")
+    assert shown is not None and shown.generation == "" and shown.files == ("path.csv", "path.png", "stale.png")
+    assert _listing(copied) == {"path.csv": b"old", "path.png": b"old png", "stale.png": b"old stale"}
+    for text in ("new", "newer"):
+        _write_set(copied, {"path.csv": text, "path.png": "new png"})
+        assert _listing(copied) == {"path.csv": text.encode(), "path.png": b"new png"}
+        assert _hidden(copied) == _tidy_hidden(copied)
+        assert current_set(copied, "plan").files == ("path.csv", "path.png")
+    assert _listing(tmp_path / "src") == {"path.csv": b"old", "path.png": b"old png", "stale.png": b"old stale"}
+
+
+def test_a_plain_current_folder_without_a_manifest_is_replaced(tmp_path):
+    """A plain `.plan.current` folder with no plain manifest beside it holds no
+    set: it reads as none, and the next set takes its place."""
+    (tmp_path / ".plan.current").mkdir()
+    (tmp_path / ".plan.current" / "path.csv").write_text("orphan")
+    assert current_set(tmp_path, "plan") is None
+    _write_set(tmp_path, {"path.csv": "new"})
+    assert _listing(tmp_path) == {"path.csv": b"new"}
+    assert _hidden(tmp_path) == _tidy_hidden(tmp_path)
+
+
+def test_a_folder_named_like_an_output_is_refused_before_the_work_and_at_commit(tmp_path):
+    """A folder has the name of one of the set's files: refused on entering
+    the block when the name is declared, at commit otherwise, naming the
+    user's path; the old set is left whole either way."""
+    _write_set(tmp_path, {"path.csv": "old"})
+    (tmp_path / "path.png").mkdir()
+    with pytest.raises(outputs_module.OutputInTheWayError) as declared:
+        with OutputSet(tmp_path, "plan", names=["path.csv", "path.png"]):
+            raise AssertionError("the block must not run")
+    assert str(declared.value) == (f"{tmp_path / 'path.png'} is a folder in the way of plan's output path.png; "
+                                   "remove or rename it, or choose another --out")
+    with pytest.raises(outputs_module.OutputInTheWayError) as at_commit:
+        _write_set(tmp_path, {"path.csv": "new", "path.png": "new png"})
+    assert str(at_commit.value) == str(declared.value)
+    assert (tmp_path / "path.csv").read_text() == "old" and (tmp_path / "path.png").is_dir()
+    assert current_set(tmp_path, "plan").files == ("path.csv",)
+    assert not [p for p in tmp_path.iterdir() if p.name.startswith((".staging", ".plan.new-"))]
+    assert len(list(tmp_path.glob(".plan.gen-*"))) == 1
+    # The set's manifest link too.
+    (tmp_path / "path.png").rmdir()
+    (tmp_path / "fresh" / ".plan.manifest").mkdir(parents=True)
+    with pytest.raises(outputs_module.OutputInTheWayError, match=r"fresh/\.plan\.manifest is a folder in the way"):
+        _write_set(tmp_path / "fresh", {"path.csv": "new"})

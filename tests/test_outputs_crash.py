@@ -126,10 +126,10 @@ def test_a_kill_at_any_step_of_the_commit_leaves_the_old_or_the_new_set(tmp_path
         now = current_set(folder, "plan")
         if seen == {**OLD, **OTHERS}:
             outcomes.append("old")
-            # The reader is told the old set: no generation yet (plain files)
-            # or one with exactly the old files.
-            assert now is None or set(now.files) == set(OLD), (kill_at, now)
-            if old_generation is not None:
+            # The reader is told the old set: its plain files (no generation
+            # yet, or one taken over from them) or its generation.
+            assert now is not None and set(now.files) == set(OLD), (kill_at, now)
+            if old_generation.generation:
                 assert now == old_generation
         else:
             assert seen == {**NEW, **OTHERS}, (kill_at, sorted(seen))  # never a mix

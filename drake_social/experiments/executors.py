@@ -47,14 +47,21 @@ SCHEDULER_SCHEMES = ("tcp", "tls")
 _log = logging.getLogger(__name__)
 
 #: HOST (a name, an IPv4 address or a bracketed IPv6 address) and PORT.
-_HOST_PORT = re.compile(r"(\[[0-9A-Fa-f:.]+\]|[A-Za-z0-9](?:[A-Za-z0-9.-]*[A-Za-z0-9])?):([0-9]+)")
+#: Names may hold '_' (docker-compose service names such as dask_scheduler resolve).
+_HOST_PORT = re.compile(r"(\[[0-9A-Fa-f:.]+\]|[A-Za-z0-9_](?:[A-Za-z0-9._-]*[A-Za-z0-9_])?):([0-9]+)")
+#: Dask's settings a tls:// client needs (its CA and its certificate), as
+#: (Security attribute, Dask config key).
+_TLS_SETTINGS = (("tls_ca_file", "distributed.comm.tls.ca-file"),
+                 ("tls_client_cert", "distributed.comm.tls.client.cert"))
 
 
 def check_scheduler_address(address: str) -> str:
     """Checks the address of a running Dask scheduler; returns it unchanged.
 
     The form is ``[tcp://|tls://]HOST:PORT`` with PORT in 1..65535, e.g.
-    ``tcp://10.0.0.5:8786``, ``localhost:8786`` or ``tls://[::1]:8786``.
+    ``tcp://10.0.0.5:8786``, ``localhost:8786``, ``dask_scheduler:8786`` or
+    ``tls://[::1]:8786``; ``tls://`` only with Dask's TLS settings
+    (``distributed.comm.tls.ca-file`` and ``distributed.comm.tls.client.cert``).
 
     Raises:
         ValueError: the address has another form; the message states the
@@ -77,7 +84,24 @@ def check_scheduler_address(address: str) -> str:
     port = int(match.group(2))
     if not 1 <= port <= 65535:
         raise ValueError(f"scheduler address {address!r}: port {port} is out of range; {form}")
+    if address.startswith("tls://"):
+        missing = _missing_tls_settings()
+        if missing:
+            raise ValueError(f"scheduler address {address!r}: tls:// needs Dask's TLS settings, and "
+                             f"{' and '.join(missing)} {'is' if len(missing) == 1 else 'are'} not set (in the Dask "
+                             "config, or as DASK_DISTRIBUTED__COMM__TLS__... variables); or use tcp://")
     return address
+
+
+def _missing_tls_settings() -> list[str]:
+    """The Dask config keys of :data:`_TLS_SETTINGS` that are not set (none
+    when distributed is not installed: :func:`map_tasks` says what to install)."""
+    try:
+        from distributed.security import Security
+    except ImportError:
+        return []
+    security = Security()  # reads the settings only; the files are read on connecting
+    return [key for attribute, key in _TLS_SETTINGS if not getattr(security, attribute, None)]
 
 
 def map_tasks(
@@ -205,7 +229,11 @@ def _map_dask(fn, tasks, workers: int, scheduler: str | None, done) -> None:
                 deferred.reraise()
                 _log.info("started a Dask LocalCluster of %d workers at %s", workers,
                           held["cluster"].scheduler_address)
-            held["client"] = Client(held.get("cluster", scheduler))
+            try:
+                held["client"] = Client(held.get("cluster", scheduler))
+            except (OSError, TypeError, ValueError) as e:  # unreachable, or TLS files Dask cannot use
+                raise ConnectionError(f"cannot connect to the Dask scheduler at {scheduler or 'the LocalCluster'}: "
+                                      f"{e}") from None
             futures = held["client"].map(fn, list(tasks), pure=False)
             index = {f.key: k for k, f in enumerate(futures)}
             for count, future in enumerate(dask_completed(futures), start=1):

@@ -94,7 +94,8 @@ from drake_social.control import (
 )
 from drake_social.model.plant import add_environment, add_robot
 from drake_social.planning.validity import ValidityChecker
-from drake_social.scenario import EXECUTIONS, SIM_MODES, Scenario, validate_scenario
+from drake_social.scenario import (EXECUTIONS, SIM_MODES, SERVO_BANDWIDTH, SERVO_BASE_TIME_CONSTANT, Scenario,
+                                    ScenarioError, plant_time_step_problem, validate_scenario)
 from drake_social.waypoints import check_waypoints
 
 __all__ = ["DiagramArguments", "TransportDiagram", "build_diagram", "check_diagram_arguments", "check_diagram_options",
@@ -136,7 +137,8 @@ class TransportDiagram:
         return self.diagram.GetSubsystemByName(name)
 
 
-def servo_gains(*, bandwidth: float = 60.0, base_time_constant: float = 0.02) -> tuple[np.ndarray, np.ndarray]:
+def servo_gains(*, bandwidth: float = SERVO_BANDWIDTH,
+                base_time_constant: float = SERVO_BASE_TIME_CONSTANT) -> tuple[np.ndarray, np.ndarray]:
     """Gains ``(Kp, Kd)`` of the dynamic mode's inverse-dynamics servo, in joint order.
 
     They act on accelerations (the inertia is compensated): the arm joints
@@ -144,8 +146,9 @@ def servo_gains(*, bandwidth: float = 60.0, base_time_constant: float = 0.02) ->
     (1/s^2), ``Kd = 2 w`` (1/s); the base joints are velocity servos of time
     constant ``base_time_constant`` seconds, ``Kp = 0``, ``Kd = 1 / tau``.
     The discrete plant (TAMSI) applies the force explicitly, which is stable
-    while ``Kd dt`` stays well below 1 (here ``2 w dt`` = 0.24 and ``dt /
-    tau`` = 0.1 at the 2 ms step).
+    while ``Kd dt`` stays at most 1 (here ``2 w dt`` = 0.24 and ``dt /
+    tau`` = 0.1 at the 2 ms step); validation holds a dynamic run's step to
+    :data:`~drake_social.scenario.MAX_DYNAMIC_PLANT_TIME_STEP`.
 
     Returns:
         Two (4,) arrays for ``[base_x, base_y, psi1, psi2]``.
@@ -241,7 +244,11 @@ def check_diagram_options(
     require_checker(checker, who, optional=True)
     require_instance(meshcat, Meshcat, who, "meshcat", "a pydrake.geometry.Meshcat", optional=True)
     validate_scenario(scenario, source=f"{who}: scenario")  # also one changed in code after loading
-    return mode or scenario.execution.mode, execution or scenario.execution.execution
+    mode = mode or scenario.execution.mode
+    problem = plant_time_step_problem(scenario.execution, mode)  # the scenario's mode was checked above
+    if problem:
+        raise ScenarioError(f"{who}: scenario: {problem[0]}: {problem[1]}")
+    return mode, execution or scenario.execution.execution
 
 
 def check_diagram_waypoints(scenario: Scenario, waypoints, checker: ValidityChecker | None, who: str) -> np.ndarray:

@@ -90,6 +90,11 @@ class LimitViolation:
     worst_time: float
     max_excess: float
 
+    @property
+    def kind(self) -> str:
+        """What was passed: ``"a room bound"`` (base) or ``"a joint limit"`` (arm)."""
+        return "a room bound" if self.joint.startswith("base") else "a joint limit"
+
     def __str__(self) -> str:
         unit = "m" if self.joint.startswith("base") else "rad"
         return (f"{self.joint} {self.max_excess:.3g} {unit} beyond its {self.bound} limit {self.limit:.6g} "
@@ -187,9 +192,11 @@ class SimulationResult:
                      f"max point deviation {r.max_point_deviation['max']:.3g} m; "
                      f"min clearance {r.min_clearance:.3g} m; "
                      f"{'collision-free' if r.collision_free else 'COLLIDES'}; "
-                     + ("within the joint limits" if r.within_limits else
+                     + ("within the joint limits and room bounds" if r.within_limits else
                         "BEYOND A LIMIT: " + "; ".join(str(v) for v in r.limit_violations)))
-        return line + f"; {self.realtime_factor:.0f}x realtime"
+        if self.sim_time > 0 and math.isfinite(self.realtime_factor):  # nothing simulated: no factor to show
+            line += f"; {self.realtime_factor:.0f}x realtime"
+        return line
 
     def to_json_dict(self) -> dict[str, Any]:
         """JSON-ready summary (the logged arrays are left out)."""
@@ -224,6 +231,49 @@ def _limits(scenario: Scenario) -> tuple[np.ndarray, np.ndarray]:
     x_min, y_min, x_max, y_max = (float(v) for v in scenario.world.bounds)
     r = scenario.robot
     return (np.array([x_min, y_min, *r.joint_lower], float), np.array([x_max, y_max, *r.joint_upper], float))
+
+
+#: A state beyond these is a diverged simulation, not a motion: speeds
+#: (m/s, rad/s) and arm angles (rad), and the base more than the room's
+#: diagonal outside the room.
+_ABSURD_SPEED = 1e3
+_ABSURD_ANGLE = 1e2
+
+
+class SimulationDiverged(ScenarioError):
+    """The simulated state became non-finite or absurd (a plant step too
+    large for the scenario's dynamics).
+
+    Attributes:
+        time: simulated seconds when it was found.
+        what: the state found (e.g. ``"speed 3.2e+05 of base_x"``).
+    """
+
+    def __init__(self, scenario: Scenario, mode: str, time: float, what: str):
+        self.time, self.what = float(time), what
+        advice = (f": execution.plant_time_step {scenario.execution.plant_time_step:g} s is too large for this "
+                  "scenario's dynamics; use a smaller one" if mode == "dynamic" else "")
+        super().__init__(f"the {mode} simulation diverged by t = {self.time:.2f} s ({what}){advice}")
+
+
+def _divergence(q, v, lower: np.ndarray, upper: np.ndarray) -> str | None:
+    """What makes the state ``q``, ``v`` (4,) a diverged one, or None."""
+    q, v = np.asarray(q, float), np.asarray(v, float)
+    for values, kind in ((q, "position"), (v, "speed")):
+        bad = np.flatnonzero(~np.isfinite(values))
+        if len(bad):
+            return f"non-finite {kind} of {ACTUATED_JOINTS[bad[0]]}"
+    reach = float(np.hypot(*(upper[:2] - lower[:2])))
+    far = np.flatnonzero((q[:2] < lower[:2] - reach) | (q[:2] > upper[:2] + reach))
+    if len(far):
+        return f"{ACTUATED_JOINTS[far[0]]} = {q[far[0]]:.3g} m, more than the room's diagonal outside the room"
+    spun = np.flatnonzero(np.abs(q[2:]) > _ABSURD_ANGLE)
+    if len(spun):
+        return f"{ACTUATED_JOINTS[2 + spun[0]]} = {q[2 + spun[0]]:.3g} rad"
+    fast = np.flatnonzero(np.abs(v) > _ABSURD_SPEED)
+    if len(fast):
+        return f"speed {v[fast[0]]:.3g} of {ACTUATED_JOINTS[fast[0]]}"
+    return None
 
 
 def limit_violations(scenario: Scenario, times: np.ndarray, q: np.ndarray) -> list[LimitViolation]:
@@ -460,9 +510,25 @@ def run_checked(
     sequencer_context = sequencer.GetMyContextFromRoot(root)
     done_port = sequencer.GetOutputPort("done")
     chunk = max(_CHUNK, float(scenario.execution.control_period))
+    q_port = built.loggers["q"].get_input_port()
+    v_port = built.loggers["v"].get_input_port()
+    q_context = built.loggers["q"].GetMyContextFromRoot(root)
+    v_context = built.loggers["v"].GetMyContextFromRoot(root)
+    bounds = _limits(scenario)
+
+    def check_divergence(cause: BaseException | None = None) -> None:
+        what = _divergence(q_port.Eval(q_context), v_port.Eval(v_context), *bounds)
+        if what is not None:
+            raise SimulationDiverged(scenario, built.mode, root.get_time(), what) from cause
+
     t0 = time.perf_counter()
     while root.get_time() < limit:
-        simulator.AdvanceTo(min(limit, root.get_time() + chunk))
+        try:
+            simulator.AdvanceTo(min(limit, root.get_time() + chunk))
+        except RuntimeError as e:  # Drake refuses a state gone non-finite: say why
+            check_divergence(e)
+            raise
+        check_divergence()
         if progress is not None:
             progress(root.get_time())
         if done_port.Eval(sequencer_context)[0] > 0.5:

@@ -105,6 +105,7 @@ def test_limit_violations_name_each_joint_and_bound_by_hand(tiny_scenario):
         LimitViolation("psi2", "lower", -math.pi, 0.0, 0.0, pytest.approx(3.2 - math.pi)),
     ]
     assert "base_x 0.1 m beyond its lower limit 0 at t = 0.00 s" in str(found[0])
+    assert [v.kind for v in found] == ["a room bound", "a room bound", "a joint limit"]
     assert limit_violations(tiny_scenario, np.array([0.0]), np.array([[8.0, 5.0, math.pi, -math.pi]])) == []
 
 
@@ -156,3 +157,77 @@ def test_fixed_waypoints_outside_the_limits_are_refused_before_execution(tiny_sc
         build_diagram(tiny_scenario, waypoints=np.array([start, [3.0, 2.5, 0.0, 3.5], goal]))
     with pytest.raises(ValueError, match=r"^build_diagram: waypoints: waypoint 1: x: 8.5 is outside the room \[0.0, 8.0\] "):
         build_diagram(tiny_scenario, waypoints=np.array([start, [8.5, 2.5, 0.0, 0.0], goal]))
+
+
+# ---- the dynamic mode's plant step ------------------------------------------------------------
+
+_STEP_RULE = ("execution.plant_time_step: must be <= 0.00833333 s in dynamic mode (the servo's damping gain 120 /s "
+              "times the step must be <= 1 for the plant to stay stable), got {}")
+
+
+@pytest.mark.parametrize("step", [0.02, 0.0084, 0.5])
+def test_a_dynamic_plant_step_beyond_the_servos_stability_is_refused(tiny_scenario_path, tmp_path, capsys, step):
+    """In the scenario, by --mode dynamic on a kinematic scenario, and by the
+    API's mode argument; the same step is fine for a kinematic run (no plant)."""
+    import dataclasses as dc
+
+    from drake_social.cli import load_with_overrides, main
+    from drake_social.scenario import ScenarioError
+
+    setting = f"execution: {{plant_time_step: {step}, control_period: {max(step, 0.01)}}}"
+    with pytest.raises(ScenarioError) as info:
+        load_with_overrides(tiny_scenario_path, [setting.replace("{", "{mode: dynamic, ", 1)])
+    assert str(info.value).endswith(_STEP_RULE.format(step))
+    kinematic = load_with_overrides(tiny_scenario_path, [setting])
+    assert kinematic.execution.plant_time_step == step
+    out = tmp_path / "out"
+    assert main(["simulate", str(tiny_scenario_path), "--mode", "dynamic", "--set", setting, "--no-replay",
+                 "--out", str(out)]) == 2
+    captured = capsys.readouterr()
+    assert captured.err == (f"drake-social: error: {tiny_scenario_path} (--mode dynamic): "
+                            f"{_STEP_RULE.format(step)}\n")
+    assert captured.out == "" and not out.exists()
+    with pytest.raises(ScenarioError) as info:
+        simulate(kinematic, mode="dynamic", analyze=False)
+    assert str(info.value) == f"simulate: scenario: {_STEP_RULE.format(step)}"
+    # Exactly at the rule it is accepted.
+    at = dc.replace(kinematic.execution, mode="dynamic", plant_time_step=1 / 120, control_period=0.01)
+    ok = copy.deepcopy(kinematic)
+    ok.execution = at
+    from drake_social.scenario import validate_scenario
+
+    validate_scenario(ok)
+
+
+def test_a_diverging_dynamic_run_is_reported_as_such(tiny_scenario):
+    """A run past the validation (run_checked takes its arguments as checked)
+    with the reviewer's 0.02 s step: the state blows up within a second, and
+    the run stops there with the error naming it and the step."""
+    import dataclasses as dc
+
+    from drake_social.sim.run import SimulationDiverged, run_checked
+
+    scenario = copy.deepcopy(tiny_scenario)
+    scenario.execution = dc.replace(scenario.execution, mode="dynamic", plant_time_step=0.02, control_period=0.02)
+    with pytest.raises(SimulationDiverged) as info:
+        run_checked(scenario, "dynamic", "synchronized", None, make_checker(scenario, "numpy"), None, 60.0, True,
+                    None, None)
+    assert 0 < info.value.time <= 2.0
+    assert str(info.value) == (f"the dynamic simulation diverged by t = {info.value.time:.2f} s ({info.value.what}): "
+                               "execution.plant_time_step 0.02 s is too large for this scenario's dynamics; use a "
+                               "smaller one")
+
+
+@pytest.mark.parametrize("q, v, what", [
+    ([1, 1, np.nan, 0], [0, 0, 0, 0], "non-finite position of psi1"),
+    ([1, 1, 0, 0], [0, np.inf, 0, 0], "non-finite speed of base_y"),
+    ([1, -20, 0, 0], [0, 0, 0, 0], "base_y = -20 m, more than the room's diagonal outside the room"),
+    ([1, 1, 0, -150], [0, 0, 0, 0], "psi2 = -150 rad"),
+    ([1, 1, 0, 0], [0, 0, 2e3, 0], "speed 2e+03 of psi1"),
+    ([-5, 9, 3, -3], [10, -10, 50, 50], None),  # outside the room, fast: a motion, not a divergence
+])
+def test_divergence_is_named_by_what_is_absurd(q, v, what):
+    from drake_social.sim.run import _divergence
+
+    lower, upper = np.array([0.0, 0.0, -3.2, -3.2]), np.array([8.0, 6.0, 3.2, 3.2])  # a diagonal of 10 m
+    assert _divergence(q, v, lower, upper) == what
