@@ -237,6 +237,16 @@ def _no_space(*args, **kwargs):
 def _script_failed(*args, **kwargs):
     raise RuntimeError("ompl_benchmark_statistics.py failed on the logs")
 
+def _assert_the_records_alone(out):
+    """The set committed in ``out`` is the two runs' records alone, complete."""
+    assert sorted(p.name for p in out.iterdir() if not p.name.startswith(".")) == ["results.csv", "results.json"]
+    assert current_set(out, "experiment").files == ("results.csv", "results.json")
+    records = json.loads((out / "results.json").read_text())["runs"]
+    assert [(r["group"], r["run"]) for r in records] == [("tiny-default", 0), ("tiny-wide", 0)]
+    assert all(r["success"] and len(r["waypoints"]) >= 2 for r in records)
+    assert len((out / "results.csv").read_text().splitlines()) == 3
+
+
 
 @pytest.mark.parametrize("where, failure, message", [
     (report, ("write_figures", _no_space), "[Errno 28] No space left on device"),
@@ -253,13 +263,7 @@ def test_an_output_error_after_the_runs_keeps_their_records_in_out(tmp_path, tin
     assert captured.err == (f"drake-social: error: writing the study's outputs into {out} failed: {message}; the "
                             f"records of its 2 runs are in {out / 'results.json'} and {out / 'results.csv'} (the "
                             "figures, REPORT.md and the arena files were not written)\n")
-    # The set committed is the records alone, complete.
-    assert sorted(p.name for p in out.iterdir() if not p.name.startswith(".")) == ["results.csv", "results.json"]
-    assert current_set(out, "experiment").files == ("results.csv", "results.json")
-    records = json.loads((out / "results.json").read_text())["runs"]
-    assert [(r["group"], r["run"]) for r in records] == [("tiny-default", 0), ("tiny-wide", 0)]
-    assert all(r["success"] and len(r["waypoints"]) >= 2 for r in records)
-    assert len((out / "results.csv").read_text().splitlines()) == 3
+    _assert_the_records_alone(out)
 
 
 def test_records_that_out_cannot_take_are_saved_in_the_temporary_directory(tmp_path, tiny_scenario_path, monkeypatch,
@@ -329,11 +333,7 @@ def test_ctrl_c_after_the_runs_keeps_their_records_in_out(tmp_path, tiny_scenari
     assert captured.err == (f"drake-social: experiment interrupted after its 2 runs: their records were written to "
                             f"{out / 'results.json'} and {out / 'results.csv'} (the figures, REPORT.md and the arena "
                             "files were not written)\n")
-    assert sorted(p.name for p in out.iterdir() if not p.name.startswith(".")) == ["results.csv", "results.json"]
-    assert current_set(out, "experiment").files == ("results.csv", "results.json")
-    records = json.loads((out / "results.json").read_text())["runs"]
-    assert [(r["group"], r["run"], r["success"]) for r in records] == [("tiny-default", 0, True),
-                                                                       ("tiny-wide", 0, True)]
+    _assert_the_records_alone(out)
 
 
 def test_a_folder_in_the_way_of_an_output_is_refused_before_the_runs_or_keeps_the_records(tmp_path,
