@@ -630,6 +630,31 @@ _STR_TAG = "tag:yaml.org,2002:str"
 _YAML_TAG = "tag:yaml.org,2002:"
 
 
+#: Longest key an error message repeats whole in a dotted field: a name of a
+#: sweep's variants may have 100 characters (``experiments.study.NAME_PATTERN``).
+_SHOWN_KEY_CHARACTERS = 100
+
+
+def _unprintable(text: str) -> str | None:
+    """The first character of ``text`` that a YAML file may not hold (a control
+    character other than tab and line breaks, DEL, a lone surrogate, U+FFFE/U+FFFF),
+    as ``U+XXXX``, or None. A quoted scalar's escapes (``"\\0"``, ``"\\ud800"``)
+    can make them, which the YAML reader refuses in the file's text."""
+    import yaml
+
+    match = yaml.reader.Reader.NON_PRINTABLE.search(text)
+    return None if match is None else f"U+{ord(match.group()):04X}"
+
+
+def _key_shown(key: str) -> str:
+    """A mapping key as a dotted field repeats it: its repr if it holds a character
+    that does not print on one line, else as written, whole up to
+    :data:`_SHOWN_KEY_CHARACTERS` characters (longer: shortened)."""
+    if not key.isprintable():
+        return shorten(repr(key))
+    return key if len(key) <= _SHOWN_KEY_CHARACTERS else shorten(key)
+
+
 def _check_node(tp, node, field: str, source: str, yaml, tag_checked: bool = False) -> None:
     """:func:`check_node` of one node; ``tag_checked``: its ``!Tag`` chose ``tp`` (an object type)."""
 
@@ -686,7 +711,11 @@ def _check_node(tp, node, field: str, source: str, yaml, tag_checked: bool = Fal
                     or key_node.value == ""):
                 raise ScenarioError(f"{source}: line {line}: {field}: names must be non-empty strings, got "
                                     f"{shown(key_node)}")
-            sub = f"{field}.{shorten(key_node.value)}" if field else shorten(key_node.value)
+            sub = f"{field}.{_key_shown(key_node.value)}" if field else _key_shown(key_node.value)
+            bad = _unprintable(key_node.value)
+            if bad is not None:
+                raise ScenarioError(f"{source}: line {line}: {sub}: names must be printable text, got {bad} in "
+                                    f"{shown(key_node)}")
             if key_node.value in seen:
                 raise ScenarioError(f"{source}: line {line}: {sub}: duplicate key (first at line "
                                     f"{seen[key_node.value]})")
@@ -706,7 +735,7 @@ def _check_node(tp, node, field: str, source: str, yaml, tag_checked: bool = Fal
                 raise ScenarioError(f"{source}: line {line}: {where}a key must be a field name ({', '.join(types)}), "
                                     f"got {shown(key_node)}")
             key = key_node.value
-            sub = f"{field}.{shorten(key)}" if field else shorten(key)
+            sub = f"{field}.{_key_shown(key)}" if field else _key_shown(key)
             if key in seen:  # YAML loaders keep the last silently
                 raise ScenarioError(f"{source}: line {line}: {sub}: duplicate key (first at line {seen[key]})")
             seen[key] = line
@@ -724,6 +753,9 @@ def _check_node(tp, node, field: str, source: str, yaml, tag_checked: bool = Fal
         value = yaml.SafeLoader("").construct_object(node)
     except Exception:
         fail(f"must be {_describe(tp)}, got {shown(node)}")
+    if isinstance(value, str) and _unprintable(value) is not None:
+        fail(f"must be printable text (the characters a YAML file may hold), got {_unprintable(value)} in "
+             f"{shown(node)}")
     if tp is bool:
         ok = isinstance(value, bool)
     elif tp is str:

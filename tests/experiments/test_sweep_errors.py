@@ -260,8 +260,8 @@ def test_unusual_yaml_in_a_sweep_is_named(tmp_path, body, message):
 
 def test_a_nul_in_a_scenario_name_is_refused(tmp_path, capsys):
     dut = _sweep(tmp_path, "", head='runs: 1\nscenarios: ["a\\0b.yaml"]\n')
-    local = str(tmp_path / "a\0b.yaml")
-    assert _error(dut) == f"{dut}: line 2: scenarios[0]: {local!r}: not a valid file name (embedded null byte)"
+    assert _error(dut) == (f"{dut}: line 2: scenarios[0]: must be printable text (the characters a YAML file may "
+                           "hold), got U+0000 in 'a\\x00b.yaml'")
     assert main(["experiment", "sweep", str(dut), "--out", str(tmp_path / "o")]) == 2
     assert "Traceback" not in capsys.readouterr().err
 
@@ -430,3 +430,18 @@ def test_the_depth_limit_leaves_room_for_what_the_comment_says(tmp_path):
     assert depth((root / "scenarios" / "office_bar.yaml").read_text()) == 6
     assert depth((root / "studies" / "example_sweep.yaml").read_text()) == 6
     assert depth("variants: {a: {world: {obstacles: [{center: [1, 2]}]}}}") == 8 <= MAX_YAML_DEPTH
+
+
+def test_a_long_variant_name_is_named_whole_in_its_fields(tmp_path):
+    # A variant name may have 100 characters; the dotted field of an error inside
+    # it names it whole, not cut in the middle of the field.
+    name = "v" * 95
+    path = _sweep(tmp_path, f"variants: {{{name}: {{social: {{sigma_hh: 1}}}}}}\n")
+    assert _error(path) == (f"{path}: line 4: variants.{name}.social.sigma_hh: unknown field in "
+                            f"variants.{name}.social; allowed: sigma_h, side_ratio, rear_ratio, threshold, weights, "
+                            "length_weight, resolution")
+
+
+def test_a_variant_name_with_a_control_character_is_refused_escaped(tmp_path):
+    path = _sweep(tmp_path, 'variants: {"v\\aw": {}}\n')
+    assert _error(path) == f"{path}: line 4: variants.'v\\x07w': names must be printable text, got U+0007 in 'v\\x07w'"
