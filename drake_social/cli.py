@@ -126,6 +126,11 @@ def _check_out_folder(out: Path) -> None:
         try:
             mode = os.stat(here).st_mode
         except (FileNotFoundError, NotADirectoryError):
+            if os.path.islink(here):  # a link to nothing: making the folder fails after the work
+                where = "it is" if here == out else f"{here} is"
+                raise NotADirectoryError(f"{shorten(str(out), 300)}: --out must be a folder (its outputs are written "
+                                         f"inside it); {where} a symbolic link to {os.readlink(here)}, which does "
+                                         f"not exist") from None
             if here == here.parent:
                 return
             here = here.parent

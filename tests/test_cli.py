@@ -204,6 +204,19 @@ def test_an_out_that_is_not_a_folder_names_the_option(tmp_path, capsys, command)
                                        f"written inside it); {plain} is a file\n")
 
 
+@pytest.mark.parametrize("command", [["show"], ["plan", "--iterations", "20"]])
+def test_an_out_through_a_dangling_link_is_refused_before_the_work(tmp_path, capsys, command):
+    """Making the folder through a link to nothing fails (File exists), so it is refused up front."""
+    link = tmp_path / "link"
+    link.symlink_to(tmp_path / "gone")
+    for out, where in ((link, "it is"), (link / "sub", f"{link} is")):
+        assert main([*command, str(_TINY), "--out", str(out)]) == 1
+        assert capsys.readouterr().err == (f"drake-social: error: {out}: --out must be a folder (its outputs are "
+                                           f"written inside it); {where} a symbolic link to {tmp_path / 'gone'}, "
+                                           f"which does not exist\n")
+    assert not (tmp_path / "gone").exists()
+
+
 def test_an_experiment_out_that_is_a_file_is_refused_before_any_run(tmp_path, capsys):
     plain = tmp_path / "plain.txt"
     plain.write_text("x")
