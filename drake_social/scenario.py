@@ -735,6 +735,10 @@ def _check_node(tp, node, field: str, source: str, yaml, tag_checked: bool = Fal
                 raise ScenarioError(f"{source}: line {line}: {where}a key must be a field name ({', '.join(types)}), "
                                     f"got {shown(key_node)}")
             key = key_node.value
+            if key_node.tag != _STR_TAG and (key in types or key == ""):  # `!!int random_seed:`, `? !!null`
+                where = f"{field}: " if field else ""
+                raise ScenarioError(f"{source}: line {line}: {where}a key must be a field name ({', '.join(types)}) "
+                                    f"as plain text, without a tag, got {shown(key_node)}")
             sub = f"{field}.{_key_shown(key)}" if field else _key_shown(key)
             if key in seen:  # YAML loaders keep the last silently
                 raise ScenarioError(f"{source}: line {line}: {sub}: duplicate key (first at line {seen[key]})")

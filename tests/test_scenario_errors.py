@@ -509,3 +509,18 @@ def test_an_unknown_key_with_a_control_character_is_shown_escaped():
     text = '"random_\\x01seed": 3'
     assert _message(TINY, [text]).startswith(
         f"{TINY} (--set {shorten(repr(text))}): line 1: 'random_\\x01seed': unknown field at the top level; allowed: ")
+
+
+@pytest.mark.parametrize("override, field, key", [
+    ("!!int random_seed: 3", "", "!!int 'random_seed'"),
+    ("!Foo random_seed: 3", "", "!Foo 'random_seed'"),
+    ("social: {!!binary sigma_h: 1}", "social: ", "!!binary 'sigma_h'"),
+    ("? !!null\n: 3", "", "null"),
+])
+def test_a_field_name_under_a_tag_is_not_called_unknown(override, field, key):
+    # It was "random_seed: unknown field ...; allowed: ..., random_seed".
+    fields = ("sigma_h, side_ratio, rear_ratio, threshold, weights, length_weight, resolution" if field else
+              "description, world, people, robot, object, start, goal, social, planner, execution, random_seed")
+    assert _message(TINY, [override]) == (
+        f"{TINY} (--set {override!r}): line 1: {field}a key must be a field name ({fields}) as plain text, without "
+        f"a tag, got {key}")
