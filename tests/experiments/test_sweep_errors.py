@@ -314,7 +314,7 @@ def test_each_scenario_and_variant_is_loaded_once(tmp_path, monkeypatch):
         return real(text, source, overrides, **kw)
 
     monkeypatch.setattr(scenario_module, "load_scenario_text", counted)
-    monkeypatch.setattr(study_module, "_loads", set())
+    monkeypatch.setattr(study_module, "_loads", {})
     study_module._load.cache_clear()
     variants = ", ".join(f"v{i}: {{social: {{length_weight: {i / 10}}}}}" for i in range(20))
     dut = _sweep(tmp_path, f"variants: {{{variants}}}\n")
@@ -445,3 +445,28 @@ def test_a_long_variant_name_is_named_whole_in_its_fields(tmp_path):
 def test_a_variant_name_with_a_control_character_is_refused_escaped(tmp_path):
     path = _sweep(tmp_path, 'variants: {"v\\aw": {}}\n')
     assert _error(path) == f"{path}: line 4: variants.'v\\x07w': names must be printable text, got U+0007 in 'v\\x07w'"
+
+
+ADMISSIBLE = "{planner: {informed_mode: admissible}, social: {length_weight: 0}}"
+
+
+def test_a_variant_invalid_with_a_study_algorithm_is_refused_before_any_run(tmp_path, capsys):
+    # Valid with the file's own planner.algorithm, but an informed planner of the
+    # study needs length_weight > 0: it failed inside the runs, naming no file.
+    dut = _sweep(tmp_path, f"algorithms: [social_rrt_star, informed_social_rrt_star]\nvariants: {{adm: {ADMISSIBLE}}}\n")
+    message = (f"{dut}: {TINY} (variants.adm) with the study's algorithm informed_social_rrt_star: "
+               "planner.informed_mode: 'admissible' needs social.length_weight > 0")
+    assert _error(dut) == message
+    out = tmp_path / "o"
+    assert main(["experiment", "sweep", str(dut), "--out", str(out)]) == 2
+    assert capsys.readouterr().err.splitlines()[-1] == f"drake-social: error: {message}"
+    assert not out.exists()
+
+
+def test_a_study_group_invalid_with_its_algorithm_is_refused_by_its_check(tmp_path):
+    study = Study("s", (Group("g", str(TINY), overrides=(ADMISSIBLE,), algorithms=("informed_social_rrt_star",)),),
+                  runs=1, iterations=10)
+    with pytest.raises(ScenarioError) as info:
+        study_tasks(study)
+    assert str(info.value) == (f"{TINY} (group g) with the study's algorithm informed_social_rrt_star: "
+                               "planner.informed_mode: 'admissible' needs social.length_weight > 0")
