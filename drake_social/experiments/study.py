@@ -217,6 +217,12 @@ def _shown(value) -> str:
     return shorten(repr(value))
 
 
+def _name_shown(name) -> str:
+    """A group's name as an error message repeats it: whole if it is a valid
+    name (at most 100 characters), else shortened (:func:`_shown`)."""
+    return repr(name) if isinstance(name, str) and _valid_name(name) else _shown(name)
+
+
 def _valid_name(name: str) -> bool:
     return re.fullmatch(NAME_PATTERN, name) is not None
 
@@ -278,13 +284,13 @@ def check_study(study: Study, source: str = "study") -> None:
         if not isinstance(g.name, str) or not _valid_name(g.name):
             fail(f"group {_shown(g.name)}", f"a group name {_NAME_RULE}")
         if g.name.casefold() in seen:
-            fail(f"group {_shown(g.name)}", "two groups have this name (letter case aside); their records and arena "
+            fail(f"group {_name_shown(g.name)}", "two groups have this name (letter case aside); their records and arena "
                                             "logs would mix")
         seen.add(g.name.casefold())
         problem = _algorithms_problem(g.algorithms)
         if problem is not None:
             i, message = problem
-            fail(f"group {_shown(g.name)}: algorithms" + ("" if i is None else f"[{i}]"), message)
+            fail(f"group {_name_shown(g.name)}: algorithms" + ("" if i is None else f"[{i}]"), message)
     tasks = study.runs * sum(len(g.algorithms) for g in study.groups)
     if tasks > MAX_STUDY_TASKS:
         fail("runs", f"{len(study.groups)} groups x their algorithms x {study.runs} runs = {tasks:,} runs; a study "

@@ -470,3 +470,13 @@ def test_a_study_group_invalid_with_its_algorithm_is_refused_by_its_check(tmp_pa
         study_tasks(study)
     assert str(info.value) == (f"{TINY} (group g) with the study's algorithm informed_social_rrt_star: "
                                "planner.informed_mode: 'admissible' needs social.length_weight > 0")
+
+
+def test_a_long_group_name_is_named_whole(tmp_path):
+    # Group names may have 100 characters; the duplicate's field was cut at 80.
+    name = "g" * 100
+    study = Study("s", (Group(name, str(TINY)), Group(name.upper(), str(TINY))), runs=1, iterations=10)
+    with pytest.raises(ScenarioError) as info:
+        study_tasks(study)
+    assert str(info.value) == (f"study: group {name.upper()!r}: two groups have this name (letter case aside); "
+                               "their records and arena logs would mix")
