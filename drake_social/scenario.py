@@ -59,6 +59,7 @@ __all__ = [
     "load_scenario",
     "load_scenario_text",
     "period_count",
+    "validate_planner_choice",
     "validate_scenario",
 ]
 
@@ -918,6 +919,29 @@ def time_limit_problem(time_limit: float, execution: ExecutionOptions, argument:
                                   f"got {time_limit}")
             return field, f"must be >= execution.time_limit / {most:,} = {limit / most:.3g} s ({why}), got {length}"
     return None
+
+
+def validate_planner_choice(scenario: Scenario, algorithm: str, iterations: int | None = None,
+                            source: str = "<scenario>") -> None:
+    """Checks ``scenario`` as a run that plans with ``algorithm`` (and
+    ``iterations``) in place of its ``planner.algorithm`` (and
+    ``planner.iterations``) does: a study's or a benchmark's runs choose the
+    planner themselves, and a rule such as ``planner.informed_mode:
+    admissible`` (which needs ``social.length_weight > 0`` for the informed
+    planners) depends on it.
+
+    Args:
+        scenario: a scenario (valid with its own planner).
+        algorithm: the planner of the run (one of :data:`ALGORITHMS`).
+        iterations: K of the run; None = the scenario's.
+        source: how errors name the scenario and the choice.
+
+    Raises:
+        ScenarioError: as :func:`validate_scenario`, naming ``source``.
+    """
+    planner = dc.replace(scenario.planner, algorithm=algorithm,
+                         iterations=scenario.planner.iterations if iterations is None else int(iterations))
+    validate_scenario(dc.replace(scenario, planner=planner), source=source)
 
 
 def validate_scenario(scenario: Scenario, source: str = "<scenario>") -> None:

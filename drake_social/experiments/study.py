@@ -314,18 +314,15 @@ def _group_texts(study: Study) -> dict[str, str]:
 
 
 def _check_run_settings(scenario: Scenario, algorithm: str, iterations: int, source: str) -> None:
-    """Checks ``scenario`` as a study's run plans it: with the study's
-    ``algorithm`` and ``iterations`` in place of its own (a rule such as
-    ``planner.informed_mode: admissible`` depends on the algorithm).
+    """Checks ``scenario`` as a study's run plans it, with the study's
+    ``algorithm`` and ``iterations`` (:func:`~drake_social.scenario.validate_planner_choice`).
 
     Raises:
         ScenarioError: ``<source> with the study's algorithm <algorithm>: <field>: ...``.
     """
-    from drake_social.scenario import validate_scenario
+    from drake_social.scenario import validate_planner_choice
 
-    planner = dc.replace(scenario.planner, algorithm=algorithm, iterations=int(iterations))
-    validate_scenario(dc.replace(scenario, planner=planner),
-                      source=f"{source} with the study's algorithm {algorithm}")
+    validate_planner_choice(scenario, algorithm, iterations, f"{source} with the study's algorithm {algorithm}")
 
 
 def _flow(node, yaml, seen=None) -> None:

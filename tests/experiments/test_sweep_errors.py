@@ -480,3 +480,23 @@ def test_a_long_group_name_is_named_whole(tmp_path):
         study_tasks(study)
     assert str(info.value) == (f"study: group {name.upper()!r}: two groups have this name (letter case aside); "
                                "their records and arena logs would mix")
+
+
+def test_a_bench_scenario_invalid_with_a_bench_algorithm_is_refused_before_any_run(tmp_path, monkeypatch):
+    from drake_social.experiments import bench as bench_module
+
+    def no_run(*args, **kwargs):
+        raise AssertionError("a planner ran before every scenario was checked")
+
+    monkeypatch.setattr(bench_module, "plan", no_run)
+    bad = tmp_path / "adm.yaml"
+    text = TINY.read_text()
+    assert "\nsocial:" not in text and "\nplanner:" in text
+    bad.write_text(text.replace("\nplanner:", "\nplanner:\n  informed_mode: admissible", 1)
+                   + "\nsocial: {length_weight: 0}\n")
+    with pytest.raises(ScenarioError) as info:
+        bench_module.run_bench(scenario_paths=[TINY, bad], algorithms=["social_rrt_star", "informed_social_rrt_star"],
+                               iterations=10, seeds=1, include_ompl=False, include_checker=False,
+                               out_dir=tmp_path / "o")
+    assert str(info.value) == (f"{bad} with the bench's algorithm informed_social_rrt_star: planner.informed_mode: "
+                               "'admissible' needs social.length_weight > 0")
