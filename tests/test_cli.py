@@ -239,3 +239,14 @@ def test_a_long_api_argument_is_not_repeated_whole():
         require_choice("x" * 5000, "make_checker", "kind", ("planar", "drake"))
     assert str(info.value) == (f"make_checker: unknown kind {repr('x' * 5000)[:80]}... (5,002 characters); allowed: "
                                f"planar, drake")
+
+
+def test_plan_checks_the_scenario_with_the_chosen_algorithm(tmp_path, capsys):
+    """--algorithm replaces planner.algorithm: the scenario is validated with it, the option named."""
+    sets = ["planner: {informed_mode: admissible}", "social: {length_weight: 0}"]
+    argv = ["plan", str(_TINY), "--set", sets[0], "--set", sets[1], "--algorithm", "informed_social_rrt_star",
+            "--iterations", "20", "--out", str(tmp_path / "o")]
+    assert main(argv) == 2
+    assert capsys.readouterr().err == (f"drake-social: error: {_TINY} (--algorithm and --iterations): "
+                                       "planner.informed_mode: 'admissible' needs social.length_weight > 0\n")
+    assert not (tmp_path / "o").exists()
