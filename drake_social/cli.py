@@ -126,6 +126,11 @@ def _check_out_folder(out: Path) -> None:
         try:
             mode = os.stat(here).st_mode
         except (FileNotFoundError, NotADirectoryError):
+            if os.path.islink(here):  # a link to nothing: making the folder fails after the work
+                where = "it is" if here == out else f"{here} is"
+                raise NotADirectoryError(f"{shorten(str(out), 300)}: --out must be a folder (its outputs are written "
+                                         f"inside it); {where} a symbolic link to {os.readlink(here)}, which does "
+                                         f"not exist") from None
             if here == here.parent:
                 return
             here = here.parent
@@ -339,10 +344,16 @@ def _run_plan(args: argparse.Namespace) -> int:
     from drake_social.planning.variants import plan
     from drake_social.viz.path import write_plan_figures  # matplotlib figures: only when drawing
 
+    from drake_social.scenario import validate_planner_choice
+
     scenario = load_with_overrides(args.scenario, args.set)
     out = args.out if args.out is not None else _default_out(args.scenario)
-    checker = _make_checker(scenario, args.checker, str(args.scenario))
     iterations = args.iterations or scenario.planner.iterations
+    chosen = [f"--{name}" for name in ("algorithm", "iterations") if getattr(args, name) is not None]
+    if chosen:  # the scenario was validated with its own planner options
+        validate_planner_choice(scenario, args.algorithm or scenario.planner.algorithm, iterations,
+                                source=f"{args.scenario} ({_listed(chosen)})")
+    checker = _make_checker(scenario, args.checker, str(args.scenario))
     # Entered before planning: an unwritable or busy --out fails early (exit 1),
     # and nothing of this run lands in --out unless all of it does.
     with OutputSet(out, "plan", names=PLAN_OUTPUTS) as outputs:

@@ -59,6 +59,7 @@ __all__ = [
     "load_scenario",
     "load_scenario_text",
     "period_count",
+    "validate_planner_choice",
     "validate_scenario",
 ]
 
@@ -630,6 +631,31 @@ _STR_TAG = "tag:yaml.org,2002:str"
 _YAML_TAG = "tag:yaml.org,2002:"
 
 
+#: Longest key an error message repeats whole in a dotted field: a name of a
+#: sweep's variants may have 100 characters (``experiments.study.NAME_PATTERN``).
+_SHOWN_KEY_CHARACTERS = 100
+
+
+def _unprintable(text: str) -> str | None:
+    """The first character of ``text`` that a YAML file may not hold (a control
+    character other than tab and line breaks, DEL, a lone surrogate, U+FFFE/U+FFFF),
+    as ``U+XXXX``, or None. A quoted scalar's escapes (``"\\0"``, ``"\\ud800"``)
+    can make them, which the YAML reader refuses in the file's text."""
+    import yaml
+
+    match = yaml.reader.Reader.NON_PRINTABLE.search(text)
+    return None if match is None else f"U+{ord(match.group()):04X}"
+
+
+def _key_shown(key: str) -> str:
+    """A mapping key as a dotted field repeats it: its repr if it holds a character
+    that does not print on one line, else as written, whole up to
+    :data:`_SHOWN_KEY_CHARACTERS` characters (longer: shortened)."""
+    if not key.isprintable():
+        return shorten(repr(key))
+    return key if len(key) <= _SHOWN_KEY_CHARACTERS else shorten(key)
+
+
 def _check_node(tp, node, field: str, source: str, yaml, tag_checked: bool = False) -> None:
     """:func:`check_node` of one node; ``tag_checked``: its ``!Tag`` chose ``tp`` (an object type)."""
 
@@ -686,7 +712,11 @@ def _check_node(tp, node, field: str, source: str, yaml, tag_checked: bool = Fal
                     or key_node.value == ""):
                 raise ScenarioError(f"{source}: line {line}: {field}: names must be non-empty strings, got "
                                     f"{shown(key_node)}")
-            sub = f"{field}.{shorten(key_node.value)}" if field else shorten(key_node.value)
+            sub = f"{field}.{_key_shown(key_node.value)}" if field else _key_shown(key_node.value)
+            bad = _unprintable(key_node.value)
+            if bad is not None:
+                raise ScenarioError(f"{source}: line {line}: {sub}: names must be printable text, got {bad} in "
+                                    f"{shown(key_node)}")
             if key_node.value in seen:
                 raise ScenarioError(f"{source}: line {line}: {sub}: duplicate key (first at line "
                                     f"{seen[key_node.value]})")
@@ -706,7 +736,11 @@ def _check_node(tp, node, field: str, source: str, yaml, tag_checked: bool = Fal
                 raise ScenarioError(f"{source}: line {line}: {where}a key must be a field name ({', '.join(types)}), "
                                     f"got {shown(key_node)}")
             key = key_node.value
-            sub = f"{field}.{shorten(key)}" if field else shorten(key)
+            if key_node.tag != _STR_TAG and (key in types or key == ""):  # `!!int random_seed:`, `? !!null`
+                where = f"{field}: " if field else ""
+                raise ScenarioError(f"{source}: line {line}: {where}a key must be a field name ({', '.join(types)}) "
+                                    f"as plain text, without a tag, got {shown(key_node)}")
+            sub = f"{field}.{_key_shown(key)}" if field else _key_shown(key)
             if key in seen:  # YAML loaders keep the last silently
                 raise ScenarioError(f"{source}: line {line}: {sub}: duplicate key (first at line {seen[key]})")
             seen[key] = line
@@ -724,6 +758,9 @@ def _check_node(tp, node, field: str, source: str, yaml, tag_checked: bool = Fal
         value = yaml.SafeLoader("").construct_object(node)
     except Exception:
         fail(f"must be {_describe(tp)}, got {shown(node)}")
+    if isinstance(value, str) and _unprintable(value) is not None:
+        fail(f"must be printable text (the characters a YAML file may hold), got {_unprintable(value)} in "
+             f"{shown(node)}")
     if tp is bool:
         ok = isinstance(value, bool)
     elif tp is str:
@@ -882,6 +919,29 @@ def time_limit_problem(time_limit: float, execution: ExecutionOptions, argument:
                                   f"got {time_limit}")
             return field, f"must be >= execution.time_limit / {most:,} = {limit / most:.3g} s ({why}), got {length}"
     return None
+
+
+def validate_planner_choice(scenario: Scenario, algorithm: str, iterations: int | None = None,
+                            source: str = "<scenario>") -> None:
+    """Checks ``scenario`` as a run that plans with ``algorithm`` (and
+    ``iterations``) in place of its ``planner.algorithm`` (and
+    ``planner.iterations``) does: a study's or a benchmark's runs choose the
+    planner themselves, and a rule such as ``planner.informed_mode:
+    admissible`` (which needs ``social.length_weight > 0`` for the informed
+    planners) depends on it.
+
+    Args:
+        scenario: a scenario (valid with its own planner).
+        algorithm: the planner of the run (one of :data:`ALGORITHMS`).
+        iterations: K of the run; None = the scenario's.
+        source: how errors name the scenario and the choice.
+
+    Raises:
+        ScenarioError: as :func:`validate_scenario`, naming ``source``.
+    """
+    planner = dc.replace(scenario.planner, algorithm=algorithm,
+                         iterations=scenario.planner.iterations if iterations is None else int(iterations))
+    validate_scenario(dc.replace(scenario, planner=planner), source=source)
 
 
 def validate_scenario(scenario: Scenario, source: str = "<scenario>") -> None:

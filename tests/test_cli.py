@@ -204,6 +204,19 @@ def test_an_out_that_is_not_a_folder_names_the_option(tmp_path, capsys, command)
                                        f"written inside it); {plain} is a file\n")
 
 
+@pytest.mark.parametrize("command", [["show"], ["plan", "--iterations", "20"]])
+def test_an_out_through_a_dangling_link_is_refused_before_the_work(tmp_path, capsys, command):
+    """Making the folder through a link to nothing fails (File exists), so it is refused up front."""
+    link = tmp_path / "link"
+    link.symlink_to(tmp_path / "gone")
+    for out, where in ((link, "it is"), (link / "sub", f"{link} is")):
+        assert main([*command, str(_TINY), "--out", str(out)]) == 1
+        assert capsys.readouterr().err == (f"drake-social: error: {out}: --out must be a folder (its outputs are "
+                                           f"written inside it); {where} a symbolic link to {tmp_path / 'gone'}, "
+                                           f"which does not exist\n")
+    assert not (tmp_path / "gone").exists()
+
+
 def test_an_experiment_out_that_is_a_file_is_refused_before_any_run(tmp_path, capsys):
     plain = tmp_path / "plain.txt"
     plain.write_text("x")
@@ -226,3 +239,14 @@ def test_a_long_api_argument_is_not_repeated_whole():
         require_choice("x" * 5000, "make_checker", "kind", ("planar", "drake"))
     assert str(info.value) == (f"make_checker: unknown kind {repr('x' * 5000)[:80]}... (5,002 characters); allowed: "
                                f"planar, drake")
+
+
+def test_plan_checks_the_scenario_with_the_chosen_algorithm(tmp_path, capsys):
+    """--algorithm replaces planner.algorithm: the scenario is validated with it, the option named."""
+    sets = ["planner: {informed_mode: admissible}", "social: {length_weight: 0}"]
+    argv = ["plan", str(_TINY), "--set", sets[0], "--set", sets[1], "--algorithm", "informed_social_rrt_star",
+            "--iterations", "20", "--out", str(tmp_path / "o")]
+    assert main(argv) == 2
+    assert capsys.readouterr().err == (f"drake-social: error: {_TINY} (--algorithm and --iterations): "
+                                       "planner.informed_mode: 'admissible' needs social.length_weight > 0\n")
+    assert not (tmp_path / "o").exists()

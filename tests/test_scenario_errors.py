@@ -485,3 +485,42 @@ def test_exactly_the_most_plant_steps_is_accepted(time_limit, step):
     scenario = load_with_overrides(TINY, [f"execution: {{time_limit: {time_limit}, plant_time_step: {step!r}, "
                                           f"control_period: {min(0.01, time_limit / 100)!r}}}"])
     assert scenario.execution.plant_time_step == step
+
+
+@pytest.mark.parametrize("escaped, code", [(r"a\0b", "U+0000"), (r"\ud800", "U+D800"), (r"bell\a", "U+0007"),
+                                           (r"del\x7f", "U+007F")])
+def test_a_control_character_made_by_an_escape_is_refused_like_one_in_the_text(escaped, code):
+    # The reader refuses these characters in the file; a quoted scalar's escape
+    # makes them all the same (a lone surrogate crashed plan's figures).
+    text = f'description: "{escaped}"'
+    value = repr(eval(f'"{escaped}"'))
+    assert _message(TINY, [text]) == (
+        f"{TINY} (--set {shorten(repr(text))}): line 1: description: must be printable text (the characters a "
+        f"YAML file may hold), got {code} in {value}")
+
+
+def test_tabs_line_breaks_and_unicode_in_text_still_load():
+    dut = load_with_overrides(TINY, ['description: "caf\\u00e9\\tsmile \\U0001F600\\nsecond line"'])
+    assert dut.description == "café\tsmile \U0001F600\nsecond line"
+
+
+def test_an_unknown_key_with_a_control_character_is_shown_escaped():
+    # Printed raw, 'random_\x01seed' reads as the valid field random_seed.
+    text = '"random_\\x01seed": 3'
+    assert _message(TINY, [text]).startswith(
+        f"{TINY} (--set {shorten(repr(text))}): line 1: 'random_\\x01seed': unknown field at the top level; allowed: ")
+
+
+@pytest.mark.parametrize("override, field, key", [
+    ("!!int random_seed: 3", "", "!!int 'random_seed'"),
+    ("!Foo random_seed: 3", "", "!Foo 'random_seed'"),
+    ("social: {!!binary sigma_h: 1}", "social: ", "!!binary 'sigma_h'"),
+    ("? !!null\n: 3", "", "null"),
+])
+def test_a_field_name_under_a_tag_is_not_called_unknown(override, field, key):
+    # It was "random_seed: unknown field ...; allowed: ..., random_seed".
+    fields = ("sigma_h, side_ratio, rear_ratio, threshold, weights, length_weight, resolution" if field else
+              "description, world, people, robot, object, start, goal, social, planner, execution, random_seed")
+    assert _message(TINY, [override]) == (
+        f"{TINY} (--set {override!r}): line 1: {field}a key must be a field name ({fields}) as plain text, without "
+        f"a tag, got {key}")

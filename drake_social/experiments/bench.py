@@ -36,7 +36,7 @@ from drake_social.model.checker import CHECKERS, make_checker
 from drake_social.planning.space import ConfigurationSpace
 from drake_social.planning.validity import ValidityChecker
 from drake_social.planning.variants import evaluate_path, make_objective, plan
-from drake_social.scenario import ALGORITHMS, EXECUTIONS, SIM_MODES, Scenario, load_scenario
+from drake_social.scenario import ALGORITHMS, EXECUTIONS, SIM_MODES, Scenario, load_scenario, validate_planner_choice
 
 __all__ = ["CHECKERS", "ompl_available", "run_bench", "summarize"]
 
@@ -305,9 +305,14 @@ def run_bench(
             progress(done, total, label)
 
     machine = _machine()  # the load average before this run's planning
+    # Every file is loaded, and checked with each planner of the bench (which
+    # replaces its planner.algorithm), before the first run.
+    loaded = [load_scenario(path) for path in paths]
+    for path, scenario in zip(paths, loaded):
+        for algorithm in algorithms:
+            validate_planner_choice(scenario, algorithm, source=f"{path} with the bench's algorithm {algorithm}")
     scenarios = {}
-    for path in paths:
-        scenario = load_scenario(path)
+    for path, scenario in zip(paths, loaded):
         _make_checker(scenario, checker, path)  # a start or goal in collision: a clear error naming the file
         # Warm-up, untimed: loads (or compiles) the motion-cost kernel and each
         # planner's loop (numba's cache is read on the first call: about 0.15 s

@@ -217,6 +217,12 @@ def _shown(value) -> str:
     return shorten(repr(value))
 
 
+def _name_shown(name) -> str:
+    """A group's name as an error message repeats it: whole if it is a valid
+    name (at most 100 characters), else shortened (:func:`_shown`)."""
+    return repr(name) if isinstance(name, str) and _valid_name(name) else _shown(name)
+
+
 def _valid_name(name: str) -> bool:
     return re.fullmatch(NAME_PATTERN, name) is not None
 
@@ -278,13 +284,13 @@ def check_study(study: Study, source: str = "study") -> None:
         if not isinstance(g.name, str) or not _valid_name(g.name):
             fail(f"group {_shown(g.name)}", f"a group name {_NAME_RULE}")
         if g.name.casefold() in seen:
-            fail(f"group {_shown(g.name)}", "two groups have this name (letter case aside); their records and arena "
+            fail(f"group {_name_shown(g.name)}", "two groups have this name (letter case aside); their records and arena "
                                             "logs would mix")
         seen.add(g.name.casefold())
         problem = _algorithms_problem(g.algorithms)
         if problem is not None:
             i, message = problem
-            fail(f"group {_shown(g.name)}: algorithms" + ("" if i is None else f"[{i}]"), message)
+            fail(f"group {_name_shown(g.name)}: algorithms" + ("" if i is None else f"[{i}]"), message)
     tasks = study.runs * sum(len(g.algorithms) for g in study.groups)
     if tasks > MAX_STUDY_TASKS:
         fail("runs", f"{len(study.groups)} groups x their algorithms x {study.runs} runs = {tasks:,} runs; a study "
@@ -301,8 +307,22 @@ def _group_texts(study: Study) -> dict[str, str]:
         if g.scenario not in files:
             files[g.scenario] = read_yaml_file(g.scenario, "scenario")
         texts[g.name] = files[g.scenario]
-        _check_load(g.scenario, texts[g.name], tuple(g.overrides), f"group {g.name}")
+        scenario = _check_load(g.scenario, texts[g.name], tuple(g.overrides), f"group {g.name}")
+        for algorithm in g.algorithms:
+            _check_run_settings(scenario, algorithm, study.iterations, f"{g.scenario} (group {g.name})")
     return texts
+
+
+def _check_run_settings(scenario: Scenario, algorithm: str, iterations: int, source: str) -> None:
+    """Checks ``scenario`` as a study's run plans it, with the study's
+    ``algorithm`` and ``iterations`` (:func:`~drake_social.scenario.validate_planner_choice`).
+
+    Raises:
+        ScenarioError: ``<source> with the study's algorithm <algorithm>: <field>: ...``.
+    """
+    from drake_social.scenario import validate_planner_choice
+
+    validate_planner_choice(scenario, algorithm, iterations, f"{source} with the study's algorithm {algorithm}")
 
 
 def _flow(node, yaml, seen=None) -> None:
@@ -490,11 +510,16 @@ def load_sweep(path: str | Path) -> Study:
             # (a variant may make a value of the file valid); an error names
             # the stage at fault, the file or the variant.
             try:
-                _check_load(str(f), text, texts, f"variants.{vname}")
+                scenario = _check_load(str(f), text, texts, f"variants.{vname}")
             except ScenarioError as e:
                 if str(e).startswith(f"{f} (variants.{vname} "):
                     raise ScenarioError(f"{path}: {e}") from None
                 fail(f"scenarios[{i}]", str(e), nodes["scenarios"].value[i])
+            for algorithm in algorithms:  # the study plans with these, not the file's planner.algorithm
+                try:
+                    _check_run_settings(scenario, algorithm, iterations, f"{f} (variants.{vname})")
+                except ScenarioError as e:
+                    raise ScenarioError(f"{path}: {e}") from None
             group = f"{f.stem}-{vname}"
             groups.append(Group(group, str(f), overrides=texts, algorithms=tuple(algorithms),
                                 label=f"{f.stem}, {vname}" + (f": {texts[0]}" if texts else "")))
@@ -536,14 +561,14 @@ def _load(source: str, text: str, overrides: tuple[str, ...], overrides_name: st
     from drake_social.scenario import load_scenario_text
 
     scenario = load_scenario_text(text, source, list(overrides), overrides_name=overrides_name)
-    _loads.add(_load_key(text, overrides))
+    _loads[_load_key(text, overrides)] = scenario
     return scenario
 
 
-#: Digests of the (scenario text, overrides) pairs this process has loaded
-#: without error: a study's check loads each once, however often it is checked
-#: and whatever its groups are called.
-_loads: set[bytes] = set()
+#: The scenarios this process has loaded without error, by the digest of
+#: their (scenario text, overrides): a study's check loads each once, however
+#: often it is checked and whatever its groups are called.
+_loads: dict[bytes, Scenario] = {}
 
 
 def _load_key(text: str, overrides: tuple[str, ...]) -> bytes:
@@ -554,10 +579,10 @@ def _load_key(text: str, overrides: tuple[str, ...]) -> bytes:
     return digest.digest()
 
 
-def _check_load(source: str, text: str, overrides: tuple[str, ...], overrides_name: str) -> None:
-    """Checks that ``text`` with ``overrides`` loads (:func:`_load`, once per pair and process)."""
-    if _load_key(text, overrides) not in _loads:
-        _load(source, text, overrides, overrides_name)
+def _check_load(source: str, text: str, overrides: tuple[str, ...], overrides_name: str) -> Scenario:
+    """The scenario of ``text`` with ``overrides``, checked to load (:func:`_load`, once per pair and process)."""
+    scenario = _loads.get(_load_key(text, overrides))
+    return _load(source, text, overrides, overrides_name) if scenario is None else scenario
 
 
 @functools.lru_cache(maxsize=16)

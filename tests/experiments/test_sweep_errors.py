@@ -260,8 +260,8 @@ def test_unusual_yaml_in_a_sweep_is_named(tmp_path, body, message):
 
 def test_a_nul_in_a_scenario_name_is_refused(tmp_path, capsys):
     dut = _sweep(tmp_path, "", head='runs: 1\nscenarios: ["a\\0b.yaml"]\n')
-    local = str(tmp_path / "a\0b.yaml")
-    assert _error(dut) == f"{dut}: line 2: scenarios[0]: {local!r}: not a valid file name (embedded null byte)"
+    assert _error(dut) == (f"{dut}: line 2: scenarios[0]: must be printable text (the characters a YAML file may "
+                           "hold), got U+0000 in 'a\\x00b.yaml'")
     assert main(["experiment", "sweep", str(dut), "--out", str(tmp_path / "o")]) == 2
     assert "Traceback" not in capsys.readouterr().err
 
@@ -314,7 +314,7 @@ def test_each_scenario_and_variant_is_loaded_once(tmp_path, monkeypatch):
         return real(text, source, overrides, **kw)
 
     monkeypatch.setattr(scenario_module, "load_scenario_text", counted)
-    monkeypatch.setattr(study_module, "_loads", set())
+    monkeypatch.setattr(study_module, "_loads", {})
     study_module._load.cache_clear()
     variants = ", ".join(f"v{i}: {{social: {{length_weight: {i / 10}}}}}" for i in range(20))
     dut = _sweep(tmp_path, f"variants: {{{variants}}}\n")
@@ -430,3 +430,73 @@ def test_the_depth_limit_leaves_room_for_what_the_comment_says(tmp_path):
     assert depth((root / "scenarios" / "office_bar.yaml").read_text()) == 6
     assert depth((root / "studies" / "example_sweep.yaml").read_text()) == 6
     assert depth("variants: {a: {world: {obstacles: [{center: [1, 2]}]}}}") == 8 <= MAX_YAML_DEPTH
+
+
+def test_a_long_variant_name_is_named_whole_in_its_fields(tmp_path):
+    # A variant name may have 100 characters; the dotted field of an error inside
+    # it names it whole, not cut in the middle of the field.
+    name = "v" * 95
+    path = _sweep(tmp_path, f"variants: {{{name}: {{social: {{sigma_hh: 1}}}}}}\n")
+    assert _error(path) == (f"{path}: line 4: variants.{name}.social.sigma_hh: unknown field in "
+                            f"variants.{name}.social; allowed: sigma_h, side_ratio, rear_ratio, threshold, weights, "
+                            "length_weight, resolution")
+
+
+def test_a_variant_name_with_a_control_character_is_refused_escaped(tmp_path):
+    path = _sweep(tmp_path, 'variants: {"v\\aw": {}}\n')
+    assert _error(path) == f"{path}: line 4: variants.'v\\x07w': names must be printable text, got U+0007 in 'v\\x07w'"
+
+
+ADMISSIBLE = "{planner: {informed_mode: admissible}, social: {length_weight: 0}}"
+
+
+def test_a_variant_invalid_with_a_study_algorithm_is_refused_before_any_run(tmp_path, capsys):
+    # Valid with the file's own planner.algorithm, but an informed planner of the
+    # study needs length_weight > 0: it failed inside the runs, naming no file.
+    dut = _sweep(tmp_path, f"algorithms: [social_rrt_star, informed_social_rrt_star]\nvariants: {{adm: {ADMISSIBLE}}}\n")
+    message = (f"{dut}: {TINY} (variants.adm) with the study's algorithm informed_social_rrt_star: "
+               "planner.informed_mode: 'admissible' needs social.length_weight > 0")
+    assert _error(dut) == message
+    out = tmp_path / "o"
+    assert main(["experiment", "sweep", str(dut), "--out", str(out)]) == 2
+    assert capsys.readouterr().err.splitlines()[-1] == f"drake-social: error: {message}"
+    assert not out.exists()
+
+
+def test_a_study_group_invalid_with_its_algorithm_is_refused_by_its_check(tmp_path):
+    study = Study("s", (Group("g", str(TINY), overrides=(ADMISSIBLE,), algorithms=("informed_social_rrt_star",)),),
+                  runs=1, iterations=10)
+    with pytest.raises(ScenarioError) as info:
+        study_tasks(study)
+    assert str(info.value) == (f"{TINY} (group g) with the study's algorithm informed_social_rrt_star: "
+                               "planner.informed_mode: 'admissible' needs social.length_weight > 0")
+
+
+def test_a_long_group_name_is_named_whole(tmp_path):
+    # Group names may have 100 characters; the duplicate's field was cut at 80.
+    name = "g" * 100
+    study = Study("s", (Group(name, str(TINY)), Group(name.upper(), str(TINY))), runs=1, iterations=10)
+    with pytest.raises(ScenarioError) as info:
+        study_tasks(study)
+    assert str(info.value) == (f"study: group {name.upper()!r}: two groups have this name (letter case aside); "
+                               "their records and arena logs would mix")
+
+
+def test_a_bench_scenario_invalid_with_a_bench_algorithm_is_refused_before_any_run(tmp_path, monkeypatch):
+    from drake_social.experiments import bench as bench_module
+
+    def no_run(*args, **kwargs):
+        raise AssertionError("a planner ran before every scenario was checked")
+
+    monkeypatch.setattr(bench_module, "plan", no_run)
+    bad = tmp_path / "adm.yaml"
+    text = TINY.read_text()
+    assert "\nsocial:" not in text and "\nplanner:" in text
+    bad.write_text(text.replace("\nplanner:", "\nplanner:\n  informed_mode: admissible", 1)
+                   + "\nsocial: {length_weight: 0}\n")
+    with pytest.raises(ScenarioError) as info:
+        bench_module.run_bench(scenario_paths=[TINY, bad], algorithms=["social_rrt_star", "informed_social_rrt_star"],
+                               iterations=10, seeds=1, include_ompl=False, include_checker=False,
+                               out_dir=tmp_path / "o")
+    assert str(info.value) == (f"{bad} with the bench's algorithm informed_social_rrt_star: planner.informed_mode: "
+                               "'admissible' needs social.length_weight > 0")
