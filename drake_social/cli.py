@@ -756,7 +756,7 @@ def _add_experiment(subparsers) -> None:
 def _run_experiment(args: argparse.Namespace) -> int:
     from tqdm import tqdm
 
-    from drake_social.experiments.study import (RECORD_FILES, StudyOutputError, load_sweep, paper_study,
+    from drake_social.experiments.study import (StudyOutputError, load_sweep, output_names, paper_study,
                                                 rescue_records, run_study, write_records, write_study)
     from drake_social.outputs import OutputSet
 
@@ -788,7 +788,7 @@ def _run_experiment(args: argparse.Namespace) -> int:
     failure = None  # the error of an output after the records
     interrupted = False  # Ctrl-C while writing the outputs after the runs
     try:
-        with OutputSet(out, "experiment", names=[*RECORD_FILES, "REPORT.md", "arena.db"]) as outputs:  # entered first: a busy --out is refused before any run
+        with OutputSet(out, "experiment", names=output_names(study)) as outputs:  # entered first: a busy --out is refused before any run
             bar = tqdm(total=1, desc=f"experiment {study.name}", unit="run", file=sys.stderr, dynamic_ncols=True,
                        disable=not _show_progress(args))
 
