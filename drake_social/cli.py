@@ -36,6 +36,7 @@ import argparse
 import json
 import logging
 import shutil
+import signal
 import sys
 from pathlib import Path
 from typing import Callable, Sequence, TextIO
@@ -758,7 +759,7 @@ def _run_experiment(args: argparse.Namespace) -> int:
 
     from drake_social.experiments.study import (StudyOutputError, load_sweep, output_names, paper_study,
                                                 rescue_records, run_study, write_records, write_study)
-    from drake_social.outputs import OutputSet
+    from drake_social.outputs import DeferredSignals, OutputSet
 
     if args.scheduler is not None and args.executor != "dask":
         raise ScenarioError("--scheduler needs --executor dask")
@@ -809,12 +810,18 @@ def _run_experiment(args: argparse.Namespace) -> int:
                 interrupted = isinstance(e, KeyboardInterrupt)
                 failure = StudyOutputError("interrupted (Ctrl-C)" if interrupted
                                            else str(e).replace(str(outputs.folder), str(out)))
-                for entry in outputs.folder.iterdir():
-                    if entry.is_dir() and not entry.is_symlink():
-                        shutil.rmtree(entry)
-                    else:
-                        entry.unlink()
-                names = write_records(result, outputs.folder)
+                # A (further) Ctrl-C here must not lose the finished runs: noted, and the records committed.
+                with DeferredSignals() as held:
+                    for entry in outputs.folder.iterdir():
+                        if entry.is_dir() and not entry.is_symlink():
+                            shutil.rmtree(entry)
+                        else:
+                            entry.unlink()
+                    names = write_records(result, outputs.folder)
+                interrupted = interrupted or signal.SIGINT in held.received
+                for sig in dict.fromkeys(held.received):  # another signal (SIGTERM) as it would have acted
+                    if sig != signal.SIGINT:
+                        signal.raise_signal(sig)
     except Exception as e:
         if result is None:
             raise

@@ -336,6 +336,37 @@ def test_ctrl_c_after_the_runs_keeps_their_records_in_out(tmp_path, tiny_scenari
     _assert_the_records_alone(out)
 
 
+@pytest.mark.parametrize("first", ["ctrl-c", "error"])
+def test_a_second_ctrl_c_while_the_records_are_written_alone_keeps_them(tmp_path, tiny_scenario_path, monkeypatch,
+                                                                        capsys, first):
+    """A Ctrl-C (a real SIGINT) that arrives while the records are rewritten
+    alone, after a first Ctrl-C or an output error: they are still committed,
+    the message says so, exit 130."""
+    from drake_social.experiments import study
+
+    sweep = _sweep(tmp_path, tiny_scenario_path)
+    out = tmp_path / "out"
+    monkeypatch.setattr(report, "write_figures", _interrupt if first == "ctrl-c" else _no_space)
+    original = study.write_records
+    calls = []
+
+    def write_records(*args, **kwargs):
+        calls.append(1)
+        if len(calls) == 2:  # the records alone, after the figures failed
+            signal.raise_signal(signal.SIGINT)
+        return original(*args, **kwargs)
+
+    monkeypatch.setattr(study, "write_records", write_records)
+    rc = main(["experiment", "sweep", str(sweep), "--out", str(out)])
+    captured = capsys.readouterr()
+    assert len(calls) == 2
+    assert rc == 130
+    assert captured.err == (f"drake-social: experiment interrupted after its 2 runs: their records were written to "
+                            f"{out / 'results.json'} and {out / 'results.csv'} (the figures, REPORT.md and the arena "
+                            "files were not written)\n")
+    _assert_the_records_alone(out)
+
+
 @pytest.mark.parametrize("name", ["results.json", "arena_tiny-wide.log", "paths_single_algorithm_groups.png",
                                   "REPORT.md", "arena.db"])
 def test_a_folder_in_the_way_of_any_output_is_refused_before_the_runs(tmp_path, tiny_scenario_path, capsys, name):
