@@ -789,7 +789,8 @@ def _run_experiment(args: argparse.Namespace) -> int:
     failure = None  # the error of an output after the records
     interrupted = False  # Ctrl-C while writing the outputs after the runs
     try:
-        with OutputSet(out, "experiment", names=output_names(study)) as outputs:  # entered first: a busy --out is refused before any run
+        # Entered first: a busy --out, or a folder in the way of any of its files, is refused before any run.
+        with OutputSet(out, "experiment", names=output_names(study)) as outputs:
             bar = tqdm(total=1, desc=f"experiment {study.name}", unit="run", file=sys.stderr, dynamic_ncols=True,
                        disable=not _show_progress(args))
 

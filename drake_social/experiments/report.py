@@ -23,8 +23,8 @@ from typing import Sequence
 
 import numpy as np
 
-__all__ = ["ALPHA", "OFF_SCALE_FACTOR", "Claim", "Comparison", "axis_stretch", "boxplot_values", "figure_names", "paired",
-           "paper_claims", "report_markdown", "write_figures"]
+__all__ = ["ALPHA", "OFF_SCALE_FACTOR", "Claim", "Comparison", "axis_stretch", "boxplot_values", "paired",
+           "figure_names", "paper_claims", "report_markdown", "write_figures"]
 
 #: Significance level of the one-sided paired test.
 ALPHA = 0.05
