@@ -127,6 +127,11 @@ def _check_out_folder(out: Path) -> None:
         try:
             mode = os.stat(here).st_mode
         except (FileNotFoundError, NotADirectoryError):
+            if os.path.islink(here):  # a link to nothing: mkdir cannot make the folder there
+                where = "it is" if here == out else f"{here} is"
+                raise NotADirectoryError(
+                    f"{shorten(str(out), 300)}: --out must be a folder (its outputs are written inside it); {where} "
+                    f"a symbolic link to {shorten(os.readlink(here), 300)}, which does not exist") from None
             if here == here.parent:
                 return
             here = here.parent

@@ -204,6 +204,23 @@ def test_an_out_that_is_not_a_folder_names_the_option(tmp_path, capsys, command)
                                        f"written inside it); {plain} is a file\n")
 
 
+@pytest.mark.parametrize("command", [["show"], ["plan"], ["simulate"]])
+def test_an_out_through_a_link_to_nothing_names_the_link(tmp_path, capsys, command):
+    """A dangling symbolic link as --out (or as a folder above it) is named,
+    not reported as 'File exists' (exit 1)."""
+    link = tmp_path / "out"
+    link.symlink_to(tmp_path / "gone")
+    assert main([*command, str(_TINY), "--out", str(link)]) == 1
+    assert capsys.readouterr().err == (f"drake-social: error: {link}: --out must be a folder (its outputs are written "
+                                       f"inside it); it is a symbolic link to {tmp_path / 'gone'}, which does not "
+                                       "exist\n")
+    assert main([*command, str(_TINY), "--out", str(link / "sub")]) == 1
+    assert capsys.readouterr().err == (f"drake-social: error: {link / 'sub'}: --out must be a folder (its outputs are "
+                                       f"written inside it); {link} is a symbolic link to {tmp_path / 'gone'}, which "
+                                       "does not exist\n")
+    assert not (tmp_path / "gone").exists()
+
+
 def test_an_experiment_out_that_is_a_file_is_refused_before_any_run(tmp_path, capsys):
     plain = tmp_path / "plain.txt"
     plain.write_text("x")
