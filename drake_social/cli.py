@@ -36,6 +36,7 @@ import argparse
 import json
 import logging
 import shutil
+import signal
 import sys
 from pathlib import Path
 from typing import Callable, Sequence, TextIO
@@ -126,11 +127,11 @@ def _check_out_folder(out: Path) -> None:
         try:
             mode = os.stat(here).st_mode
         except (FileNotFoundError, NotADirectoryError):
-            if os.path.islink(here):  # a link to nothing: making the folder fails after the work
+            if os.path.islink(here):  # a link to nothing: mkdir cannot make the folder there
                 where = "it is" if here == out else f"{here} is"
-                raise NotADirectoryError(f"{shorten(str(out), 300)}: --out must be a folder (its outputs are written "
-                                         f"inside it); {where} a symbolic link to {os.readlink(here)}, which does "
-                                         f"not exist") from None
+                raise NotADirectoryError(
+                    f"{shorten(str(out), 300)}: --out must be a folder (its outputs are written inside it); {where} "
+                    f"a symbolic link to {shorten(os.readlink(here), 300)}, which does not exist") from None
             if here == here.parent:
                 return
             here = here.parent
@@ -767,9 +768,9 @@ def _add_experiment(subparsers) -> None:
 def _run_experiment(args: argparse.Namespace) -> int:
     from tqdm import tqdm
 
-    from drake_social.experiments.study import (RECORD_FILES, StudyOutputError, load_sweep, paper_study,
+    from drake_social.experiments.study import (StudyOutputError, load_sweep, output_names, paper_study,
                                                 rescue_records, run_study, write_records, write_study)
-    from drake_social.outputs import OutputSet
+    from drake_social.outputs import DeferredSignals, OutputSet
 
     if args.scheduler is not None and args.executor != "dask":
         raise ScenarioError("--scheduler needs --executor dask")
@@ -799,7 +800,8 @@ def _run_experiment(args: argparse.Namespace) -> int:
     failure = None  # the error of an output after the records
     interrupted = False  # Ctrl-C while writing the outputs after the runs
     try:
-        with OutputSet(out, "experiment", names=[*RECORD_FILES, "REPORT.md", "arena.db"]) as outputs:  # entered first: a busy --out is refused before any run
+        # Entered first: a busy --out, or a folder in the way of any of its files, is refused before any run.
+        with OutputSet(out, "experiment", names=output_names(study)) as outputs:
             bar = tqdm(total=1, desc=f"experiment {study.name}", unit="run", file=sys.stderr, dynamic_ncols=True,
                        disable=not _show_progress(args))
 
@@ -820,12 +822,18 @@ def _run_experiment(args: argparse.Namespace) -> int:
                 interrupted = isinstance(e, KeyboardInterrupt)
                 failure = StudyOutputError("interrupted (Ctrl-C)" if interrupted
                                            else str(e).replace(str(outputs.folder), str(out)))
-                for entry in outputs.folder.iterdir():
-                    if entry.is_dir() and not entry.is_symlink():
-                        shutil.rmtree(entry)
-                    else:
-                        entry.unlink()
-                names = write_records(result, outputs.folder)
+                # A (further) Ctrl-C here must not lose the finished runs: noted, and the records committed.
+                with DeferredSignals() as held:
+                    for entry in outputs.folder.iterdir():
+                        if entry.is_dir() and not entry.is_symlink():
+                            shutil.rmtree(entry)
+                        else:
+                            entry.unlink()
+                    names = write_records(result, outputs.folder)
+                interrupted = interrupted or signal.SIGINT in held.received
+                for sig in dict.fromkeys(held.received):  # another signal (SIGTERM) as it would have acted
+                    if sig != signal.SIGINT:
+                        signal.raise_signal(sig)
     except Exception as e:
         if result is None:
             raise

@@ -72,8 +72,8 @@ import threading
 from collections.abc import Iterable
 from pathlib import Path
 
-__all__ = ["CommittedSet", "InterruptedAfterCommit", "OutputBusyError", "OutputInTheWayError", "OutputSet",
-           "current_set"]
+__all__ = ["CommittedSet", "DeferredSignals", "InterruptedAfterCommit", "OutputBusyError", "OutputInTheWayError",
+           "OutputSet", "current_set"]
 
 _log = logging.getLogger(__name__)
 
@@ -497,3 +497,10 @@ class _Deferred:
     def reraise(self) -> None:
         for sig in dict.fromkeys(self.received):
             signal.raise_signal(sig)
+
+
+#: Holds back SIGINT and SIGTERM over a ``with`` block (main thread only):
+#: ``.received`` lists the signals that arrived, ``.reraise()`` delivers them.
+#: For work that a Ctrl-C must not cut short, such as writing the records
+#: that an interrupted command still commits.
+DeferredSignals = _Deferred

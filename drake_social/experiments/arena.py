@@ -28,7 +28,7 @@ import subprocess
 import sys
 from pathlib import Path
 
-__all__ = ["RUN_PROPERTIES", "build_database", "experiment_log", "write_logs"]
+__all__ = ["RUN_PROPERTIES", "build_database", "experiment_log", "log_name", "write_logs"]
 
 #: The first run properties (name, OMPL type, record field).
 RUN_PROPERTIES = (("time", "REAL", "planning_time"), ("solved", "BOOLEAN", "success"), ("best_cost", "REAL", "cost"),
@@ -92,11 +92,16 @@ def experiment_log(result, group) -> str:
     return "\n".join(lines) + "\n"
 
 
+def log_name(group) -> str:
+    """The file name of ``group``'s log: ``arena_<group>.log``."""
+    return f"arena_{group.name}.log"
+
+
 def write_logs(result, out: Path) -> list[str]:
     """Writes ``arena_<group>.log`` for every group; returns the file names."""
     names = []
     for g in result.study.groups:
-        name = f"arena_{g.name}.log"
+        name = log_name(g)
         (Path(out) / name).write_text(experiment_log(result, g))
         names.append(name)
     return names

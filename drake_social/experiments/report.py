@@ -24,7 +24,7 @@ from typing import Sequence
 import numpy as np
 
 __all__ = ["ALPHA", "OFF_SCALE_FACTOR", "Claim", "Comparison", "axis_stretch", "boxplot_values", "paired",
-           "paper_claims", "report_markdown", "write_figures"]
+           "figure_names", "paper_claims", "report_markdown", "write_figures"]
 
 #: Significance level of the one-sided paired test.
 ALPHA = 0.05
@@ -320,6 +320,19 @@ def boxplot_values(records: Sequence[dict], group: str, algorithms: Sequence[str
     del values["rrt_star"]
     return values, (f"RRT* not shown: its median F = {med:.4g}; its runs would stretch the axis "
                     f"{stretch:.3g}x the others' size ({_describe_runs(o)}; shown up to {factor:g}x)")
+
+
+def figure_names(study) -> list[str]:
+    """The file names :func:`write_figures` writes for ``study``: for each
+    group of several algorithms ``boxplot_``, ``cost_profile_`` and
+    ``paths_<group>.png``; when there are groups of one algorithm,
+    ``paths_single_algorithm_groups.png`` and
+    ``boxplot_single_algorithm_groups.png``."""
+    names = [f"{kind}_{g.name}.png" for g in study.groups if len(g.algorithms) > 1
+             for kind in ("boxplot", "cost_profile", "paths")]
+    if any(len(g.algorithms) == 1 for g in study.groups):
+        names += ["paths_single_algorithm_groups.png", "boxplot_single_algorithm_groups.png"]
+    return names
 
 
 def write_figures(result, out: Path) -> list[str]:

@@ -60,6 +60,7 @@ __all__ = [
     "check_study",
     "comparable",
     "load_sweep",
+    "output_names",
     "paper_study",
     "rescue_records",
     "run_study",
@@ -785,6 +786,17 @@ def rescue_records(result: StudyResult) -> Path:
     folder = Path(tempfile.mkdtemp(prefix="drake-social-records-"))
     write_records(result, folder)
     return folder
+
+
+def output_names(study: Study) -> list[str]:
+    """Every file name :func:`write_study` may write for ``study``, known
+    before any run (so that an output folder can refuse what is in their
+    way up front): the records, the figures, the arena logs, ``arena.db``
+    and ``REPORT.md``."""
+    from drake_social.experiments import arena, report
+
+    return [*RECORD_FILES, *report.figure_names(study), *(arena.log_name(g) for g in study.groups), "arena.db",
+            "REPORT.md"]
 
 
 def write_study(result: StudyResult, out_dir: str | Path, *, scenario_loader=None) -> list[str]:

@@ -105,6 +105,17 @@ def _distinct_segments(planned: np.ndarray) -> np.ndarray:
     return distinct
 
 
+def _subdivide(planned: np.ndarray, parts: np.ndarray) -> np.ndarray:
+    """The waypoints ``planned`` (N, 4) with segment i cut into ``parts[i]``
+    equal straight parts (the given waypoints kept exactly)."""
+    segment = np.repeat(np.arange(len(parts)), parts)
+    k = np.arange(parts.sum()) - np.repeat(np.cumsum(parts) - parts, parts)  # 0 .. parts - 1 within each segment
+    t = (k / parts[segment])[:, None]
+    inner = planned[segment] + t * (planned[segment + 1] - planned[segment])
+    inner[k == 0] = planned[segment[k == 0]]
+    return np.concatenate([inner, planned[-1:]])
+
+
 def _pieces(steps: np.ndarray, distinct: np.ndarray, budget: int) -> list[tuple[int, int]]:
     """Runs ``(first, last)`` of consecutive distinct segments with at most
     ``budget`` densified steps each (at least one segment), then widened by
@@ -140,6 +151,7 @@ def point_deviation(
 
     Memory does not grow with the path's length: the path is densified and
     searched in pieces of consecutive segments of at most ``block`` samples
+    (a longer segment is first cut into equal straight parts)
     (the smallest distance over the pieces is kept), a segment with the same
     two ends as an earlier one (the same curves) is searched once, and a
     piece is searched only for the executed points that it may bring nearer
@@ -171,10 +183,15 @@ def point_deviation(
         out = {n: float(d[:, k].max()) for k, n in enumerate(names)}
         out["max"] = max(out.values())
         return out
+    budget = max(1, int(block))
     span = geometry.max_displacement(planned[:-1], planned[1:], include_body=True)
     steps = np.maximum(1, np.ceil(span / spacing))  # densify's samples per segment
+    if np.any(steps > budget):  # a segment longer than a piece: cut into equal straight parts (the same curves)
+        planned = _subdivide(planned, np.ceil(steps / budget).astype(np.int64))
+        span = geometry.max_displacement(planned[:-1], planned[1:], include_body=True)
+        steps = np.maximum(1, np.ceil(span / spacing))
     best = np.full(executed_pts.shape[:2], np.inf)  # (T, K)
-    for first, last in _pieces(steps, _distinct_segments(planned), max(1, int(block))):
+    for first, last in _pieces(steps, _distinct_segments(planned), budget):
         # Each curve of the piece lies within its disc: centre the mean of the
         # points at the segments' starts, radius the farthest start plus its motion bound.
         starts = body_points(geometry, planned[first:last + 1])  # (S, K, 2)

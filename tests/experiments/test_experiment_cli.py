@@ -336,30 +336,67 @@ def test_ctrl_c_after_the_runs_keeps_their_records_in_out(tmp_path, tiny_scenari
     _assert_the_records_alone(out)
 
 
-def test_a_folder_in_the_way_of_an_output_is_refused_before_the_runs_or_keeps_the_records(tmp_path,
-                                                                                        tiny_scenario_path, capsys):
-    """A folder named like a record file is refused before any run; one named
-    like a file known only after the runs (an arena log) leaves the records
-    committed alone, and the error names the user's path."""
+@pytest.mark.parametrize("first", ["ctrl-c", "error"])
+def test_a_second_ctrl_c_while_the_records_are_written_alone_keeps_them(tmp_path, tiny_scenario_path, monkeypatch,
+                                                                        capsys, first):
+    """A Ctrl-C (a real SIGINT) that arrives while the records are rewritten
+    alone, after a first Ctrl-C or an output error: they are still committed,
+    the message says so, exit 130."""
+    from drake_social.experiments import study
+
     sweep = _sweep(tmp_path, tiny_scenario_path)
     out = tmp_path / "out"
-    (out / "results.json").mkdir(parents=True)
+    monkeypatch.setattr(report, "write_figures", _interrupt if first == "ctrl-c" else _no_space)
+    original = study.write_records
+    calls = []
+
+    def write_records(*args, **kwargs):
+        calls.append(1)
+        if len(calls) == 2:  # the records alone, after the figures failed
+            signal.raise_signal(signal.SIGINT)
+        return original(*args, **kwargs)
+
+    monkeypatch.setattr(study, "write_records", write_records)
+    rc = main(["experiment", "sweep", str(sweep), "--out", str(out)])
+    captured = capsys.readouterr()
+    assert len(calls) == 2
+    assert rc == 130
+    assert captured.err == (f"drake-social: experiment interrupted after its 2 runs: their records were written to "
+                            f"{out / 'results.json'} and {out / 'results.csv'} (the figures, REPORT.md and the arena "
+                            "files were not written)\n")
+    _assert_the_records_alone(out)
+
+
+@pytest.mark.parametrize("name", ["results.json", "arena_tiny-wide.log", "paths_single_algorithm_groups.png",
+                                  "REPORT.md", "arena.db"])
+def test_a_folder_in_the_way_of_any_output_is_refused_before_the_runs(tmp_path, tiny_scenario_path, capsys, name):
+    """A folder named like any file of the study (the records, a figure, a
+    group's arena log: all known from the sweep) is refused before any run,
+    naming the user's path."""
+    sweep = _sweep(tmp_path, tiny_scenario_path)
+    out = tmp_path / "out"
+    (out / name).mkdir(parents=True)
     assert main(["experiment", "sweep", str(sweep), "--out", str(out)]) == 1
     captured = capsys.readouterr()
     assert captured.out == ""
-    assert captured.err == (f"drake-social: error: {out / 'results.json'} is a folder in the way of experiment's "
-                            "output results.json; remove or rename it, or choose another --out\n")
-    (out / "results.json").rmdir()
-    log = out / "arena_tiny-wide.log"
-    log.mkdir()
-    assert main(["experiment", "sweep", str(sweep), "--out", str(out)]) == 1
-    captured = capsys.readouterr()
-    assert captured.err == (f"drake-social: error: writing the study's outputs into {out} failed: {log} is a folder "
-                            "in the way of experiment's output arena_tiny-wide.log; remove or rename it, or choose "
-                            f"another --out; the records of its 2 runs are in {out / 'results.json'} and "
-                            f"{out / 'results.csv'} (the figures, REPORT.md and the arena files were not written)\n")
-    assert current_set(out, "experiment").files == ("results.csv", "results.json")
-    assert len(json.loads((out / "results.json").read_text())["runs"]) == 2
+    assert captured.err == (f"drake-social: error: {out / name} is a folder in the way of experiment's "
+                            f"output {name}; remove or rename it, or choose another --out\n")
+    assert current_set(out, "experiment") is None
+
+
+@pytest.mark.parametrize("algorithms", [("social_rrt_star",), ("rrt_star", "social_rrt_star")])
+def test_the_names_refused_up_front_are_the_files_a_study_writes(tmp_path, tiny_scenario_path, algorithms):
+    """output_names(study) lists every file write_study writes (arena.db only
+    when OMPL's script is there), for groups of one and of several algorithms."""
+    from drake_social.experiments.study import load_sweep, output_names
+
+    sweep = _sweep(tmp_path, tiny_scenario_path, iterations=20, algorithms=algorithms)
+    out = tmp_path / "out"
+    assert main(["experiment", "sweep", str(sweep), "--out", str(out)]) == 0
+    written = set(current_set(out, "experiment").files)
+    expected = set(output_names(load_sweep(sweep)))
+    assert written - {"arena.db"} == expected - {"arena.db"}
+    assert written <= expected
 
 
 def test_a_study_on_a_scheduler_says_so_not_the_workers_default(tmp_path, tiny_scenario_path, capsys):

@@ -279,6 +279,22 @@ def test_point_deviation_memory_does_not_grow_with_the_path(tiny_scenario):
     assert dut == pytest.approx(whole, rel=0, abs=1e-12)
 
 
+def test_point_deviation_memory_does_not_grow_with_one_long_segment(tiny_scenario):
+    """One straight segment longer than a piece (a two-row path 2 km long) is
+    cut into parts of at most ``block`` samples: memory is that of a piece,
+    not of the whole segment, and the figures are those of searching the
+    whole segment at once."""
+    geometry = ArmGeometry.from_scenario(tiny_scenario)
+    start = np.array(tiny_scenario.start, float)
+    far = start + [2000.0, 0.0, 0.0, 0.0]
+    planned = np.array([start, far])
+    executed = start + np.linspace(0, 1, 50)[:, None] * (far - start) + [0.0, 0.03, 0.01, -0.02]
+    whole, whole_peak = _peak_bytes(point_deviation, geometry, planned, executed, spacing=0.05, block=10**9)
+    dut, peak = _peak_bytes(point_deviation, geometry, planned, executed, spacing=0.05, block=1 << 10)
+    assert peak < whole_peak / 4, (peak, whole_peak)
+    assert dut == pytest.approx(whole, rel=0, abs=1e-9)
+
+
 def test_config_deviation_never_measures_more_pairs_than_the_full_comparison(rng, monkeypatch):
     """The worst case: every segment overlaps every other (start, goal, start,
     ... 2000 segments), so every one is a candidate of every configuration.
