@@ -258,6 +258,15 @@ class ArmGeometry:
         return displacement_bound(np.asarray(q_b, float) - np.asarray(q_a, float), self.lever(include_body, active))
 
 
+def configuration_limits(scenario: Scenario) -> tuple[np.ndarray, np.ndarray]:
+    """(lower, upper), each (4,), of a valid ``q = [x, y, psi1, psi2]``: the
+    room's ``world.bounds`` for the base position, ``robot.joint_lower`` /
+    ``robot.joint_upper`` for the joints (metres, radians)."""
+    x_min, y_min, x_max, y_max = (float(v) for v in scenario.world.bounds)
+    r = scenario.robot
+    return np.array([x_min, y_min, *r.joint_lower], float), np.array([x_max, y_max, *r.joint_upper], float)
+
+
 def displacement_bound(dq: np.ndarray, lever: np.ndarray) -> np.ndarray:
     """``hypot(dx, dy) + c_s |dpsi1| + c_g |dpsi1 + dpsi2|`` for motions dq
     (..., 4) and lever arms ``(c_s, c_g)`` from :meth:`ArmGeometry.lever`."""

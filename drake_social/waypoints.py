@@ -36,6 +36,7 @@ from typing import Any, Sequence
 import numpy as np
 
 from drake_social.arguments import real_array, require_checker, require_scenario
+from drake_social.kinematics import configuration_limits
 from drake_social.limits import MAX_WAYPOINTS
 from drake_social.planning.validity import ValidityChecker
 from drake_social.scenario import Scenario, ScenarioError
@@ -126,10 +127,7 @@ def check_waypoints(
         i, j = np.argwhere(bad)[0]
         fail(i, f"{FIELDS[j]}: must be a finite number, got {float(wp[i, j])!r}")
 
-    x_min, y_min, x_max, y_max = (float(b) for b in scenario.world.bounds)
-    r = scenario.robot
-    lower = np.array([x_min, y_min, *r.joint_lower], float)
-    upper = np.array([x_max, y_max, *r.joint_upper], float)
+    lower, upper = configuration_limits(scenario)
     where_limit = ("world.bounds", "world.bounds", "robot.joint_lower/joint_upper", "robot.joint_lower/joint_upper")
     outside = (wp < lower) | (wp > upper)
     if outside.any():

@@ -182,12 +182,12 @@ def _direction_share(*vectors: np.ndarray) -> np.ndarray:
 
 class _LineTrajectory:
     """A motion on a straight segment: a 1-DoF ``ruckig.Trajectory`` of the
-    distance s (0 to ``length``) along the unit vector ``u`` from ``start``;
+    distance s along the unit vector ``u`` from ``start``;
     the part of ``ruckig.Trajectory`` that :class:`RuckigSegment` uses."""
 
     __slots__ = ("_trajectory", "_start", "_u", "duration")
 
-    def __init__(self, trajectory, start: np.ndarray, u: np.ndarray, length: float):
+    def __init__(self, trajectory, start: np.ndarray, u: np.ndarray):
         self._trajectory = trajectory
         self._start = [float(x) for x in start]
         self._u = [float(x) for x in u]
@@ -461,7 +461,7 @@ class RuckigTrajectorySource(LeafSystem):
             raise RuntimeError(f"{self.get_name()}: Ruckig failed at t = {t} s: {error}") from error
         if result != ruckig.Result.Working:
             raise RuntimeError(f"{self.get_name()}: Ruckig failed at t = {t} s with {result}; input:\n{inp}")
-        return _LineTrajectory(trajectory, p, u, length)
+        return _LineTrajectory(trajectory, p, u)
 
     def _Calculate(self, t: float, p: np.ndarray, v: np.ndarray, a: np.ndarray, target: np.ndarray,
                    synchronization: ruckig.Synchronization):
@@ -531,11 +531,6 @@ class RuckigTrajectorySource(LeafSystem):
         output.SetAtIndex(0, 1.0 if context.get_time() - segment.t0 >= segment.duration else 0.0)
 
 
-def _finite_vector(value, n: int, who: str, argument: str, layout: str) -> np.ndarray:
-    """``value`` as a finite (n,) float array (never reshaped), or a TypeError/ValueError naming it."""
-    return real_array(value, who, argument, (n,), layout=layout)
-
-
 def arm_source_from_options(
     execution_options: ExecutionOptions, initial_arm: Sequence[float],
     position_limits: tuple[Sequence[float], Sequence[float]] | None = None,
@@ -551,7 +546,7 @@ def arm_source_from_options(
     require_execution_options(execution_options, "arm_source_from_options")
     return RuckigTrajectorySource(
         position_limits=position_limits,
-        initial_position=_finite_vector(initial_arm, 2, "arm_source_from_options", "initial_arm", "[psi1, psi2]"),
+        initial_position=real_array(initial_arm, "arm_source_from_options", "initial_arm", (2,), layout="[psi1, psi2]"),
         max_velocity=execution_options.arm_max_velocity,
         max_acceleration=execution_options.arm_max_acceleration,
         max_jerk=execution_options.arm_max_jerk,
@@ -587,8 +582,7 @@ def reference_source_from_options(
     return RuckigTrajectorySource(
         xy_max_abs_sum=e.max_wheel_speed * e.wheel_radius,
         position_limits=position_limits,
-        initial_position=_finite_vector(initial_q, 4, "reference_source_from_options", "initial_q",
-                                        "[x, y, psi1, psi2]"),
+        initial_position=real_array(initial_q, "reference_source_from_options", "initial_q", (4,), layout="[x, y, psi1, psi2]"),
         max_velocity=[e.max_base_speed, e.max_base_speed, *e.arm_max_velocity],
         max_acceleration=[e.max_base_acceleration, e.max_base_acceleration, *e.arm_max_acceleration],
         max_jerk=[e.max_base_jerk, e.max_base_jerk, *e.arm_max_jerk],

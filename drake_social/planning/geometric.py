@@ -38,7 +38,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from drake_social.kinematics import ArmGeometry
+from drake_social.kinematics import ArmGeometry, configuration_limits
 from drake_social.planning.planar_kernel import MAX_STEPS, STEP_MARGIN, TOLERANCE
 from drake_social.scenario import Scenario
 
@@ -121,9 +121,7 @@ class CheckerBase:
         self.resolution = float(scenario.planner.collision_resolution if resolution is None else resolution)
         if not self.resolution > 0:
             raise ValueError(f"resolution must be > 0 metres, got {resolution}")
-        b, r = scenario.world.bounds, scenario.robot
-        self.lower = np.array([b[0], b[1], *r.joint_lower], float)
-        self.upper = np.array([b[2], b[3], *r.joint_upper], float)
+        self.lower, self.upper = configuration_limits(scenario)
 
     @property
     def motion_check(self) -> str:

@@ -54,9 +54,7 @@ def make_objective(scenario, algorithm: str) -> Objective:
         ValueError: an unknown algorithm.
     """
     require_scenario(scenario, "make_objective")
-    require_instance(algorithm, str, "make_objective", "algorithm", f"one of {', '.join(ALGORITHMS)}")
-    if algorithm not in ALGORITHMS:
-        raise ValueError(f"unknown algorithm {algorithm!r}; allowed: {', '.join(ALGORITHMS)}")
+    require_choice(algorithm, "make_objective", "algorithm", ALGORITHMS)
     if algorithm == "rrt_star":
         return PathLengthObjective(scenario.planner.distance_weights)
     social = SocialCost.from_scenario(scenario)

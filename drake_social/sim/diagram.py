@@ -92,6 +92,7 @@ from drake_social.control import (
     arm_source_from_options,
     reference_source_from_options,
 )
+from drake_social.kinematics import configuration_limits
 from drake_social.model.plant import add_environment, add_robot
 from drake_social.planning.validity import ValidityChecker
 from drake_social.scenario import (EXECUTIONS, SIM_MODES, SERVO_BANDWIDTH, SERVO_BASE_TIME_CONSTANT, Scenario,
@@ -304,9 +305,7 @@ def build_checked(
     period = float(opts.control_period)
     # The references keep to the limits of a valid configuration: the room
     # bounds for the base and the joint limits (the checkers' and the model's).
-    x_min, y_min, x_max, y_max = (float(v) for v in scenario.world.bounds)
-    lower = np.array([x_min, y_min, *scenario.robot.joint_lower], float)
-    upper = np.array([x_max, y_max, *scenario.robot.joint_upper], float)
+    lower, upper = configuration_limits(scenario)
 
     builder = DiagramBuilder()
     if mode == "dynamic":

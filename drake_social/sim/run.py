@@ -42,7 +42,7 @@ from drake_social.arguments import (
     require_scenario,
 )
 from drake_social.cost.social import SocialCost
-from drake_social.kinematics import ArmGeometry
+from drake_social.kinematics import ArmGeometry, configuration_limits
 from drake_social.model.plant import ACTUATED_JOINTS
 from drake_social.planning.result import PlannerResult
 from drake_social.planning.validity import ValidityChecker
@@ -226,13 +226,6 @@ class SimulationResult:
         return out
 
 
-def _limits(scenario: Scenario) -> tuple[np.ndarray, np.ndarray]:
-    """(lower, upper) of a valid ``[x, y, psi1, psi2]``: room bounds and joint limits."""
-    x_min, y_min, x_max, y_max = (float(v) for v in scenario.world.bounds)
-    r = scenario.robot
-    return (np.array([x_min, y_min, *r.joint_lower], float), np.array([x_max, y_max, *r.joint_upper], float))
-
-
 #: A state beyond these is a diverged simulation, not a motion: speeds
 #: (m/s, rad/s) and arm angles (rad), and the base more than the room's
 #: diagonal outside the room.
@@ -287,7 +280,7 @@ def limit_violations(scenario: Scenario, times: np.ndarray, q: np.ndarray) -> li
         One :class:`LimitViolation` per joint and bound passed, in joint
         order, lower before upper; empty when every sample is within.
     """
-    lower, upper = _limits(scenario)
+    lower, upper = configuration_limits(scenario)
     q = np.asarray(q, float).reshape(-1, 4)
     times = np.asarray(times, float).reshape(-1)
     found = []
@@ -365,7 +358,7 @@ def analyze_execution(
     resolution = float(scenario.planner.collision_resolution)
     # Which executed sample each densified configuration follows (for the collision time).
     dense, owner = densify(geometry, q, resolution, return_owner=True)
-    lower, upper = _limits(scenario)
+    lower, upper = configuration_limits(scenario)
     if checker is None:  # Drake's, from SceneGraphs of the shapes near the trajectory (bounded memory)
         valid = _collision_free(lambda qs: valid_configurations(scenario, qs), planar.clearance, lower, upper, dense)
     else:
@@ -514,7 +507,7 @@ def run_checked(
     v_port = built.loggers["v"].get_input_port()
     q_context = built.loggers["q"].GetMyContextFromRoot(root)
     v_context = built.loggers["v"].GetMyContextFromRoot(root)
-    bounds = _limits(scenario)
+    bounds = configuration_limits(scenario)
 
     def check_divergence(cause: BaseException | None = None) -> None:
         what = _divergence(q_port.Eval(q_context), v_port.Eval(v_context), *bounds)

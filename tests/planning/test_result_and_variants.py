@@ -88,7 +88,7 @@ def weighted(tiny_scenario, length_weight=0.3, distance_weights=(1.0, 2.0, 0.5, 
 
 def test_make_objective_for_each_algorithm(tiny_scenario):
     scenario = weighted(tiny_scenario)
-    with pytest.raises(ValueError, match=r"^unknown algorithm 'rrt'; allowed: " + ", ".join(ALGORITHMS) + "$"):
+    with pytest.raises(ValueError, match=r"^make_objective: unknown algorithm 'rrt'; allowed: " + ", ".join(ALGORITHMS) + "$"):
         make_objective(scenario, "rrt")
     length = make_objective(scenario, "rrt_star")
     assert type(length) is PathLengthObjective
