@@ -245,7 +245,7 @@ class OutputSet:
         return self
 
     def __exit__(self, exc_type, exc, tb) -> bool:
-        with _Deferred() as deferred:
+        with DeferredSignals() as deferred:
             try:
                 if exc_type is None:
                     self._commit()
@@ -470,7 +470,7 @@ class OutputSet:
                 entry.unlink(missing_ok=True)
 
 
-class _Deferred:
+class DeferredSignals:
     """Holds back SIGINT and SIGTERM over a block (main thread only; elsewhere
     Python runs no signal handler anyway): the signals received are noted and
     :meth:`reraise` delivers them afterwards with the original handlers."""
@@ -479,7 +479,7 @@ class _Deferred:
         self.received: list[int] = []
         self._old: dict[int, object] = {}
 
-    def __enter__(self) -> "_Deferred":
+    def __enter__(self) -> "DeferredSignals":
         if threading.current_thread() is threading.main_thread():
             for sig in _DEFERRED_SIGNALS:
                 if signal.getsignal(sig) is not None:  # None: a handler set outside Python, left alone
@@ -503,4 +503,3 @@ class _Deferred:
 #: ``.received`` lists the signals that arrived, ``.reraise()`` delivers them.
 #: For work that a Ctrl-C must not cut short, such as writing the records
 #: that an interrupted command still commits.
-DeferredSignals = _Deferred

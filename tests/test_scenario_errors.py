@@ -189,16 +189,12 @@ def _nodes_message(source, line: int) -> str:
 
 @pytest.mark.parametrize("field", ["description", "world", "start", "object"])
 def test_an_alias_bomb_is_refused_while_it_is_read(tmp_path, field):
-    """Under a known field too (not only refused as an unknown key), and in --set."""
-    import time
-
+    """Under a known field too (not only refused as an unknown key), and in --set:
+    refused while it is composed, at the line whose aliases pass the node limit."""
     lines = _laughs()
     dut = tmp_path / "bomb.yaml"
     dut.write_text(f"{field}:\n" + "".join(f"  - {{{line}}}\n" for line in lines))
-    t0 = time.perf_counter()
-    message = _message(dut)
-    assert time.perf_counter() - t0 < 5
-    assert message == _nodes_message(dut, 7)  # the level of 9^6 leaves
+    assert _message(dut) == _nodes_message(dut, 7)  # the level of 9^6 leaves
     text = "{" + ", ".join(lines) + "}"
     assert _message(TINY, [text]) == _nodes_message(f"{TINY} (--set {shorten(repr(text))})", 1)
 

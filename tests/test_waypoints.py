@@ -262,14 +262,26 @@ def test_contradictory_execution_options_are_refused_with_the_rule(tiny_scenario
     assert str(info.value).startswith(f"x.yaml: {field}: {message}"), str(info.value)
 
 
-def test_execution_options_just_inside_the_rules_are_accepted(tiny_scenario):
+@pytest.mark.parametrize("inside, outside, field", [
+    ({"control_period": 0.5, "time_limit": 5.0, "kp": 3.9, "plant_time_step": 0.5},
+     {"kp": 4.0}, "execution.kp"),
+    ({"control_period": 0.5, "time_limit": 5.0, "kp": 3.9, "plant_time_step": 0.5},
+     {"time_limit": 4.99}, "execution.control_period"),
+    ({"control_period": 0.01, "kp": 199.9, "plant_time_step": 0.002},
+     {"kp": 200.0}, "execution.kp"),
+    ({"control_period": 0.01, "kp": 1.5, "plant_time_step": 0.01},
+     {"plant_time_step": 0.0101}, "execution.plant_time_step"),
+])
+def test_execution_options_just_inside_the_rules_are_accepted_and_just_outside_refused(tiny_scenario, inside,
+                                                                                        outside, field):
     import dataclasses as dc
 
-    ok = copy.deepcopy(tiny_scenario)
-    ok.execution = dc.replace(ok.execution, control_period=0.5, time_limit=5.0, kp=3.9, plant_time_step=0.5)
-    validate_scenario(ok)
-    ok.execution = dc.replace(ok.execution, control_period=0.01, kp=199.9, plant_time_step=0.002)
-    validate_scenario(ok)
+    dut = copy.deepcopy(tiny_scenario)
+    dut.execution = dc.replace(dut.execution, **inside)
+    validate_scenario(dut)  # raises if refused
+    dut.execution = dc.replace(dut.execution, **outside)
+    with pytest.raises(ScenarioError, match=f"^x.yaml: {field}: "):
+        validate_scenario(dut, source="x.yaml")
 
 
 def test_control_period_against_time_limit_from_the_command_line(tmp_path, tiny_scenario_path, capsys):

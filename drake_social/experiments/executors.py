@@ -35,7 +35,7 @@ import threading
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from typing import Callable, Iterator, Sequence
 
-from drake_social.outputs import _Deferred  # SIGINT and SIGTERM held back over a block
+from drake_social.outputs import DeferredSignals  # SIGINT and SIGTERM held back over a block
 
 __all__ = ["EXECUTORS", "SCHEDULER_SCHEMES", "check_scheduler_address", "map_tasks"]
 
@@ -161,7 +161,7 @@ def map_tasks(
         try:
             # Submitting starts the workers: a Ctrl-C waits until every one
             # is registered with the pool, so that all are stopped below.
-            with _Deferred() as deferred:
+            with DeferredSignals() as deferred:
                 futures = {pool.submit(fn, task): k for k, task in enumerate(tasks)}
             deferred.reraise()
             for count, future in enumerate(as_completed(futures), start=1):
@@ -222,7 +222,7 @@ def _map_dask(fn, tasks, workers: int, scheduler: str | None, done) -> None:
                 # worker would say is its connections closing under it (an
                 # ERROR when a busy worker's heartbeat finds the scheduler
                 # gone after a Ctrl-C).
-                with _Deferred() as deferred:
+                with DeferredSignals() as deferred:
                     held["cluster"] = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
                                                    dashboard_address=None, silence_logs=logging.CRITICAL + 1,
                                                    scheduler_kwargs={"dashboard_address": "127.0.0.1:0"})

@@ -30,7 +30,7 @@ import numpy as np
 from pydrake.geometry import Box as DrakeBox
 from pydrake.geometry import Cylinder, Role
 
-from drake_social.model.checker import Contact, SceneGraphChecker
+from drake_social.model.checker import Contact
 from drake_social.model.plant import ScenarioDiagram, build_robot_diagram, environment_parts, registration_order
 from drake_social.planning import planar_kernel as kernel
 from drake_social.planning.geometric import CheckerBase
@@ -57,8 +57,8 @@ class PlanarChecker(CheckerBase):
 
     Args:
         scenario, resolution: see :class:`CheckerBase`; the resolution only
-            serves Drake's second opinion (:attr:`drake_checker`,
-            :func:`~drake_social.model.checker.verify_path`).
+            serves Drake's second opinion
+            (:func:`~drake_social.model.checker.verify_path`).
         model: a built :func:`build_robot_diagram` of ``scenario``, read
             whole; None = the room is built and read in parts of at most
             :data:`~drake_social.model.plant.ENVIRONMENT_PART` shapes (the
@@ -80,7 +80,6 @@ class PlanarChecker(CheckerBase):
     def __init__(self, scenario: Scenario, resolution: float | None = None, model: ScenarioDiagram | None = None):
         super().__init__(scenario, resolution)
         self.scenario = scenario
-        self._drake_checker: SceneGraphChecker | None = None
         if model is not None:
             self.model = model
             self._read_geometry()
@@ -257,20 +256,13 @@ class PlanarChecker(CheckerBase):
     def contacts(self, q: np.ndarray) -> list[Contact]:
         """The (robot body, environment shape) pairs at signed distance <= 0,
         deepest first, from the exact planar distances (see
-        :meth:`SceneGraphChecker.contacts` for Drake's)."""
+        :meth:`~drake_social.model.checker.SceneGraphChecker.contacts` for Drake's)."""
         d = kernel.pair_distances(np.asarray(q, float), self.bodies, self.robot, self.env)
         deepest: dict[tuple[str, str], float] = {}
         for j, k in zip(*np.nonzero(d <= 0.0)):
             key = (self.capsule_names[j][0], self.env_names[k])
             deepest[key] = min(float(d[j, k]), deepest.get(key, math.inf))
         return sorted((Contact(a, b, v) for (a, b), v in deepest.items()), key=lambda c: c.distance)
-
-    @property
-    def drake_checker(self) -> SceneGraphChecker:
-        """Drake's checker of the same scenario and resolution (built on first use)."""
-        if self._drake_checker is None:
-            self._drake_checker = SceneGraphChecker(self.scenario, self.resolution)
-        return self._drake_checker
 
 
 def _rotate(cs: np.ndarray, p: np.ndarray) -> np.ndarray:

@@ -205,11 +205,9 @@ def test_ctrl_c_during_a_study_exits_130_with_one_line(tmp_path, tiny_scenario_p
                       or proc.poll() is not None, 300, f"two workers with Drake and {_PLANNING_CPU} s of CPU each")
             assert proc.poll() is None, err.decode()
             workers = _workers(proc.pid)
-        t0 = time.monotonic()
         os.killpg(proc.pid, signal.SIGINT)
         stdout = proc.stdout.read()
-        rc = proc.wait(timeout=120)
-        stopped = time.monotonic() - t0
+        rc = proc.wait(timeout=120)  # a hang fails here
     finally:
         if proc.poll() is None:
             os.killpg(proc.pid, signal.SIGKILL)
@@ -222,7 +220,6 @@ def test_ctrl_c_during_a_study_exits_130_with_one_line(tmp_path, tiny_scenario_p
     assert lines[-2:] == ["drake-social: experiment interrupted; no output of this run was written", ""], stderr
     assert all(line.startswith("experiment abuse:") for line in lines[:-2]), stderr  # the bar, nothing else
     assert stdout == b"" and current_set(out, "experiment") is None
-    assert stopped < 60  # a prompt stop, with room for a loaded machine
     # No worker left behind (they may take a moment to be reaped).
     _wait_for(lambda: not [w for w in workers if _alive(w)], 30, f"workers {workers} gone")
 

@@ -4,7 +4,6 @@ that name the sweep file, the scenario file (with its folder) and the variant.""
 
 from __future__ import annotations
 
-import time
 from pathlib import Path
 
 import pytest
@@ -35,10 +34,8 @@ def _sweep(tmp_path: Path, body: str, head: str = f"runs: 1\niterations: 20\nsce
 
 
 def _error(path: Path) -> str:
-    t0 = time.perf_counter()
     with pytest.raises(ScenarioError) as info:
         load_sweep(path)
-    assert time.perf_counter() - t0 < 10, "refused at once, before any work"
     return str(info.value)
 
 

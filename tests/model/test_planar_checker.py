@@ -301,7 +301,7 @@ def test_verify_path(tiny_scenario):
     dut = PlanarChecker(tiny_scenario)
     free = np.array([[2.0, 2.5, 0.0, math.pi], [2.0, 3.0, 0.5, math.pi], [1.5, 3.0, 0.5, math.pi]])
     assert all(dut.is_motion_valid(a, b) for a, b in zip(free[:-1], free[1:]))
-    for x in (dut, tiny_scenario, GeometricChecker(tiny_scenario), dut.drake_checker):
+    for x in (dut, tiny_scenario, GeometricChecker(tiny_scenario), SceneGraphChecker(tiny_scenario)):
         assert verify_path(x, free) is None
         assert verify_path(x, free[:1]) is None
     through = np.vstack([free, [[2.9, 3.3, 0.0, 0.0]]])  # its last waypoint is in collision
