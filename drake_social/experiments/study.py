@@ -24,6 +24,7 @@ plans, measures the path (:mod:`drake_social.experiments.metrics`) and, with
 
 from __future__ import annotations
 
+import collections
 import csv
 import dataclasses as dc
 import functools
@@ -260,18 +261,28 @@ def _algorithms_problem(algorithms: Sequence[str]) -> tuple[Optional[int], str] 
     return None
 
 
-def check_study(study: Study, source: str = "study") -> None:
+def check_study(study: Study, source: str = "study") -> dict[str, str]:
     """Checks a study before any run: its limits, names and planners, and
-    that every group's scenario file reads and loads with its overrides.
+    that every group's scenario file reads and loads with its overrides and
+    is valid with each of the study's algorithms.
 
     Args:
         study: the study.
         source: how errors name it (the sweep file, or the command).
 
+    Returns:
+        Group name -> its scenario file's text (each file read once).
+
     Raises:
         ScenarioError: ``<source>: <field>: <what is allowed>, got <value>``,
             or the scenario error of a group (naming its file and overrides).
     """
+    _check_settings_and_names(study, source)
+    return _group_texts(study)
+
+
+def _check_settings_and_names(study: Study, source: str) -> None:
+    """:func:`check_study`'s checks that read no file: limits, names, planners."""
     def fail(field: str, message: str):
         raise ScenarioError(f"{source}: {field}: {message}")
 
@@ -296,19 +307,19 @@ def check_study(study: Study, source: str = "study") -> None:
     if tasks > MAX_STUDY_TASKS:
         fail("runs", f"{len(study.groups)} groups x their algorithms x {study.runs} runs = {tasks:,} runs; a study "
                      f"may have at most {MAX_STUDY_TASKS:,}")
-    _group_texts(study)
 
 
 def _group_texts(study: Study) -> dict[str, str]:
     """Group name -> its scenario file's text, each file read once, each
-    group's scenario and overrides checked to load (:func:`_check_load`)."""
+    group's scenario and overrides checked to load (:func:`_load`) and with
+    each of the study's algorithms."""
     files: dict[str, str] = {}
     texts = {}
     for g in study.groups:
         if g.scenario not in files:
             files[g.scenario] = read_yaml_file(g.scenario, "scenario")
         texts[g.name] = files[g.scenario]
-        scenario = _check_load(g.scenario, texts[g.name], tuple(g.overrides), f"group {g.name}")
+        scenario = _load(g.scenario, texts[g.name], tuple(g.overrides), f"group {g.name}")
         for algorithm in g.algorithms:
             _check_run_settings(scenario, algorithm, study.iterations, f"{g.scenario} (group {g.name})")
     return texts
@@ -511,7 +522,7 @@ def load_sweep(path: str | Path) -> Study:
             # (a variant may make a value of the file valid); an error names
             # the stage at fault, the file or the variant.
             try:
-                scenario = _check_load(str(f), text, texts, f"variants.{vname}")
+                scenario = _load(str(f), text, texts, f"variants.{vname}")
             except ScenarioError as e:
                 if str(e).startswith(f"{f} (variants.{vname} "):
                     raise ScenarioError(f"{path}: {e}") from None
@@ -525,7 +536,7 @@ def load_sweep(path: str | Path) -> Study:
             groups.append(Group(group, str(f), overrides=texts, algorithms=tuple(algorithms),
                                 label=f"{f.stem}, {vname}" + (f": {texts[0]}" if texts else "")))
     study = Study(name, tuple(groups), runs=runs, iterations=iterations, seed=seed, simulate=simulate, checker=checker)
-    check_study(study, str(path))
+    _check_settings_and_names(study, str(path))  # every group was loaded and checked above
     return study
 
 
@@ -536,8 +547,7 @@ def study_tasks(study: Study) -> list[dict]:
         ScenarioError: the study is invalid (:func:`check_study`) or a group's
             scenario or overrides are: nothing has run yet.
     """
-    check_study(study)
-    texts = _group_texts(study)
+    texts = check_study(study)
     seeds = study.run_seeds()
     tasks = []
     for group in study.groups:
@@ -556,20 +566,26 @@ def study_tasks(study: Study) -> list[dict]:
 # ---- in the worker --------------------------------------------------------------
 
 
-@functools.lru_cache(maxsize=16)
-def _load(source: str, text: str, overrides: tuple[str, ...], overrides_name: str = "overrides"):
-    """The scenario of a task (loaded once per process and overrides); errors name ``source``."""
+def _load(source: str, text: str, overrides: tuple[str, ...], overrides_name: str = "overrides") -> Scenario:
+    """The scenario of ``text`` with ``overrides``, loaded once per pair and
+    process while it is among the last :data:`_LOADED_MOST` loaded (keyed by
+    their digest, whatever the groups are called); errors name ``source``."""
     from drake_social.scenario import load_scenario_text
 
-    scenario = load_scenario_text(text, source, list(overrides), overrides_name=overrides_name)
-    _loads[_load_key(text, overrides)] = scenario
+    key = _load_key(text, overrides)
+    scenario = _loaded.get(key)
+    if scenario is None:
+        scenario = load_scenario_text(text, source, list(overrides), overrides_name=overrides_name)
+        _loaded[key] = scenario
+        if len(_loaded) > _LOADED_MOST:
+            _loaded.popitem(last=False)
+    _loaded.move_to_end(key)
     return scenario
 
 
-#: The scenarios this process has loaded without error, by the digest of
-#: their (scenario text, overrides): a study's check loads each once, however
-#: often it is checked and whatever its groups are called.
-_loads: dict[bytes, Scenario] = {}
+#: The most scenarios :func:`_load` keeps (the least recently used go first).
+_LOADED_MOST = 64
+_loaded: "collections.OrderedDict[bytes, Scenario]" = collections.OrderedDict()
 
 
 def _load_key(text: str, overrides: tuple[str, ...]) -> bytes:
@@ -578,12 +594,6 @@ def _load_key(text: str, overrides: tuple[str, ...]) -> bytes:
         data = part.encode("utf-8", "surrogatepass")
         digest.update(len(data).to_bytes(8, "little") + data)
     return digest.digest()
-
-
-def _check_load(source: str, text: str, overrides: tuple[str, ...], overrides_name: str) -> Scenario:
-    """The scenario of ``text`` with ``overrides``, checked to load (:func:`_load`, once per pair and process)."""
-    scenario = _loads.get(_load_key(text, overrides))
-    return _load(source, text, overrides, overrides_name) if scenario is None else scenario
 
 
 @functools.lru_cache(maxsize=16)

@@ -4,6 +4,7 @@ that name the sweep file, the scenario file (with its folder) and the variant.""
 
 from __future__ import annotations
 
+import collections
 from pathlib import Path
 
 import pytest
@@ -311,8 +312,7 @@ def test_each_scenario_and_variant_is_loaded_once(tmp_path, monkeypatch):
         return real(text, source, overrides, **kw)
 
     monkeypatch.setattr(scenario_module, "load_scenario_text", counted)
-    monkeypatch.setattr(study_module, "_loads", {})
-    study_module._load.cache_clear()
+    monkeypatch.setattr(study_module, "_loaded", collections.OrderedDict())
     variants = ", ".join(f"v{i}: {{social: {{length_weight: {i / 10}}}}}" for i in range(20))
     dut = _sweep(tmp_path, f"variants: {{{variants}}}\n")
     study = load_sweep(dut)
