@@ -578,8 +578,10 @@ def _run_simulate(args: argparse.Namespace) -> int:
         try:
             # The scenario is validated (loaded) and the path checked with the checker above: once.
             opts = scenario.execution
-            run = run_checked(scenario, args.mode or opts.mode, args.execution or opts.execution, waypoints, checker,
-                              meshcat, float(opts.time_limit), True, None, progress if bar is not None else None)
+            run = run_checked(scenario, mode=args.mode or opts.mode, execution=args.execution or opts.execution,
+                              waypoints=waypoints, checker=checker, meshcat=meshcat, time_limit=float(opts.time_limit),
+                              analyze=True, analysis_checker=None,
+                              progress=progress if bar is not None else None)
         except PlanningInputError as e:
             raise PlanningInputError(f"{args.scenario}: {e}") from e
         finally:

@@ -421,19 +421,18 @@ def load_scenario_text(text: str, source: str, overrides: str | Sequence[str] | 
     """
     from pydrake.common.yaml import yaml_load_typed  # lazy: keep pydrake out of the core
 
-    path = source
     sources = [(source, text)]
     for extra in [overrides] if isinstance(overrides, str) else list(overrides or []):
-        sources.append((f"{path} ({overrides_name} {shorten(repr(extra))})", extra))
+        sources.append((f"{source} ({overrides_name} {shorten(repr(extra))})", extra))
     stages = []
     scenario = None
-    for source, data in sources:
-        check_yaml(data, source)
+    for where, data in sources:
+        check_yaml(data, where)
         try:
             scenario = yaml_load_typed(schema=Scenario, data=data, **({} if scenario is None else
                                                                         {"defaults": scenario}))
         except Exception as e:  # what check_yaml lets through; Drake's message has no file name: add it
-            raise ScenarioError(f"{source}: {e}") from e
+            raise ScenarioError(f"{where}: {e}") from e
         stages.append(scenario)
     # Blame the source after which the scenario stopped being valid: a bad
     # --set is named, not the file it was applied to.
