@@ -50,7 +50,7 @@ from pydrake.common import Parallelism
 from pydrake.planning import LinearDistanceAndInterpolationProvider, SceneGraphCollisionChecker
 
 from drake_social.arguments import require_choice, require_scenario
-from drake_social.kinematics import displacement_bound
+from drake_social.kinematics import configuration_limits, displacement_bound
 from drake_social.model import plant
 from drake_social.model.plant import (
     ScenarioDiagram,
@@ -345,16 +345,17 @@ def check_start_goal(
             the configuration and which robot bodies collide with which
             obstacles, people or walls (or which limit is exceeded).
     """
+    lower, upper = configuration_limits(scenario)
     for field in ("start", "goal"):
         q = np.asarray(getattr(scenario, field), float)
+        if not np.all((q >= lower) & (q <= upper)):
+            raise ScenarioError(
+                f"{source}: {field}: configuration {q.tolist()} is outside the limits "
+                f"lower={lower.tolist()}, upper={upper.tolist()} (world.bounds, robot.joint_*)"
+            )
         checkers = [checker] if checker is not None else local_checkers(scenario, q[None, :2], q[None, :2])
         contacts: list[Contact] = []
         for part in checkers:
-            if not part.in_limits(q):
-                raise ScenarioError(
-                    f"{source}: {field}: configuration {q.tolist()} is outside the limits "
-                    f"lower={part.lower.tolist()}, upper={part.upper.tolist()} (world.bounds, robot.joint_*)"
-                )
             contacts += part.contacts(q)
         contacts.sort(key=lambda c: c.distance)
         if contacts:
