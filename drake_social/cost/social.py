@@ -114,7 +114,7 @@ class SocialCost:
     def point_costs(self, q: np.ndarray) -> np.ndarray:
         """Unweighted ``sum_i AGF_i(p_j(q))`` for every interest point, (..., 3 + P)."""
         points = self.geometry.interest_points(q)
-        return self.field(points[..., 0], points[..., 1])
+        return self._people_sum(points[..., 0], points[..., 1])
 
     def __call__(self, q: np.ndarray) -> np.ndarray:
         """S(q) for q of shape (..., 4); returns shape (...).
@@ -128,7 +128,7 @@ class SocialCost:
         # In the memory layout of x, as the sums of one (..., K, H) array
         # would be: the weighted sum over K then runs the same BLAS path.
         sums = np.empty_like(x)
-        sums[...] = self.field(x, y)
+        sums[...] = self._people_sum(x, y)
         return sums @ self._active_weights
 
     # ---- along motions --------------------------------------------------------
@@ -292,9 +292,14 @@ class SocialCost:
         about :data:`FIELD_CHUNK_ELEMENTS` values whatever the number of
         points and people: a 512 x 512 heat map of a crowd costs megabytes,
         not gigabytes. Each point's sum is that of ``agf(...).sum(-1)`` of all
-        points at once, bit for bit. :meth:`__call__` and :meth:`point_costs`
-        take their people's sums from it too.
+        points at once, bit for bit.
         """
+        return self._people_sum(x, y)
+
+    def _people_sum(self, x: np.ndarray, y: np.ndarray) -> np.ndarray:
+        """:meth:`field`, also the people's sums of :meth:`__call__` and
+        :meth:`point_costs` (apart from :meth:`field`, which figures call and
+        tests count)."""
         x, y = np.broadcast_arrays(np.asarray(x, float), np.asarray(y, float))
         shape = x.shape
         x, y = x.ravel(), y.ravel()
