@@ -2,8 +2,8 @@
 
 numba (``@njit(cache=True)``) invalidates a cached function only when its
 own source file changes, not when a function it calls (and compiles in)
-changes in another file: :func:`drake_social.planning.tree_kernel.grow` would
-go on running an old :mod:`~drake_social.planning.planar_kernel` after an
+changes in another file: :func:`drake_social.planning.rrt_star.tree_kernel.grow` would
+go on running an old :mod:`~drake_social.collision.planar_kernel` after an
 edit of that file. :func:`ensure_fresh` therefore stamps the cache
 directories with a hash of all kernel sources and drops every cached kernel
 when the hash changes: the ``__pycache__`` folders beside the sources, and
@@ -24,7 +24,7 @@ __all__ = ["KERNEL_SOURCES", "ensure_fresh", "sources_hash"]
 _PACKAGE = Path(__file__).resolve().parent
 #: The kernel modules, which call each other's compiled functions, and the
 #: limits they compile in.
-KERNEL_SOURCES = ("cost/kernel.py", "planning/planar_kernel.py", "planning/tree_kernel.py", "limits.py")
+KERNEL_SOURCES = ("cost/kernel.py", "collision/planar_kernel.py", "planning/rrt_star/tree_kernel.py", "limits.py")
 _STAMP = "drake_social_kernels.stamp"
 _done = False
 

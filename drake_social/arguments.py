@@ -24,7 +24,7 @@ from typing import Any
 import numpy as np
 
 from drake_social.scenario import ExecutionOptions, Scenario
-from drake_social.textfile import shorten
+from drake_social.io.textfile import shorten
 
 __all__ = [
     "CHECKER_METHODS",
@@ -90,7 +90,7 @@ def require_execution_options(value: Any, who: str, argument: str = "execution_o
                      "a drake_social.scenario.ExecutionOptions (a scenario's execution section, scenario.execution)")
 
 
-#: The methods of :class:`~drake_social.planning.validity.ValidityChecker`,
+#: The methods of :class:`~drake_social.collision.validity.ValidityChecker`,
 #: checked by name so that this module does not import the planning package
 #: (which imports this one).
 CHECKER_METHODS = ("is_valid", "are_valid", "is_motion_valid", "are_motions_valid", "clearance")
@@ -98,7 +98,7 @@ CHECKER_METHODS = ("is_valid", "are_valid", "is_motion_valid", "are_motions_vali
 
 def require_checker(value: Any, who: str, argument: str = "checker", *, optional: bool = False) -> None:
     """Refuses anything but a validity checker (an object with the methods of
-    :class:`~drake_social.planning.validity.ValidityChecker`); a checker's
+    :class:`~drake_social.collision.validity.ValidityChecker`); a checker's
     name such as ``"planar"`` is told how to build one.
 
     Raises:
@@ -106,7 +106,7 @@ def require_checker(value: Any, who: str, argument: str = "checker", *, optional
     """
     if (value is None and optional) or all(callable(getattr(value, m, None)) for m in CHECKER_METHODS):
         return
-    allowed = ("a validity checker object (drake_social.model.checker.make_checker(scenario, kind), "
+    allowed = ("a validity checker object (drake_social.collision.drake_checker.make_checker(scenario, kind), "
                "with is_valid, are_valid, is_motion_valid, are_motions_valid and clearance)")
     hint = ""
     if isinstance(value, str):

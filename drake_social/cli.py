@@ -27,7 +27,7 @@ stderr names the segment), 5 ``simulate`` did not reach the goal within
 room bounds; ``simulate`` writes its files in every case and names each
 finding on stderr), 130 interrupted (Ctrl-C): one
 line says what, and no file of the interrupted run is left (outputs are
-written as one set, see :mod:`drake_social.outputs`).
+written as one set, see :mod:`drake_social.io.outputs`).
 """
 
 from __future__ import annotations
@@ -48,7 +48,7 @@ from drake_social import __version__
 from drake_social.planning.result import PlanningInputError
 from drake_social.scenario import (ALGORITHMS, CHECKERS, Scenario, ScenarioError, compose_yaml, load_scenario,
                                     plant_time_step_problem)
-from drake_social.textfile import check_regular_file, read_text_file, shorten
+from drake_social.io.textfile import check_regular_file, read_text_file, shorten
 
 __all__ = ["EXIT_NO_PATH", "ProgressBar", "main", "build_parser", "load_with_overrides"]
 
@@ -120,7 +120,7 @@ def _check_out_folder(out: Path) -> None:
     import os
     import stat
 
-    from drake_social.textfile import describe_mode
+    from drake_social.io.textfile import describe_mode
 
     here = out
     while True:
@@ -167,7 +167,7 @@ def _add_show(subparsers) -> None:
 
 
 def _run_show(args: argparse.Namespace) -> int:
-    from drake_social.outputs import OutputSet
+    from drake_social.io.outputs import OutputSet
     from drake_social.viz import write_show  # matplotlib figures: only when drawing
 
     scenario = load_with_overrides(args.scenario, args.set)
@@ -285,7 +285,7 @@ def _add_checker_argument(parser: argparse.ArgumentParser, default: str = "drake
 def _make_checker(scenario: Scenario, kind: str, source: str):
     """The validity checker of ``kind``; the Drake one first explains a start
     or goal in collision by naming the touching bodies (ScenarioError)."""
-    from drake_social.model.checker import make_checker  # imports Drake: only when planning
+    from drake_social.collision.drake_checker import make_checker  # imports Drake: only when planning
 
     return make_checker(scenario, kind, source=source)
 
@@ -341,8 +341,8 @@ def _json_lines(record: dict) -> str:
 
 
 def _run_plan(args: argparse.Namespace) -> int:
-    from drake_social.outputs import OutputSet
-    from drake_social.planning.variants import plan
+    from drake_social.io.outputs import OutputSet
+    from drake_social.planning.algorithms import plan
     from drake_social.viz.path import write_plan_figures  # matplotlib figures: only when drawing
 
     from drake_social.scenario import validate_planner_choice
@@ -370,7 +370,7 @@ def _run_plan(args: argparse.Namespace) -> int:
         print(result.summary())
         bad = None
         if result.success:  # Drake's independent second opinion, before anything is committed
-            from drake_social.model.checker import verify_path
+            from drake_social.collision.drake_checker import verify_path
 
             bad = verify_path(checker, result.waypoints)
 
@@ -473,7 +473,7 @@ def _checked_path(path: Path, parsed: tuple[np.ndarray, list[int]], scenario: Sc
     from drake_social.waypoints import check_waypoints
 
     if checker is None:
-        from drake_social.model.checker import make_checker
+        from drake_social.collision.drake_checker import make_checker
 
         checker = make_checker(scenario, "planar")
     rows, numbers = parsed
@@ -483,12 +483,12 @@ def _checked_path(path: Path, parsed: tuple[np.ndarray, list[int]], scenario: Sc
 def _parse_path_csv(path: Path) -> tuple[np.ndarray, list[int]]:
     """The rows (N, 4) of a ``path.csv`` and the file line of each (see :func:`read_path_csv`).
 
-    The file may have at most :data:`~drake_social.textfile.MAX_PATH_FILE_BYTES`
+    The file may have at most :data:`~drake_social.io.textfile.MAX_PATH_FILE_BYTES`
     bytes; lines end with LF or CRLF (nothing else starts a line); a leading
     UTF-8 byte order mark (as spreadsheets write) is skipped.
     """
     from drake_social.limits import MAX_WAYPOINTS
-    from drake_social.textfile import MAX_PATH_FILE_BYTES
+    from drake_social.io.textfile import MAX_PATH_FILE_BYTES
 
     text = read_text_file(path, "path", "--path", limit=MAX_PATH_FILE_BYTES).removeprefix("\ufeff")
     lines = [line.removesuffix("\r") for line in text.split("\n")]
@@ -536,7 +536,7 @@ def _listed(names: Sequence[str]) -> str:
 
 
 def _run_simulate(args: argparse.Namespace) -> int:
-    from drake_social.outputs import OutputSet
+    from drake_social.io.outputs import OutputSet
     from drake_social.scenario import validate_scenario
     from drake_social.sim.run import run_checked
     from drake_social.viz.tracking import tracking_figure
@@ -680,8 +680,8 @@ def _add_bench(subparsers) -> None:
 
 
 def _run_bench(args: argparse.Namespace) -> int:
-    from drake_social.experiments.bench import run_bench
-    from drake_social.outputs import OutputSet
+    from drake_social.experiments.bench.planners import run_bench
+    from drake_social.io.outputs import OutputSet
 
     for path in args.scenarios:
         check_regular_file(path, "scenario", "--scenarios")
@@ -722,7 +722,7 @@ def _run_bench(args: argparse.Namespace) -> int:
 
 
 def _add_experiment(subparsers) -> None:
-    from drake_social.experiments.executors import EXECUTORS
+    from drake_social.experiments.study.executors import EXECUTORS
     from drake_social.experiments.study import MAX_PAPER_RUNS, MAX_STUDY_TASKS, PAPER_PAIRS
     from drake_social.scenario import MAX_ITERATIONS
 
@@ -772,12 +772,12 @@ def _run_experiment(args: argparse.Namespace) -> int:
 
     from drake_social.experiments.study import (StudyOutputError, load_sweep, output_names, paper_study,
                                                 rescue_records, run_study, write_records, write_study)
-    from drake_social.outputs import DeferredSignals, OutputSet
+    from drake_social.io.outputs import DeferredSignals, OutputSet
 
     if args.scheduler is not None and args.executor != "dask":
         raise ScenarioError("--scheduler needs --executor dask")
     if args.scheduler is not None:  # before anything runs
-        from drake_social.experiments.executors import check_scheduler_address
+        from drake_social.experiments.study.executors import check_scheduler_address
 
         try:
             check_scheduler_address(args.scheduler)
@@ -925,7 +925,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         print(f"drake-social: error: {e}", file=sys.stderr)
         return 1
     except KeyboardInterrupt as e:
-        from drake_social.outputs import InterruptedAfterCommit
+        from drake_social.io.outputs import InterruptedAfterCommit
 
         if isinstance(e, InterruptedAfterCommit):  # Ctrl-C while the set was moved into place
             where = e.committed[0].parent if e.committed else "its folder"

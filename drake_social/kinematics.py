@@ -199,7 +199,7 @@ class ArmGeometry:
         ``c1`` bounds its distance from the shoulder (``l1 + c2``), so a
         point moves at most ``hypot(dx, dy) + c1 |dpsi1| + c2 |dpsi2|``: the
         per-coordinate form Drake's weighted distance needs
-        (:mod:`drake_social.model.checker`). :meth:`lever` gives a tighter
+        (:mod:`drake_social.collision.drake_checker`). :meth:`lever` gives a tighter
         bound in the coordinates (psi1, psi1 + psi2).
 
         Args:

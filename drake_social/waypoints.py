@@ -22,7 +22,7 @@ and :func:`drake_social.sim.diagram.build_diagram` all use it.
 
 Example::
 
-    from drake_social.model.checker import make_checker
+    from drake_social.collision.drake_checker import make_checker
     from drake_social.waypoints import check_waypoints
 
     checker = make_checker(scenario, "planar")
@@ -38,7 +38,7 @@ import numpy as np
 from drake_social.arguments import real_array, require_checker, require_scenario
 from drake_social.kinematics import configuration_limits
 from drake_social.limits import MAX_WAYPOINTS
-from drake_social.planning.validity import ValidityChecker
+from drake_social.collision.validity import ValidityChecker
 from drake_social.scenario import Scenario, ScenarioError
 
 __all__ = ["ENDPOINT_TOLERANCE", "FIELDS", "check_waypoints", "waypoint_array"]

@@ -12,8 +12,8 @@ import numpy as np
 import pytest
 
 from drake_social.cli import EXIT_NO_PATH, ProgressBar, build_parser, main
-from drake_social.planning.geometric import GeometricChecker
-from drake_social.planning.variants import evaluate_path, make_objective, plan
+from drake_social.collision.geometric import GeometricChecker
+from drake_social.planning.algorithms import evaluate_path, make_objective, plan
 from drake_social.scenario import ALGORITHMS, load_scenario
 
 SCENARIO_DIR = Path(__file__).resolve().parent.parent / "scenarios"
@@ -198,14 +198,14 @@ def test_a_ctrl_c_mid_redraw_still_ends_the_bars_line(cut):
 
 def test_bench_parses_and_calls_run_bench_with_keywords(tmp_path, monkeypatch, capsys):
     calls = []
-    fake = types.ModuleType("drake_social.experiments.bench")
+    fake = types.ModuleType("drake_social.experiments.bench.planners")
 
     def fake_run_bench(**kwargs):
         calls.append(kwargs)
         (kwargs["out_dir"] / "bench.md").write_text("| table |\n")
 
     fake.run_bench = fake_run_bench
-    monkeypatch.setitem(sys.modules, "drake_social.experiments.bench", fake)
+    monkeypatch.setitem(sys.modules, "drake_social.experiments.bench.planners", fake)
     argv = ["bench", "--scenarios", str(TINY), "--algorithms", "rrt_star", "social_rrt_star", "--iterations", "50",
             "--seeds", "3", "--repeats", "2", "--checker", "numpy", "--no-ompl", "--out", str(tmp_path)]
     assert main(argv) == 0
@@ -244,7 +244,7 @@ def test_bench_runs_on_tiny_and_prints_its_table(tmp_path, capsys):
 
 def test_cli_offers_exactly_the_library_checkers():
     from drake_social import cli
-    from drake_social.model.checker import CHECKERS
+    from drake_social.collision.drake_checker import CHECKERS
 
     assert cli.CHECKERS == CHECKERS
 

@@ -128,7 +128,7 @@ def test_drake_social_has_no_import_cycle():
 
 def test_arguments_checks_the_checker_protocol_by_its_methods():
     from drake_social.arguments import CHECKER_METHODS
-    from drake_social.planning.validity import ValidityChecker
+    from drake_social.collision.validity import ValidityChecker
 
     protocol = {k for k, v in vars(ValidityChecker).items() if callable(v) and not k.startswith("_")}
     assert set(CHECKER_METHODS) == protocol

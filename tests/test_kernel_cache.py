@@ -24,12 +24,12 @@ def package(tmp_path, monkeypatch):
 
 def _cached(package):
     files = [package / "cost/__pycache__/kernel.msc_sums-101.py311.nbi",
-             package / "planning/__pycache__/tree_kernel.grow-70.py311.1.nbc",
-             package / "planning/__pycache__/planar_kernel._pair-99.py311.nbi"]
+             package / "planning/rrt_star/__pycache__/tree_kernel.grow-70.py311.1.nbc",
+             package / "collision/__pycache__/planar_kernel._pair-99.py311.nbi"]
     for f in files:
         f.parent.mkdir(parents=True, exist_ok=True)
         f.write_bytes(b"x")
-    other = package / "planning/__pycache__/rrt_star.cpython-311.pyc"
+    other = package / "planning/rrt_star/__pycache__/__init__.cpython-311.pyc"
     other.write_bytes(b"y")
     return files, other
 
@@ -41,14 +41,14 @@ def test_caches_survive_while_the_sources_stay_and_go_when_one_changes(package, 
     dut.ensure_fresh()
     assert all(f.exists() for f in files)  # same sources: kept
     stamp = dut.sources_hash()
-    with open(package / "planning/planar_kernel.py", "a") as f:
+    with open(package / "collision/planar_kernel.py", "a") as f:
         f.write("\n# edited\n")
     assert dut.sources_hash() != stamp
     monkeypatch.setattr(dut, "_done", False)
     dut.ensure_fresh()
     assert not any(f.exists() for f in files)  # tree_kernel's cache too, though its file did not change
     assert other.exists()  # only numba's kernel caches are touched
-    assert (package / "planning/__pycache__" / dut._STAMP).read_text() == dut.sources_hash()
+    assert (package / "collision/__pycache__" / dut._STAMP).read_text() == dut.sources_hash()
 
 
 def test_once_per_process(package, monkeypatch):

@@ -119,7 +119,7 @@ def boxes(tmp_path_factory):
 
 def test_planar_checker_reads_the_same_room_in_parts(boxes):
     from drake_social.model.plant import ENVIRONMENT_PART, build_robot_diagram
-    from drake_social.model.planar_checker import PlanarChecker
+    from drake_social.collision.planar_checker import PlanarChecker
 
     whole = PlanarChecker(boxes, model=build_robot_diagram(boxes))
     parts = PlanarChecker(boxes)
@@ -138,7 +138,7 @@ def test_local_drake_checks_answer_as_the_whole_room(boxes, monkeypatch):
     """verify_path and the start/goal check from the shapes near the path
     (in parts) agree with one Drake checker of the whole room, on random
     straight motions, many of them colliding."""
-    from drake_social.model.checker import (
+    from drake_social.collision.drake_checker import (
         SceneGraphChecker,
         _segment_groups,
         check_start_goal,
@@ -146,7 +146,7 @@ def test_local_drake_checks_answer_as_the_whole_room(boxes, monkeypatch):
         valid_configurations,
         verify_path,
     )
-    from drake_social.model.planar_checker import PlanarChecker
+    from drake_social.collision.planar_checker import PlanarChecker
     from drake_social.scenario import ScenarioError
 
     import drake_social.model.plant as plant

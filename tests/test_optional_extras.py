@@ -26,7 +26,7 @@ def dut(extra, monkeypatch, tmp_path):
 
 def test_a_missing_package_skips_where_it_is_optional(dut):
     with pytest.raises(pytest.skip.Exception, match=f"optional '{MISSING}' package is not installed"):
-        dut(MISSING, "drake_social.experiments.ompl_baseline")
+        dut(MISSING, "drake_social.experiments.bench.planners.ompl_baseline")
 
 
 @pytest.mark.parametrize("ci", ["true", "1", "True"])
@@ -60,6 +60,6 @@ def test_a_broken_project_module_is_an_error_not_a_skip(dut, monkeypatch, tmp_pa
 
 
 def test_an_installed_package_returns_the_module(dut):
-    import drake_social.experiments.bench as expected
+    import drake_social.experiments.bench.planners as expected
 
-    assert dut("numpy", "drake_social.experiments.bench") is expected
+    assert dut("numpy", "drake_social.experiments.bench.planners") is expected

@@ -1,4 +1,4 @@
-"""drake_social.outputs: a command's files land as one set or not at all."""
+"""drake_social.io.outputs: a command's files land as one set or not at all."""
 
 from __future__ import annotations
 
@@ -15,8 +15,8 @@ from pathlib import Path
 
 import pytest
 
-from drake_social import outputs as outputs_module
-from drake_social.outputs import InterruptedAfterCommit, OutputBusyError, OutputSet, current_set
+from drake_social.io import outputs as outputs_module
+from drake_social.io.outputs import InterruptedAfterCommit, OutputBusyError, OutputSet, current_set
 
 
 def _listing(folder: Path) -> dict[str, bytes]:
@@ -100,7 +100,7 @@ def test_committed_files_have_normal_permissions(tmp_path):
 
 _HOLDER = textwrap.dedent("""
     import sys
-    from drake_social.outputs import OutputSet
+    from drake_social.io.outputs import OutputSet
     with OutputSet(sys.argv[1], "plan") as dut:
         dut.write_text("path.csv", "holder")
         print("ready", flush=True)
@@ -192,7 +192,7 @@ def test_without_symbolic_links_the_set_is_moved_file_by_file_with_a_warning(tmp
     monkeypatch.setattr(outputs_module.os, "symlink", no_links)
     _write_set(tmp_path, {"path.csv": "old", "stale.png": "old"})
     caplog.clear()
-    with caplog.at_level("WARNING", logger="drake_social.outputs"):
+    with caplog.at_level("WARNING", logger="drake_social.io.outputs"):
         dut = _write_set(tmp_path, {"path.csv": "new", "path.png": "new png"})
     assert _listing(tmp_path) == {"path.csv": b"new", "path.png": b"new png"}
     assert dut.committed == [tmp_path / "path.csv", tmp_path / "path.png"]

@@ -1,4 +1,4 @@
-"""drake_social.outputs under SIGKILL: a run killed at any step of its commit
+"""drake_social.io.outputs under SIGKILL: a run killed at any step of its commit
 leaves the folder holding the complete old set or the complete new one, and
 :func:`current_set` says which. Each case is a subprocess that kills itself
 (SIGKILL: no handler, no cleanup) just before its k-th file-system change
@@ -16,7 +16,7 @@ from pathlib import Path
 
 import pytest
 
-from drake_social.outputs import OutputSet, current_set
+from drake_social.io.outputs import OutputSet, current_set
 
 #: The set the killed run writes.
 NEW = {"path.csv": b"new path", "path.png": b"new png", "extra.png": b"new extra"}
@@ -27,7 +27,7 @@ OTHERS = {"notes.txt": b"the user's", "scene.png": b"show's scene"}
 
 _KILLED_RUN = textwrap.dedent("""
     import builtins, os, shutil, signal, sys
-    from drake_social import outputs
+    from drake_social.io import outputs
 
     folder, kill_at = sys.argv[1], int(sys.argv[2])
     state = {"committing": False, "changes": 0}

@@ -1,5 +1,6 @@
-"""The pure-numpy core (kinematics, cost/, planning/ and the modules they
-use: arguments, textfile, waypoints, limits) never imports pydrake."""
+"""The pure-numpy core (kinematics, cost/, planning/, the numpy half of
+collision/ and the modules they use: arguments, textfile, waypoints, limits)
+never imports pydrake."""
 
 from __future__ import annotations
 
@@ -15,7 +16,9 @@ PROBE = textwrap.dedent(
     import importlib, json, pkgutil, sys
     imported = []
     for name in ("drake_social.kinematics", "drake_social.cost", "drake_social.planning", "drake_social.arguments",
-                 "drake_social.textfile", "drake_social.waypoints", "drake_social.limits"):
+                 "drake_social.io.textfile", "drake_social.waypoints", "drake_social.limits",
+                 "drake_social.collision.validity", "drake_social.collision.geometric",
+                 "drake_social.collision.planar_kernel"):
         importlib.import_module(name)
         imported.append(name)
     for package in ("drake_social.cost", "drake_social.planning"):
@@ -51,8 +54,8 @@ def test_core_modules_do_not_import_pydrake():
     dut = run(PROBE)
     imported = set(dut["imported"])
     # pkgutil found the modules known today (and whatever is added later).
-    assert {"drake_social.cost.agf", "drake_social.cost.social", "drake_social.planning.validity",
-            "drake_social.arguments", "drake_social.textfile", "drake_social.waypoints", "drake_social.limits"} <= imported
+    assert {"drake_social.cost.agf", "drake_social.cost.social", "drake_social.collision.validity",
+            "drake_social.arguments", "drake_social.io.textfile", "drake_social.waypoints", "drake_social.limits"} <= imported
     assert dut["pydrake"] == [], f"pydrake modules loaded by the core: {dut['pydrake'][:5]}"
 
 

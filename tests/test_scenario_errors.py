@@ -13,7 +13,7 @@ import pytest
 
 from drake_social.cli import load_with_overrides, main, read_path_csv
 from drake_social.scenario import ScenarioError, check_yaml, load_scenario
-from drake_social.textfile import shorten
+from drake_social.io.textfile import shorten
 
 TINY = Path(__file__).resolve().parent.parent / "scenarios" / "tiny.yaml"
 PEOPLE = 'people:\n  - {x: 4.0, y: 3.8, theta: -1.5708, radius: 0.25, name: "standing"}  # faces south'
@@ -324,7 +324,7 @@ def test_a_control_character_or_nul_is_refused_in_a_file_and_a_set(tmp_path, cap
 
 
 def test_a_sparse_file_of_nuls_at_the_size_limit_is_refused(tmp_path, capsys):
-    from drake_social.textfile import MAX_YAML_FILE_BYTES
+    from drake_social.io.textfile import MAX_YAML_FILE_BYTES
 
     dut = tmp_path / "zeros.yaml"
     with open(dut, "wb") as f:
@@ -426,7 +426,7 @@ def test_a_long_path_line_is_cut_short(tmp_path, tiny_scenario, capsys):
 
 def test_the_path_byte_limit_follows_the_waypoint_limit(tmp_path, tiny_scenario):
     from drake_social.limits import MAX_WAYPOINTS
-    from drake_social.textfile import MAX_PATH_FILE_BYTES
+    from drake_social.io.textfile import MAX_PATH_FILE_BYTES
 
     assert MAX_PATH_FILE_BYTES == (MAX_WAYPOINTS + 1) * 256 < 3_000_000
     # the longest rows plan writes (17 significant digits, exponents, signs) fit with room to spare

@@ -19,7 +19,7 @@ import pytest
 
 from drake_social.cost import SocialCost
 from drake_social.kinematics import ArmGeometry
-from drake_social.planning.geometric import GeometricChecker
+from drake_social.collision.geometric import GeometricChecker
 from drake_social.scenario import Bar, LShape, load_scenario, validate_scenario
 
 SCENARIO_DIR = Path(__file__).resolve().parent.parent / "scenarios"

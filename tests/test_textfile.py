@@ -18,7 +18,7 @@ import pytest
 from drake_social.cli import main
 from drake_social.experiments.study import load_sweep
 from drake_social.scenario import ScenarioError, load_scenario
-from drake_social.textfile import MAX_PATH_FILE_BYTES, MAX_YAML_FILE_BYTES, read_text_file
+from drake_social.io.textfile import MAX_PATH_FILE_BYTES, MAX_YAML_FILE_BYTES, read_text_file
 
 TINY = Path(__file__).resolve().parent / ".." / "scenarios" / "tiny.yaml"
 

@@ -17,7 +17,7 @@ import pytest
 
 from drake_social.cli import main
 from drake_social.limits import MAX_WAYPOINTS
-from drake_social.planning.geometric import GeometricChecker
+from drake_social.collision.geometric import GeometricChecker
 from drake_social.planning.result import PlanningInputError
 from drake_social.scenario import ScenarioError, validate_scenario
 from drake_social.sim.diagram import build_diagram
@@ -225,7 +225,7 @@ def test_start_equal_to_goal_is_refused_by_plan_and_simulate_alike(tmp_path, tin
 
 
 def test_the_planner_refuses_start_equal_to_goal(tiny_scenario):
-    from drake_social.planning.variants import make_planner
+    from drake_social.planning.algorithms import make_planner
 
     planner = make_planner(tiny_scenario, GeometricChecker(tiny_scenario))
     q = np.asarray(tiny_scenario.start, float)
@@ -308,10 +308,10 @@ def _cases(s):
         arm_source_from_options,
         reference_source_from_options,
     )
-    from drake_social.model.checker import make_checker
+    from drake_social.collision.drake_checker import make_checker
     from drake_social.planning.rrt_star import RrtStar
     from drake_social.planning.space import ConfigurationSpace
-    from drake_social.planning.variants import make_objective, make_planner, plan
+    from drake_social.planning.algorithms import make_objective, make_planner, plan
 
     space, objective = ConfigurationSpace.from_scenario(s), make_objective(s, "rrt_star")
     wp = np.array([s.start, s.goal], float)
@@ -347,7 +347,7 @@ def _cases(s):
         (lambda: simulate(s, waypoints=wp, meshcat="http://localhost"), TypeError,
          "simulate: meshcat must be a pydrake.geometry.Meshcat or None"),
         (lambda: plan(s, "planar"), TypeError,
-         f"plan: checker {CHECKER} (drake_social.model.checker.make_checker(scenario, kind), with is_valid, "
+         f"plan: checker {CHECKER} (drake_social.collision.drake_checker.make_checker(scenario, kind), with is_valid, "
          "are_valid, is_motion_valid, are_motions_valid and clearance), got str 'planar' (a checker's name: build "
          "the checker with make_checker(scenario, 'planar'))"),
         (lambda: plan("x.yaml", GeometricChecker(s)), TypeError, "plan: scenario must be a drake_social.scenario"),
@@ -400,11 +400,11 @@ def _cases(s):
         (lambda: plan(s, GeometricChecker(s), iterations=0), ValueError,
          "plan: iterations must be an integer >= 1 and <= 10,000,000, got 0"),
         (lambda: PlannerSystem(s, iterations="20"), TypeError, "PlannerSystem: iterations must be an integer"),
-        (lambda: __import__("drake_social.planning.variants", fromlist=["x"]).evaluate_path(s, np.zeros(3)),
+        (lambda: __import__("drake_social.planning.algorithms", fromlist=["x"]).evaluate_path(s, np.zeros(3)),
          ValueError, "evaluate_path: waypoints: must be an (N, 4) array of rows [x, y, psi1, psi2] with N >= 1, "
                      "got shape "
                      "(3,)"),
-        (lambda: __import__("drake_social.planning.variants", fromlist=["x"]).evaluate_path(s, [[1, 2, 3, "4"]]),
+        (lambda: __import__("drake_social.planning.algorithms", fromlist=["x"]).evaluate_path(s, [[1, 2, 3, "4"]]),
          TypeError, "evaluate_path: waypoints: must be an (N, 4) array"),
         (lambda: analyze_execution("x", wp, np.zeros(2), np.zeros((2, 4))), TypeError,
          "analyze_execution: scenario must be a drake_social.scenario.Scenario"),
@@ -459,7 +459,7 @@ def _counting(monkeypatch, owner, name):
 def test_a_path_file_and_the_scenario_are_checked_once(tmp_path, tiny_scenario_path, capsys, monkeypatch):
     import drake_social.scenario
     import drake_social.sim.diagram
-    from drake_social.model.planar_checker import PlanarChecker
+    from drake_social.collision.planar_checker import PlanarChecker
 
     motions = _counting(monkeypatch, PlanarChecker, "are_motions_valid")
     validations = [_counting(monkeypatch, module, "validate_scenario")
@@ -482,7 +482,7 @@ def test_a_path_file_and_the_scenario_are_checked_once(tmp_path, tiny_scenario_p
 ])
 def test_simulate_checks_cheap_arguments_before_the_waypoints_collisions(tiny_scenario, path, monkeypatch,
                                                                          arguments, kind, message):
-    from drake_social.model.planar_checker import PlanarChecker
+    from drake_social.collision.planar_checker import PlanarChecker
 
     motions = _counting(monkeypatch, PlanarChecker, "are_motions_valid")
     configurations = _counting(monkeypatch, PlanarChecker, "are_valid")
@@ -519,7 +519,7 @@ def test_the_segment_message_says_how_the_checker_checks_motions(tiny_scenario):
 def test_a_checker_of_another_scenario_is_refused(tiny_scenario):
     import dataclasses as dc
 
-    from drake_social.model.checker import make_checker
+    from drake_social.collision.drake_checker import make_checker
 
     empty = copy.deepcopy(tiny_scenario)
     empty.world = dc.replace(empty.world, obstacles=[])

@@ -1,6 +1,6 @@
 """The planner as a Drake system: plan once at initialization, output the path.
 
-:class:`PlannerSystem` runs :func:`drake_social.planning.variants.plan` in an
+:class:`PlannerSystem` runs :func:`drake_social.planning.algorithms.plan` in an
 initialization event (``Simulator.Initialize()`` or
 ``system.ExecuteInitializationEvents(context)``) and stores the
 :class:`~drake_social.planning.result.PlannerResult` in abstract state. Its
@@ -33,8 +33,8 @@ from pydrake.trajectories import PiecewisePolynomial
 from drake_social.arguments import require_checker, require_choice, require_int, require_scenario
 from drake_social.kinematics import cumulative_distance
 from drake_social.planning.result import PlannerResult
-from drake_social.planning.validity import ValidityChecker
-from drake_social.planning.variants import plan
+from drake_social.collision.validity import ValidityChecker
+from drake_social.planning.algorithms import plan
 from drake_social.scenario import ALGORITHMS, MAX_ITERATIONS, Scenario
 
 __all__ = ["PlannerSystem", "path_parameter", "waypoint_trajectory"]
@@ -80,7 +80,7 @@ class PlannerSystem(LeafSystem):
     Args:
         scenario: a validated scenario (start, goal, planner options, seed).
         checker: the validity checker; None = the exact planar checker built
-            from the scenario's SceneGraph (:class:`~drake_social.model.planar_checker.PlanarChecker`).
+            from the scenario's SceneGraph (:class:`~drake_social.collision.planar_checker.PlanarChecker`).
         algorithm: one of ``scenario.ALGORITHMS``; None = ``scenario.planner.algorithm``.
         iterations: K; None = ``scenario.planner.iterations``.
         seed: the planner's seed; None = ``scenario.random_seed``.
@@ -111,7 +111,7 @@ class PlannerSystem(LeafSystem):
         require_int(iterations, "PlannerSystem", "iterations", minimum=1, maximum=MAX_ITERATIONS, optional=True)
         require_int(seed, "PlannerSystem", "seed", minimum=0, optional=True)
         if checker is None:
-            from drake_social.model.checker import make_checker
+            from drake_social.collision.drake_checker import make_checker
 
             checker = make_checker(scenario, "planar")
         self._scenario = scenario

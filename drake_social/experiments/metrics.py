@@ -55,7 +55,7 @@ import numpy as np
 from drake_social.cost.agf import agf_xy, people_array
 from drake_social.cost.social import SocialCost
 from drake_social.kinematics import ArmGeometry, config_distance
-from drake_social.planning.variants import base_only_weights
+from drake_social.planning.algorithms import base_only_weights
 
 __all__ = [
     "HEADING_STEP",

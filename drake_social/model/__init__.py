@@ -1,15 +1,9 @@
-"""Drake: the robot model, the MultibodyPlant/SceneGraph of a scenario, and the
-SceneGraphCollisionChecker adapter of the validity-checker protocol."""
+"""Drake: the robot model and the MultibodyPlant/SceneGraph of a scenario.
 
-from drake_social.model.checker import Contact, SceneGraphChecker, check_start_goal
+The checkers built on this model live in :mod:`drake_social.collision`.
+"""
+
 from drake_social.model.plant import ScenarioDiagram, build_robot_diagram
 from drake_social.model.robot_model import robot_sdf
 
-__all__ = [
-    "Contact",
-    "ScenarioDiagram",
-    "SceneGraphChecker",
-    "build_robot_diagram",
-    "check_start_goal",
-    "robot_sdf",
-]
+__all__ = ["ScenarioDiagram", "build_robot_diagram", "robot_sdf"]

@@ -28,7 +28,7 @@ import numpy as np
 
 from drake_social.planning.objective import Objective
 from drake_social.planning.space import ConfigurationSpace
-from drake_social.planning.validity import ValidityChecker
+from drake_social.collision.validity import ValidityChecker
 
 __all__ = ["OptimizeOptions", "optimize_path", "path_cost"]
 

@@ -94,7 +94,7 @@ from drake_social.control import (
 )
 from drake_social.kinematics import configuration_limits
 from drake_social.model.plant import add_environment, add_robot
-from drake_social.planning.validity import ValidityChecker
+from drake_social.collision.validity import ValidityChecker
 from drake_social.scenario import (EXECUTIONS, SIM_MODES, SERVO_BANDWIDTH, SERVO_BASE_TIME_CONSTANT, Scenario,
                                     ScenarioError, plant_time_step_problem, validate_scenario)
 from drake_social.waypoints import check_waypoints
@@ -257,7 +257,7 @@ def check_diagram_waypoints(scenario: Scenario, waypoints, checker: ValidityChec
     with ``checker``, or the exact planar checker when it is None (the
     planner's default: the checker of the run)."""
     if checker is None:
-        from drake_social.model.checker import make_checker
+        from drake_social.collision.drake_checker import make_checker
 
         checker = make_checker(scenario, "planar")
     return check_waypoints(scenario, waypoints, checker, source=f"{who}: waypoints")

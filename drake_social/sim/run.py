@@ -45,7 +45,7 @@ from drake_social.cost.social import SocialCost
 from drake_social.kinematics import ArmGeometry, configuration_limits
 from drake_social.model.plant import ACTUATED_JOINTS
 from drake_social.planning.result import PlannerResult
-from drake_social.planning.validity import ValidityChecker
+from drake_social.collision.validity import ValidityChecker
 from drake_social.scenario import Scenario, ScenarioError, time_limit_problem
 from drake_social.sim.analysis import config_deviation, densify, point_deviation
 from drake_social.sim.diagram import (
@@ -330,7 +330,7 @@ def analyze_execution(
         waypoints: (N, 4) planned path.
         times, q: (T,), (T, 4) executed configurations over time.
         checker: the collision checker of the executed configurations;
-            None = Drake's (:func:`~drake_social.model.checker.valid_configurations`:
+            None = Drake's (:func:`~drake_social.collision.drake_checker.valid_configurations`:
             SceneGraphCollisionChecker answers from the shapes near the
             trajectory), independent of the planar checker that planned. The minimum
             clearance is the exact planar checker's.
@@ -340,14 +340,14 @@ def analyze_execution(
         ScenarioError: ``waypoints`` not an (N, 4) array with 2 <= N <=
             MAX_WAYPOINTS; ``times`` and ``q`` not (T,) and (T, 4) finite.
     """
-    from drake_social.model.checker import make_checker, valid_configurations
+    from drake_social.collision.drake_checker import make_checker, valid_configurations
 
     require_scenario(scenario, "analyze_execution")
     require_checker(checker, "analyze_execution", optional=True)
     waypoints = waypoint_array(waypoints, "analyze_execution: waypoints")
     times, q = _trajectory(times, q, "analyze_execution")
     # Clearances from the exact planar checker: Drake's cylinder-box distance
-    # can exceed the true one (see drake_social.model.checker).
+    # can exceed the true one (see drake_social.collision.drake_checker).
     planar = make_checker(scenario, "planar")
     geometry = ArmGeometry.from_scenario(scenario)
     social = SocialCost.from_scenario(scenario)

@@ -9,9 +9,9 @@ from pydrake.systems.framework import DiagramBuilder
 
 import drake_social.control.planner_system as planner_system
 from drake_social.control import PlannerSystem, path_parameter, waypoint_trajectory
-from drake_social.planning.geometric import GeometricChecker
+from drake_social.collision.geometric import GeometricChecker
 from drake_social.planning.result import PlanningInputError
-from drake_social.planning.variants import plan
+from drake_social.planning.algorithms import plan
 
 ITERATIONS = 150
 
@@ -61,7 +61,7 @@ def test_outputs_equal_plan_with_the_same_seed_bit_for_bit(tiny_scenario):
 
 
 def test_the_default_checker_is_the_planar_one_and_gives_the_same_path_as_plan(tiny_scenario):
-    from drake_social.model.planar_checker import PlanarChecker
+    from drake_social.collision.planar_checker import PlanarChecker
 
     dut = PlannerSystem(tiny_scenario, iterations=60, seed=3)
     assert isinstance(dut._checker, PlanarChecker)

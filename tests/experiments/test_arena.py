@@ -7,7 +7,7 @@ import sqlite3
 
 import pytest
 
-from drake_social.experiments.arena import build_database, statistics_script, write_logs
+from drake_social.experiments.study.arena import build_database, statistics_script, write_logs
 from drake_social.experiments.study import Group, Study, run_study
 
 

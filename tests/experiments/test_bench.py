@@ -10,10 +10,10 @@ import numpy as np
 import pytest
 
 from drake_social.cost.social import SocialCost
-from drake_social.experiments.bench import run_bench
-from drake_social.planning.geometric import GeometricChecker
+from drake_social.experiments.bench.planners import run_bench
+from drake_social.collision.geometric import GeometricChecker
 from drake_social.planning.space import ConfigurationSpace
-from drake_social.planning.variants import evaluate_path, make_objective
+from drake_social.planning.algorithms import evaluate_path, make_objective
 from drake_social.scenario import load_scenario
 
 ALGOS = ["rrt_star", "social_rrt_star"]
@@ -41,7 +41,7 @@ def test_small_bench_reports_its_runs(tiny_scenario_path, tiny_scenario, tmp_pat
     assert on_disk["machine"]["cpu_count"] >= 1 and on_disk["machine"]["numpy"] == np.__version__
     for key in ("load_average_start", "load_average_end"):  # what os.getloadavg gives here
         assert len(on_disk["machine"][key]) == 3 and min(on_disk["machine"][key]) >= 0.0
-    from drake_social.experiments import bench
+    from drake_social.experiments.bench import planners as bench
 
     assert on_disk["machine"]["cpu_model"] == bench.cpu_model()
     assert on_disk["checker_bench"]["scenarios"]["tiny.yaml"]["configs_per_s"]["numpy_batched"] > 0
@@ -110,7 +110,7 @@ def test_bench_rejects_bad_arguments(tiny_scenario_path, tmp_path):
 
 
 def test_radius_formula_by_hand(extra):
-    ompl_baseline = extra("ompl", "drake_social.experiments.ompl_baseline")
+    ompl_baseline = extra("ompl", "drake_social.experiments.bench.planners.ompl_baseline")
     assert ompl_baseline.unit_ball_measure(2) == pytest.approx(math.pi)
     assert ompl_baseline.unit_ball_measure(3) == pytest.approx(4 * math.pi / 3)
     assert ompl_baseline.unit_ball_measure(4) == pytest.approx(math.pi**2 / 2)
@@ -127,7 +127,7 @@ def test_radius_formula_by_hand(extra):
 
 
 def test_ompl_path_is_valid_and_costed_by_our_code(tiny_scenario, extra):
-    ompl_baseline = extra("ompl", "drake_social.experiments.ompl_baseline")
+    ompl_baseline = extra("ompl", "drake_social.experiments.bench.planners.ompl_baseline")
     objective = make_objective(tiny_scenario, "social_rrt_star")
     p = tiny_scenario.planner
 
@@ -164,7 +164,7 @@ def test_ompl_path_is_valid_and_costed_by_our_code(tiny_scenario, extra):
 
 
 def test_objective_adapter_equals_our_motion_cost(tiny_scenario_path, rng, extra):
-    ompl_baseline = extra("ompl", "drake_social.experiments.ompl_baseline")
+    ompl_baseline = extra("ompl", "drake_social.experiments.bench.planners.ompl_baseline")
     from ompl import base as ob
     from ompl import geometric as og
 
@@ -237,7 +237,7 @@ def test_bench_with_ompl_reports_ratios(tiny_scenario_path, tmp_path, extra):
 
 
 def test_bench_without_ompl_says_so(tiny_scenario_path, tmp_path, monkeypatch):
-    import drake_social.experiments.bench as bench
+    import drake_social.experiments.bench.planners as bench
 
     monkeypatch.setattr(bench, "ompl_available", lambda: False)
     dut = _small(tiny_scenario_path, tmp_path, algorithms=["rrt_star"], seeds=1, iterations=50, include_ompl=True)
@@ -251,7 +251,7 @@ def test_bench_without_ompl_says_so(tiny_scenario_path, tmp_path, monkeypatch):
 def test_ratios_where_a_median_is_zero_are_not_defined():
     """A scenario where every social planner finds a path of cost 0: the
     social-cost and objective ratios are n/a, not 0; the time ratio stays."""
-    from drake_social.experiments import bench
+    from drake_social.experiments.bench import planners as bench
 
     def summary(time, cost):
         stat = lambda m: {"n": 2, "median": m, "q25": m, "q75": m, "iqr": 0.0, "min": m, "max": m}  # noqa: E731
@@ -281,7 +281,7 @@ def test_repeats_pool_only_identical_runs():
     repeat with another path is refused, not averaged in."""
     from types import SimpleNamespace
 
-    from drake_social.experiments import bench
+    from drake_social.experiments.bench import planners as bench
 
     def run(times, costs):
         it = iter(zip(times, costs))
@@ -300,7 +300,7 @@ def test_repeats_pool_only_identical_runs():
 def test_cpu_model_and_the_machine_line(tmp_path):
     """The processor is read from cpuinfo's first non-empty "model name"; the
     Markdown says it and the load averages around the run."""
-    from drake_social.experiments import bench
+    from drake_social.experiments.bench import planners as bench
 
     info = tmp_path / "cpuinfo"
     info.write_text("processor\t: 0\nvendor_id\t: X\nmodel name\t:   \nmodel name\t: AMD EPYC 9B45\n"

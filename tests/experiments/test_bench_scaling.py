@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from drake_social.experiments import bench_scaling as dut
-from drake_social.model.checker import make_checker
+from drake_social.collision.drake_checker import make_checker
 
 
 def test_fit_exponent_recovers_a_power_law():

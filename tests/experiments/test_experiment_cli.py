@@ -19,9 +19,10 @@ from pathlib import Path
 import pytest
 
 from drake_social.cli import main
-from drake_social.experiments import arena, report
-from drake_social.experiments.executors import check_scheduler_address, map_tasks
-from drake_social.outputs import OutputSet, current_set
+from drake_social.experiments.study import arena
+from drake_social.experiments.study import report
+from drake_social.experiments.study.executors import check_scheduler_address, map_tasks
+from drake_social.io.outputs import OutputSet, current_set
 
 CLI = Path(sys.executable).with_name("drake-social")
 _FORM = "the form is [tcp://|tls://]HOST:PORT with PORT in 1..65535, e.g. tcp://10.0.0.5:8786"

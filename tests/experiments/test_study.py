@@ -9,7 +9,7 @@ import json
 import numpy as np
 import pytest
 
-from drake_social.experiments.report import paired, paper_claims, report_markdown
+from drake_social.experiments.study.report import paired, paper_claims, report_markdown
 from drake_social.experiments.study import (
     Group,
     Study,

@@ -21,7 +21,7 @@ from drake_social.experiments.study import (
     study_tasks,
 )
 from drake_social.scenario import ScenarioError
-from drake_social.textfile import shorten
+from drake_social.io.textfile import shorten
 
 TINY = Path(__file__).resolve().parent.parent.parent / "scenarios" / "tiny.yaml"
 NAME_RULE = ("may contain only letters, digits, '_', '-' and '.' (not first), at most 100 characters, as it names "
@@ -409,7 +409,7 @@ def test_a_sweep_and_a_study_check_their_settings_with_the_same_words(tmp_path, 
 def test_the_checkers_have_one_home():
     from drake_social import cli, scenario
     from drake_social.experiments import study
-    from drake_social.model import checker
+    from drake_social.collision import drake_checker as checker
 
     assert cli.CHECKERS is study.CHECKERS is checker.CHECKERS is scenario.CHECKERS
 
@@ -480,7 +480,7 @@ def test_a_long_group_name_is_named_whole(tmp_path):
 
 
 def test_a_bench_scenario_invalid_with_a_bench_algorithm_is_refused_before_any_run(tmp_path, monkeypatch):
-    from drake_social.experiments import bench as bench_module
+    from drake_social.experiments.bench import planners as bench_module
 
     def no_run(*args, **kwargs):
         raise AssertionError("a planner ran before every scenario was checked")

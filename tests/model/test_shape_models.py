@@ -33,10 +33,10 @@ from matplotlib.figure import Figure
 
 from drake_social.cost import SocialCost
 from drake_social.kinematics import ArmGeometry
-from drake_social.model.checker import SceneGraphChecker
-from drake_social.model.planar_checker import PlanarChecker
+from drake_social.collision.drake_checker import SceneGraphChecker
+from drake_social.collision.planar_checker import PlanarChecker
 from drake_social.model.plant import build_robot_diagram
-from drake_social.planning.geometric import GeometricChecker
+from drake_social.collision.geometric import GeometricChecker
 from drake_social.scenario import (
     MAX_OBJECT_POINTS,
     Bar,

@@ -33,8 +33,8 @@ def path_hash(waypoints: np.ndarray) -> str:
 
 def plan_case(scenario_name: str, algorithm: str, seed: int, checker=None) -> dict:
     """One raw (not optimised) plan's hash, waypoint count and cost."""
-    from drake_social.model.checker import make_checker
-    from drake_social.planning.variants import plan
+    from drake_social.collision.drake_checker import make_checker
+    from drake_social.planning.algorithms import plan
     from drake_social.scenario import load_scenario
 
     scenario = load_scenario(SCENARIO_DIR / f"{scenario_name}.yaml", "planner: {optimize: false}")
@@ -46,7 +46,7 @@ def plan_case(scenario_name: str, algorithm: str, seed: int, checker=None) -> di
 
 
 def all_cases() -> list[dict]:
-    from drake_social.model.checker import make_checker
+    from drake_social.collision.drake_checker import make_checker
     from drake_social.scenario import ALGORITHMS, load_scenario
 
     rows = []

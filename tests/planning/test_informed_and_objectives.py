@@ -11,11 +11,11 @@ import numpy as np
 import pytest
 
 from drake_social.cost import SocialCost
-from drake_social.planning.geometric import GeometricChecker
+from drake_social.collision.geometric import GeometricChecker
 from drake_social.planning.objective import SocialObjective
 from drake_social.planning.sampling import EllipseSampler, transverse_diameter
 from drake_social.planning.space import ConfigurationSpace
-from drake_social.planning.variants import base_only_weights, make_objective, plan
+from drake_social.planning.algorithms import base_only_weights, make_objective, plan
 from drake_social.scenario import Person, Scenario, World, validate_scenario
 
 PI = math.pi

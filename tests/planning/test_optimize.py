@@ -12,7 +12,7 @@ import pytest
 
 from drake_social.cost import SocialCost
 from drake_social.planning import optimize as opt_mod
-from drake_social.planning.geometric import GeometricChecker
+from drake_social.collision.geometric import GeometricChecker
 from drake_social.planning.objective import Objective, PathLengthObjective, SocialObjective
 from drake_social.planning.optimize import OptimizeOptions, optimize_path, path_cost
 from drake_social.planning.space import ConfigurationSpace

@@ -24,4 +24,6 @@ def test_the_table_covers_every_case():
 def test_the_raw_path_is_unchanged(row):
     dut = plan_case(row["scenario"], row["algorithm"], row["seed"])
     assert (dut["waypoints"], dut["sha256"]) == (row["waypoints"], row["sha256"])
-    assert dut["cost"] == row["cost"]
+    # The waypoints are bit for bit; the cost is a sum the compiled kernels
+    # may order or fuse (FMA) differently on another processor: a few ulp.
+    assert dut["cost"] == pytest.approx(row["cost"], rel=1e-12, abs=0.0)

@@ -11,13 +11,13 @@ import pytest
 
 from drake_social.cost import SocialCost
 from drake_social.kinematics import ArmGeometry, config_distance
-from drake_social.model.planar_checker import PlanarChecker
-from drake_social.planning.geometric import GeometricChecker
+from drake_social.collision.planar_checker import PlanarChecker
+from drake_social.collision.geometric import GeometricChecker
 from drake_social.planning.objective import PathLengthObjective, SocialObjective
 from drake_social.planning.result import PlanningInputError
 from drake_social.planning.rrt_star import RrtStar, RrtStarOptions
 from drake_social.planning.space import ConfigurationSpace
-from drake_social.planning.variants import evaluate_path, make_objective, make_planner, plan
+from drake_social.planning.algorithms import evaluate_path, make_objective, make_planner, plan
 from drake_social.scenario import ALGORITHMS, Bar, Box, Person, Scenario, World, validate_scenario
 
 PI = math.pi
@@ -429,7 +429,7 @@ def test_every_scenario_plans_a_valid_path_with_drake(name, repo_root):
     """A short run per shipped scenario with the SceneGraph checker (clearance
     advancement for motions); its path is re-checked by Drake's discrete
     edge check and by the independent numpy checker."""
-    from drake_social.model.checker import SceneGraphChecker
+    from drake_social.collision.drake_checker import SceneGraphChecker
     from drake_social.scenario import load_scenario
 
     scenario = load_scenario(repo_root / "scenarios" / f"{name}.yaml")

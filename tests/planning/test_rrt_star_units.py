@@ -13,11 +13,11 @@ import time
 import numpy as np
 import pytest
 
-from drake_social.planning.geometric import GeometricChecker
+from drake_social.collision.geometric import GeometricChecker
 from drake_social.planning.result import PlanningInputError
 from drake_social.planning.rrt_star import RrtStar, RrtStarOptions, _Tree, default_gamma
 from drake_social.planning.space import ConfigurationSpace
-from drake_social.planning.variants import make_objective
+from drake_social.planning.algorithms import make_objective
 from drake_social.scenario import Bar, Box, Scenario, World, validate_scenario
 
 
@@ -203,9 +203,9 @@ def test_integer_ends_give_the_float_ends_result(tiny_scenario):
     """Start and goal given as integer arrays are planned as floats: the
     compiled loop (the planar checker) and the Python loop (the numpy
     checker) return the trees of the float ends."""
-    from drake_social.model.planar_checker import PlanarChecker
-    from drake_social.planning import tree_kernel
-    from drake_social.planning.variants import make_planner
+    from drake_social.collision.planar_checker import PlanarChecker
+    from drake_social.planning.rrt_star import tree_kernel
+    from drake_social.planning.algorithms import make_planner
 
     scenario = copy.deepcopy(tiny_scenario)
     scenario.planner = dc.replace(scenario.planner, iterations=60)
@@ -251,8 +251,8 @@ def test_a_goal_drawn_again_adds_nothing_and_counts_like_the_compiled_loop():
     """Goal bias 0.5 near the goal: once the goal is a node, drawing it again
     adds no node and checks nothing; the Python loop's counts equal the
     compiled loop's (a second implementation) on the planar checker."""
-    from drake_social.model.planar_checker import PlanarChecker
-    from drake_social.planning import tree_kernel
+    from drake_social.collision.planar_checker import PlanarChecker
+    from drake_social.planning.rrt_star import tree_kernel
 
     if not tree_kernel.AVAILABLE:
         pytest.skip("numba is not importable")
@@ -279,8 +279,8 @@ def test_compiled_and_python_loops_fill_the_result_alike(case):
     loop's on the same tree: the counts and sizes as ints, the first solution
     None when there is none, the raw cost before optimisation and a positive
     wall time measured from the start of solve."""
-    from drake_social.model.planar_checker import PlanarChecker
-    from drake_social.planning import tree_kernel
+    from drake_social.collision.planar_checker import PlanarChecker
+    from drake_social.planning.rrt_star import tree_kernel
 
     if not tree_kernel.AVAILABLE:
         pytest.skip("numba is not importable")
@@ -467,8 +467,8 @@ def test_the_compiled_loop_applies_to_the_planar_checker_and_known_objectives_on
     """Compiled: the planar checker with the path length or the numba social
     objective. The Python loop: the numpy checker, the numpy social backend,
     any other objective class (even a subclass)."""
-    from drake_social.model.planar_checker import PlanarChecker
-    from drake_social.planning import tree_kernel
+    from drake_social.collision.planar_checker import PlanarChecker
+    from drake_social.planning.rrt_star import tree_kernel
     from drake_social.planning.objective import PathLengthObjective, SocialObjective
 
     if not tree_kernel.AVAILABLE:
@@ -544,8 +544,8 @@ def test_the_starts_own_goal_connection_is_reported_even_when_no_node_is_added(c
     made before the first sample, is the solution from iteration 1 on, even
     though the first sample adds no node (a review found both loops waiting
     for a node to be added before reporting it: success=False at K = 1)."""
-    from drake_social.model.planar_checker import PlanarChecker
-    from drake_social.planning import tree_kernel
+    from drake_social.collision.planar_checker import PlanarChecker
+    from drake_social.planning.rrt_star import tree_kernel
 
     if checker_kind.startswith("planar") and not tree_kernel.AVAILABLE:
         pytest.skip("numba is not importable")

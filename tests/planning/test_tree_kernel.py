@@ -9,9 +9,9 @@ import math
 import numpy as np
 import pytest
 
-from drake_social.model.planar_checker import PlanarChecker
-from drake_social.planning import tree_kernel
-from drake_social.planning.variants import make_planner
+from drake_social.collision.planar_checker import PlanarChecker
+from drake_social.planning.rrt_star import tree_kernel
+from drake_social.planning.algorithms import make_planner
 from drake_social.scenario import load_scenario
 
 pytestmark = pytest.mark.skipif(not tree_kernel.AVAILABLE, reason="numba is not importable")
@@ -86,7 +86,7 @@ def test_compiled_loop_equals_the_reference_on_the_shipped_maps(name, repo_root)
 
 
 def test_other_checkers_use_the_python_loop(tiny, tiny_scenario):
-    from drake_social.planning.geometric import GeometricChecker
+    from drake_social.collision.geometric import GeometricChecker
 
     scenario, _ = tiny
     assert not make_planner(scenario, GeometricChecker(scenario))._compiled_applies()

@@ -14,9 +14,9 @@ import math
 import numpy as np
 import pytest
 
-from drake_social.model.checker import make_checker
+from drake_social.collision.drake_checker import make_checker
 from drake_social.sim.diagram import build_diagram
-from drake_social.planning.variants import plan
+from drake_social.planning.algorithms import plan
 from drake_social.sim.run import LimitViolation, analyze_execution, limit_violations, simulate
 
 #: Stated tolerances of "on the checked segments": every body point within

@@ -14,8 +14,8 @@ import numpy as np
 import pytest
 
 from drake_social.kinematics import ArmGeometry
-from drake_social.model.checker import make_checker
-from drake_social.planning.variants import plan
+from drake_social.collision.drake_checker import make_checker
+from drake_social.planning.algorithms import plan
 from drake_social.sim.analysis import body_points, config_deviation, densify, point_deviation
 from drake_social.sim.diagram import build_diagram
 from drake_social.sim.run import simulate

@@ -12,9 +12,9 @@ import pytest
 
 from drake_social.cost import SocialCost
 from drake_social.kinematics import ArmGeometry
-from drake_social.planning.geometric import GeometricChecker
+from drake_social.collision.geometric import GeometricChecker
 from drake_social.planning.result import PlannerResult
-from drake_social.planning.variants import plan
+from drake_social.planning.algorithms import plan
 from drake_social.viz.path import (
     convergence_figure,
     cost_profile,

@@ -8,7 +8,7 @@ import pytest
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.lines import Line2D
 
-from drake_social.experiments.report import OFF_SCALE_FACTOR, axis_stretch, boxplot_values
+from drake_social.experiments.study.report import OFF_SCALE_FACTOR, axis_stretch, boxplot_values
 from drake_social.viz.study import boxplot_figure, paths_side_by_side
 
 

@@ -2,7 +2,7 @@
 
 :class:`PlanarChecker` reads every proximity shape of the scenario's
 RobotDiagram from its ``SceneGraphInspector`` (shape, frame, pose) and turns
-it into the footprints of :mod:`drake_social.planning.planar_kernel`: the
+it into the footprints of :mod:`drake_social.collision.planar_kernel`: the
 robot's cylinders and stadia (box + end cylinders) become discs and capsules
 in their body frames, the anchored boxes and cylinders (obstacles, walls,
 people) rotated boxes and discs in the world. The SceneGraph stays the one
@@ -17,7 +17,7 @@ these poses against ``MultibodyPlant.EvalBodyPoseInWorld``.
 
 Distances are exact in closed form (see the kernel), so configuration checks
 need no tolerance and motion checks are sound by conservative advancement
-(:func:`~drake_social.planning.planar_kernel.motion_valid`) with the lever
+(:func:`~drake_social.collision.planar_kernel.motion_valid`) with the lever
 arms of the displacement bound measured on the same shapes.
 """
 
@@ -30,10 +30,10 @@ import numpy as np
 from pydrake.geometry import Box as DrakeBox
 from pydrake.geometry import Cylinder, Role
 
-from drake_social.model.checker import Contact
+from drake_social.collision.drake_checker import Contact
 from drake_social.model.plant import ScenarioDiagram, build_robot_diagram, environment_parts, registration_order
-from drake_social.planning import planar_kernel as kernel
-from drake_social.planning.geometric import CheckerBase
+from drake_social.collision import planar_kernel as kernel
+from drake_social.collision.geometric import CheckerBase
 from drake_social.scenario import Scenario
 
 __all__ = ["PlanarChecker"]
@@ -58,7 +58,7 @@ class PlanarChecker(CheckerBase):
     Args:
         scenario, resolution: see :class:`CheckerBase`; the resolution only
             serves Drake's second opinion
-            (:func:`~drake_social.model.checker.verify_path`).
+            (:func:`~drake_social.collision.drake_checker.verify_path`).
         model: a built :func:`build_robot_diagram` of ``scenario``, read
             whole; None = the room is built and read in parts of at most
             :data:`~drake_social.model.plant.ENVIRONMENT_PART` shapes (the
@@ -256,7 +256,7 @@ class PlanarChecker(CheckerBase):
     def contacts(self, q: np.ndarray) -> list[Contact]:
         """The (robot body, environment shape) pairs at signed distance <= 0,
         deepest first, from the exact planar distances (see
-        :meth:`~drake_social.model.checker.SceneGraphChecker.contacts` for Drake's)."""
+        :meth:`~drake_social.collision.drake_checker.SceneGraphChecker.contacts` for Drake's)."""
         d = kernel.pair_distances(np.asarray(q, float), self.bodies, self.robot, self.env)
         deepest: dict[tuple[str, str], float] = {}
         for j, k in zip(*np.nonzero(d <= 0.0)):

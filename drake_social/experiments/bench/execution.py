@@ -41,15 +41,15 @@ def run_sim_bench(
         scenario_paths: scenario files.
         runs: timed runs per (mode, execution), without recording (>= 1).
         modes, executions: which pairs.
-        checker: the planner's checker (see ``drake_social.model.checker.CHECKERS``).
+        checker: the planner's checker (see ``drake_social.collision.drake_checker.CHECKERS``).
         record: also time one recorded run and measure its replay size.
         progress: optional ``progress(label)`` after each simulation.
 
     Returns:
         ``{file name: {"path": {...}, "pairs": {"mode/execution": {...}}}}``.
     """
-    from drake_social.model.checker import make_checker
-    from drake_social.planning.variants import plan
+    from drake_social.collision.drake_checker import make_checker
+    from drake_social.planning.algorithms import plan
     from drake_social.sim.replay import draw_overlays, make_meshcat, set_top_view, write_replay_html
     from drake_social.sim.run import simulate
 

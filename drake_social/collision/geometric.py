@@ -1,6 +1,6 @@
 """A pure-numpy validity checker: discs and capsules against boxes, discs and walls.
 
-It implements :class:`~drake_social.planning.validity.ValidityChecker` with
+It implements :class:`~drake_social.collision.validity.ValidityChecker` with
 the same planar shapes as the Drake model (:mod:`drake_social.model`), so the
 two agree up to floating point; planner tests use it as a fast, Drake-free
 checker.
@@ -26,7 +26,7 @@ Signed distances are exact whenever the shapes are apart:
 
 Everything is batched over configurations. Motions are checked soundly by
 conservative advancement on these exact clearances, the same scheme as the
-compiled :func:`drake_social.planning.planar_kernel.motion_valid` with the
+compiled :func:`drake_social.collision.planar_kernel.motion_valid` with the
 displacement bound of ``ArmGeometry.max_displacement(include_body=True)``:
 a configuration at clearance c clears every configuration of the motion
 whose body points moved less than c. (Discrete checking at ``resolution``,
@@ -39,7 +39,7 @@ from __future__ import annotations
 import numpy as np
 
 from drake_social.kinematics import ArmGeometry, configuration_limits
-from drake_social.planning.planar_kernel import MAX_STEPS, STEP_MARGIN, TOLERANCE
+from drake_social.collision.planar_kernel import MAX_STEPS, STEP_MARGIN, TOLERANCE
 from drake_social.scenario import Scenario
 
 __all__ = ["CheckerBase", "GeometricChecker"]
@@ -291,7 +291,7 @@ class GeometricChecker(CheckerBase):
         Conservative advancement from both ends, all motions at once: a query
         at clearance c clears ``c / D`` of t around it (D the displacement
         bound per unit t), the next query sits at the first point not yet
-        cleared; see :func:`drake_social.planning.planar_kernel.motion_valid`
+        cleared; see :func:`drake_social.collision.planar_kernel.motion_valid`
         for the proof and the floors (``TOLERANCE``, ``STEP_MARGIN``,
         ``MAX_STEPS``), which are the same here.
         """

@@ -9,9 +9,9 @@ import math
 import numpy as np
 import pytest
 
-from drake_social.planning import geometric
-from drake_social.planning.geometric import GeometricChecker
-from drake_social.planning.planar_kernel import STEP_MARGIN, TOLERANCE
+from drake_social.collision import geometric
+from drake_social.collision.geometric import GeometricChecker
+from drake_social.collision.planar_kernel import STEP_MARGIN, TOLERANCE
 from drake_social.scenario import Bar, Box, Person, Scenario, World
 
 

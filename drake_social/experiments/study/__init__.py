@@ -42,7 +42,7 @@ from typing import Callable, Optional, Sequence
 import numpy as np
 
 from drake_social.scenario import ALGORITHMS, CHECKERS, Scenario, ScenarioError
-from drake_social.textfile import SHOWN_PATH_CHARACTERS, check_regular_file, read_yaml_file, shorten
+from drake_social.io.textfile import SHOWN_PATH_CHARACTERS, check_regular_file, read_yaml_file, shorten
 
 __all__ = [
     "MAX_PAPER_RUNS",
@@ -354,7 +354,7 @@ def _sweep_scenario(sweep: Path, name: str) -> Path:
     sweep's folder if it is there, else to the working directory.
 
     Raises:
-        ScenarioError: as :func:`~drake_social.textfile.check_regular_file`; a
+        ScenarioError: as :func:`~drake_social.io.textfile.check_regular_file`; a
             file in neither place is named in both.
     """
     if name == "" or Path(name).is_absolute():
@@ -598,7 +598,7 @@ def _load_key(text: str, overrides: tuple[str, ...]) -> bytes:
 
 @functools.lru_cache(maxsize=16)
 def _checker(source: str, text: str, overrides: tuple[str, ...], overrides_name: str, kind: str):
-    from drake_social.model.checker import make_checker
+    from drake_social.collision.drake_checker import make_checker
 
     return make_checker(_load(source, text, overrides, overrides_name), kind, parallelism=1)
 
@@ -617,7 +617,7 @@ def run_task(task: dict) -> dict:
     """
     from drake_social.experiments.metrics import executed_metrics, path_metrics
     from drake_social.planning.objective import SocialObjective
-    from drake_social.planning.variants import make_objective, plan
+    from drake_social.planning.algorithms import make_objective, plan
 
     key = (task["source"], task["scenario_text"], tuple(task["overrides"]), task["override_name"])
     scenario = _load(*key)
@@ -719,8 +719,8 @@ class StudyResult:
 
 def run_study(study: Study, *, executor: str = "process", workers: int = 1, scheduler: str | None = None,
               progress: Callable[[int, int, dict], None] | None = None) -> StudyResult:
-    """Runs every task of ``study`` (see :func:`~drake_social.experiments.executors.map_tasks`)."""
-    from drake_social.experiments.executors import map_tasks
+    """Runs every task of ``study`` (see :func:`~drake_social.experiments.study.executors.map_tasks`)."""
+    from drake_social.experiments.study.executors import map_tasks
 
     tasks = study_tasks(study)
     t0 = time.perf_counter()
@@ -778,7 +778,7 @@ def write_records(result: StudyResult, out_dir: str | Path) -> list[str]:
     Returns:
         The names of the written files.
     """
-    from drake_social.experiments.bench import _finite  # non-finite floats -> None (strict JSON)
+    from drake_social.experiments.bench.planners import _finite  # non-finite floats -> None (strict JSON)
 
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
@@ -803,7 +803,8 @@ def output_names(study: Study) -> list[str]:
     before any run (so that an output folder can refuse what is in their
     way up front): the records, the figures, the arena logs, ``arena.db``
     and ``REPORT.md``."""
-    from drake_social.experiments import arena, report
+    from drake_social.experiments.study import arena
+    from drake_social.experiments.study import report
 
     return [*RECORD_FILES, *report.figure_names(study), *(arena.log_name(g) for g in study.groups), "arena.db",
             "REPORT.md"]
@@ -820,7 +821,8 @@ def write_study(result: StudyResult, out_dir: str | Path, *, scenario_loader=Non
     Returns:
         The names of the written files.
     """
-    from drake_social.experiments import arena, report
+    from drake_social.experiments.study import arena
+    from drake_social.experiments.study import report
 
     out = Path(out_dir)
     names = write_records(result, out)

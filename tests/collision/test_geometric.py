@@ -13,8 +13,8 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from drake_social.kinematics import ArmGeometry
-from drake_social.planning.geometric import GeometricChecker, _segment_box_sdf
-from drake_social.planning.validity import ValidityChecker
+from drake_social.collision.geometric import GeometricChecker, _segment_box_sdf
+from drake_social.collision.validity import ValidityChecker
 from drake_social.scenario import Bar, Box, LShape, Person, Polyline, Scenario, World
 
 # ---- an independent reference: polygon geometry by half-planes and edge distances
@@ -297,5 +297,5 @@ def test_bad_resolution_is_rejected(tiny_scenario):
 
 
 def test_module_does_not_import_pydrake():
-    code = "import sys, drake_social.planning.geometric; sys.exit('pydrake' in sys.modules)"
+    code = "import sys, drake_social.collision.geometric; sys.exit('pydrake' in sys.modules)"
     assert subprocess.run([sys.executable, "-c", code], check=False).returncode == 0

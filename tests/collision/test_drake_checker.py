@@ -11,10 +11,10 @@ import numpy as np
 import pytest
 
 from drake_social.kinematics import ArmGeometry
-from drake_social.model.checker import Contact, SceneGraphChecker, check_start_goal
-from drake_social.model.planar_checker import PlanarChecker
-from drake_social.planning.geometric import GeometricChecker
-from drake_social.planning.validity import ValidityChecker
+from drake_social.collision.drake_checker import Contact, SceneGraphChecker, check_start_goal
+from drake_social.collision.planar_checker import PlanarChecker
+from drake_social.collision.geometric import GeometricChecker
+from drake_social.collision.validity import ValidityChecker
 from drake_social.scenario import Box, Polyline, Scenario, ScenarioError, World, load_scenario
 
 SCENARIO_DIR = Path(__file__).resolve().parents[2] / "scenarios"
@@ -245,7 +245,7 @@ def _dense_min_clearance(checker, q_a: np.ndarray, q_b: np.ndarray, step: float 
 @pytest.mark.parametrize("path", SCENARIOS, ids=[p.name for p in SCENARIOS])
 def test_numpy_and_scenegraph_motions_agree(path, rng):
     """Random motions between valid ends (the planner's case), checked by
-    what each checker guarantees (drake_social.model.checker's docstring):
+    what each checker guarantees (drake_social.collision.drake_checker's docstring):
 
     * numpy and planar are exact and sound: a motion is accepted iff its
       exact clearance stays > 0 all along. Against a 1 mm reference: every

@@ -46,7 +46,7 @@ from drake_social.planning.objective import Objective
 from drake_social.planning.result import PlannerResult, PlanningInputError
 from drake_social.planning.sampling import EllipseSampler, transverse_diameter
 from drake_social.planning.space import ConfigurationSpace
-from drake_social.planning.validity import ValidityChecker
+from drake_social.collision.validity import ValidityChecker
 
 __all__ = ["MAX_ITERATIONS", "NEAR_RADIUS_MODES", "RrtStar", "RrtStarOptions", "default_gamma"]
 
@@ -425,7 +425,7 @@ class RrtStar:
         return self.options.near_radius_gamma or default_gamma(self.space)
 
     def _compiled_applies(self) -> bool:
-        from drake_social.planning import tree_kernel
+        from drake_social.planning.rrt_star import tree_kernel
         from drake_social.planning.objective import PathLengthObjective, SocialObjective
 
         c, o = self.checker, self.objective
@@ -434,7 +434,7 @@ class RrtStar:
         return tree_kernel.AVAILABLE and planar and known
 
     def _solve_compiled(self, start, goal, rng, t0, progress=None) -> PlannerResult:
-        from drake_social.planning import tree_kernel
+        from drake_social.planning.rrt_star import tree_kernel
         from drake_social.planning.objective import SocialObjective
 
         opt, space, c, o = self.options, self.space, self.checker, self.objective

@@ -20,7 +20,7 @@ so a motion between two configurations within them stays within them.
 
 Which checker (:data:`CHECKERS`, :func:`make_checker`):
 
-* ``planar`` (the default): :class:`~drake_social.model.planar_checker.PlanarChecker`,
+* ``planar`` (the default): :class:`~drake_social.collision.planar_checker.PlanarChecker`,
   exact planar distances of the SceneGraph's own shapes, compiled, with
   sound motion checks (conservative advancement);
 * ``drake``: :class:`SceneGraphChecker`, Drake alone, for comparison. Its
@@ -28,7 +28,7 @@ Which checker (:data:`CHECKERS`, :func:`make_checker`):
   overestimates some cylinder-box distances (FCL's GJK; e.g. generic_L at
   q = [10.78156014, 5.65723962, 0.02822218, -0.18334348]: 1.0786 m where the
   exact value is 0.4043 m), and by at least ``resolution / 2`` per query;
-* ``numpy``: :class:`~drake_social.planning.geometric.GeometricChecker`,
+* ``numpy``: :class:`~drake_social.collision.geometric.GeometricChecker`,
   the pure-numpy reference, sound by conservative advancement too.
 
 :func:`verify_path` is the independent second opinion: Drake's discrete
@@ -59,7 +59,7 @@ from drake_social.model.plant import (
     environment_parts,
     registration_order,
 )
-from drake_social.planning.geometric import CheckerBase
+from drake_social.collision.geometric import CheckerBase
 from drake_social.scenario import CHECKERS, Scenario, ScenarioError
 
 __all__ = ["CHECKERS", "Contact", "SceneGraphChecker", "check_start_goal", "local_checkers", "make_checker",
@@ -385,11 +385,11 @@ def make_checker(
     require_scenario(scenario, "make_checker")
     require_choice(kind, "make_checker", "kind", CHECKERS)
     if kind == "numpy":
-        from drake_social.planning.geometric import GeometricChecker
+        from drake_social.collision.geometric import GeometricChecker
 
         return GeometricChecker(scenario)
     if kind == "planar":
-        from drake_social.model.planar_checker import PlanarChecker  # it imports this module
+        from drake_social.collision.planar_checker import PlanarChecker  # it imports this module
 
         checker = PlanarChecker(scenario)
         if source is not None:

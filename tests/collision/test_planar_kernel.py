@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from drake_social.kinematics import displacement_bound
-from drake_social.planning import planar_kernel as dut
+from drake_social.collision import planar_kernel as dut
 
 
 def golden_min(f, n_iter: int = 120):

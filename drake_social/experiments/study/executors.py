@@ -35,7 +35,7 @@ import threading
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from typing import Callable, Iterator, Sequence
 
-from drake_social.outputs import DeferredSignals  # SIGINT and SIGTERM held back over a block
+from drake_social.io.outputs import DeferredSignals  # SIGINT and SIGTERM held back over a block
 
 __all__ = ["EXECUTORS", "SCHEDULER_SCHEMES", "check_scheduler_address", "map_tasks"]
 

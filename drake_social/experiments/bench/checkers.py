@@ -26,9 +26,9 @@ import numpy as np
 from pydrake.common import Parallelism
 
 from drake_social.kinematics import config_distance
-from drake_social.model.checker import SceneGraphChecker
-from drake_social.model.planar_checker import PlanarChecker
-from drake_social.planning.geometric import GeometricChecker
+from drake_social.collision.drake_checker import SceneGraphChecker
+from drake_social.collision.planar_checker import PlanarChecker
+from drake_social.collision.geometric import GeometricChecker
 from drake_social.scenario import load_scenario
 
 __all__ = ["random_edges", "raw_distance", "run_checker_bench"]

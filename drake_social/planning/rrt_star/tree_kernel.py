@@ -12,7 +12,7 @@ get a turn between chunks). Squared distances
 are summed as numpy's ``einsum`` sums four terms on this platform,
 ``(s0 + s2) + (s1 + s3)``; the equality tests against the reference guard it.
 
-Motion checks call :mod:`drake_social.planning.planar_kernel` (the planar
+Motion checks call :mod:`drake_social.collision.planar_kernel` (the planar
 checker's compiled functions), motion costs :func:`drake_social.cost.kernel.msc_sums`.
 """
 
@@ -23,7 +23,7 @@ import math
 import numpy as np
 
 from drake_social.cost import kernel as cost_kernel
-from drake_social.planning import planar_kernel
+from drake_social.collision import planar_kernel
 
 njit = cost_kernel.njit
 AVAILABLE = cost_kernel.AVAILABLE

@@ -62,7 +62,7 @@ from ompl import util as ou
 from drake_social.planning.objective import Objective
 from drake_social.planning.result import PlannerResult, PlanningInputError
 from drake_social.planning.space import ConfigurationSpace
-from drake_social.planning.validity import ValidityChecker
+from drake_social.collision.validity import ValidityChecker
 
 __all__ = [
     "ObjectiveAdapter",

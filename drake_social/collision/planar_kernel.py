@@ -4,7 +4,7 @@ The scene is planar by construction (every collision shape is a vertical
 extrusion over the same slab, see :mod:`drake_social.model.plant`), so the
 distance between two shapes is the 2-D distance between their footprints.
 This module works on footprints only, in plain arrays; the Drake adapter
-:class:`drake_social.model.planar_checker.PlanarChecker` reads them from the
+:class:`drake_social.collision.planar_checker.PlanarChecker` reads them from the
 SceneGraph. No pydrake here.
 
 Footprints (metres, radians):

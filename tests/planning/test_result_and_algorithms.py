@@ -14,11 +14,11 @@ import pytest
 
 from drake_social.cost import SocialCost
 from drake_social.kinematics import config_distance
-from drake_social.planning import variants
-from drake_social.planning.geometric import GeometricChecker
+from drake_social.planning import algorithms as variants
+from drake_social.collision.geometric import GeometricChecker
 from drake_social.planning.objective import PathLengthObjective, SocialObjective
 from drake_social.planning.result import NoPathError, PlannerResult
-from drake_social.planning.variants import base_only_weights, evaluate_path, make_objective, make_planner, plan
+from drake_social.planning.algorithms import base_only_weights, evaluate_path, make_objective, make_planner, plan
 from drake_social.scenario import ALGORITHMS, MAX_ITERATIONS
 
 # ---- result.py ---------------------------------------------------------------

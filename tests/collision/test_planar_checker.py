@@ -18,11 +18,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from drake_social.model.checker import CHECKERS, SceneGraphChecker, make_checker, verify_path
-from drake_social.model.planar_checker import PlanarChecker
+from drake_social.collision.drake_checker import CHECKERS, SceneGraphChecker, make_checker, verify_path
+from drake_social.collision.planar_checker import PlanarChecker
 from drake_social.model.plant import wall_boxes
-from drake_social.planning.geometric import GeometricChecker
-from drake_social.planning.validity import ValidityChecker
+from drake_social.collision.geometric import GeometricChecker
+from drake_social.collision.validity import ValidityChecker
 from drake_social.scenario import Box, LShape, Person, Scenario, World, load_scenario
 
 SCENARIO_DIR = Path(__file__).resolve().parents[2] / "scenarios"
@@ -154,7 +154,7 @@ def test_accepted_motions_near_obstacles_are_free_at_1_mm(name, kind):
     """Up to 300 motions per map (6 maps) between valid ends within 0.3 m of
     contact, for every --checker: every accepted one is free at 1 mm steps by
     the exact planar and numpy clearances (each independent of the other).
-    ``drake`` is approximate (module docstring of drake_social.model.checker):
+    ``drake`` is approximate (module docstring of drake_social.collision.drake_checker):
     its unsound acceptances are counted and must stay rare and shallow."""
     scenario, planar, numpy_ = _case(name)
     q_a, q_b = _near_motions(name)
@@ -251,7 +251,7 @@ def test_each_capsule_moves_no_more_than_its_lever_bound(name, rng):
     directions fixed to its body) moves at most that far per unit of t,
     measured along random motions at 1/64 steps; the base's capsules move
     with the base only."""
-    from drake_social.planning import planar_kernel as kernel
+    from drake_social.collision import planar_kernel as kernel
 
     _, dut, _ = _case(name)
     angles = np.linspace(0, 2 * np.pi, 16, endpoint=False)

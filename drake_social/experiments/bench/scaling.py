@@ -36,8 +36,8 @@ from typing import Callable, Sequence
 
 import numpy as np
 
-from drake_social.model.checker import make_checker
-from drake_social.planning.variants import make_planner, plan
+from drake_social.collision.drake_checker import make_checker
+from drake_social.planning.algorithms import make_planner, plan
 from drake_social.scenario import Person, Scenario, load_scenario
 
 __all__ = ["far_people_scenario", "fit_exponent", "run_scaling_bench"]

@@ -26,7 +26,7 @@ from typing import Optional, Sequence, Union
 import numpy as np
 
 from drake_social.limits import MAX_ITERATIONS, MAX_MOTION_STEPS
-from drake_social.textfile import read_yaml_file, shorten
+from drake_social.io.textfile import read_yaml_file, shorten
 
 __all__ = [
     "ALGORITHMS",
@@ -112,7 +112,7 @@ ALGORITHMS = (
     "informed_base_rrt_star",
 )
 
-#: Validity checkers (``drake_social.model.checker.make_checker``; the first is
+#: Validity checkers (``drake_social.collision.drake_checker.make_checker``; the first is
 #: the default of the planner): the exact planar one, Drake's SceneGraph and
 #: the pure-numpy reference. Here, not in that module, so that the command
 #: line and studies can name them without importing Drake.
@@ -398,7 +398,7 @@ def load_scenario(path: str | Path, overrides: str | Sequence[str] | None = None
 
     Raises:
         ScenarioError: the file is missing, not a regular file, larger than
-            :data:`~drake_social.textfile.MAX_YAML_FILE_BYTES` (4 MiB), malformed, has
+            :data:`~drake_social.io.textfile.MAX_YAML_FILE_BYTES` (4 MiB), malformed, has
             duplicate or unknown keys or invalid values; the message names
             the file (or the override at fault), the line and the field.
     """
@@ -825,7 +825,7 @@ class _Checker:
 
 
 def _shown(value) -> str:
-    """A value of the scenario as an error message repeats it (:func:`~drake_social.textfile.shorten`)."""
+    """A value of the scenario as an error message repeats it (:func:`~drake_social.io.textfile.shorten`)."""
     return shorten(repr(value) if isinstance(value, str) else str(value))
 
 

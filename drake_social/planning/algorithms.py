@@ -32,7 +32,7 @@ from drake_social.planning.objective import Objective, PathLengthObjective, Soci
 from drake_social.planning.result import PlannerResult
 from drake_social.planning.rrt_star import RrtStar, RrtStarOptions
 from drake_social.planning.space import ConfigurationSpace
-from drake_social.planning.validity import ValidityChecker
+from drake_social.collision.validity import ValidityChecker
 from drake_social.limits import MAX_ITERATIONS
 from drake_social.scenario import ALGORITHMS
 

@@ -1,0 +1,1 @@
+"""``drake-social bench``: planners, checkers, scaling and execution, measured."""

@@ -1,0 +1,1 @@
+"""Files: the guarded reader of user text, path CSVs, JSON records and output sets."""
