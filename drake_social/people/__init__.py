@@ -1,0 +1,12 @@
+"""Who is where at time t: the people model every consumer reads.
+
+The cost, the checkers, the plant, the figures, the replay and the metrics
+ask a :class:`PeopleModel` for a :class:`PeopleState` at a time ``t``
+instead of reading the scenario's people. :class:`StaticPeople` is the
+first model (people who stand still); walking people are further models
+behind the same protocol.
+"""
+
+from drake_social.people.model import PeopleModel, PeopleState, StaticPeople, people_model
+
+__all__ = ["PeopleModel", "PeopleState", "StaticPeople", "people_model"]

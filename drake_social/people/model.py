@@ -1,0 +1,115 @@
+"""The people protocol (:class:`PeopleModel`), its state and the static model."""
+
+from __future__ import annotations
+
+import dataclasses as dc
+import math
+from typing import Protocol, Sequence, runtime_checkable
+
+import numpy as np
+
+__all__ = ["PeopleModel", "PeopleState", "StaticPeople", "people_model"]
+
+
+@dc.dataclass(frozen=True)
+class PeopleState:
+    """Where everyone is at one time, in the world frame.
+
+    Attributes:
+        t: the time of the state, seconds since the start of the run.
+        positions: (P, 2) body centres [x, y], metres.
+        headings: (P,) facing directions, radians, counter-clockwise from +x.
+        velocities: (P, 2) velocities [vx, vy], metres per second.
+        radii: (P,) body radii, metres.
+        names: P labels for figures and messages ("" where unnamed).
+    """
+
+    t: float
+    positions: np.ndarray
+    headings: np.ndarray
+    velocities: np.ndarray
+    radii: np.ndarray
+    names: tuple[str, ...]
+
+    def __post_init__(self) -> None:
+        n = len(self.names)
+        for field, shape in (("positions", (n, 2)), ("headings", (n,)), ("velocities", (n, 2)), ("radii", (n,))):
+            value = np.asarray(getattr(self, field), dtype=float)
+            if value.shape != shape:
+                raise ValueError(f"PeopleState.{field} has shape {value.shape}; {n} people need {shape}")
+            value = value.copy()
+            value.flags.writeable = False
+            object.__setattr__(self, field, value)
+
+    @property
+    def count(self) -> int:
+        """The number of people P."""
+        return len(self.names)
+
+    def poses(self) -> np.ndarray:
+        """(P, 3) rows [x, y, theta]: the layout the social cost reads."""
+        return np.column_stack([self.positions, self.headings]).reshape(-1, 3)
+
+    def speeds(self) -> np.ndarray:
+        """(P,) speeds, metres per second."""
+        return np.hypot(self.velocities[:, 0], self.velocities[:, 1])
+
+
+@runtime_checkable
+class PeopleModel(Protocol):
+    """Answers "where is everyone at time t".
+
+    ``count`` people, always the same ones in the same order; ``static`` is
+    True when :meth:`state_at` gives the same state at every time.
+    """
+
+    @property
+    def count(self) -> int: ...
+
+    @property
+    def static(self) -> bool: ...
+
+    def state_at(self, t: float) -> PeopleState: ...
+
+
+class StaticPeople:
+    """People who stand still: the same :class:`PeopleState` at every time.
+
+    Args:
+        poses: (P, 3) rows [x, y, theta] (metres, radians).
+        radii: (P,) body radii, metres.
+        names: optional labels, one per person.
+    """
+
+    def __init__(self, poses, radii, names: Sequence[str] | None = None) -> None:
+        poses = np.asarray(poses, dtype=float).reshape(-1, 3)
+        radii = np.asarray(radii, dtype=float).reshape(-1)
+        names = tuple(names) if names is not None else ("",) * len(poses)
+        if not (len(poses) == len(radii) == len(names)):
+            raise ValueError(f"StaticPeople: {len(poses)} poses, {len(radii)} radii and {len(names)} names; "
+                             "one of each per person")
+        if not (np.isfinite(poses).all() and np.isfinite(radii).all() and (radii > 0).all()):
+            raise ValueError("StaticPeople: poses and radii must be finite and the radii > 0")
+        self._state = PeopleState(t=0.0, positions=poses[:, :2], headings=poses[:, 2],
+                                  velocities=np.zeros((len(poses), 2)), radii=radii, names=names)
+
+    @property
+    def count(self) -> int:
+        return self._state.count
+
+    @property
+    def static(self) -> bool:
+        return True
+
+    def state_at(self, t: float) -> PeopleState:
+        """The people at time ``t`` (seconds, finite): where they stand."""
+        if not math.isfinite(t):
+            raise ValueError(f"StaticPeople.state_at: t must be a finite time in seconds, got {t!r}")
+        return dc.replace(self._state, t=float(t))
+
+
+def people_model(scenario) -> PeopleModel:
+    """The people model of a scenario (its ``people`` list)."""
+    people = scenario.people
+    return StaticPeople([[p.x, p.y, p.theta] for p in people], [p.radius for p in people],
+                        [p.name for p in people])
