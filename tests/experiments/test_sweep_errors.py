@@ -417,7 +417,7 @@ def test_the_checkers_have_one_home():
 def test_the_depth_limit_leaves_room_for_what_the_comment_says(tmp_path):
     import yaml
 
-    from drake_social.scenario import MAX_YAML_DEPTH, _limited_loader
+    from drake_social.scenario.load import MAX_YAML_DEPTH, _limited_loader
 
     def depth(text):
         loader = _limited_loader(yaml)(text)
