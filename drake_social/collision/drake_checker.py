@@ -41,7 +41,6 @@ boxes would take gigabytes.
 
 from __future__ import annotations
 
-import dataclasses as dc
 import math
 from typing import Iterator, Sequence
 
@@ -59,30 +58,13 @@ from drake_social.model.plant import (
     environment_parts,
     registration_order,
 )
-from drake_social.collision.geometric import CheckerBase
+from drake_social.collision.geometric import CheckerBase, GeometricChecker
+from drake_social.collision.planar_checker import PlanarChecker
+from drake_social.collision.validity import Contact
 from drake_social.scenario import CHECKERS, Scenario, ScenarioError
 
 __all__ = ["CHECKERS", "Contact", "SceneGraphChecker", "check_start_goal", "local_checkers", "make_checker",
            "near_environment", "valid_configurations", "verify_path"]
-
-
-@dc.dataclass(frozen=True)
-class Contact:
-    """A robot body touching or penetrating an environment shape.
-
-    Attributes:
-        robot_body: ``base``, ``link1``, ``link2`` or ``object``.
-        other: the environment shape (``obstacle[i]``, ``person[i] 'name'``,
-            ``wall_<side>``).
-        distance: their signed distance, metres (<= 0).
-    """
-
-    robot_body: str
-    other: str
-    distance: float
-
-    def __str__(self) -> str:
-        return f"{self.robot_body} with {self.other} ({self.distance:+.3f} m)"
 
 
 class SceneGraphChecker(CheckerBase):
@@ -385,12 +367,8 @@ def make_checker(
     require_scenario(scenario, "make_checker")
     require_choice(kind, "make_checker", "kind", CHECKERS)
     if kind == "numpy":
-        from drake_social.collision.geometric import GeometricChecker
-
         return GeometricChecker(scenario)
     if kind == "planar":
-        from drake_social.collision.planar_checker import PlanarChecker  # it imports this module
-
         checker = PlanarChecker(scenario)
         if source is not None:
             check_start_goal(scenario, None, source)

@@ -37,6 +37,7 @@ from drake_social.planning.space import ConfigurationSpace
 from drake_social.collision.validity import ValidityChecker
 from drake_social.planning.algorithms import evaluate_path, make_objective, plan
 from drake_social.scenario import ALGORITHMS, EXECUTIONS, SIM_MODES, Scenario, load_scenario, validate_planner_choice
+from drake_social.io.json_numbers import finite_or_none
 
 __all__ = ["CHECKERS", "ompl_available", "run_bench", "summarize"]
 
@@ -382,21 +383,10 @@ def run_bench(
     }
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
-    (out_dir / "bench.json").write_text(json.dumps(_finite(out), indent=1, allow_nan=False))
+    (out_dir / "bench.json").write_text(json.dumps(finite_or_none(out), indent=1, allow_nan=False))
     (out_dir / "bench.md").write_text(_markdown(out))
     _log.info("bench written to %s", out_dir)
     return out
-
-
-def _finite(x):
-    """Non-finite floats become None (strict JSON)."""
-    if isinstance(x, dict):
-        return {k: _finite(v) for k, v in x.items()}
-    if isinstance(x, (list, tuple)):
-        return [_finite(v) for v in x]
-    if isinstance(x, float) and not np.isfinite(x):
-        return None
-    return x
 
 
 def _fmt(s: dict, digits: int = 3) -> str:
