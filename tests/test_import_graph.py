@@ -25,8 +25,8 @@ The rules, each checked over the whole graph:
    4     ``model``, ``collision.planar_checker``, ``collision.drake_checker``
          (Drake: the plant and Drake's checker)
    5     ``control``, ``viz``
-   6     ``sim``
-   7     ``io.outputs``, ``io.paths``, ``io.records``, ``experiments``, ``app``
+   6     ``sim``, ``io.paths`` (path CSVs, which a run may read)
+   7     ``io.outputs``, ``io.records``, ``experiments``, ``app``
    8     ``cli``
    ===== ==================================================================
 
@@ -81,7 +81,7 @@ LAYERS: dict[str, int] = {
     "drake_social.viz": 5,
     "drake_social.sim": 6,
     "drake_social.io.outputs": 7,
-    "drake_social.io.paths": 7,
+    "drake_social.io.paths": 6,
     "drake_social.io.records": 7,
     "drake_social.experiments": 7,
     "drake_social.app": 7,

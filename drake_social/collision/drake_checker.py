@@ -49,7 +49,7 @@ from pydrake.common import Parallelism
 from pydrake.planning import LinearDistanceAndInterpolationProvider, SceneGraphCollisionChecker
 
 from drake_social.arguments import require_choice, require_scenario
-from drake_social.kinematics import configuration_limits, displacement_bound
+from drake_social.kinematics import ArmGeometry, configuration_limits, displacement_bound
 from drake_social.model import plant
 from drake_social.model.plant import (
     ScenarioDiagram,
@@ -274,8 +274,6 @@ def near_environment(scenario: Scenario, a_xy: np.ndarray, b_xy: np.ndarray, mar
 def _near_function(scenario: Scenario, margin: float = 0.01):
     """:func:`near_environment` of ``scenario`` as a function of the tracks
     (the room's discs and the robot's extent computed once)."""
-    from drake_social.kinematics import ArmGeometry
-
     geometry = ArmGeometry.from_scenario(scenario)
     extent = max(float(scenario.robot.base_radius), float(np.sum(geometry.lever(include_body=True))))
     discs = environment_discs(scenario)

@@ -64,7 +64,6 @@ SIM_MODES = ("kinematic", "dynamic")
 EXECUTIONS = ("synchronized", "paper")
 
 
-
 @dc.dataclass
 class Box:
     """A rectangular obstacle, extruded over the robot's height."""
@@ -136,7 +135,6 @@ class Bar:
     # Interest points [[x, y], ...] in the gripper frame, metres; None = the ends.
     interest_points: Optional[list[list[float]]] = None
 
-
     def polyline(self) -> np.ndarray:
         """Its vertices in the gripper frame, shape (2, 2), metres: the two ends."""
         h = self.length / 2
@@ -145,6 +143,7 @@ class Bar:
     def default_interest_points(self) -> np.ndarray:
         """The interest points when ``interest_points`` is None, shape (2, 2): the two ends."""
         return self.polyline()
+
 
 @dc.dataclass
 class LShape:
@@ -163,7 +162,6 @@ class LShape:
     # Interest points [[x, y], ...] in the gripper frame, metres; None = vertices.
     interest_points: Optional[list[list[float]]] = None
 
-
     def polyline(self) -> np.ndarray:
         """Its vertices in the gripper frame, shape (3, 2), metres: the free
         end of the first bar, the corner, the free end of the second."""
@@ -173,6 +171,7 @@ class LShape:
     def default_interest_points(self) -> np.ndarray:
         """The interest points when ``interest_points`` is None, shape (3, 2): the three vertices."""
         return self.polyline()
+
 
 @dc.dataclass
 class Polyline:
@@ -185,7 +184,6 @@ class Polyline:
     # Interest points [[x, y], ...] in the gripper frame; None = first and last vertex.
     interest_points: Optional[list[list[float]]] = None
 
-
     def polyline(self) -> np.ndarray:
         """Its vertices in the gripper frame, shape (M, 2), metres."""
         return np.asarray(self.points, dtype=float).reshape(-1, 2)
@@ -193,6 +191,7 @@ class Polyline:
     def default_interest_points(self) -> np.ndarray:
         """The interest points when ``interest_points`` is None, shape (2, 2): the first and last vertex."""
         return self.polyline()[[0, -1]]
+
 
 @dc.dataclass
 class SocialCostOptions:
