@@ -80,7 +80,8 @@ def test_an_empty_room_has_empty_boxes(office):
 
 
 @pytest.mark.parametrize("args, message", [
-    (dict(centers=[[0.0, 0.0]], sizes=[[1.0, 1.0]], yaws=[0.0, 1.0]), r"Boxes.centers has shape \(1, 2\); expected \(2, 2\)"),
+    (dict(centers=[[0.0, 0.0]], sizes=[[1.0, 1.0]], yaws=[0.0, 1.0]),
+     r"Boxes.centers has shape \(1, 2\); expected \(2, 2\)"),
     (dict(centers=[[0.0, 0.0]], sizes=[1.0, 1.0, 1.0], yaws=[0.0]), r"Boxes.sizes has shape \(3,\); expected \(1, 2\)"),
     (dict(centers=[[0.0, 0.0]], sizes=[[1.0, 1.0]], yaws=[[0.0]]), r"Boxes.yaws must be one angle per box"),
 ])
