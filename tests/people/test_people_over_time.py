@@ -82,3 +82,24 @@ def test_without_times_a_path_is_measured_against_the_people_at_t0(walk):
     q = np.tile(walk.start, (5, 1))
     dut = metrics.trajectory_metrics(walk, q, np.linspace(0.0, 1.0, 5))
     assert dut["min_dist_base"] == pytest.approx(math.hypot(5.0, 1.3) - 0.35 - 0.25, abs=1e-12)
+
+
+def test_the_cost_and_the_figure_take_a_state_at_any_time(walk):
+    from matplotlib.figure import Figure
+
+    from drake_social.cost import SocialCost
+    from drake_social.viz import draw_world
+
+    state = WalkingPeople(walk).state_at(5.0)  # the person at (10, 3.8)
+    cost = SocialCost.from_scenario(walk, people=state)
+    np.testing.assert_array_equal(cost.people, [[10.0, 3.8, 0.0]])
+    space = PersonalSpace.from_options(walk.social)
+    assert cost(np.array([walk.start]))[0] == pytest.approx(
+        sum(w * agf_algorithm1(x, y, (10.0, 3.8, 0.0), space)
+            for w, (x, y) in zip(cost.weights, cost.geometry.interest_points(np.array(walk.start)))), rel=1e-12)
+    # Without a state: the scenario's people at t = 0.
+    np.testing.assert_array_equal(SocialCost.from_scenario(walk).people, [[5.0, 3.8, 0.0]])
+    ax = Figure().add_subplot()
+    drawn = draw_world(ax, walk, people=state)
+    assert drawn["people"][0].center == (10.0, 3.8) and drawn["people"][0].radius == 0.25
+    assert draw_world(Figure().add_subplot(), walk)["people"][0].center == (5.0, 3.8)
