@@ -4,11 +4,13 @@ from __future__ import annotations
 
 import dataclasses as dc
 import math
-from typing import Protocol, Sequence, runtime_checkable
+from typing import Protocol, Sequence, TypeVar, runtime_checkable
 
 import numpy as np
 
 __all__ = ["PeopleModel", "PeopleState", "StaticPeople", "people_model", "with_people"]
+
+_S = TypeVar("_S")
 
 
 @dc.dataclass(frozen=True)
@@ -115,7 +117,7 @@ def people_model(scenario) -> PeopleModel:
                         [p.name for p in people])
 
 
-def with_people(scenario, extra: Sequence) -> object:
+def with_people(scenario: _S, extra: Sequence) -> _S:
     """A deep copy of ``scenario`` whose people are its own followed by ``extra``.
 
     Args:
