@@ -38,6 +38,7 @@ import numpy as np
 from drake_social.arguments import real_array, require_checker, require_scenario
 from drake_social.kinematics import configuration_limits
 from drake_social.limits import MAX_WAYPOINTS
+from drake_social.people import people_model
 from drake_social.collision.validity import ValidityChecker
 from drake_social.scenario import Scenario, ScenarioError
 
@@ -163,9 +164,12 @@ def check_waypoints(
     return wp
 
 
-def _checked_world(scenario: Scenario) -> str:
-    """What a validity checker of ``scenario`` checks against, as text to compare."""
-    return repr((scenario.world, scenario.people, scenario.robot, scenario.object))
+def _checked_world(scenario: Scenario) -> tuple:
+    """What a validity checker of ``scenario`` checks against, to compare:
+    the room, the people's bodies (at t = 0), the robot and the object."""
+    people = people_model(scenario).state_at(0.0)
+    bodies = tuple(np.ascontiguousarray(a).tobytes() for a in (people.positions, people.headings, people.radii))
+    return repr((scenario.world, scenario.robot, scenario.object)), bodies
 
 
 def _answers(checker: ValidityChecker, method: str, arguments: tuple, n: int) -> np.ndarray:

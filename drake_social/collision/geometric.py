@@ -41,7 +41,9 @@ import numpy as np
 from drake_social.arguments import require_scenario
 from drake_social.kinematics import ArmGeometry, configuration_limits
 from drake_social.collision.planar_kernel import MAX_STEPS, STEP_MARGIN, TOLERANCE
+from drake_social.people import people_model
 from drake_social.scenario import Scenario
+from drake_social.world import world_model
 
 __all__ = ["CheckerBase", "GeometricChecker"]
 
@@ -145,14 +147,13 @@ class GeometricChecker(CheckerBase):
     def __init__(self, scenario: Scenario, resolution: float | None = None, chunk: int = 1024):
         super().__init__(scenario, resolution)
         self.chunk = int(chunk)
-        self.bounds = np.asarray(scenario.world.bounds, float)
-        boxes = scenario.world.obstacles
-        self._box_center = np.array([b.center for b in boxes], float).reshape(-1, 2)
-        self._box_half = np.array([b.size for b in boxes], float).reshape(-1, 2) / 2
-        yaw = np.array([b.yaw for b in boxes], float)
-        self._box_cos, self._box_sin = np.cos(yaw), np.sin(yaw)
-        self._people = np.array([[p.x, p.y] for p in scenario.people], float).reshape(-1, 2)
-        self._people_r = np.array([p.radius for p in scenario.people], float)
+        world = world_model(scenario)
+        self.bounds = np.array(world.bounds)
+        boxes = world.boxes
+        self._box_center, self._box_half = boxes.centers, boxes.halves
+        self._box_cos, self._box_sin = boxes.cos, boxes.sin
+        people = people_model(scenario).state_at(0.0)
+        self._people, self._people_r = people.positions, people.radii
         g = self.geometry
         self._radii = g.segment_radii
         # Segment s runs from vertex _seg[s, 0] to vertex _seg[s, 1] of _vertices().

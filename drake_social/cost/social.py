@@ -5,9 +5,10 @@ from __future__ import annotations
 import numpy as np
 
 from drake_social.cost import kernel
-from drake_social.cost.agf import PersonalSpace, agf_xy, gaussian, people_array
+from drake_social.cost.agf import PersonalSpace, agf_xy, gaussian
 from drake_social.kinematics import ArmGeometry, config_distance, displacement_bound
 from drake_social.limits import MAX_MOTION_STEPS
+from drake_social.people import PeopleState, people_model
 
 __all__ = ["FIELD_CHUNK_ELEMENTS", "SocialCost", "interpolation_segments"]
 
@@ -90,15 +91,23 @@ class SocialCost:
         self.backend = "numba" if kernel.AVAILABLE else "numpy"
 
     @classmethod
-    def from_scenario(cls, scenario, weights: np.ndarray | None = None) -> "SocialCost":
-        """The scenario's cost; ``weights`` overrides ``scenario.social.weights``."""
+    def from_scenario(cls, scenario, weights: np.ndarray | None = None,
+                      people: PeopleState | None = None) -> "SocialCost":
+        """The scenario's cost; ``weights`` overrides ``scenario.social.weights``.
+
+        Args:
+            people: the people the cost is about; None = the scenario's
+                people model at t = 0 (:func:`drake_social.people.people_model`).
+        """
         from drake_social.arguments import require_scenario
 
         require_scenario(scenario, "SocialCost.from_scenario")
         s = scenario.social
+        if people is None:
+            people = people_model(scenario).state_at(0.0)
         return cls(
             ArmGeometry.from_scenario(scenario),
-            people_array(scenario.people),
+            people.poses(),
             PersonalSpace.from_options(s),
             weights=s.weights if weights is None else weights,
             resolution=s.resolution,

@@ -52,9 +52,10 @@ import dataclasses as dc
 
 import numpy as np
 
-from drake_social.cost.agf import agf_xy, people_array
+from drake_social.cost.agf import agf_xy
 from drake_social.cost.social import SocialCost
 from drake_social.kinematics import ArmGeometry, config_distance
+from drake_social.people import people_model
 from drake_social.planning.algorithms import base_only_weights
 
 __all__ = [
@@ -225,7 +226,9 @@ def trajectory_metrics(
         q: (M, 4) configurations, dense enough that a part moves little between them.
         s: (M,) configuration arc length at the samples (None: the plain norm
             of the differences, summed).
-        times: (M,) seconds; given, the zone shares by time are added.
+        times: (M,) seconds; given, the zone shares by time are added and
+            each sample is measured against the people at its time (None:
+            against the people at t = 0).
         zones: the zone bounds.
 
     Returns:
@@ -233,13 +236,27 @@ def trajectory_metrics(
         ``agf_max_<part>``, ``agf_mean_<part>`` for every part of :func:`part_names`.
     """
     q = np.asarray(q, float).reshape(-1, 4)
-    cost = SocialCost.from_scenario(scenario, np.ones(ArmGeometry.from_scenario(scenario).num_interest_points))
-    g = cost.geometry
-    radii = np.array([p.radius for p in scenario.people], float)
+    g = ArmGeometry.from_scenario(scenario)
+    ones = np.ones(g.num_interest_points)
     if s is None:
         s = np.concatenate([[0.0], np.cumsum(config_distance(q[:-1], q[1:]))]) if len(q) else np.zeros(0)
-    dist = part_distances(g, cost.people, radii, q)
-    values = part_agf(cost, q)
+    model = people_model(scenario)
+    if times is None or model.static:
+        # A planned path has no times: it is measured against the people at
+        # t = 0, where the planner saw them; static people are there always.
+        state = model.state_at(0.0)
+        dist = part_distances(g, state.poses(), state.radii, q)
+        values = part_agf(SocialCost.from_scenario(scenario, ones, people=state), q)
+    else:
+        # Moving people: each sample against the people at its own time.
+        per_sample = []
+        for qi, ti in zip(q, np.asarray(times, float)):
+            state = model.state_at(float(ti))
+            per_sample.append((part_distances(g, state.poses(), state.radii, qi),
+                               part_agf(SocialCost.from_scenario(scenario, ones, people=state), qi)))
+        parts = part_names(g)
+        dist = {n: np.array([d[n][0] for d, _ in per_sample], float).reshape(-1) for n in parts}
+        values = {n: np.array([v[n][0] for _, v in per_sample], float).reshape(-1) for n in parts}
     base_steps = np.hypot(*np.diff(q[:, :2], axis=0).T) if len(q) > 1 else np.zeros(0)
     length = float(s[-1] - s[0]) if len(s) else 0.0
     out: dict[str, float] = {}

@@ -27,7 +27,9 @@ from pydrake.multibody.tree import ModelInstanceIndex
 from pydrake.planning import RobotDiagram, RobotDiagramBuilder
 
 from drake_social.model.robot_model import COLLISION_HEIGHT, robot_sdf
+from drake_social.people import people_model
 from drake_social.scenario import Box, Scenario
+from drake_social.world import WALL_NAMES, world_model
 
 __all__ = [
     "ACTUATED_JOINTS",
@@ -54,16 +56,9 @@ def wall_boxes(scenario: Scenario) -> dict[str, Box]:
     corners; west and east walls span y in [y_min, y_max]; t is
     ``world.wall_thickness`` (metres).
     """
-    x_min, y_min, x_max, y_max = (float(v) for v in scenario.world.bounds)
-    t = float(scenario.world.wall_thickness)
-    cx, cy = (x_min + x_max) / 2, (y_min + y_max) / 2
-    w, h = x_max - x_min, y_max - y_min
-    return {
-        "wall_south": Box(center=[cx, y_min - t / 2], size=[w + 2 * t, t]),
-        "wall_north": Box(center=[cx, y_max + t / 2], size=[w + 2 * t, t]),
-        "wall_west": Box(center=[x_min - t / 2, cy], size=[t, h]),
-        "wall_east": Box(center=[x_max + t / 2, cy], size=[t, h]),
-    }
+    walls = world_model(scenario).walls
+    return {name: Box(center=[float(v) for v in c], size=[float(v) for v in size], yaw=float(yaw))
+            for name, c, size, yaw in zip(WALL_NAMES, walls.centers, walls.sizes, walls.yaws)}
 
 
 def environment_names(scenario: Scenario) -> list[str]:
@@ -72,9 +67,10 @@ def environment_names(scenario: Scenario) -> list[str]:
     ``obstacle[i]`` for ``world.obstacles[i]``, ``person[i]`` (plus its name
     in quotes, when it has one) for ``people[i]``, and ``wall_<side>``.
     """
-    names = [f"obstacle[{i}]" for i in range(len(scenario.world.obstacles))]
-    names += [f"person[{i}] {p.name!r}" if p.name else f"person[{i}]" for i, p in enumerate(scenario.people)]
-    return names + list(wall_boxes(scenario))
+    names = [f"obstacle[{i}]" for i in range(len(world_model(scenario).boxes))]
+    people = people_model(scenario).state_at(0.0)
+    names += [f"person[{i}] {name!r}" if name else f"person[{i}]" for i, name in enumerate(people.names)]
+    return names + list(WALL_NAMES)
 
 
 #: Most environment shapes in one diagram built for reading shapes or for a
@@ -86,8 +82,8 @@ ENVIRONMENT_PART = 256
 def registration_order(scenario: Scenario) -> list[int]:
     """Indices into :func:`environment_names` in the order :func:`add_environment`
     registers the shapes: obstacles, walls, then people."""
-    n_obstacles, n_people = len(scenario.world.obstacles), len(scenario.people)
-    n = n_obstacles + n_people + len(wall_boxes(scenario))
+    n_obstacles, n_people = len(world_model(scenario).boxes), people_model(scenario).count
+    n = n_obstacles + n_people + len(WALL_NAMES)
     return [*range(n_obstacles), *range(n_obstacles + n_people, n), *range(n_obstacles, n_obstacles + n_people)]
 
 
@@ -111,13 +107,12 @@ def environment_discs(scenario: Scenario) -> np.ndarray:
     """(N, 3) ``[x, y, rho]`` of the environment's shapes in the order of
     :func:`environment_names`: each shape lies within ``rho`` metres of
     ``(x, y)`` (a box's half diagonal, a person's radius)."""
-    boxes = list(scenario.world.obstacles)
-    n_obstacles = len(boxes)
-    boxes += list(wall_boxes(scenario).values())
-    rows = [[b.center[0], b.center[1], 0.5 * float(np.hypot(*b.size))] for b in boxes[:n_obstacles]]
-    rows += [[p.x, p.y, p.radius] for p in scenario.people]
-    rows += [[b.center[0], b.center[1], 0.5 * float(np.hypot(*b.size))] for b in boxes[n_obstacles:]]
-    return np.array(rows, float).reshape(-1, 3)
+    world, people = world_model(scenario), people_model(scenario).state_at(0.0)
+    return np.concatenate([
+        np.column_stack([world.boxes.centers, world.boxes.radii]),
+        np.column_stack([people.positions, people.radii]),
+        np.column_stack([world.walls.centers, world.walls.radii]),
+    ]).reshape(-1, 3)
 
 
 def add_environment(plant: MultibodyPlant, scenario: Scenario, only: Sequence[int] | None = None) -> list[str]:
@@ -133,18 +128,21 @@ def add_environment(plant: MultibodyPlant, scenario: Scenario, only: Sequence[in
         The registered shape names, in the order of :func:`environment_names`.
     """
     names = environment_names(scenario)
-    n_obstacles, n_people = len(scenario.world.obstacles), len(scenario.people)
+    world, people = world_model(scenario), people_model(scenario).state_at(0.0)
+    n_obstacles, n_people = len(world.boxes), people.count
     wanted = set(range(len(names))) if only is None else {int(i) for i in only}
-    shapes = [(i, b, "obstacle") for i, b in enumerate(scenario.world.obstacles)]
-    shapes += [(n_obstacles + n_people + k, b, "wall") for k, b in enumerate(wall_boxes(scenario).values())]
-    for i, box, kind in shapes:
+    shapes = [(i, world.boxes, i, "obstacle") for i in range(n_obstacles)]
+    shapes += [(n_obstacles + n_people + k, world.walls, k, "wall") for k in range(len(world.walls))]
+    for i, boxes, k, kind in shapes:
         if i in wanted:
-            X_WG = RigidTransform(RotationMatrix.MakeZRotation(float(box.yaw)), [*box.center, COLLISION_HEIGHT / 2])
-            _register(plant, names[i], X_WG, DrakeBox(box.size[0], box.size[1], COLLISION_HEIGHT), kind)
-    for k, p in enumerate(scenario.people):
+            X_WG = RigidTransform(RotationMatrix.MakeZRotation(float(boxes.yaws[k])),
+                                  [*boxes.centers[k], COLLISION_HEIGHT / 2])
+            size = boxes.sizes[k]
+            _register(plant, names[i], X_WG, DrakeBox(size[0], size[1], COLLISION_HEIGHT), kind)
+    for k in range(n_people):
         if n_obstacles + k in wanted:
-            X_WG = RigidTransform([p.x, p.y, COLLISION_HEIGHT / 2])
-            _register(plant, names[n_obstacles + k], X_WG, Cylinder(p.radius, COLLISION_HEIGHT), "person")
+            X_WG = RigidTransform([*people.positions[k], COLLISION_HEIGHT / 2])
+            _register(plant, names[n_obstacles + k], X_WG, Cylinder(people.radii[k], COLLISION_HEIGHT), "person")
     return [names[i] for i in sorted(wanted)] if only is not None else names
 
 

@@ -7,6 +7,6 @@ first model (people who stand still); walking people are further models
 behind the same protocol.
 """
 
-from drake_social.people.model import PeopleModel, PeopleState, StaticPeople, people_model
+from drake_social.people.model import PeopleModel, PeopleState, StaticPeople, people_model, with_people
 
-__all__ = ["PeopleModel", "PeopleState", "StaticPeople", "people_model"]
+__all__ = ["PeopleModel", "PeopleState", "StaticPeople", "people_model", "with_people"]

@@ -4,11 +4,13 @@ from __future__ import annotations
 
 import dataclasses as dc
 import math
-from typing import Protocol, Sequence, runtime_checkable
+from typing import Protocol, Sequence, TypeVar, runtime_checkable
 
 import numpy as np
 
-__all__ = ["PeopleModel", "PeopleState", "StaticPeople", "people_model"]
+__all__ = ["PeopleModel", "PeopleState", "StaticPeople", "people_model", "with_people"]
+
+_S = TypeVar("_S")
 
 
 @dc.dataclass(frozen=True)
@@ -113,3 +115,21 @@ def people_model(scenario) -> PeopleModel:
     people = scenario.people
     return StaticPeople([[p.x, p.y, p.theta] for p in people], [p.radius for p in people],
                         [p.name for p in people])
+
+
+def with_people(scenario: _S, extra: Sequence) -> _S:
+    """A deep copy of ``scenario`` whose people are its own followed by ``extra``.
+
+    Args:
+        scenario: a scenario (not modified).
+        extra: scenario ``Person`` records to append (the records themselves,
+            not copies).
+
+    Returns:
+        The new scenario; it is not validated again.
+    """
+    import copy
+
+    out = copy.deepcopy(scenario)
+    out.people = list(out.people) + list(extra)
+    return out

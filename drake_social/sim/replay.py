@@ -50,6 +50,7 @@ from pydrake.systems.framework import DiagramBuilder
 
 from drake_social.cost import SocialCost
 from drake_social.model.robot_model import COLLISION_HEIGHT
+from drake_social.people import people_model
 from drake_social.scenario import Scenario
 from drake_social.viz.world import (  # noqa: F401  (FIELD_MAX_CELLS, field_resolution: re-exported)
     FIELD_CMAP,
@@ -270,8 +271,9 @@ def draw_overlays(
     for wrap in ("wrapS", "wrapT"):
         meshcat.SetProperty(f"{prefix}/field/<object>", f"material.emissiveMap.{wrap}", _THREE_CLAMP_TO_EDGE)
     meshcat.SetProperty(f"{prefix}/field/<object>", "material.needsUpdate", True)
-    for i, p in enumerate(scenario.people):
-        vertices, faces = _arrow_mesh(p.x, p.y, p.theta, p.radius)
+    people = people_model(scenario).state_at(0.0)
+    for i, ((x, y), theta, radius) in enumerate(zip(people.positions, people.headings, people.radii)):
+        vertices, faces = _arrow_mesh(float(x), float(y), float(theta), float(radius))
         meshcat.SetTriangleMesh(f"{prefix}/people/{i}", vertices, faces, _ARROW_RGBA)
     if waypoints is not None:
         xy = np.asarray(waypoints, float).reshape(len(waypoints), -1)[:, :2]

@@ -13,6 +13,7 @@ from matplotlib.patches import Circle
 
 from drake_social.cost import SocialCost
 from drake_social.kinematics import ArmGeometry
+from drake_social.people import people_model
 from drake_social.scenario import Scenario
 from drake_social.viz.labels import fit_width
 from drake_social.viz.robot import draw_robot
@@ -116,7 +117,7 @@ def show_figure(scenario: Scenario, *, title: str | None = None, resolution: flo
     draw_robot(ax, geometry, np.asarray(scenario.start, float), labels=True)
     draw_robot(ax, geometry, np.asarray(scenario.goal, float))
     s_start, s_goal = cost(np.array([scenario.start, scenario.goal], float))
-    n = len(scenario.people)
+    n = people_model(scenario).count
     people = "1 person" if n == 1 else f"{n} people"
     map_titles(fig, ax, title if title is not None else scenario.description or "scenario",
                f"{people}; social cost S(start) = {s_start:.2f}, S(goal) = {s_goal:.2f}")

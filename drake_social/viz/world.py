@@ -18,8 +18,10 @@ from matplotlib.image import AxesImage
 from matplotlib.patches import Circle, FancyArrow, Polygon, Rectangle
 
 from drake_social.cost import SocialCost
+from drake_social.people import PeopleState, people_model
 from drake_social.scenario import Box, Scenario
 from drake_social.viz.labels import MAX_LABEL_CHARS, fit_text
+from drake_social.world import Boxes, world_model
 
 __all__ = [
     "FIELD_CMAP",
@@ -52,13 +54,11 @@ FIELD_MIN_RESOLUTION = 0.05
 
 def box_corners(box: Box) -> np.ndarray:
     """The four corners (4, 2) of a box obstacle in the world frame, metres."""
-    c, s = math.cos(box.yaw), math.sin(box.yaw)
-    hx, hy = box.size[0] / 2, box.size[1] / 2
-    local = np.array([[-hx, -hy], [hx, -hy], [hx, hy], [-hx, hy]])
-    return np.asarray(box.center, float) + local @ np.array([[c, s], [-s, c]])
+    return Boxes(centers=[box.center], sizes=[box.size], yaws=[box.yaw]).corners[0]
 
 
-def draw_world(ax: Axes, scenario: Scenario, *, names: bool = True, margin: float = VIEW_MARGIN) -> dict[str, list]:
+def draw_world(ax: Axes, scenario: Scenario, *, names: bool = True, margin: float = VIEW_MARGIN,
+               people: PeopleState | None = None) -> dict[str, list]:
     """Draws the boundary walls, the obstacles and the people.
 
     People are discs of their body radius with an arrow along their facing
@@ -71,15 +71,19 @@ def draw_world(ax: Axes, scenario: Scenario, *, names: bool = True, margin: floa
             line, cut to :data:`~drake_social.viz.labels.MAX_LABEL_CHARS`
             characters).
         margin: free space around the outer walls in the view, metres.
+        people: the people to draw; None = the scenario's people model at
+            t = 0 (:func:`drake_social.people.people_model`).
 
     Returns:
         Artists by kind: "walls", "obstacles", "people", "arrows", "names".
         The first wall is labelled "wall / obstacle" and the first person
         "person (arrow: facing)" for legends.
     """
-    w = scenario.world
-    x0, y0, x1, y1 = w.bounds
+    w = world_model(scenario)
+    x0, y0, x1, y1 = (float(v) for v in w.bounds)
     t = w.wall_thickness
+    if people is None:
+        people = people_model(scenario).state_at(0.0)
     out: dict[str, list] = {"walls": [], "obstacles": [], "people": [], "arrows": [], "names": []}
     # Boundary walls stand outside the bounds (see World.wall_thickness).
     for x, y, dx, dy in (
@@ -91,24 +95,26 @@ def draw_world(ax: Axes, scenario: Scenario, *, names: bool = True, margin: floa
         patch = Rectangle((x, y), dx, dy, facecolor=OBSTACLE_COLOR, edgecolor="none", zorder=2)
         out["walls"].append(ax.add_patch(patch))
     out["walls"][0].set_label("wall / obstacle")
-    for box in w.obstacles:
-        patch = Polygon(box_corners(box), closed=True, facecolor=OBSTACLE_COLOR, edgecolor="#2b2b2b",
+    for corners in w.boxes.corners:
+        patch = Polygon(corners, closed=True, facecolor=OBSTACLE_COLOR, edgecolor="#2b2b2b",
                         linewidth=0.6, zorder=2)
         out["obstacles"].append(ax.add_patch(patch))
-    for i, p in enumerate(scenario.people):
-        body = Circle((p.x, p.y), p.radius, facecolor=PERSON_COLOR, edgecolor="black", linewidth=1.0, zorder=4,
+    for i, ((px, py), theta, radius, name) in enumerate(zip(people.positions, people.headings, people.radii,
+                                                           people.names)):
+        px, py, theta, radius = float(px), float(py), float(theta), float(radius)
+        body = Circle((px, py), radius, facecolor=PERSON_COLOR, edgecolor="black", linewidth=1.0, zorder=4,
                       label="person (arrow: facing)" if i == 0 else None)
         out["people"].append(ax.add_patch(body))
         # The arrow starts at the body's edge so that it reads as a nose.
-        length = max(0.45, 1.6 * p.radius)
-        c, s = math.cos(p.theta), math.sin(p.theta)
-        arrow = FancyArrow(p.x + p.radius * c, p.y + p.radius * s, length * c, length * s, width=0.06,
+        length = max(0.45, 1.6 * radius)
+        c, s = math.cos(theta), math.sin(theta)
+        arrow = FancyArrow(px + radius * c, py + radius * s, length * c, length * s, width=0.06,
                            head_width=0.26, head_length=0.22, length_includes_head=True, color="black", zorder=4)
         out["arrows"].append(ax.add_patch(arrow))
-        if names and p.name:
+        if names and name:
             # Label on the side opposite to the facing arrow, to keep it readable.
-            off = p.radius + 0.2
-            out["names"].append(ax.text(p.x - off * c, p.y - off * s, fit_text(p.name, MAX_LABEL_CHARS, 1),
+            off = radius + 0.2
+            out["names"].append(ax.text(px - off * c, py - off * s, fit_text(name, MAX_LABEL_CHARS, 1),
                                         fontsize=7,
                                         ha="left" if c < -0.3 else ("right" if c > 0.3 else "center"),
                                         va="bottom" if s < -0.3 else ("top" if s > 0.3 else "center"),

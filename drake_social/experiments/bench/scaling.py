@@ -37,6 +37,7 @@ from typing import Callable, Sequence
 import numpy as np
 
 from drake_social.collision.drake_checker import make_checker
+from drake_social.people import with_people
 from drake_social.planning.algorithms import make_planner, plan
 from drake_social.scenario import Person, Scenario, load_scenario
 
@@ -56,13 +57,11 @@ def far_people_scenario(scenario: Scenario, count: int, gap: float = 10.0) -> Sc
     east wall, 1 m apart (their own room: outside the planner's bounds).
     Not validated (people outside the bounds are not allowed in a scenario
     file); for measurements only."""
-    out = copy.deepcopy(scenario)
-    x0, y0, x1, y1 = out.world.bounds
+    x0, y0, x1, y1 = scenario.world.bounds
     rows = max(1, int(y1 - y0))
     extra = [Person(x=x1 + gap + (i // rows), y=y0 + 0.5 + (i % rows), theta=math.pi * (i % 3) / 3,
                     radius=0.25, name=f"far {i}") for i in range(count)]
-    out.people = list(out.people) + extra
-    return out
+    return with_people(scenario, extra)
 
 
 def _plan(scenario: Scenario, checker_kind: str, algorithm: str, iterations: int, seed: int, **planner) -> dict:
