@@ -20,7 +20,6 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from drake_social.kinematics import ArmGeometry
-from drake_social.sim import analysis_kernel
 
 __all__ = ["body_point_names", "body_points", "config_deviation", "densify", "point_deviation"]
 
@@ -183,6 +182,10 @@ def point_deviation(
     """
     planned = np.asarray(planned, float).reshape(-1, 4)
     executed = np.asarray(executed, float).reshape(-1, 4)
+    if compiled is None or compiled:
+        from drake_social.sim import analysis_kernel  # numba: imported when a search needs it
+
+        compiled = analysis_kernel.AVAILABLE if compiled is None else True
     names = body_point_names(geometry)
     if len(executed) == 0:
         return {**{n: 0.0 for n in names}, "max": 0.0}
@@ -211,7 +214,7 @@ def point_deviation(
         active = lower - 1e-9 * (1.0 + radius) < best
         if active.any():
             _search_piece(geometry, densify(geometry, planned[first:last + 2], spacing), executed_pts, active, best,
-                          iterations, analysis_kernel.AVAILABLE if compiled is None else bool(compiled))
+                          iterations, bool(compiled))
     out = {name: float(best[:, k].max()) for k, name in enumerate(names)}
     out["max"] = max(out.values())
     return out
@@ -274,6 +277,8 @@ def _search_piece(geometry: ArmGeometry, dense: np.ndarray, executed_pts: np.nda
             best[rows, k] = np.minimum(best[rows, k], np.linalg.norm(x - curve[keep[0]], axis=1))
             continue
         if compiled:
+            from drake_social.sim import analysis_kernel
+
             polyline = np.ascontiguousarray(curve[keep])
             _, nearest = cKDTree(polyline).query(x, k=min(16, len(polyline)))
             nearest = np.asarray(nearest, np.int64).reshape(len(x), -1)

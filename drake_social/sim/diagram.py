@@ -2,8 +2,11 @@
 
 :func:`build_diagram` wires the systems of :mod:`drake_social.control` into
 one Drake diagram and names every subsystem, so that a script can fetch any of
-them (``diagram.GetSubsystemByName("controller")``) or replace one (pass fixed
-``waypoints`` instead of planning). Running it is :func:`drake_social.sim.simulate` (in :mod:`drake_social.sim.run`).
+them (``diagram.GetSubsystemByName("controller")``), and exports named ports
+(a station, as in Drake's hardware_sim and the manipulation course's
+``station.py``), so that a script can leave out the planner or the base
+controller and wire its own. Running it is :func:`drake_social.sim.simulate`
+(in :mod:`drake_social.sim.run`).
 
 Blocks (all named; ``[p]`` only with ``execution="paper"``, ``[s]`` only with
 ``"synchronized"``, ``[k]`` only in ``mode="kinematic"``, ``[d]`` only in
@@ -18,8 +21,14 @@ Blocks (all named; ``[p]`` only with ``execution="paper"``, ``[s]`` only with
     [d] drive velocity ─▶ hold (ZOH) ─▶ desired_state ◀─ arm reference state (position, velocity, acceleration)
         desired_state, plant state ─▶ servo_* (commanded acceleration) ─▶ servo (inverse dynamics) ─▶ plant
 
-The planner is left out when ``waypoints`` are given. In ``synchronized``
-execution each segment's reference is one phase-synchronized Ruckig
+    people (PeopleSource: the people model at the context's time) ─▶ people_state
+
+The planner is left out when ``waypoints`` are given, or with
+``planner=False`` (the path then comes in through the input port ``path``);
+the base controller with ``controller=False`` (the wheel speeds then come in
+through the input port ``wheel_speeds``).
+
+In ``synchronized`` execution each segment's reference is one phase-synchronized Ruckig
 trajectory of all four coordinates, so it runs on the straight
 configuration-space segment the planner checked and costed; the base tracks
 it with feed-forward plus the P term, the arm follows it, and the sequencer
@@ -364,6 +373,11 @@ def scenario_plant_config(scenario: Scenario) -> MultibodyPlantConfig:
     Drake's built-in joint PD controllers would need; the servo is therefore
     made of C++ blocks (``servo_*``, ``servo``) on the plant's actuation
     input. The other fields are Drake's defaults.
+
+    Drake 1.51 marks TAMSI deprecated (removal announced for 2026-09-01; it
+    logs one warning per process): a script can pass another approximation
+    (``"lagged"``, ``"similar"``) through ``build_diagram(plant_config=...)``,
+    at about three times the cost of a step.
     """
     return MultibodyPlantConfig(time_step=float(scenario.execution.plant_time_step),
                                 discrete_contact_approximation="tamsi")
