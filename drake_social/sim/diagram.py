@@ -140,7 +140,7 @@ from drake_social.scenario import (EXECUTIONS, SIM_MODES, SERVO_BANDWIDTH, SERVO
 from drake_social.waypoints import check_waypoints
 
 __all__ = ["DiagramArguments", "TransportDiagram", "build_diagram", "check_diagram_arguments", "check_diagram_options",
-           "check_diagram_waypoints", "scenario_plant_config", "servo_gains"]
+           "check_diagram_waypoints", "drake_config_problem", "scenario_plant_config", "servo_gains"]
 
 
 @dc.dataclass
@@ -323,7 +323,38 @@ def check_diagram_options(
     problem = plant_time_step_problem(scenario.execution, mode)  # the scenario's mode was checked above
     if problem:
         raise ScenarioError(f"{who}: scenario: {problem[0]}: {problem[1]}")
+    problem = drake_config_problem(scenario.execution)
+    if problem:
+        raise ScenarioError(f"{who}: scenario: {problem[0]}: {problem[1]}")
     return mode, execution or scenario.execution.execution
+
+
+#: The values of ``execution.contact_approximation`` (Drake's discrete contact approximations).
+CONTACT_APPROXIMATIONS = ("tamsi", "sap", "similar", "lagged")
+
+
+def drake_config_problem(execution) -> tuple[str, str] | None:
+    """What is wrong with the Drake settings of a scenario's ``execution``
+    section (``contact_approximation``, ``integration_scheme``, ``accuracy``,
+    ``target_realtime_rate``) as ``(field, rule)``, or None."""
+    from pydrake.systems.analysis import GetIntegrationSchemes
+
+    e = execution
+    if e.contact_approximation not in CONTACT_APPROXIMATIONS:
+        return "execution.contact_approximation", (f"must be one of {', '.join(CONTACT_APPROXIMATIONS)}, "
+                                                   f"got {e.contact_approximation!r}")
+    if e.integration_scheme not in GetIntegrationSchemes():
+        return "execution.integration_scheme", (f"must be one of {', '.join(GetIntegrationSchemes())}, "
+                                                f"got {e.integration_scheme!r}")
+    for name in ("accuracy", "target_realtime_rate"):
+        value = getattr(e, name)
+        if isinstance(value, bool) or not isinstance(value, (int, float)) or not np.isfinite(value):
+            return f"execution.{name}", f"must be a finite number, got {value!r}"
+    if not e.accuracy > 0:
+        return "execution.accuracy", f"must be > 0, got {e.accuracy!r}"
+    if e.target_realtime_rate < 0:
+        return "execution.target_realtime_rate", f"must be >= 0 (0 = as fast as possible), got {e.target_realtime_rate!r}"
+    return None
 
 
 def check_diagram_waypoints(scenario: Scenario, waypoints, checker: ValidityChecker | None, who: str) -> np.ndarray:
@@ -367,8 +398,9 @@ def check_diagram_arguments(
 def scenario_plant_config(scenario: Scenario) -> MultibodyPlantConfig:
     """The dynamic mode's ``MultibodyPlantConfig`` of a scenario.
 
-    ``time_step`` is ``execution.plant_time_step`` (seconds). The discrete
-    contact approximation is TAMSI: a step of this plant costs ~60 us
+    ``time_step`` is ``execution.plant_time_step`` (seconds) and
+    ``discrete_contact_approximation`` is ``execution.contact_approximation``,
+    by default TAMSI: a step of this plant costs ~60 us
     against ~200 us with the SAP solvers (measured on office_bar), which
     Drake's built-in joint PD controllers would need; the servo is therefore
     made of C++ blocks (``servo_*``, ``servo``) on the plant's actuation
@@ -376,11 +408,11 @@ def scenario_plant_config(scenario: Scenario) -> MultibodyPlantConfig:
 
     Drake 1.51 marks TAMSI deprecated (removal announced for 2026-09-01; it
     logs one warning per process): a script can pass another approximation
-    (``"lagged"``, ``"similar"``) through ``build_diagram(plant_config=...)``,
-    at about three times the cost of a step.
+    (``"lagged"``, ``"similar"``) in the scenario or through
+    ``build_diagram(plant_config=...)``, at about three times the cost of a step.
     """
     return MultibodyPlantConfig(time_step=float(scenario.execution.plant_time_step),
-                                discrete_contact_approximation="tamsi")
+                                discrete_contact_approximation=scenario.execution.contact_approximation)
 
 
 def build_checked(

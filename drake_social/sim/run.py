@@ -272,12 +272,17 @@ def _divergence(q, v, lower: np.ndarray, upper: np.ndarray) -> str | None:
 def scenario_simulator_config(scenario: Scenario) -> SimulatorConfig:
     """The ``SimulatorConfig`` of a scenario's run.
 
-    Drake's defaults (Runge-Kutta 3 with error control, accuracy 1e-4, as
-    fast as possible, no publish every step) with ``max_step_size`` one
+    ``execution.integration_scheme``, ``accuracy`` and
+    ``target_realtime_rate`` (by default Drake's: Runge-Kutta 3 with error
+    control, accuracy 1e-4, as fast as possible), ``max_step_size`` one
     ``execution.control_period`` (seconds): the continuous base of the
     kinematic mode is integrated in steps of at most one control period.
+    The rest are Drake's defaults (no publish at every step: the loggers
+    sample periodically).
     """
-    return SimulatorConfig(max_step_size=float(scenario.execution.control_period))
+    e = scenario.execution
+    return SimulatorConfig(integration_scheme=e.integration_scheme, max_step_size=float(e.control_period),
+                           accuracy=float(e.accuracy), target_realtime_rate=float(e.target_realtime_rate))
 
 
 def limit_violations(scenario: Scenario, times: np.ndarray, q: np.ndarray) -> list[LimitViolation]:

@@ -17,6 +17,7 @@ from pydrake.systems.framework import DiagramBuilder
 from drake_social.collision.drake_checker import make_checker
 from drake_social.people import people_model
 from drake_social.planning.algorithms import plan
+from drake_social.scenario import ScenarioError
 from drake_social.sim.diagram import build_diagram, scenario_plant_config
 from drake_social.sim.run import scenario_simulator_config, simulate
 
@@ -89,6 +90,8 @@ def test_the_plant_config_follows_the_scenario(tiny_scenario, tiny_path):
     scenario = dc.replace(tiny_scenario, execution=dc.replace(tiny_scenario.execution, plant_time_step=0.0015))
     config = scenario_plant_config(scenario)
     assert config.time_step == 0.0015 and config.discrete_contact_approximation == "tamsi"
+    lagged = dc.replace(scenario, execution=dc.replace(scenario.execution, contact_approximation="lagged"))
+    assert scenario_plant_config(lagged).discrete_contact_approximation == "lagged"
     built = build_diagram(scenario, mode="dynamic", waypoints=tiny_path)
     assert built.plant.time_step() == 0.0015
     assert built.plant.get_discrete_contact_approximation().name == "kTamsi"
@@ -103,8 +106,27 @@ def test_the_simulator_config_follows_the_scenario(tiny_scenario):
     config = scenario_simulator_config(tiny_scenario)
     assert config.max_step_size == tiny_scenario.execution.control_period
     assert (config.integration_scheme, config.accuracy, config.use_error_control) == ("runge_kutta3", 1e-4, True)
+    assert config.target_realtime_rate == 0.0
+    execution = dc.replace(tiny_scenario.execution, integration_scheme="runge_kutta5", accuracy=1e-6,
+                           target_realtime_rate=1.0, control_period=0.02)
+    config = scenario_simulator_config(dc.replace(tiny_scenario, execution=execution))
+    assert (config.integration_scheme, config.accuracy, config.target_realtime_rate, config.max_step_size) == (
+        "runge_kutta5", 1e-6, 1.0, 0.02)
     with pytest.raises(TypeError, match="simulator_config"):
         simulate(tiny_scenario, simulator_config={"max_step_size": 0.01})
+
+
+@pytest.mark.parametrize("field, value, rule", [
+    ("integration_scheme", "rk9", "must be one of .*runge_kutta3"),
+    ("contact_approximation", "soft", "must be one of tamsi, sap, similar, lagged"),
+    ("accuracy", 0.0, "must be > 0"),
+    ("target_realtime_rate", -1.0, "must be >= 0"),
+    ("accuracy", float("nan"), "must be a finite number"),
+])
+def test_bad_drake_settings_are_refused_by_name(tiny_scenario, field, value, rule):
+    scenario = dc.replace(tiny_scenario, execution=dc.replace(tiny_scenario.execution, **{field: value}))
+    with pytest.raises(ScenarioError, match=f"build_diagram: scenario: execution.{field}: {rule}"):
+        build_diagram(scenario)
 
 
 def _example():
