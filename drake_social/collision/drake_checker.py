@@ -271,27 +271,38 @@ def near_environment(scenario: Scenario, a_xy: np.ndarray, b_xy: np.ndarray, mar
     return _near_function(scenario, margin)(a_xy, b_xy)
 
 
-def _near_function(scenario: Scenario, margin: float = 0.01):
+def _near_function(scenario: Scenario, margin: float = 0.01, *, per_track: bool = False):
     """:func:`near_environment` of ``scenario`` as a function of the tracks
-    (the room's discs and the robot's extent computed once)."""
+    (the room's discs and the robot's extent computed once); with
+    ``per_track``, the function gives an (M, S) bool matrix instead: shape
+    ``registration_order(scenario)[j]`` is near track i."""
     geometry = ArmGeometry.from_scenario(scenario)
     extent = max(float(scenario.robot.base_radius), float(np.sum(geometry.lever(include_body=True))))
     discs = environment_discs(scenario)
     order = np.asarray(registration_order(scenario), int)
 
-    def near(a_xy: np.ndarray, b_xy: np.ndarray) -> np.ndarray:
+    rows = max(1, (1 << 16) // max(1, len(discs)))  # tracks per block: memory bounded whatever the room
+
+    def near_tracks(a_xy: np.ndarray, b_xy: np.ndarray) -> np.ndarray:
         a = np.asarray(a_xy, float).reshape(-1, 2)
         d = np.asarray(b_xy, float).reshape(-1, 2) - a
-        hit = np.zeros(len(discs), dtype=bool)
-        for start, step in zip(a, d):
-            rel = discs[:, :2] - start
-            length2 = float(step @ step)
-            t = np.clip(rel @ step / length2, 0.0, 1.0) if length2 > 0 else np.zeros(len(discs))
-            gap = np.hypot(*(rel - t[:, None] * step).T) - discs[:, 2]
-            hit |= ~(gap > extent + margin)  # NaN keeps the shape
+        hit = np.zeros((len(a), len(discs)), dtype=bool)
+        for r0 in range(0, len(a), rows):
+            start, step = a[r0:r0 + rows, None, :], d[r0:r0 + rows, None, :]  # (m, 1, 2)
+            rel = discs[None, :, :2] - start  # (m, D, 2)
+            length2 = step[..., 0] * step[..., 0] + step[..., 1] * step[..., 1]  # (m, 1)
+            along = rel[..., 0] * step[..., 0] + rel[..., 1] * step[..., 1]
+            with np.errstate(invalid="ignore", divide="ignore"):
+                t = np.where(length2 > 0, np.clip(along / np.where(length2 > 0, length2, 1.0), 0.0, 1.0), 0.0)
+            gap = np.hypot(rel[..., 0] - t * step[..., 0], rel[..., 1] - t * step[..., 1]) - discs[:, 2]
+            hit[r0:r0 + rows] = ~(gap > extent + margin)  # NaN keeps the shape
+        return hit
+
+    def near(a_xy: np.ndarray, b_xy: np.ndarray) -> np.ndarray:
+        hit = near_tracks(a_xy, b_xy).any(axis=0)
         return order[hit[order]]
 
-    return near
+    return (lambda a_xy, b_xy: near_tracks(a_xy, b_xy)[:, order]) if per_track else near
 
 
 def local_checkers(scenario: Scenario, a_xy: np.ndarray, b_xy: np.ndarray, resolution: float | None = None,
@@ -455,13 +466,18 @@ def _segment_groups(scenario: Scenario, wp: np.ndarray) -> list[tuple[int, int]]
     group grows while its shapes do; a segment near more shapes is a group
     alone (checked in several parts)."""
     groups: list[tuple[int, int]] = []
-    first, shapes = 0, set()
-    near_of = _near_function(scenario)
-    for i in range(len(wp) - 1):
-        near = set(near_of(wp[i : i + 1, :2], wp[i + 1 : i + 2, :2]).tolist())
-        if i > first and len(shapes | near) > plant.ENVIRONMENT_PART:
-            groups.append((first, i))
-            first, shapes = i, set()
-        shapes |= near
+    near_of = _near_function(scenario, per_track=True)
+    first, shapes = 0, 0  # the group's near shapes as a bit set
+    block = 4096  # segments whose near shapes are computed at once
+    for b0 in range(0, len(wp) - 1, block):
+        b1 = min(b0 + block, len(wp) - 1)
+        near = near_of(wp[b0:b1, :2], wp[b0 + 1 : b1 + 1, :2])  # (m, S)
+        packed = np.packbits(near, axis=1)
+        for i in range(b0, b1):
+            row = int.from_bytes(packed[i - b0].tobytes(), "big")
+            if i > first and (shapes | row).bit_count() > plant.ENVIRONMENT_PART:
+                groups.append((first, i))
+                first, shapes = i, 0
+            shapes |= row
     groups.append((first, len(wp) - 1))
     return groups

@@ -6,6 +6,7 @@
   :class:`MecanumDrive` turns wheel speeds into the base velocity.
 * :class:`RuckigTrajectorySource` gives jerk-limited references (the arm's,
   or the synchronized whole-configuration reference).
+* :class:`PeopleSource` outputs where the people are at the context's time.
 """
 
 from drake_social.control.holonomic import (
@@ -17,6 +18,7 @@ from drake_social.control.holonomic import (
     wheel_limited_speed,
     wheel_speeds,
 )
+from drake_social.control.people_source import PEOPLE_VECTOR_FIELDS, PeopleSource, people_vector
 from drake_social.control.planner_system import PlannerSystem, path_parameter, waypoint_trajectory
 from drake_social.control.ruckig_source import (
     RuckigSegment,
@@ -29,6 +31,8 @@ from drake_social.control.sequencer import WaypointSequencer
 __all__ = [
     "HolonomicPController",
     "MecanumDrive",
+    "PEOPLE_VECTOR_FIELDS",
+    "PeopleSource",
     "PlannerSystem",
     "RuckigSegment",
     "RuckigTrajectorySource",
@@ -37,6 +41,7 @@ __all__ = [
     "base_velocity",
     "mecanum_matrix",
     "path_parameter",
+    "people_vector",
     "reference_source_from_options",
     "saturate_norm",
     "waypoint_trajectory",

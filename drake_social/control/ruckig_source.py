@@ -11,7 +11,10 @@ outputs only evaluate the stored segment at the context time.
 State: one abstract value, an immutable :class:`RuckigSegment` (start time
 t0, the ``ruckig.Trajectory`` or None when at rest, the rest position, the
 target it heads for). Outputs depend on the state and the time only (no
-direct feedthrough from ``target``).
+direct feedthrough from ``target``); the position, velocity and acceleration
+of one instant come from one cache entry of the context, so the system keeps
+nothing of a run on ``self`` (a cloned context, or a second context of the
+same system, runs on its own).
 
 Ports: input ``target`` (n; while it has no value, the reference stays
 where it is); outputs ``position``, ``velocity``,
@@ -51,14 +54,12 @@ Example::
 
 from __future__ import annotations
 
-import itertools
-
 from typing import Sequence
 
 import numpy as np
 import ruckig
 from pydrake.common.value import AbstractValue
-from pydrake.systems.framework import EventStatus, BasicVector, Context, LeafSystem, State
+from pydrake.systems.framework import EventStatus, BasicVector, Context, LeafSystem, State, ValueProducer
 
 from drake_social.arguments import real_array, require_execution_options
 from drake_social.scenario import ExecutionOptions
@@ -87,8 +88,6 @@ _SHARE_FLOOR = 1e-6
 # clipped to the limits, which removes only that rounding.
 _LIMIT_ROUNDING = 1e-12
 
-_SERIALS = itertools.count()
-
 
 class RuckigSegment:
     """One reference segment: immutable, so copies may share it.
@@ -107,11 +106,10 @@ class RuckigSegment:
             extrema respect up to rounding; positions are clipped to them, or None.
     """
 
-    __slots__ = ("t0", "trajectory", "rest", "target", "target_list", "serial", "clip")
+    __slots__ = ("t0", "trajectory", "rest", "target", "target_list", "clip")
 
     def __init__(self, t0: float, trajectory, rest: np.ndarray, target: np.ndarray | None,
                  clip: tuple[np.ndarray, np.ndarray] | None = None):
-        object.__setattr__(self, "serial", next(_SERIALS))  # identifies the segment in caches
         object.__setattr__(self, "t0", float(t0))
         object.__setattr__(self, "trajectory", trajectory)
         rest = np.array(rest, float)
@@ -332,6 +330,12 @@ class RuckigTrajectorySource(LeafSystem):
         self.DeclareForcedUnrestrictedUpdateEvent(self._Retarget)
 
         prereqs = {self.abstract_state_ticket(self._segment_index), self.time_ticket()}
+        # (p, v, a) at the context's time: the position, velocity and
+        # acceleration ports of one instant share one at_time() call.
+        self._at_cache = self.DeclareCacheEntry(
+            "reference (position, velocity, acceleration) at the context's time",
+            ValueProducer(allocate=lambda: AbstractValue.Make((initial, initial, initial)), calc=self._CalcAt),
+            prerequisites_of_calc=prereqs)
         self.DeclareVectorOutputPort("position", n, self._CalcPosition, prerequisites_of_calc=prereqs)
         self.DeclareVectorOutputPort("velocity", n, self._CalcVelocity, prerequisites_of_calc=prereqs)
         self.DeclareVectorOutputPort("acceleration", n, self._CalcAcceleration, prerequisites_of_calc=prereqs)
@@ -343,10 +347,6 @@ class RuckigTrajectorySource(LeafSystem):
                 raise ValueError(f"RuckigTrajectorySource: preview must be a finite number > 0, got {preview!r}")
             self._preview = float(preview)
             self.DeclareVectorOutputPort("mean_velocity", n, self._CalcMeanVelocity, prerequisites_of_calc=prereqs)
-        # The last (segment, t) -> (p, v, a): the position, velocity and
-        # acceleration ports of one instant share one at_time() call. A pure
-        # cache of a function of the context, not state.
-        self._memo: tuple = (None, None, None)
 
     @staticmethod
     def _RestSegment(t0: float, position) -> RuckigSegment:
@@ -499,14 +499,11 @@ class RuckigTrajectorySource(LeafSystem):
 
     # ---- outputs ---------------------------------------------------------------
 
+    def _CalcAt(self, context: Context, value: AbstractValue) -> None:
+        value.set_value(self._Segment(context).at(context.get_time()))
+
     def _At(self, context: Context) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        segment, t = self._Segment(context), context.get_time()
-        serial, memo_t, value = self._memo
-        if serial == segment.serial and memo_t == t:
-            return value
-        value = segment.at(t)
-        self._memo = (segment.serial, t, value)  # not the segment: nothing of ruckig kept on self
-        return value
+        return self._at_cache.Eval(context)
 
     def _CalcPosition(self, context: Context, output: BasicVector) -> None:
         output.SetFromVector(self._At(context)[0])

@@ -295,6 +295,17 @@ class ExecutionOptions:
     control_period: float = 0.01
     # Time step of the discrete MultibodyPlant in "dynamic" mode, seconds (> 0).
     plant_time_step: float = 0.002
+    # Discrete contact approximation of that plant (Drake's
+    # MultibodyPlantConfig.discrete_contact_approximation): "tamsi", "sap",
+    # "similar" or "lagged".
+    contact_approximation: str = "tamsi"
+    # Drake's SimulatorConfig of a run: the integration scheme (one of
+    # pydrake.systems.analysis.GetIntegrationSchemes()), its accuracy (> 0,
+    # with error control) and the target realtime rate (0 = as fast as
+    # possible, 1 = wall-clock time, e.g. to watch Meshcat live).
+    integration_scheme: str = "runge_kutta3"
+    accuracy: float = 1e-4
+    target_realtime_rate: float = 0.0
     # A run that has not reached the goal after this long stops and says so,
     # seconds (> 0, <= MAX_TIME_LIMIT = 600; at most MAX_CONTROL_STEPS control
     # periods and MAX_PLANT_STEPS plant steps).

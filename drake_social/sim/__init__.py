@@ -1,10 +1,13 @@
 """Simulation of a scenario: the diagram, the Simulator run, Meshcat replays.
 
 * :mod:`drake_social.sim.diagram` :func:`build_diagram`: planner, sequencer,
-  controller, Ruckig sources and the robot, every subsystem named.
+  controller, Ruckig sources, people and the robot, every subsystem named;
+  a station with named ports, to which a script can wire its own planner,
+  controller or people (``docs/examples/custom_controller.py``).
 * :mod:`drake_social.sim.run` :func:`simulate`: runs it and measures the
   executed trajectory (:class:`SimulationResult`, :class:`ExecutionReport`).
-* :mod:`drake_social.sim.analysis` deviation and densification (no Drake).
+* :mod:`drake_social.sim.analysis` deviation and densification (no Drake;
+  its inner loops compiled in :mod:`drake_social.sim.analysis_kernel`).
 * :mod:`drake_social.sim.replay` Meshcat recording, overlays (heat map,
   facing arrows, path ribbon), the top view and the standalone HTML replay.
 
@@ -31,10 +34,11 @@ _EXPORTS = {
     )
 }
 
-_EXPORTS.update({name: "drake_social.sim.diagram" for name in ("TransportDiagram", "build_diagram", "servo_gains")})
+_EXPORTS.update({name: "drake_social.sim.diagram" for name in ("TransportDiagram", "build_diagram", "scenario_plant_config",
+                                                                  "servo_gains")})
 _EXPORTS.update({
     name: "drake_social.sim.run"
-    for name in ("ExecutionReport", "SimulationResult", "analyze_execution", "simulate")
+    for name in ("ExecutionReport", "SimulationResult", "analyze_execution", "scenario_simulator_config", "simulate")
 })
 
 __all__ = sorted(_EXPORTS)

@@ -134,9 +134,13 @@ def _pieces(steps: np.ndarray, distinct: np.ndarray, budget: int) -> list[tuple[
     return pieces
 
 
+#: Newton steps of the compiled search per dense step (it converges in 2-3).
+_NEWTON_STEPS = 8
+
+
 def point_deviation(
     geometry: ArmGeometry, planned: np.ndarray, executed: np.ndarray, spacing: float = 0.005,
-    iterations: int = 30, block: int = 1 << 17,
+    iterations: int = 30, block: int = 1 << 17, compiled: bool | None = None,
 ) -> dict[str, float]:
     """Largest distance of each executed body point from its planned curve, metres.
 
@@ -167,6 +171,10 @@ def point_deviation(
         spacing: sample spacing along the planned curves, metres.
         iterations: golden-section steps (the bracket shrinks by 0.618 each).
         block: the most densified samples searched at once.
+        compiled: search with the compiled loops of
+            :mod:`~drake_social.sim.analysis_kernel` (True) or the numpy
+            formulation (False, the reference: the same arithmetic over
+            arrays, some 20x slower); None = compiled when numba is there.
 
     Returns:
         name -> largest deviation (see :func:`body_point_names`), plus
@@ -174,6 +182,10 @@ def point_deviation(
     """
     planned = np.asarray(planned, float).reshape(-1, 4)
     executed = np.asarray(executed, float).reshape(-1, 4)
+    if compiled is None or compiled:
+        from drake_social.sim import analysis_kernel  # numba: imported when a search needs it
+
+        compiled = analysis_kernel.AVAILABLE if compiled is None else True
     names = body_point_names(geometry)
     if len(executed) == 0:
         return {**{n: 0.0 for n in names}, "max": 0.0}
@@ -202,16 +214,17 @@ def point_deviation(
         active = lower - 1e-9 * (1.0 + radius) < best
         if active.any():
             _search_piece(geometry, densify(geometry, planned[first:last + 2], spacing), executed_pts, active, best,
-                          iterations)
+                          iterations, bool(compiled))
     out = {name: float(best[:, k].max()) for k, name in enumerate(names)}
     out["max"] = max(out.values())
     return out
 
 
 def _search_piece(geometry: ArmGeometry, dense: np.ndarray, executed_pts: np.ndarray, active: np.ndarray,
-                  best: np.ndarray, iterations: int) -> None:
+                  best: np.ndarray, iterations: int, compiled: bool) -> None:
     """Lowers ``best`` (T, K) to the distance of each ``active`` executed
-    point (T, K, 2) from its curve along the densified piece ``dense`` (M >= 2, 4)."""
+    point (T, K, 2) from its curve along the densified piece ``dense`` (M >= 2, 4)
+    (``compiled``: by the loops of :mod:`~drake_social.sim.analysis_kernel`)."""
     names = body_point_names(geometry)
     planned_pts = body_points(geometry, dense)  # (M, K, 2)
     last = len(dense) - 1
@@ -262,6 +275,22 @@ def _search_piece(geometry: ArmGeometry, dense: np.ndarray, executed_pts: np.nda
         keep = np.flatnonzero(moves)
         if len(keep) == 1:
             best[rows, k] = np.minimum(best[rows, k], np.linalg.norm(x - curve[keep[0]], axis=1))
+            continue
+        if compiled:
+            from drake_social.sim import analysis_kernel
+
+            polyline = np.ascontiguousarray(curve[keep])
+            _, nearest = cKDTree(polyline).query(x, k=min(16, len(polyline)))
+            nearest = np.asarray(nearest, np.int64).reshape(len(x), -1)
+            j = analysis_kernel.nearest_segments(np.ascontiguousarray(x), polyline, nearest)
+            kind = min(k, 2)
+            g = (0.0, 0.0) if k < 2 else (
+                gripper_points[k - 2] if k < n_interest
+                else gripper_points[1 + len(geometry.object_interest) + k - n_interest])
+            found = analysis_kernel.step_distances(np.ascontiguousarray(dense, float), np.ascontiguousarray(x),
+                                                   keep[j].astype(np.int64), kind, float(l1), float(l2),
+                                                   float(g[0]), float(g[1]), _NEWTON_STEPS)
+            best[rows, k] = np.minimum(best[rows, k], found)
             continue
         j = _nearest_segment(x, curve[keep])
         # The segment's motion is the dense step keep[j] -> keep[j] + 1 (the

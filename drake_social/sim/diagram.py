@@ -2,8 +2,11 @@
 
 :func:`build_diagram` wires the systems of :mod:`drake_social.control` into
 one Drake diagram and names every subsystem, so that a script can fetch any of
-them (``diagram.GetSubsystemByName("controller")``) or replace one (pass fixed
-``waypoints`` instead of planning). Running it is :func:`drake_social.sim.simulate` (in :mod:`drake_social.sim.run`).
+them (``diagram.GetSubsystemByName("controller")``), and exports named ports
+(a station, as in Drake's hardware_sim and the manipulation course's
+``station.py``), so that a script can leave out the planner or the base
+controller and wire its own. Running it is :func:`drake_social.sim.simulate`
+(in :mod:`drake_social.sim.run`).
 
 Blocks (all named; ``[p]`` only with ``execution="paper"``, ``[s]`` only with
 ``"synchronized"``, ``[k]`` only in ``mode="kinematic"``, ``[d]`` only in
@@ -18,8 +21,14 @@ Blocks (all named; ``[p]`` only with ``execution="paper"``, ``[s]`` only with
     [d] drive velocity ─▶ hold (ZOH) ─▶ desired_state ◀─ arm reference state (position, velocity, acceleration)
         desired_state, plant state ─▶ servo_* (commanded acceleration) ─▶ servo (inverse dynamics) ─▶ plant
 
-The planner is left out when ``waypoints`` are given. In ``synchronized``
-execution each segment's reference is one phase-synchronized Ruckig
+    people (PeopleSource: the people model at the context's time) ─▶ people_state
+
+The planner is left out when ``waypoints`` are given, or with
+``planner=False`` (the path then comes in through the input port ``path``);
+the base controller with ``controller=False`` (the wheel speeds then come in
+through the input port ``wheel_speeds``).
+
+In ``synchronized`` execution each segment's reference is one phase-synchronized Ruckig
 trajectory of all four coordinates, so it runs on the straight
 configuration-space segment the planner checked and costed; the base tracks
 it with feed-forward plus the P term, the arm follows it, and the sequencer
@@ -38,7 +47,7 @@ continuous ``Integrator``) and the arm follows its reference exactly; the
 plant is not simulated (it stays outside the diagram and only turns
 positions into SceneGraph poses, :attr:`TransportDiagram.plant`).
 ``dynamic`` mode: the ``MultibodyPlant`` is a discrete system
-(``execution.plant_time_step``, TAMSI) whose joint actuators are driven at
+(:func:`scenario_plant_config`: ``execution.plant_time_step``, TAMSI) whose joint actuators are driven at
 every plant step by a computed-torque servo in C++ blocks: the commanded
 acceleration ``a = a_d + Kp (q_d - q) + Kd (v_d - v)`` (gain blocks
 ``servo_*``, the gains of :func:`servo_gains`), then Drake's
@@ -53,6 +62,32 @@ leads a decelerating reference and can pass a joint limit at the goal). The
 base joints are velocity servos on the drive's velocity (the digital base
 controller's output, held for ``execution.control_period`` by ``hold``).
 
+The station's ports (the diagram's exported ports, by name), so that a
+script can wire another planner, controller or people model around it
+(``builder.AddSystem(built.diagram)``, then ``GetInputPort`` /
+``GetOutputPort`` by these names)::
+
+    inputs   path            (N, 4) waypoints, Value[object]; only with planner=False and no waypoints
+             wheel_speeds    4 wheel speeds, rad/s; only with controller=False
+    outputs  robot_state     8: [q, v], q = [x, y, psi1, psi2] (m, rad), v its velocity (m/s, rad/s)
+             target          4: the sequencer's current waypoint
+             reference       4: what is being tracked (see the loggers below)
+             reference_feedforward
+                             4: the reference's mean velocity over the next control period
+                             (synchronized execution only; the base controller's feed-forward)
+             done, index     1 each: the sequencer's latched goal flag and target index
+             planned_path    (N, 4) waypoints being followed, Value[object]
+             wheel_speeds    4: the wheel speeds applied (held in kinematic mode), rad/s
+             people_state    PeopleState at the context's time, Value[object]
+             people_vector   6 P: per person [x, y, theta, vx, vy, radius]
+             query_object    SceneGraph's QueryObject (distances, collisions)
+
+A base controller outside the diagram reads ``robot_state`` and
+``reference`` (and ``reference_feedforward``) and writes ``wheel_speeds``;
+``robot_state`` does not depend on ``wheel_speeds`` at the same instant
+(the wheels act through the hold or the discrete plant), so such a loop
+has no algebraic loop. ``docs/examples/custom_controller.py`` is one.
+
 Loggers (``VectorLogSink``, period ``execution.control_period``), in
 :attr:`TransportDiagram.loggers`: ``q`` (configuration), ``v`` (its
 velocity), ``wheel_speeds``, ``target`` (the sequencer's), ``reference``
@@ -66,18 +101,21 @@ import dataclasses as dc
 
 import numpy as np
 from pydrake.geometry import Meshcat, SceneGraph
-from pydrake.multibody.plant import AddMultibodyPlantSceneGraph, DiscreteContactApproximation, MultibodyPlant
+from pydrake.common.value import AbstractValue
+from pydrake.multibody.plant import AddMultibodyPlant, MultibodyPlant, MultibodyPlantConfig
 from pydrake.multibody.tree import ModelInstanceIndex
 from pydrake.systems.controllers import InverseDynamics
 from pydrake.systems.framework import Diagram, DiagramBuilder, OutputPort
 from pydrake.systems.primitives import (
     Adder,
+    ConstantValueSource,
     ConstantVectorSource,
     Demultiplexer,
     Integrator,
     LogVectorOutput,
     MatrixGain,
     Multiplexer,
+    PassThrough,
     VectorLogSink,
     ZeroOrderHold,
 )
@@ -87,6 +125,7 @@ from drake_social.arguments import require_checker, require_choice, require_inst
 from drake_social.control import (
     HolonomicPController,
     MecanumDrive,
+    PeopleSource,
     PlannerSystem,
     WaypointSequencer,
     arm_source_from_options,
@@ -94,13 +133,14 @@ from drake_social.control import (
 )
 from drake_social.kinematics import configuration_limits
 from drake_social.model.plant import add_environment, add_robot
+from drake_social.people import people_model
 from drake_social.collision.validity import ValidityChecker
 from drake_social.scenario import (EXECUTIONS, SIM_MODES, SERVO_BANDWIDTH, SERVO_BASE_TIME_CONSTANT, Scenario,
                                     ScenarioError, plant_time_step_problem, validate_scenario)
 from drake_social.waypoints import check_waypoints
 
 __all__ = ["DiagramArguments", "TransportDiagram", "build_diagram", "check_diagram_arguments", "check_diagram_options",
-           "check_diagram_waypoints", "servo_gains"]
+           "check_diagram_waypoints", "drake_config_problem", "scenario_plant_config", "servo_gains"]
 
 
 @dc.dataclass
@@ -119,6 +159,8 @@ class TransportDiagram:
         meshcat: the Meshcat the visualizer draws to, or None.
         visualizer: the ``MeshcatVisualizer``, or None.
         loggers: name -> VectorLogSink (see the module docstring).
+        planner_included, controller_included: whether the built-in planner
+            and base controller are inside (see :func:`build_diagram`).
     """
 
     diagram: Diagram
@@ -132,10 +174,20 @@ class TransportDiagram:
     meshcat: Meshcat | None
     visualizer: object | None
     loggers: dict[str, VectorLogSink]
+    planner_included: bool = True
+    controller_included: bool = True
 
     def subsystem(self, name: str):
         """The subsystem called ``name`` (e.g. ``"sequencer"``)."""
         return self.diagram.GetSubsystemByName(name)
+
+    def input_port_names(self) -> list[str]:
+        """Names of the diagram's exported input ports (see :func:`build_diagram`)."""
+        return [self.diagram.get_input_port(i).get_name() for i in range(self.diagram.num_input_ports())]
+
+    def output_port_names(self) -> list[str]:
+        """Names of the diagram's exported output ports (see :func:`build_diagram`)."""
+        return [self.diagram.get_output_port(i).get_name() for i in range(self.diagram.num_output_ports())]
 
 
 def servo_gains(*, bandwidth: float = SERVO_BANDWIDTH,
@@ -178,8 +230,15 @@ def build_diagram(
     waypoints: np.ndarray | None = None,
     checker: ValidityChecker | None = None,
     meshcat: Meshcat | None = None,
+    planner: bool = True,
+    controller: bool = True,
+    plant_config: MultibodyPlantConfig | None = None,
 ) -> TransportDiagram:
     """Builds the diagram that plans (or takes) a path and executes it.
+
+    The diagram is a station: its named ports (see the module docstring,
+    :data:`INPUTS` and :data:`OUTPUTS`) let a script wire another planner,
+    controller or people model around it without editing this builder.
 
     Args:
         scenario: a validated scenario (its ``execution`` section sets gains,
@@ -194,6 +253,16 @@ def build_diagram(
             waypoints (None = the exact planar checker).
         meshcat: when given, a ``MeshcatVisualizer`` draws the scene to it at
             ``execution.replay_fps``.
+        planner: with no ``waypoints``, plan them with the built-in
+            ``planner``; False leaves it out and exports the sequencer's
+            input as the diagram's input port ``path`` (an (N, 4) array in a
+            ``Value[object]``) for a planner outside the diagram.
+        controller: include the built-in base controller; False leaves it
+            out and exports the drive's input as the diagram's input port
+            ``wheel_speeds`` (4, rad/s) for a controller outside the diagram.
+        plant_config: the dynamic mode's ``MultibodyPlantConfig``; None =
+            :func:`scenario_plant_config` (unused in kinematic mode, whose
+            plant only places the shapes).
 
     Returns:
         The :class:`TransportDiagram`.
@@ -208,7 +277,12 @@ def build_diagram(
     """
     checked = check_diagram_arguments(scenario, mode=mode, execution=execution, waypoints=waypoints, checker=checker,
                                       meshcat=meshcat, who="build_diagram")
-    return build_checked(scenario, checked.mode, checked.execution, checked.waypoints, checker, meshcat)
+    require_instance(planner, (bool, np.bool_), "build_diagram", "planner", "True or False")
+    require_instance(controller, (bool, np.bool_), "build_diagram", "controller", "True or False")
+    require_instance(plant_config, MultibodyPlantConfig, "build_diagram", "plant_config",
+                     "a pydrake.multibody.plant.MultibodyPlantConfig", optional=True)
+    return build_checked(scenario, checked.mode, checked.execution, checked.waypoints, checker, meshcat,
+                         planner=bool(planner), controller=bool(controller), plant_config=plant_config)
 
 
 @dc.dataclass(frozen=True)
@@ -249,7 +323,38 @@ def check_diagram_options(
     problem = plant_time_step_problem(scenario.execution, mode)  # the scenario's mode was checked above
     if problem:
         raise ScenarioError(f"{who}: scenario: {problem[0]}: {problem[1]}")
+    problem = drake_config_problem(scenario.execution)
+    if problem:
+        raise ScenarioError(f"{who}: scenario: {problem[0]}: {problem[1]}")
     return mode, execution or scenario.execution.execution
+
+
+#: The values of ``execution.contact_approximation`` (Drake's discrete contact approximations).
+CONTACT_APPROXIMATIONS = ("tamsi", "sap", "similar", "lagged")
+
+
+def drake_config_problem(execution) -> tuple[str, str] | None:
+    """What is wrong with the Drake settings of a scenario's ``execution``
+    section (``contact_approximation``, ``integration_scheme``, ``accuracy``,
+    ``target_realtime_rate``) as ``(field, rule)``, or None."""
+    from pydrake.systems.analysis import GetIntegrationSchemes
+
+    e = execution
+    if e.contact_approximation not in CONTACT_APPROXIMATIONS:
+        return "execution.contact_approximation", (f"must be one of {', '.join(CONTACT_APPROXIMATIONS)}, "
+                                                   f"got {e.contact_approximation!r}")
+    if e.integration_scheme not in GetIntegrationSchemes():
+        return "execution.integration_scheme", (f"must be one of {', '.join(GetIntegrationSchemes())}, "
+                                                f"got {e.integration_scheme!r}")
+    for name in ("accuracy", "target_realtime_rate"):
+        value = getattr(e, name)
+        if isinstance(value, bool) or not isinstance(value, (int, float)) or not np.isfinite(value):
+            return f"execution.{name}", f"must be a finite number, got {value!r}"
+    if not e.accuracy > 0:
+        return "execution.accuracy", f"must be > 0, got {e.accuracy!r}"
+    if e.target_realtime_rate < 0:
+        return "execution.target_realtime_rate", f"must be >= 0 (0 = as fast as possible), got {e.target_realtime_rate!r}"
+    return None
 
 
 def check_diagram_waypoints(scenario: Scenario, waypoints, checker: ValidityChecker | None, who: str) -> np.ndarray:
@@ -290,13 +395,35 @@ def check_diagram_arguments(
     return DiagramArguments(mode, execution, waypoints)
 
 
+def scenario_plant_config(scenario: Scenario) -> MultibodyPlantConfig:
+    """The dynamic mode's ``MultibodyPlantConfig`` of a scenario.
+
+    ``time_step`` is ``execution.plant_time_step`` (seconds) and
+    ``discrete_contact_approximation`` is ``execution.contact_approximation``,
+    by default TAMSI: a step of this plant costs ~60 us
+    against ~200 us with the SAP solvers (measured on office_bar), which
+    Drake's built-in joint PD controllers would need; the servo is therefore
+    made of C++ blocks (``servo_*``, ``servo``) on the plant's actuation
+    input. The other fields are Drake's defaults.
+
+    Drake 1.51 marks TAMSI deprecated (removal announced for 2026-09-01; it
+    logs one warning per process): a script can pass another approximation
+    (``"lagged"``, ``"similar"``) in the scenario or through
+    ``build_diagram(plant_config=...)``, at about three times the cost of a step.
+    """
+    return MultibodyPlantConfig(time_step=float(scenario.execution.plant_time_step),
+                                discrete_contact_approximation=scenario.execution.contact_approximation)
+
+
 def build_checked(
     scenario: Scenario, mode: str, execution: str, waypoints: np.ndarray | None, checker: ValidityChecker | None,
-    meshcat: Meshcat | None,
+    meshcat: Meshcat | None, *, planner: bool = True, controller: bool = True,
+    plant_config: MultibodyPlantConfig | None = None,
 ) -> TransportDiagram:
     """:func:`build_diagram` with its arguments already checked
     (:func:`check_diagram_arguments`; ``mode`` and ``execution`` the ones in
     force). For drake_social's own callers that checked them once."""
+    config = plant_config if plant_config is not None else scenario_plant_config(scenario)
     opts = scenario.execution
     start = np.asarray(scenario.start, float)
     if waypoints is not None:
@@ -309,12 +436,7 @@ def build_checked(
 
     builder = DiagramBuilder()
     if mode == "dynamic":
-        plant, scene_graph = AddMultibodyPlantSceneGraph(builder, time_step=float(opts.plant_time_step))
-        # TAMSI: a step of this plant costs ~60 us against ~200 us with the
-        # SAP solvers (measured on office_bar), which Drake's built-in joint
-        # PD controllers would need; the servo is therefore made of C++ blocks
-        # (servo_*, servo) on the plant's actuation input.
-        plant.set_discrete_contact_approximation(DiscreteContactApproximation.kTamsi)
+        plant, scene_graph = AddMultibodyPlant(config, builder)
         robot = _populate(plant, scenario)
         plant.SetDefaultPositions(robot, start)
     else:
@@ -325,27 +447,43 @@ def build_checked(
 
     # ---- which target ---------------------------------------------------------
     if waypoints is None:
-        planner = builder.AddNamedSystem("planner", PlannerSystem(scenario, checker))
         sequencer = builder.AddNamedSystem(
             "sequencer", WaypointSequencer.from_options(opts, wait_for_reference=synchronized))
-        builder.Connect(planner.GetOutputPort("waypoints"), sequencer.GetInputPort("waypoints"))
+        if planner:
+            path_port = builder.AddNamedSystem("planner", PlannerSystem(scenario, checker)).GetOutputPort("waypoints")
+        else:  # a planner outside the diagram gives the path
+            path_in = builder.AddNamedSystem("path", PassThrough(AbstractValue.Make(np.zeros((0, 4)))))
+            builder.ExportInput(path_in.get_input_port(), "path")
+            path_port = path_in.get_output_port()
+        builder.Connect(path_port, sequencer.GetInputPort("waypoints"))
     else:
         sequencer = builder.AddNamedSystem(
             "sequencer", WaypointSequencer.from_options(opts, waypoints=waypoints, wait_for_reference=synchronized))
+        path_port = builder.AddNamedSystem(
+            "path", ConstantValueSource(AbstractValue.Make(waypoints.copy()))).get_output_port()
 
     # ---- how to get there -----------------------------------------------------
-    controller = builder.AddNamedSystem("controller", HolonomicPController.from_options(opts, feedforward=synchronized))
+    if controller:
+        base_controller = builder.AddNamedSystem(
+            "controller", HolonomicPController.from_options(opts, feedforward=synchronized))
+        command = base_controller.GetOutputPort("wheel_speeds")
+    else:  # a controller outside the diagram commands the wheels
+        base_controller = None
+        command_in = builder.AddNamedSystem("wheel_speeds", PassThrough(4))
+        builder.ExportInput(command_in.get_input_port(), "wheel_speeds")
+        command = command_in.get_output_port()
     drive = builder.AddNamedSystem("drive", MecanumDrive(float(opts.wheel_radius)))
     if mode == "kinematic":
         # The controller is sampled every control period (a digital controller):
         # the base integrates the velocity of the held wheel speeds.
         hold = builder.AddNamedSystem("hold", ZeroOrderHold(period, 4))
-        builder.Connect(controller.GetOutputPort("wheel_speeds"), hold.get_input_port())
+        builder.Connect(command, hold.get_input_port())
         builder.Connect(hold.get_output_port(), drive.GetInputPort("wheel_speeds"))
         wheel_port = hold.get_output_port()
     else:
-        builder.Connect(controller.GetOutputPort("wheel_speeds"), drive.GetInputPort("wheel_speeds"))
-        wheel_port = controller.GetOutputPort("wheel_speeds")
+        builder.Connect(command, drive.GetInputPort("wheel_speeds"))
+        wheel_port = command
+    feedforward: OutputPort | None = None
     if synchronized:
         reference = builder.AddNamedSystem("reference", reference_source_from_options(opts, start, (lower, upper)))
         builder.Connect(sequencer.GetOutputPort("target"), reference.GetInputPort("target"))
@@ -356,8 +494,10 @@ def build_checked(
         builder.Connect(reference.GetOutputPort("velocity"), ref_vel.get_input_port())
         ref_ff = builder.AddNamedSystem("reference_feedforward_split", Demultiplexer([2, 2]))
         builder.Connect(reference.GetOutputPort("mean_velocity"), ref_ff.get_input_port())
-        builder.Connect(ref_pos.get_output_port(0), controller.GetInputPort("base_target"))
-        builder.Connect(ref_ff.get_output_port(0), controller.GetInputPort("base_velocity_ff"))
+        if base_controller is not None:
+            builder.Connect(ref_pos.get_output_port(0), base_controller.GetInputPort("base_target"))
+            builder.Connect(ref_ff.get_output_port(0), base_controller.GetInputPort("base_velocity_ff"))
+        feedforward = reference.GetOutputPort("mean_velocity")
         arm_position: OutputPort = ref_pos.get_output_port(1)
         arm_velocity: OutputPort = ref_vel.get_output_port(1)
         # [xy, arm] x (position, velocity, acceleration) in one evaluation (the servo's, every plant step).
@@ -370,7 +510,8 @@ def build_checked(
         builder.Connect(sequencer.GetOutputPort("target"), split.get_input_port())
         arm = builder.AddNamedSystem("arm", arm_source_from_options(opts, start[2:], (lower[2:], upper[2:])))
         builder.Connect(split.get_output_port(1), arm.GetInputPort("target"))
-        builder.Connect(split.get_output_port(0), controller.GetInputPort("base_target"))
+        if base_controller is not None:
+            builder.Connect(split.get_output_port(0), base_controller.GetInputPort("base_target"))
         arm_position = arm.GetOutputPort("position")
         arm_velocity = arm.GetOutputPort("velocity")
         arm_split = builder.AddNamedSystem("arm_state_split", Demultiplexer([2, 2, 2]))
@@ -386,6 +527,7 @@ def build_checked(
         state = builder.AddNamedSystem("state_split", Demultiplexer([4, 4]))
         builder.Connect(plant.get_state_output_port(robot), state.get_input_port())
         q_port, v_port = state.get_output_port(0), state.get_output_port(1)
+        state_port: OutputPort = plant.get_state_output_port(robot)
         q_split = builder.AddNamedSystem("q_split", Demultiplexer([2, 2]))
         builder.Connect(q_port, q_split.get_input_port())
         # The digital base controller's velocity, held for a control period.
@@ -439,8 +581,32 @@ def build_checked(
         q_port, v_port = configuration.get_output_port(), velocity.get_output_port()
         q_split = builder.AddNamedSystem("q_split", Demultiplexer([2, 2]))
         builder.Connect(q_port, q_split.get_input_port())
+        robot_state = builder.AddNamedSystem("robot_state", Multiplexer([4, 4]))
+        builder.Connect(q_port, robot_state.get_input_port(0))
+        builder.Connect(v_port, robot_state.get_input_port(1))
+        state_port = robot_state.get_output_port()
     builder.Connect(q_port, sequencer.GetInputPort("q"))
-    builder.Connect(q_split.get_output_port(0), controller.GetInputPort("base_position"))
+    if base_controller is not None:
+        builder.Connect(q_split.get_output_port(0), base_controller.GetInputPort("base_position"))
+    people = builder.AddNamedSystem("people", PeopleSource(people_model(scenario)))
+
+    # ---- the station's ports --------------------------------------------------
+    exported = {
+        "robot_state": state_port,
+        "target": sequencer.GetOutputPort("target"),
+        "reference": reference_out,
+        "done": sequencer.GetOutputPort("done"),
+        "index": sequencer.GetOutputPort("index"),
+        "planned_path": path_port,
+        "wheel_speeds": wheel_port,
+        "people_state": people.GetOutputPort("people_state"),
+        "people_vector": people.GetOutputPort("people_vector"),
+        "query_object": scene_graph.get_query_output_port(),
+    }
+    if feedforward is not None:
+        exported["reference_feedforward"] = feedforward
+    for name, port in exported.items():
+        builder.ExportOutput(port, name)
 
     # ---- records --------------------------------------------------------------
     ports = {
@@ -469,4 +635,5 @@ def build_checked(
     return TransportDiagram(
         diagram=diagram, plant=plant, scene_graph=scene_graph, robot=robot, scenario=scenario, mode=mode,
         execution=execution, waypoints=waypoints, meshcat=meshcat, visualizer=visualizer, loggers=loggers,
+        planner_included=waypoints is None and planner, controller_included=controller,
     )

@@ -31,7 +31,7 @@ from typing import Any, Callable
 
 import numpy as np
 from pydrake.geometry import Meshcat
-from pydrake.systems.analysis import InitializeParams, Simulator
+from pydrake.systems.analysis import ApplySimulatorConfig, InitializeParams, Simulator, SimulatorConfig
 
 from drake_social.arguments import (
     real_array,
@@ -57,7 +57,7 @@ from drake_social.sim.diagram import (
 from drake_social.waypoints import waypoint_array
 
 __all__ = ["ExecutionReport", "LimitViolation", "SimulationResult", "analyze_execution", "limit_violations",
-           "simulate"]
+           "scenario_simulator_config", "simulate"]
 
 #: Simulated seconds per AdvanceTo call between checks for the goal.
 _CHUNK = 0.25
@@ -269,6 +269,22 @@ def _divergence(q, v, lower: np.ndarray, upper: np.ndarray) -> str | None:
     return None
 
 
+def scenario_simulator_config(scenario: Scenario) -> SimulatorConfig:
+    """The ``SimulatorConfig`` of a scenario's run.
+
+    ``execution.integration_scheme``, ``accuracy`` and
+    ``target_realtime_rate`` (by default Drake's: Runge-Kutta 3 with error
+    control, accuracy 1e-4, as fast as possible), ``max_step_size`` one
+    ``execution.control_period`` (seconds): the continuous base of the
+    kinematic mode is integrated in steps of at most one control period.
+    The rest are Drake's defaults (no publish at every step: the loggers
+    sample periodically).
+    """
+    e = scenario.execution
+    return SimulatorConfig(integration_scheme=e.integration_scheme, max_step_size=float(e.control_period),
+                           accuracy=float(e.accuracy), target_realtime_rate=float(e.target_realtime_rate))
+
+
 def limit_violations(scenario: Scenario, times: np.ndarray, q: np.ndarray) -> list[LimitViolation]:
     """Where the executed configurations ``q`` (T, 4) at ``times`` (T,) pass a limit.
 
@@ -404,6 +420,7 @@ def simulate(
     analyze: bool = True,
     analysis_checker: ValidityChecker | None = None,
     progress: Callable[[float], None] | None = None,
+    simulator_config: SimulatorConfig | None = None,
 ) -> SimulationResult:
     """Plans (unless ``waypoints`` are given), executes and measures a transport.
 
@@ -422,6 +439,9 @@ def simulate(
         analysis_checker: the checker of that analysis (None = Drake's).
         progress: optional ``progress(t)`` callback with the simulated time,
             called every quarter of a simulated second.
+        simulator_config: Drake's ``SimulatorConfig`` of the run (integration
+            scheme, accuracy, maximum step, target realtime rate); None =
+            :func:`scenario_simulator_config`.
 
     Returns:
         The :class:`SimulationResult`; ``reached`` is False when no path was
@@ -443,6 +463,8 @@ def simulate(
     require_instance(analyze, (bool, np.bool_), "simulate", "analyze", "True or False")
     require_checker(analysis_checker, "simulate", "analysis_checker", optional=True)
     require_callable(progress, "simulate", "progress")
+    require_instance(simulator_config, SimulatorConfig, "simulate", "simulator_config",
+                     "a pydrake.systems.analysis.SimulatorConfig", optional=True)
     mode, execution = check_diagram_options(scenario, mode=mode, execution=execution, checker=checker,
                                             meshcat=meshcat, who="simulate")
     if time_limit is not None:  # the scenario's own was checked with it (validate_scenario)
@@ -453,7 +475,7 @@ def simulate(
     if waypoints is not None:
         waypoints = check_diagram_waypoints(scenario, waypoints, checker, "simulate")
     return run_checked(scenario, mode, execution, waypoints, checker, meshcat, limit, bool(analyze),
-                       analysis_checker, progress)
+                       analysis_checker, progress, simulator_config=simulator_config)
 
 
 def run_checked(
@@ -467,6 +489,8 @@ def run_checked(
     analyze: bool,
     analysis_checker: ValidityChecker | None,
     progress: Callable[[float], None] | None,
+    *,
+    simulator_config: SimulatorConfig | None = None,
 ) -> SimulationResult:
     """:func:`simulate` with its arguments already checked (the scenario
     validated, ``waypoints`` checked with ``checker`` by
@@ -493,7 +517,8 @@ def run_checked(
         if not planner_result.success:
             return _empty_result(built, path, planner_result, f"no path to execute ({planner_result.message})")
     simulator = Simulator(built.diagram, root)
-    simulator.get_mutable_integrator().set_maximum_step_size(float(scenario.execution.control_period))
+    ApplySimulatorConfig(scenario_simulator_config(scenario) if simulator_config is None else simulator_config,
+                         simulator)
     simulator.Initialize(InitializeParams(suppress_initialization_events=True))
 
     # Advance in chunks and stop at the first chunk after the goal: a Python
