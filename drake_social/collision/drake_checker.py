@@ -89,7 +89,8 @@ class SceneGraphChecker(CheckerBase):
     """Configuration and motion validity from SceneGraph collision queries.
 
     Args:
-        scenario, resolution: see :class:`CheckerBase` (geometry, limits).
+        scenario: see :class:`CheckerBase` (geometry, limits).
+        resolution: see :class:`CheckerBase`.
         parallelism: threads of the batched calls (:meth:`are_valid`,
             :meth:`are_motions_valid`): True = all cores, False = 1, or a count.
         environment: indices into

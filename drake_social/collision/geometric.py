@@ -139,7 +139,8 @@ class GeometricChecker(CheckerBase):
     """The Drake-free :class:`ValidityChecker` of a scenario.
 
     Args:
-        scenario, resolution: see :class:`CheckerBase`.
+        scenario: see :class:`CheckerBase`.
+        resolution: see :class:`CheckerBase`.
         chunk: configurations evaluated per numpy batch (bounds memory).
     """
 

@@ -40,7 +40,8 @@ def run_sim_bench(
     Args:
         scenario_paths: scenario files.
         runs: timed runs per (mode, execution), without recording (>= 1).
-        modes, executions: which pairs.
+        modes: the modes timed.
+        executions: the executions timed, with each mode.
         checker: the planner's checker (see ``drake_social.collision.drake_checker.CHECKERS``).
         record: also time one recorded run and measure its replay size.
         progress: optional ``progress(label)`` after each simulation.
