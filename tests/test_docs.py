@@ -78,6 +78,26 @@ def test_every_package_gets_an_api_page():
     assert names == sorted(names)
 
 
+def test_sphinx_roles_become_code_spans():
+    pytest.importorskip("griffe", reason="griffe (mkdocstrings[python]) is not installed")
+    spec = importlib.util.spec_from_file_location("docs_hooks_roles", DOCS / "hooks" / "griffe_roles.py")
+    dut = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(dut)
+    text = "See :func:`~drake_social.sim.simulate`, :class:`Scenario` and :py:meth:`a.B.c`; ``kept``."
+    assert dut.markdown_roles(text) == "See `simulate`, `Scenario` and `a.B.c`; ``kept``."
+
+
+def test_a_package_page_lists_each_module_once():
+    dut = _hooks()
+    page = dut.api_page("planning")
+    directives = [line for line in page.splitlines() if line.startswith(":::")]
+    assert directives[0] == "::: drake_social.planning"
+    assert "::: drake_social.planning.rrt_star" in directives
+    assert "::: drake_social.planning.rrt_star.tree_kernel" in directives
+    assert len(directives) == len(set(directives))
+    assert dut.api_page("kinematics").splitlines()[-1] == "::: drake_social.kinematics"
+
+
 def _readme_examples() -> list[str]:
     return PYTHON_BLOCK.findall(README.read_text(encoding="utf-8"))
 

@@ -25,6 +25,28 @@ def api_modules() -> list[str]:
     return sorted(names)
 
 
+def api_page(name: str) -> str:
+    """The Markdown of ``name``'s API page: for a package of several modules,
+    its docstring, then each of its modules (subpackages' included) in turn,
+    so that an object re-exported by the package appears once, under its own
+    module; for a module or a package of one file, all of it."""
+    lines = [f"# `drake_social.{name}`", ""]
+    path = _PACKAGE / name
+    if not path.is_dir() or not [m for m in path.rglob("*.py") if m.name != "__init__.py"]:
+        return "\n".join([*lines, f"::: drake_social.{name}", ""])
+    lines += [f"::: drake_social.{name}", "    options:", "      members: false", "      show_root_heading: false", ""]
+    for module in sorted(path.rglob("*.py")):
+        parts = module.relative_to(_PACKAGE.parent).with_suffix("").parts
+        if any(p.startswith("_") for p in parts[2:-1]) or (parts[-1].startswith("_") and parts[-1] != "__init__"):
+            continue
+        if parts[-1] == "__init__":
+            if module.parent == path:
+                continue
+            parts = parts[:-1]
+        lines += [f"::: {'.'.join(parts)}", ""]
+    return "\n".join(lines)
+
+
 def readme_as_index(text: str) -> str:
     """README.md with its ``docs/...`` links and images pointing inside the site."""
     return re.sub(r"\]\(docs/", "](", text)
@@ -41,6 +63,5 @@ def on_files(files, config, **kwargs):
     readme = (_ROOT / "README.md").read_text(encoding="utf-8")
     files.append(File.generated(config, "index.md", content=readme_as_index(readme)))
     for name in api_modules():
-        page = f"# `drake_social.{name}`\n\n::: drake_social.{name}\n"
-        files.append(File.generated(config, f"api/{name}.md", content=page))
+        files.append(File.generated(config, f"api/{name}.md", content=api_page(name)))
     return files
