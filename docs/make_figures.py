@@ -87,7 +87,14 @@ POSITIONS = {
     "controller": (16, 0), "hold": (20, 0), "drive": (24, 0),
     "base": (24, -4.2), "configuration": (20, -4.2), "velocity": (20, -6.0), "q_split": (16, -4.2),
     "to_pose": (4, -6.0), "scene_graph": (0, -6.0),
+    # dynamic mode: the plant under the inverse-dynamics servo
+    "state_split": (20, -4.2), "plant": (24, -4.2),
+    "desired_state": (12, -6.6), "servo_desired": (16, -6.6), "servo_acceleration": (20, -6.6), "servo": (24, -6.6),
+    "base_acceleration": (8, -8.4), "desired_acceleration": (12, -8.4), "servo_state": (16, -8.4),
 }
+# Where the dynamic mode's diagram differs: the hold follows the drive, and
+# the scene graph answers the plant's queries.
+DYNAMIC_POSITIONS = {"hold": (24, -2.1), "scene_graph": (28, -4.2)}
 BOX_W, BOX_H = 2.5, 0.75
 GENERIC_PORT = re.compile(r"^(y|u)\d*$|^sum$|^Source_\d+_pose$")
 
@@ -123,10 +130,11 @@ def _label(out_port: str, in_port: str) -> str:
 def draw_diagram(built, title: str, path: Path) -> None:
     """One execution diagram, as built: boxes by subsystem name, arrows labelled by port."""
     names, edges = diagram_edges(built)
+    positions = {**POSITIONS, **(DYNAMIC_POSITIONS if built.mode == "dynamic" else {})}
     pos, extra = {}, 0
     for name in names:
-        if name in POSITIONS:
-            pos[name] = POSITIONS[name]
+        if name in positions:
+            pos[name] = positions[name]
         else:
             pos[name] = (extra % 7 * 4.0, -7.6 - extra // 7 * 1.2)
             extra += 1
@@ -134,7 +142,12 @@ def draw_diagram(built, title: str, path: Path) -> None:
     ax.set_aspect("equal")
     for out_name, out_port, in_name, in_port in edges:
         p0, p1 = pos[out_name], pos[in_name]
-        rad = 0.0 if p1[0] > p0[0] or p0[0] == p1[0] else (-0.5 if abs(p1[0] - p0[0]) < 5 else -0.25)
+        if p0[0] == p1[0]:  # vertical: the upward arrow bends, so a pair both ways stays apart
+            rad = 0.3 if p1[1] > p0[1] else 0.0
+        elif p1[0] > p0[0]:
+            rad = 0.0
+        else:
+            rad = -0.5 if abs(p1[0] - p0[0]) < 5 else -0.25
         a, b = _border(p0, p1), _border(p1, p0)
         ax.annotate("", xy=b, xytext=a, arrowprops=dict(arrowstyle="-|>", color="#4a6fa5", lw=1.0,
                                                         shrinkA=0, shrinkB=0, connectionstyle=f"arc3,rad={rad}"))
@@ -173,7 +186,7 @@ def main() -> None:
     from drake_social.sim import build_diagram
 
     scenario = load_scenario(DOCS.parent / "scenarios" / "tiny.yaml")
-    for mode, execution in (("kinematic", "synchronized"), ("kinematic", "paper")):
+    for mode, execution in (("kinematic", "synchronized"), ("kinematic", "paper"), ("dynamic", "synchronized")):
         built = build_diagram(scenario, mode=mode, execution=execution)
         draw_diagram(built, f"build_diagram(scenario, mode={mode!r}, execution={execution!r})",
                      args.out / f"diagram_{mode}_{execution}.png")
