@@ -35,8 +35,8 @@ def _local_links(page: Path) -> list[str]:
     return [t for t in targets if not re.match(r"^[a-z]+:", t) and not t.startswith("#")]
 
 
-def _hooks():
-    pytest.importorskip("mkdocs", reason="mkdocs is not installed (pip install -e '.[docs]')")
+def _hooks(extra):
+    extra("mkdocs")  # the docs extra: skipped where it may be missing, required where make install ran
     spec = importlib.util.spec_from_file_location("docs_hooks_pages", DOCS / "hooks" / "pages.py")
     module = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(module)
@@ -62,14 +62,14 @@ def test_every_link_reaches_a_file(page):
     assert not missing, f"{page.relative_to(ROOT)} links to missing files: {missing}"
 
 
-def test_readme_links_into_docs_become_site_links():
-    dut = _hooks()
+def test_readme_links_into_docs_become_site_links(extra):
+    dut = _hooks(extra)
     text = "![a](docs/office_bar.png) see [the limits](docs/limits.md) and `docs/make_figures.py`"
     assert dut.readme_as_index(text) == "![a](office_bar.png) see [the limits](limits.md) and `docs/make_figures.py`"
 
 
-def test_every_package_gets_an_api_page():
-    dut = _hooks()
+def test_every_package_gets_an_api_page(extra):
+    dut = _hooks(extra)
     names = dut.api_modules()
     packages = {p.name for p in (ROOT / "drake_social").iterdir() if (p / "__init__.py").is_file()}
     assert packages <= set(names)
@@ -78,8 +78,8 @@ def test_every_package_gets_an_api_page():
     assert names == sorted(names)
 
 
-def test_sphinx_roles_become_code_spans():
-    pytest.importorskip("griffe", reason="griffe (mkdocstrings[python]) is not installed")
+def test_sphinx_roles_become_code_spans(extra):
+    extra("griffe")
     spec = importlib.util.spec_from_file_location("docs_hooks_roles", DOCS / "hooks" / "griffe_roles.py")
     dut = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(dut)
@@ -87,8 +87,8 @@ def test_sphinx_roles_become_code_spans():
     assert dut.markdown_roles(text) == "See `simulate`, `Scenario` and `a.B.c`; ``kept``."
 
 
-def test_a_package_page_lists_each_module_once():
-    dut = _hooks()
+def test_a_package_page_lists_each_module_once(extra):
+    dut = _hooks(extra)
     page = dut.api_page("planning")
     directives = [line for line in page.splitlines() if line.startswith(":::")]
     assert directives[0] == "::: drake_social.planning"
@@ -123,9 +123,10 @@ def test_readme_python_example_runs(index, tmp_path):
 
 
 @pytest.mark.slow
-def test_site_builds_strictly(tmp_path):
-    pytest.importorskip("mkdocs", reason="mkdocs is not installed (pip install -e '.[docs]')")
-    pytest.importorskip("mkdocstrings_handlers.python", reason="mkdocstrings[python] is not installed")
+def test_site_builds_strictly(tmp_path, extra):
+    extra("mkdocs")
+    extra("material")  # mkdocs-material
+    extra("mkdocstrings_handlers", "mkdocstrings_handlers.python")
     site = tmp_path / "site"
     env = dict(os.environ, NO_MKDOCS_2_WARNING="1")
     out = subprocess.run([sys.executable, "-m", "mkdocs", "build", "--strict", "-d", str(site)], cwd=ROOT,
