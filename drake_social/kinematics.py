@@ -281,8 +281,7 @@ def config_distance(q_a: np.ndarray, q_b: np.ndarray, weights: np.ndarray | None
     """Configuration-space distance ``|| W (q_b - q_a) ||`` (the paper's norm).
 
     Args:
-        q_a: configurations (..., 4), broadcastable with ``q_b``.
-        q_b: configurations (..., 4).
+        q_a, q_b: configurations (..., 4), broadcastable.
         weights: optional per-coordinate scale factors (4,); None = all ones.
 
     Returns:

@@ -78,13 +78,28 @@ def test_every_package_gets_an_api_page(extra):
     assert names == sorted(names)
 
 
-def test_sphinx_roles_become_code_spans(extra):
+def _griffe_extension(extra):
     extra("griffe")
     spec = importlib.util.spec_from_file_location("docs_hooks_roles", DOCS / "hooks" / "griffe_roles.py")
-    dut = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(dut)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def test_sphinx_roles_become_code_spans(extra):
+    dut = _griffe_extension(extra)
     text = "See :func:`~drake_social.sim.simulate`, :class:`Scenario` and :py:meth:`a.B.c`; ``kept``."
     assert dut.markdown_roles(text) == "See `simulate`, `Scenario` and `a.B.c`; ``kept``."
+
+
+def test_an_entry_of_several_names_becomes_one_per_name(extra):
+    dut = _griffe_extension(extra)
+    text = ("Runs it.\n\nArgs:\n    scenario: a scenario.\n    mode, execution: see\n        build_diagram.\n"
+            "    q_a, q_b: ends.\n\nReturns:\n    a, b: left alone outside Args and Attributes.\n")
+    assert dut.split_combined_entries(text) == (
+        "Runs it.\n\nArgs:\n    scenario: a scenario.\n    mode: see\n        build_diagram.\n"
+        "    execution: see\n        build_diagram.\n    q_a: ends.\n    q_b: ends.\n\nReturns:\n"
+        "    a, b: left alone outside Args and Attributes.")
 
 
 def test_a_package_page_lists_each_module_once(extra):

@@ -89,8 +89,7 @@ class SceneGraphChecker(CheckerBase):
     """Configuration and motion validity from SceneGraph collision queries.
 
     Args:
-        scenario: see :class:`CheckerBase` (geometry, limits).
-        resolution: see :class:`CheckerBase`.
+        scenario, resolution: see :class:`CheckerBase` (geometry, limits).
         parallelism: threads of the batched calls (:meth:`are_valid`,
             :meth:`are_motions_valid`): True = all cores, False = 1, or a count.
         environment: indices into

@@ -139,8 +139,7 @@ class GeometricChecker(CheckerBase):
     """The Drake-free :class:`ValidityChecker` of a scenario.
 
     Args:
-        scenario: see :class:`CheckerBase`.
-        resolution: see :class:`CheckerBase`.
+        scenario, resolution: see :class:`CheckerBase`.
         chunk: configurations evaluated per numpy batch (bounds memory).
     """
 

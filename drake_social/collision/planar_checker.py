@@ -56,8 +56,7 @@ class PlanarChecker(CheckerBase):
     """Exact configuration and sound motion validity of a scenario (compiled).
 
     Args:
-        scenario: see :class:`CheckerBase`.
-        resolution: see :class:`CheckerBase`; the resolution only
+        scenario, resolution: see :class:`CheckerBase`; the resolution only
             serves Drake's second opinion
             (:func:`~drake_social.collision.drake_checker.verify_path`).
         model: a built :func:`build_robot_diagram` of ``scenario``, read

@@ -501,14 +501,10 @@ def motion_valid(q_a, q_b, lower, upper, bodies, robot, env, levers):
     in all reject it. Rejecting is always safe.
 
     Args:
-        q_a: the start (4,).
-        q_b: the end (4,).
-        lower: lower limits (4,); the limits are a box, so a motion between
+        q_a, q_b: the ends (4,).
+        lower, upper: limits (4,); the limits are a box, so a motion between
             two configurations within them stays within them.
-        upper: upper limits (4,).
-        bodies: the scene's bodies (module docstring).
-        robot: the robot's shapes (module docstring).
-        env: the environment's shapes (module docstring).
+        bodies, robot, env: the scene (module docstring).
         levers: (S, 2) per capsule ``(c_shoulder, c_gripper)`` lever arms, metres.
     """
     return _motion_valid(q_a, q_b, lower, upper, bodies, robot, env, levers)

@@ -196,8 +196,7 @@ class SocialCost:
         non-zero; elsewhere they are exactly 0.
 
         Args:
-            q_a: motion starts (E, 4) or (4,), broadcastable with ``q_b``.
-            q_b: motion ends (E, 4) or (4,).
+            q_a, q_b: motion ends (E, 4) or (4,), broadcastable.
 
         Returns:
             (E,) costs (a 0-d value for a single motion).

@@ -39,8 +39,7 @@ class EllipseSampler:
 
     Args:
         space: the configuration space (its XY bounds clip the ellipse).
-        start_xy: one focus (2,), metres.
-        goal_xy: the other focus (2,), metres.
+        start_xy, goal_xy: the foci, metres.
         max_attempts: rejection attempts against the room bounds before the
             sampler gives up and raises (only possible for a degenerate room).
     """

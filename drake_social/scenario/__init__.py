@@ -414,8 +414,7 @@ def load_scenario_text(text: str, source: str, overrides: str | Sequence[str] | 
     Args:
         text: the scenario's YAML.
         source: how errors name it (the file it came from).
-        overrides: as :func:`load_scenario`.
-        overrides_name: as :func:`load_scenario`.
+        overrides, overrides_name: as :func:`load_scenario`.
 
     Raises:
         ScenarioError: as :func:`load_scenario`, naming ``source``.

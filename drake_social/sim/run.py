@@ -328,8 +328,7 @@ def analyze_execution(
     Args:
         scenario: the scenario.
         waypoints: (N, 4) planned path.
-        times: (T,) times of the executed configurations, seconds.
-        q: (T, 4) executed configurations.
+        times, q: (T,), (T, 4) executed configurations over time.
         checker: the collision checker of the executed configurations;
             None = Drake's (:func:`~drake_social.collision.drake_checker.valid_configurations`:
             SceneGraphCollisionChecker answers from the shapes near the
@@ -410,11 +409,8 @@ def simulate(
 
     Args:
         scenario: a validated scenario.
-        mode: see :func:`~drake_social.sim.diagram.build_diagram`.
-        execution: see :func:`~drake_social.sim.diagram.build_diagram`.
-        waypoints: see :func:`~drake_social.sim.diagram.build_diagram`.
-        checker: see :func:`~drake_social.sim.diagram.build_diagram`.
-        meshcat: see :func:`~drake_social.sim.diagram.build_diagram`. With ``meshcat``
+        mode, execution, waypoints, checker, meshcat: see
+            :func:`~drake_social.sim.diagram.build_diagram`. With ``meshcat``
             the run is recorded (``execution.replay_fps``); publish or export
             it afterwards (:mod:`drake_social.sim.replay`).
         time_limit: simulated seconds before giving up, in (0, MAX_TIME_LIMIT],

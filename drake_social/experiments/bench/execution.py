@@ -40,8 +40,7 @@ def run_sim_bench(
     Args:
         scenario_paths: scenario files.
         runs: timed runs per (mode, execution), without recording (>= 1).
-        modes: the modes timed.
-        executions: the executions timed, with each mode.
+        modes, executions: which pairs.
         checker: the planner's checker (see ``drake_social.collision.drake_checker.CHECKERS``).
         record: also time one recorded run and measure its replay size.
         progress: optional ``progress(label)`` after each simulation.

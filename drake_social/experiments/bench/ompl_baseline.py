@@ -231,8 +231,7 @@ def plan_ompl(
         space: bounds and distance weights.
         checker: our validity checker (called once per state / motion OMPL checks).
         objective: our objective (its ``motion_cost`` is OMPL's motion cost).
-        start: the start configuration (4,).
-        goal: the goal configuration (4,).
+        start, goal: configurations (4,).
         iterations: samples drawn, K.
         planning_range: Steer distance (OMPL's range).
         near_radius: our near radius; OMPL's radius is ``min(range, near_radius)``.

@@ -331,8 +331,7 @@ class RrtStar:
         """Runs K iterations and returns the best path to exactly ``goal``.
 
         Args:
-            start: the start configuration (4,).
-            goal: the goal configuration (4,).
+            start, goal: configurations (4,).
             rng: the only source of randomness.
             progress: optional ``progress(iteration, best_cost)`` called for
                 every iteration (for progress bars; keep it cheap). The
