@@ -4,12 +4,12 @@ VENV   := .venv
 PY     := $(VENV)/bin/python
 OUT    ?= out
 
-.PHONY: demo test bench install clean chromium mutate
+.PHONY: demo test bench install clean chromium mutate docs
 
 $(VENV)/.installed: pyproject.toml
 	$(PYTHON) -m venv $(VENV)
 	$(PY) -m pip install --quiet --upgrade pip
-	$(PY) -m pip install --quiet -e '.[test,bench]'
+	$(PY) -m pip install --quiet -e '.[test,bench,docs]'
 	touch $@
 
 install: $(VENV)/.installed
@@ -39,6 +39,11 @@ test: install chromium
 	$(PY) -m pytest -q -p no:cacheprovider tests; rc=$$?; \
 	if [ $$rc -eq 5 ]; then echo "error: pytest collected no tests"; exit 1; fi; exit $$rc
 
+# The documentation site (mkdocs.yml, docs/): the README, the guides and an API
+# reference from the docstrings, built into site/; any warning is an error.
+docs: install
+	$(PY) -m mkdocs build --strict -d site
+
 bench: install
 	$(VENV)/bin/drake-social bench --out $(OUT)/bench
 
@@ -54,4 +59,4 @@ mutate: install
 	$(VENV)/bin/mutmut export-cicd-stats && cat mutants/mutmut-cicd-stats.json
 
 clean:
-	rm -rf $(VENV) $(OUT) build *.egg-info
+	rm -rf $(VENV) $(OUT) build site *.egg-info

@@ -44,7 +44,7 @@ def import_extra(package: str, module: str | None = None):
         if extras_must_be_installed():
             pytest.fail(f"the {package!r} package is missing, but `make install` installs it here "
                         f"(CI={os.environ.get('CI')!r}, {INSTALLED_MARKER} exists): reinstall with "
-                        f"`{sys.executable} -m pip install -e '.[test,bench]'`", pytrace=False)
+                        f"`{sys.executable} -m pip install -e '.[test,bench,docs]'`", pytrace=False)
         pytest.skip(f"the optional {package!r} package is not installed")
     return importlib.import_module(module or package)
 

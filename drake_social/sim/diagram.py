@@ -311,7 +311,9 @@ def check_diagram_options(
         The mode and execution in force.
 
     Raises:
-        See :func:`build_diagram`.
+        TypeError: as :func:`build_diagram`.
+        ValueError: as :func:`build_diagram`.
+        ScenarioError: as :func:`build_diagram`.
     """
     require_scenario(scenario, who)
     require_choice(mode, who, "mode", SIM_MODES, optional=True)
@@ -386,7 +388,9 @@ def check_diagram_arguments(
         who: the public function, named in the errors.
 
     Raises:
-        See :func:`build_diagram`.
+        TypeError: as :func:`build_diagram`.
+        ValueError: as :func:`build_diagram`.
+        ScenarioError: as :func:`build_diagram`.
     """
     mode, execution = check_diagram_options(scenario, mode=mode, execution=execution, checker=checker,
                                             meshcat=meshcat, who=who)

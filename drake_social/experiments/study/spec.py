@@ -83,7 +83,8 @@ class Study:
         seed: the study seed; run r's seed is the r-th spawned SeedSequence's first word.
         simulate: also execute each path in the Drake diagram (kinematic mode).
         checker: validity checker of the planner: ``planar`` (the fast exact one), ``drake`` or ``numpy``.
-        (:func:`check_study` checks all of it before any run.)
+
+    :func:`check_study` checks all of it before any run.
     """
 
     name: str
