@@ -164,7 +164,7 @@ def run_plan(*, scenario: str | Path, out: str | Path, overrides: Sequence[str] 
         OSError: an output could not be written.
     """
     from drake_social.collision.drake_checker import make_checker, verify_path
-    from drake_social.experiments.metrics import run_record
+    from drake_social.experiments.records import run_record
     from drake_social.io.outputs import OutputSet
     from drake_social.io.paths import write_path_csv
     from drake_social.io.records import json_lines

@@ -56,7 +56,7 @@ PLANNER_FIELDS: dict[str, str] = {
     "cost_history": "the best objective after each iteration (null before the first solution)",
 }
 
-#: The fields of a path's measures (:func:`drake_social.experiments.metrics.path_costs`), recomputed from the
+#: The fields of a path's measures (:func:`drake_social.experiments.records.path_costs`), recomputed from the
 #: waypoints by the same code for every producer; null on failure.
 PATH_FIELDS: dict[str, str] = {
     "F_multi": "the social integral along the path with weight 1 on every interest point (the paper's F; "

@@ -35,7 +35,7 @@ import numpy as np
 from drake_social.collision.drake_checker import CHECKERS, make_checker
 from drake_social.planning.space import ConfigurationSpace
 from drake_social.collision.validity import ValidityChecker
-from drake_social.experiments.metrics import run_record
+from drake_social.experiments.records import run_record
 from drake_social.io.records import write_json
 from drake_social.planning.algorithms import evaluate_path, make_objective, plan
 from drake_social.scenario import ALGORITHMS, EXECUTIONS, SIM_MODES, Scenario, load_scenario, validate_planner_choice
