@@ -5,7 +5,7 @@ run in ``bench.json``; a study keeps one per task in ``results.json`` and
 ``results.csv``. All three name every quantity as :data:`RUN_FIELDS` does:
 the planner's part comes from
 :meth:`drake_social.planning.result.PlannerResult.to_record`, the path's
-measures from :func:`drake_social.experiments.metrics.path_costs`, and each
+measures from :func:`drake_social.experiments.records.path_costs`, and each
 producer adds the fields of its context (:data:`CONTEXT_FIELDS`). A producer
 may leave a field out (``bench`` keeps no ``cost_history``), never rename it.
 
