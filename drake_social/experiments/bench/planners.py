@@ -72,11 +72,11 @@ def _objective_key(algorithm: str) -> str:
     return algorithm.removeprefix("informed_")
 
 
-def _record(scenario: Scenario, result, objective, checker: ValidityChecker) -> dict:
-    """One run's record (:data:`drake_social.io.records.RUN_FIELDS`), its path
-    re-measured and re-checked by our code: ``objective`` recomputed from the
-    waypoints and ``path_valid``."""
-    run = run_record(scenario, result, objective)
+def _record(scenario: Scenario, result, objective, checker: ValidityChecker, iterations: int) -> dict:
+    """One run's record (:data:`drake_social.io.records.RUN_FIELDS`) of K =
+    ``iterations``, its path re-measured and re-checked by our code:
+    ``objective`` recomputed from the waypoints and ``path_valid``."""
+    run = {"iterations": int(iterations), **run_record(scenario, result, objective)}
     waypoints = run.pop("waypoints")
     if result.success:
         wp = np.asarray(result.waypoints, float)
@@ -163,7 +163,7 @@ def _plan_ompl_runs(scenario: Scenario, key: str, iterations: int, seeds: int, c
             )
 
         (result, settings), times = _repeated(once, repeats)
-        runs.append({**_record(scenario, result, objective, chk), "planning_times": times})
+        runs.append({**_record(scenario, result, objective, chk, iterations), "planning_times": times})
         tick(f"ompl_rrt_star[{key}] seed {seed}")
     return {"objective_of": key, "checker": checker, "settings": settings.to_json_dict(), "runs": runs,
             "summary": summarize(runs)}
@@ -321,7 +321,7 @@ def run_bench(
                 chk = _make_checker(scenario, checker)
                 (result,), times = _repeated(
                     lambda: (plan(scenario, chk, algorithm=algorithm, iterations=iterations, seed=seed),), repeats)
-                runs.append({**_record(scenario, result, objective, chk), "planning_times": times})
+                runs.append({**_record(scenario, result, objective, chk, iterations), "planning_times": times})
                 tick(f"{path.stem} {algorithm} seed {seed}")
             entry["algorithms"][algorithm] = {"runs": runs, "summary": summarize(runs)}
         for field, ompl_chk in ompl_sets:
