@@ -118,7 +118,7 @@ def test_load_with_overrides_applies_each_set_in_turn(tiny_scenario_path):
                                                        "social: {threshold: 0.1}"])
     plain = load_scenario(tiny_scenario_path)
     assert dut.random_seed == 3 and dut.social.sigma_h == 1.5 and dut.social.threshold == 0.1
-    assert dut.social.sigma_s == plain.social.sigma_s and dut.start == plain.start
+    assert dut.social.side_ratio == plain.social.side_ratio and dut.start == plain.start
 
 
 def test_run_simulate_follows_a_planned_path_csv(planned, tmp_path, tiny_scenario_path):
