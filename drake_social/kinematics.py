@@ -16,11 +16,14 @@ Motions are straight lines in these coordinates (``(1 - t) q_a + t q_b``).
 from __future__ import annotations
 
 import dataclasses as dc
+from typing import TYPE_CHECKING
 
 import numpy as np
 
-from drake_social.arguments import require_scenario
-from drake_social.scenario import Bar, LShape, Polyline, Scenario
+from drake_social.io.textfile import shorten
+
+if TYPE_CHECKING:  # the schema's types, for annotations only: the scenario's validation imports this module
+    from drake_social.scenario.schema import Bar, LShape, Polyline, Scenario
 
 __all__ = [
     "ArmGeometry",
@@ -33,14 +36,9 @@ __all__ = [
 
 
 def object_polyline(obj: Bar | LShape | Polyline) -> np.ndarray:
-    """The object's vertices in the gripper frame, shape (M, 2), metres."""
-    if isinstance(obj, Bar):
-        h = obj.length / 2
-        return np.array([[0.0, -h], [0.0, h]])
-    if isinstance(obj, LShape):
-        la, lb = obj.lengths
-        return np.array([[0.0, -la / 2], [0.0, la / 2], [lb, la / 2]])
-    return np.asarray(obj.points, dtype=float).reshape(-1, 2)
+    """The object's vertices in the gripper frame, shape (M, 2), metres
+    (each object type of the schema knows its own: ``obj.polyline()``)."""
+    return obj.polyline()
 
 
 def object_interest_points(obj: Bar | LShape | Polyline) -> np.ndarray:
@@ -51,10 +49,7 @@ def object_interest_points(obj: Bar | LShape | Polyline) -> np.ndarray:
     """
     if obj.interest_points is not None:
         return np.asarray(obj.interest_points, dtype=float).reshape(-1, 2)
-    pts = object_polyline(obj)
-    if isinstance(obj, Polyline):
-        return pts[[0, -1]]
-    return pts
+    return obj.default_interest_points()
 
 
 def _gripper_cos_sin(q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -90,8 +85,16 @@ class ArmGeometry:
 
     @classmethod
     def from_scenario(cls, scenario: Scenario) -> "ArmGeometry":
-        require_scenario(scenario, "ArmGeometry.from_scenario")
-        r, o = scenario.robot, scenario.object
+        """The dimensions of ``scenario``'s robot and object.
+
+        Raises:
+            TypeError: ``scenario`` is not a scenario (has no robot and object).
+        """
+        try:
+            r, o = scenario.robot, scenario.object
+        except AttributeError:
+            raise TypeError(f"ArmGeometry.from_scenario: scenario must be a drake_social.scenario.Scenario, got "
+                            f"{type(scenario).__name__} {shorten(repr(scenario))}") from None
         return cls(
             base_radius=float(r.base_radius),
             link_lengths=(float(r.link_lengths[0]), float(r.link_lengths[1])),

@@ -1,8 +1,10 @@
-"""Limits shared by the scenario check and the compiled kernels.
+"""Constants shared across the package: the bounds of a scenario and a run,
+and the names of the planners and the validity checkers. One home each.
 
-A module of its own so that the kernels can compile its constants in and
-:mod:`drake_social._kernel_cache` can drop their cached code when one
-changes (it hashes this file with the kernel sources). No imports.
+A module of its own, with no imports, so that every layer may read it (the
+scenario check, the command line, the studies) and the compiled kernels can
+compile its constants in; :mod:`drake_social._kernel_cache` drops their cached
+code when this file changes (it hashes it with the kernel sources).
 """
 
 #: Largest iteration budget K of a planner (``planner.iterations``,
@@ -24,3 +26,57 @@ MAX_MOTION_STEPS = 1_000_000
 #: this bounds the checks and the analysis (whose memory does not grow with
 #: the path), not what a run can finish.
 MAX_WAYPOINTS = 10_000
+
+#: Largest ``execution.time_limit``, seconds: twice the default (300 s) and
+#: eight times the longest run of the shipped scenarios (office_bar reaches
+#: its goal at 73-76 s in both modes and executions). Logs and the replay grow with it (a 1,200 s run held
+#: 0.75 GB and wrote a 19.7 MB replay).
+MAX_TIME_LIMIT = 600.0
+#: Most control periods in one run (``time_limit / control_period``): the
+#: logs keep one sample per period, about 3 kB each (the default 300 s /
+#: 0.01 s is 30,000; this is MAX_TIME_LIMIT at the default period, a run that
+#: peaked at 0.55 GB).
+MAX_CONTROL_STEPS = 60_000
+#: Most plant steps in one dynamic run (``time_limit / plant_time_step``):
+#: MAX_TIME_LIMIT at the default 0.002 s step.
+MAX_PLANT_STEPS = 300_000
+#: The dynamic mode's servo (:func:`drake_social.sim.diagram.servo_gains`):
+#: the arm joints' critically damped bandwidth, rad/s, and the base joints'
+#: velocity time constant, seconds.
+SERVO_BANDWIDTH = 60.0
+SERVO_BASE_TIME_CONSTANT = 0.02
+#: Largest ``execution.plant_time_step`` of a dynamic run, seconds: the
+#: discrete plant applies the servo's force explicitly, stable while its
+#: largest damping gain times the step, ``max(2 * SERVO_BANDWIDTH, 1 /
+#: SERVO_BASE_TIME_CONSTANT) * dt``, is at most 1 (1/120 s; tiny.yaml's run
+#: still tracked at 1.5 and blew up at 1.92).
+MAX_DYNAMIC_PLANT_TIME_STEP = 1.0 / max(2.0 * SERVO_BANDWIDTH, 1.0 / SERVO_BASE_TIME_CONSTANT)
+#: Fewest control periods in one run (``time_limit / control_period``). The
+#: sequencer and the controllers act once per period and the time to goal
+#: is known to one period; with fewer than 10 a run is decided by its
+#: sampling (the time to goal would be off by more than a tenth of the
+#: limit). The shipped scenarios run 30,000.
+MIN_CONTROL_PERIODS = 10
+#: Largest ``execution.replay_fps``, frames per second (the replay keeps every frame).
+MAX_REPLAY_FPS = 60.0
+#: Most vertices of a ``!Polyline`` object. Each segment is a box and each
+#: vertex a cylinder of the Drake model, and Drake's second-opinion check of a
+#: plan, the model's parsing and the figures take time in proportion: ``plan``
+#: of scenarios/tiny.yaml carrying a smooth polyline takes 9 s with 100
+#: vertices, 23 s with 300 and 160 s (2.6 GB) with 1,000, for a 0.1 s search.
+MAX_OBJECT_POINTS = 200
+
+#: Planner names accepted in ``planner.algorithm`` (see ``drake_social.planning``).
+ALGORITHMS = (
+    "rrt_star",
+    "social_rrt_star",
+    "base_rrt_star",
+    "informed_social_rrt_star",
+    "informed_base_rrt_star",
+)
+
+#: Validity checkers (``drake_social.collision.drake_checker.make_checker``; the first is
+#: the default of the planner): the exact planar one, Drake's SceneGraph and
+#: the pure-numpy reference. Named here so that the command line and
+#: studies can name them without importing Drake.
+CHECKERS = ("planar", "drake", "numpy")

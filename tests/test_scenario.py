@@ -317,3 +317,45 @@ def test_bad_override_is_named_as_such(tmp_path, overrides, fragments):
 )
 def test_overridden_values_are_validated(tmp_path, overrides, fragments):
     expect_error(write_scenario(tmp_path), *fragments, overrides=overrides)
+
+
+# ---- the package's parts -----------------------------------------------------------------
+
+
+def test_the_package_re_exports_each_name_from_its_one_home():
+    """Each public name is defined (assigned, a def or a class) in exactly one
+    of the package's modules, limits.py or errors.py, and the package gives that object."""
+    import ast
+    import importlib
+
+    import drake_social.scenario as dut
+
+    homes = ["drake_social.scenario.schema", "drake_social.scenario.load", "drake_social.scenario.validate",
+             "drake_social.limits", "drake_social.errors"]
+    defined: dict[str, list[str]] = {}
+    for home in homes:
+        module = importlib.import_module(home)
+        for node in ast.parse(Path(module.__file__).read_text()).body:
+            names = ([t.id for t in node.targets if isinstance(t, ast.Name)] if isinstance(node, ast.Assign) else
+                     [node.name] if isinstance(node, (ast.FunctionDef, ast.ClassDef)) else [])
+            for name in names:
+                defined.setdefault(name, []).append(home)
+    for name in dut.__all__:
+        assert len(defined.get(name, [])) == 1, (name, defined.get(name))
+        assert getattr(dut, name) is getattr(importlib.import_module(defined[name][0]), name)
+
+
+@pytest.mark.parametrize("obj, vertices, interest", [
+    (Bar(length=2.0), [[0, -1], [0, 1]], [[0, -1], [0, 1]]),
+    (LShape(lengths=[3.0, 2.0]), [[0, -1.5], [0, 1.5], [2, 1.5]], [[0, -1.5], [0, 1.5], [2, 1.5]]),
+    (Polyline(points=[[0, 0], [1, 0], [1, 1], [0.5, 2]]), [[0, 0], [1, 0], [1, 1], [0.5, 2]], [[0, 0], [0.5, 2]]),
+])
+def test_each_object_type_knows_its_vertices_and_default_interest_points(obj, vertices, interest):
+    import numpy as np
+
+    from drake_social.scenario import interest_point_count
+
+    np.testing.assert_array_equal(obj.polyline(), vertices)
+    np.testing.assert_array_equal(obj.default_interest_points(), interest)
+    assert interest_point_count(obj) == len(interest)
+    assert interest_point_count(dc.replace(obj, interest_points=[[0.0, 0.0]] * 5)) == 5

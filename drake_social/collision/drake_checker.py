@@ -41,7 +41,6 @@ boxes would take gigabytes.
 
 from __future__ import annotations
 
-import dataclasses as dc
 import math
 from typing import Iterator, Sequence
 
@@ -50,7 +49,7 @@ from pydrake.common import Parallelism
 from pydrake.planning import LinearDistanceAndInterpolationProvider, SceneGraphCollisionChecker
 
 from drake_social.arguments import require_choice, require_scenario
-from drake_social.kinematics import configuration_limits, displacement_bound
+from drake_social.kinematics import ArmGeometry, configuration_limits, displacement_bound
 from drake_social.model import plant
 from drake_social.model.plant import (
     ScenarioDiagram,
@@ -59,30 +58,13 @@ from drake_social.model.plant import (
     environment_parts,
     registration_order,
 )
-from drake_social.collision.geometric import CheckerBase
+from drake_social.collision.geometric import CheckerBase, GeometricChecker
+from drake_social.collision.planar_checker import PlanarChecker
+from drake_social.collision.validity import Contact
 from drake_social.scenario import CHECKERS, Scenario, ScenarioError
 
 __all__ = ["CHECKERS", "Contact", "SceneGraphChecker", "check_start_goal", "local_checkers", "make_checker",
            "near_environment", "valid_configurations", "verify_path"]
-
-
-@dc.dataclass(frozen=True)
-class Contact:
-    """A robot body touching or penetrating an environment shape.
-
-    Attributes:
-        robot_body: ``base``, ``link1``, ``link2`` or ``object``.
-        other: the environment shape (``obstacle[i]``, ``person[i] 'name'``,
-            ``wall_<side>``).
-        distance: their signed distance, metres (<= 0).
-    """
-
-    robot_body: str
-    other: str
-    distance: float
-
-    def __str__(self) -> str:
-        return f"{self.robot_body} with {self.other} ({self.distance:+.3f} m)"
 
 
 class SceneGraphChecker(CheckerBase):
@@ -292,8 +274,6 @@ def near_environment(scenario: Scenario, a_xy: np.ndarray, b_xy: np.ndarray, mar
 def _near_function(scenario: Scenario, margin: float = 0.01):
     """:func:`near_environment` of ``scenario`` as a function of the tracks
     (the room's discs and the robot's extent computed once)."""
-    from drake_social.kinematics import ArmGeometry
-
     geometry = ArmGeometry.from_scenario(scenario)
     extent = max(float(scenario.robot.base_radius), float(np.sum(geometry.lever(include_body=True))))
     discs = environment_discs(scenario)
@@ -385,12 +365,8 @@ def make_checker(
     require_scenario(scenario, "make_checker")
     require_choice(kind, "make_checker", "kind", CHECKERS)
     if kind == "numpy":
-        from drake_social.collision.geometric import GeometricChecker
-
         return GeometricChecker(scenario)
     if kind == "planar":
-        from drake_social.collision.planar_checker import PlanarChecker  # it imports this module
-
         checker = PlanarChecker(scenario)
         if source is not None:
             check_start_goal(scenario, None, source)

@@ -38,6 +38,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from drake_social.arguments import require_scenario
 from drake_social.kinematics import ArmGeometry, configuration_limits
 from drake_social.collision.planar_kernel import MAX_STEPS, STEP_MARGIN, TOLERANCE
 from drake_social.scenario import Scenario
@@ -113,8 +114,6 @@ class CheckerBase:
     """
 
     def __init__(self, scenario: Scenario, resolution: float | None = None):
-        from drake_social.arguments import require_scenario
-
         require_scenario(scenario, type(self).__name__)
         self.scenario = scenario
         self.geometry = ArmGeometry.from_scenario(scenario)

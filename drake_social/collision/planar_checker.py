@@ -30,10 +30,10 @@ import numpy as np
 from pydrake.geometry import Box as DrakeBox
 from pydrake.geometry import Cylinder, Role
 
-from drake_social.collision.drake_checker import Contact
 from drake_social.model.plant import ScenarioDiagram, build_robot_diagram, environment_parts, registration_order
 from drake_social.collision import planar_kernel as kernel
 from drake_social.collision.geometric import CheckerBase
+from drake_social.collision.validity import Contact
 from drake_social.scenario import Scenario
 
 __all__ = ["PlanarChecker"]

@@ -1,12 +1,14 @@
-"""The validity-checker protocol the planners use (implemented in numpy and in Drake)."""
+"""The validity-checker protocol the planners use (implemented in numpy and in Drake),
+and the :class:`Contact` a checker reports."""
 
 from __future__ import annotations
 
+import dataclasses as dc
 from typing import Protocol, runtime_checkable
 
 import numpy as np
 
-__all__ = ["ValidityChecker"]
+__all__ = ["Contact", "ValidityChecker"]
 
 
 @runtime_checkable
@@ -34,3 +36,22 @@ class ValidityChecker(Protocol):
     def clearance(self, q: np.ndarray) -> float:
         """Signed distance (metres) from the robot and object to the nearest
         obstacle, person or wall; negative when penetrating."""
+
+
+@dc.dataclass(frozen=True)
+class Contact:
+    """A robot body touching or penetrating an environment shape.
+
+    Attributes:
+        robot_body: ``base``, ``link1``, ``link2`` or ``object``.
+        other: the environment shape (``obstacle[i]``, ``person[i] 'name'``,
+            ``wall_<side>``).
+        distance: their signed distance, metres (<= 0).
+    """
+
+    robot_body: str
+    other: str
+    distance: float
+
+    def __str__(self) -> str:
+        return f"{self.robot_body} with {self.other} ({self.distance:+.3f} m)"

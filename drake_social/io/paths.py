@@ -18,13 +18,16 @@ Example::
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from drake_social.errors import ScenarioError
 from drake_social.io.textfile import MAX_PATH_FILE_BYTES, read_text_file, shorten
 from drake_social.limits import MAX_WAYPOINTS
-from drake_social.scenario import Scenario, ScenarioError
+
+if TYPE_CHECKING:
+    from drake_social.scenario import Scenario
 
 __all__ = ["PATH_HEADER", "EXECUTED_HEADER", "check_path_rows", "parse_path_csv", "read_path_csv",
            "write_executed_csv", "write_path_csv"]

@@ -9,7 +9,7 @@ measures from :func:`drake_social.experiments.records.path_costs`, and each
 producer adds the fields of its context (:data:`CONTEXT_FIELDS`). A producer
 may leave a field out (``bench`` keeps no ``cost_history``), never rename it.
 
-JSON is written strict (:func:`finite`): NaN and infinities become ``null``,
+JSON is written strict (:func:`~drake_social.io.json_numbers.finite_or_none`): NaN and infinities become ``null``,
 as does every value of a failed run that has no meaning (its cost, its
 lengths).
 
@@ -24,11 +24,12 @@ Example::
 from __future__ import annotations
 
 import json
-import math
 from pathlib import Path
 from typing import Any, Mapping
 
-__all__ = ["CONTEXT_FIELDS", "PATH_FIELDS", "PLANNER_FIELDS", "RUN_FIELDS", "SHARED_FIELDS", "finite", "json_lines",
+from drake_social.io.json_numbers import finite_or_none
+
+__all__ = ["CONTEXT_FIELDS", "PATH_FIELDS", "PLANNER_FIELDS", "RUN_FIELDS", "SHARED_FIELDS", "json_lines",
            "write_json"]
 
 #: The fields a planner's result gives (:meth:`PlannerResult.to_record`), in order, with their meaning and unit.
@@ -92,22 +93,11 @@ SHARED_FIELDS: tuple[str, ...] = (
 )
 
 
-def finite(value: Any) -> Any:
-    """``value`` with every non-finite float (NaN, infinities) replaced by None, in nested dicts, lists and tuples
-    (tuples become lists), so that ``json.dumps(..., allow_nan=False)`` accepts it."""
-    if isinstance(value, Mapping):
-        return {k: finite(v) for k, v in value.items()}
-    if isinstance(value, (list, tuple)):
-        return [finite(v) for v in value]
-    if isinstance(value, float) and not math.isfinite(value):
-        return None
-    return value
-
-
 def json_lines(record: Mapping[str, Any]) -> str:
     """Strict JSON of ``record`` with one top-level key per line (arrays such as the waypoints stay on their
-    line); non-finite numbers become null (:func:`finite`)."""
-    body = ",\n".join(f"  {json.dumps(k)}: {json.dumps(finite(v), allow_nan=False)}" for k, v in record.items())
+    line); non-finite numbers become null."""
+    body = ",\n".join(f"  {json.dumps(k)}: {json.dumps(finite_or_none(v), allow_nan=False)}"
+                      for k, v in record.items())
     return "{\n" + body + "\n}\n"
 
 
@@ -119,4 +109,4 @@ def write_json(path: str | Path, value: Any, *, indent: int | None = None) -> No
         value: dicts, lists, strings, numbers, booleans and None.
         indent: spaces per nesting level (None: one line).
     """
-    Path(path).write_text(json.dumps(finite(value), indent=indent, allow_nan=False) + "\n")
+    Path(path).write_text(json.dumps(finite_or_none(value), indent=indent, allow_nan=False) + "\n")

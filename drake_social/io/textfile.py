@@ -12,7 +12,7 @@ through :func:`read_text_file`, so all of them are refused the same way:
   with the limit stated, before anything is read;
 * the text must be UTF-8; the error names the byte offset at fault.
 
-Errors are :class:`~drake_social.scenario.ScenarioError` (invalid input: the
+Errors are :class:`~drake_social.errors.ScenarioError` (invalid input: the
 command line prints it and exits 2), naming the file and, when given, the
 option that named it (``--path``).
 """
@@ -23,6 +23,7 @@ import os
 import stat
 from pathlib import Path
 
+from drake_social.errors import ScenarioError
 from drake_social.limits import MAX_WAYPOINTS
 
 __all__ = ["MAX_PATH_FILE_BYTES", "MAX_YAML_FILE_BYTES", "check_regular_file", "read_text_file", "read_yaml_file",
@@ -73,8 +74,6 @@ def shorten(text: str, limit: int = SHOWN_CHARACTERS) -> str:
 
 
 def _error(path: Path | str, message: str, option: str | None):
-    from drake_social.scenario import ScenarioError  # scenario.py imports this module
-
     return ScenarioError(f"{shorten(str(path), SHOWN_PATH_CHARACTERS)}: {message}"
                          + ("" if option is None else f" ({option})"))
 

@@ -6,6 +6,7 @@ import dataclasses as dc
 
 import numpy as np
 
+from drake_social.arguments import require_scenario
 from drake_social.kinematics import config_distance
 
 __all__ = ["ConfigurationSpace"]
@@ -36,8 +37,6 @@ class ConfigurationSpace:
     @classmethod
     def from_scenario(cls, scenario) -> "ConfigurationSpace":
         """Base positions keep the base disc inside the room; joints in their limits."""
-        from drake_social.arguments import require_scenario
-
         require_scenario(scenario, "ConfigurationSpace.from_scenario")
         x0, y0, x1, y1 = scenario.world.bounds
         r = scenario.robot.base_radius

@@ -11,6 +11,7 @@ import pytest
 
 from drake_social.cost.social import SocialCost
 from drake_social.experiments.bench.planners import run_bench
+from drake_social.io.json_numbers import finite_or_none
 from drake_social.collision.geometric import GeometricChecker
 from drake_social.planning.space import ConfigurationSpace
 from drake_social.planning.algorithms import evaluate_path, make_objective
@@ -274,7 +275,7 @@ def test_ratios_where_a_median_is_zero_are_not_defined():
                                        "ompl": {}}}}
     row = next(line for line in bench._markdown(out).splitlines() if line.startswith("| tiny | social_rrt_star"))
     assert row.endswith("| 0.25 | n/a | n/a | n/a |")  # time, time with the same checks (none), costs
-    assert json.loads(json.dumps(bench._finite(vs)))["social_cost"] is None
+    assert json.loads(json.dumps(finite_or_none(vs)))["social_cost"] is None
 
 
 def test_repeats_pool_only_identical_runs():

@@ -354,7 +354,8 @@ def test_a_second_ctrl_c_while_the_records_are_written_alone_keeps_them(tmp_path
             signal.raise_signal(signal.SIGINT)
         return original(*args, **kwargs)
 
-    monkeypatch.setattr(study, "write_records", write_records)
+    for owner in (study, study.output):  # the command's own call and write_study's
+        monkeypatch.setattr(owner, "write_records", write_records)
     rc = main(["experiment", "sweep", str(sweep), "--out", str(out)])
     captured = capsys.readouterr()
     assert len(calls) == 2

@@ -301,18 +301,17 @@ def test_a_variant_may_make_the_file_valid(tmp_path):
 
 
 def test_each_scenario_and_variant_is_loaded_once(tmp_path, monkeypatch):
-    import drake_social.scenario as scenario_module
-    from drake_social.experiments import study as study_module
+    from drake_social.experiments.study import scenarios as study_scenarios
 
     calls = []
-    real = scenario_module.load_scenario_text
+    real = study_scenarios.load_scenario_text
 
     def counted(text, source, overrides=None, **kw):
         calls.append((source, tuple(overrides or ())))
         return real(text, source, overrides, **kw)
 
-    monkeypatch.setattr(scenario_module, "load_scenario_text", counted)
-    monkeypatch.setattr(study_module, "_loaded", collections.OrderedDict())
+    monkeypatch.setattr(study_scenarios, "load_scenario_text", counted)
+    monkeypatch.setattr(study_scenarios, "_loaded", collections.OrderedDict())
     variants = ", ".join(f"v{i}: {{social: {{length_weight: {i / 10}}}}}" for i in range(20))
     dut = _sweep(tmp_path, f"variants: {{{variants}}}\n")
     study = load_sweep(dut)
@@ -417,7 +416,7 @@ def test_the_checkers_have_one_home():
 def test_the_depth_limit_leaves_room_for_what_the_comment_says(tmp_path):
     import yaml
 
-    from drake_social.scenario import MAX_YAML_DEPTH, _limited_loader
+    from drake_social.scenario.load import MAX_YAML_DEPTH, _limited_loader
 
     def depth(text):
         loader = _limited_loader(yaml)(text)

@@ -10,8 +10,9 @@ import numpy as np
 import pytest
 
 from drake_social import app
-from drake_social.io.records import (CONTEXT_FIELDS, PATH_FIELDS, PLANNER_FIELDS, RUN_FIELDS, SHARED_FIELDS, finite,
-                                     json_lines, write_json)
+from drake_social.io.json_numbers import finite_or_none as finite
+from drake_social.io.records import (CONTEXT_FIELDS, PATH_FIELDS, PLANNER_FIELDS, RUN_FIELDS, SHARED_FIELDS, json_lines,
+                                     write_json)
 from drake_social.planning.result import PlannerResult
 
 #: Names of one quantity that the schema replaced: no producer may use them.

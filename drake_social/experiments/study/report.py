@@ -23,6 +23,8 @@ from typing import Sequence
 
 import numpy as np
 
+from drake_social.experiments.study.results import best_runs
+
 __all__ = ["ALPHA", "OFF_SCALE_FACTOR", "Claim", "Comparison", "axis_stretch", "boxplot_values", "paired",
            "figure_names", "paper_claims", "report_markdown", "write_figures"]
 
@@ -337,7 +339,6 @@ def figure_names(study) -> list[str]:
 
 def write_figures(result, out: Path) -> list[str]:
     """Boxplots of F per group, cost against distance and best paths; returns the file names."""
-    from drake_social.experiments.study import best_runs
     from drake_social.viz.path import cost_profile_figure
     from drake_social.viz.study import boxplot_figure, paths_side_by_side
 

@@ -1,0 +1,338 @@
+"""The scenario schema: a typed tree of dataclasses, the one description of the YAML format.
+
+In the style of Drake's ``examples/hardware_sim``: every field has a comment
+with its unit and the values it may take, defaults are the paper's values, and
+files are loaded into these classes by :mod:`drake_social.scenario.load`
+(with :func:`pydrake.common.yaml.yaml_load_typed`, which rejects unknown keys)
+and checked by :mod:`drake_social.scenario.validate`.
+
+Angles are radians, lengths metres. Configurations are ``q = [x, y, psi1,
+psi2]``: base position, the angle of link 1 from the world x axis (the base
+does not rotate) and the angle of link 2 relative to link 1.
+
+Pure Python and numpy: the pure-numpy core uses these classes without Drake.
+The names of the planners and checkers and the numeric bounds live in
+:mod:`drake_social.limits`; the values of the schema's own choice fields
+(modes, executions) live here.
+"""
+
+import dataclasses as dc
+import math
+from typing import Optional, Union
+
+import numpy as np
+
+from drake_social.errors import ScenarioError
+from drake_social.limits import ALGORITHMS, CHECKERS
+
+__all__ = [
+    "ALGORITHMS",
+    "CHECKERS",
+    "EXECUTIONS",
+    "INFORMED_MODES",
+    "NEAR_RADIUS_MODES",
+    "SIM_MODES",
+    "Bar",
+    "Box",
+    "ExecutionOptions",
+    "LShape",
+    "Person",
+    "PlannerOptions",
+    "Polyline",
+    "Robot",
+    "Scenario",
+    "ScenarioError",
+    "SocialCostOptions",
+    "World",
+    "interest_point_count",
+]
+
+#: Values of ``planner.near_radius_mode``.
+NEAR_RADIUS_MODES = ("fixed", "shrinking")
+
+#: Modes of the informed sampler (see ``drake_social.planning.sampling``).
+INFORMED_MODES = ("paper", "admissible")
+
+#: Simulation modes (see ``drake_social.sim``): the base integrates its
+#: commanded velocity and the arm follows its reference exactly, or the
+#: MultibodyPlant is simulated with actuated joints.
+SIM_MODES = ("kinematic", "dynamic")
+
+#: How a path is executed (see ``drake_social.sim``): one phase-synchronized
+#: 4-DoF reference per segment (stays on the straight segment the planner
+#: checked), or the paper's independent base P-controller and arm trajectory.
+EXECUTIONS = ("synchronized", "paper")
+
+
+@dc.dataclass
+class Box:
+    """A rectangular obstacle, extruded over the robot's height."""
+
+    # Centre [x, y] of the box in the world frame, metres.
+    center: list[float] = dc.field(default_factory=lambda: [0.0, 0.0])
+    # Side lengths [along its own x axis, along its own y axis], metres (> 0).
+    size: list[float] = dc.field(default_factory=lambda: [1.0, 1.0])
+    # Rotation of the box about z, radians, counter-clockwise from world +x.
+    yaw: float = 0.0
+
+
+@dc.dataclass
+class World:
+    """The room: its walls and the obstacles inside it."""
+
+    # Room bounds [x_min, y_min, x_max, y_max], metres; walls stand on them.
+    bounds: list[float] = dc.field(default_factory=lambda: [0.0, 0.0, 10.0, 10.0])
+    # Static obstacles (desks, walls, shelves).
+    obstacles: list[Box] = dc.field(default_factory=list)
+    # Thickness of the four boundary walls, metres, built outside the bounds.
+    wall_thickness: float = 0.1
+
+
+@dc.dataclass
+class Person:
+    """A static person: a body disc and a facing direction."""
+
+    # Position of the body centre in the world frame, metres.
+    x: float = 0.0
+    y: float = 0.0
+    # Facing direction, radians, counter-clockwise from world +x.
+    theta: float = 0.0
+    # Body radius, metres (> 0); the body is an obstacle too.
+    radius: float = 0.25
+    # Optional label used in figures and error messages.
+    name: str = ""
+
+
+@dc.dataclass
+class Robot:
+    """The planar mobile manipulator: a holonomic disc base and a 2-link arm."""
+
+    # Radius of the (non-rotating) base disc, metres (> 0).
+    base_radius: float = 0.35
+    # Lengths [l1, l2] of the two links, metres (> 0). Link 1 starts at the
+    # base centre; the gripper frame sits at the tip of link 2.
+    link_lengths: list[float] = dc.field(default_factory=lambda: [0.6, 0.5])
+    # Width of both links, metres (> 0); links are capsules of radius width/2.
+    link_width: float = 0.08
+    # Lower joint limits [psi1, psi2], radians.
+    joint_lower: list[float] = dc.field(default_factory=lambda: [-math.pi, -math.pi])
+    # Upper joint limits [psi1, psi2], radians (> lower).
+    joint_upper: list[float] = dc.field(default_factory=lambda: [math.pi, math.pi])
+
+
+@dc.dataclass
+class Bar:
+    """A straight bar held at its middle, across link 2 (gripper y axis).
+
+    In the gripper frame its ends are (0, -length/2) and (0, +length/2), and
+    these two ends are its default interest points.
+    """
+
+    # Bar length, metres (> 0).
+    length: float = 1.5
+    # Bar thickness, metres (> 0); the bar is a capsule of radius thickness/2.
+    thickness: float = 0.05
+    # Interest points [[x, y], ...] in the gripper frame, metres; None = the ends.
+    interest_points: Optional[list[list[float]]] = None
+
+    def polyline(self) -> np.ndarray:
+        """Its vertices in the gripper frame, shape (2, 2), metres: the two ends."""
+        h = self.length / 2
+        return np.array([[0.0, -h], [0.0, h]])
+
+    def default_interest_points(self) -> np.ndarray:
+        """The interest points when ``interest_points`` is None, shape (2, 2): the two ends."""
+        return self.polyline()
+
+
+@dc.dataclass
+class LShape:
+    """Two bars joined at a right angle.
+
+    The first bar (``lengths[0]``) is held at its middle across link 2, from
+    (0, -l_a/2) to (0, +l_a/2) in the gripper frame; the second
+    (``lengths[1]``) leaves its +y end along the gripper x axis, to
+    (l_b, +l_a/2). Default interest points: the three vertices.
+    """
+
+    # Lengths [first bar, second bar], metres (> 0).
+    lengths: list[float] = dc.field(default_factory=lambda: [3.0, 2.0])
+    # Bar thickness, metres (> 0).
+    thickness: float = 0.05
+    # Interest points [[x, y], ...] in the gripper frame, metres; None = vertices.
+    interest_points: Optional[list[list[float]]] = None
+
+    def polyline(self) -> np.ndarray:
+        """Its vertices in the gripper frame, shape (3, 2), metres: the free
+        end of the first bar, the corner, the free end of the second."""
+        la, lb = self.lengths
+        return np.array([[0.0, -la / 2], [0.0, la / 2], [lb, la / 2]])
+
+    def default_interest_points(self) -> np.ndarray:
+        """The interest points when ``interest_points`` is None, shape (3, 2): the three vertices."""
+        return self.polyline()
+
+
+@dc.dataclass
+class Polyline:
+    """A general object: an open polyline in the gripper frame."""
+
+    # Vertices [[x, y], ...] in the gripper frame, metres (at least two).
+    points: list[list[float]] = dc.field(default_factory=lambda: [[0.0, -0.5], [0.0, 0.5]])
+    # Thickness, metres (> 0); every segment is a capsule of radius thickness/2.
+    thickness: float = 0.05
+    # Interest points [[x, y], ...] in the gripper frame; None = first and last vertex.
+    interest_points: Optional[list[list[float]]] = None
+
+    def polyline(self) -> np.ndarray:
+        """Its vertices in the gripper frame, shape (M, 2), metres."""
+        return np.asarray(self.points, dtype=float).reshape(-1, 2)
+
+    def default_interest_points(self) -> np.ndarray:
+        """The interest points when ``interest_points`` is None, shape (2, 2): the first and last vertex."""
+        return self.polyline()[[0, -1]]
+
+
+@dc.dataclass
+class SocialCostOptions:
+    """Kirby's asymmetric Gaussian personal space and the multi-point sum."""
+
+    # Variance along the facing direction, metres (the paper: 2).
+    sigma_h: float = 2.0
+    # sigma_s = side_ratio * sigma_h (the paper: 2/3).
+    side_ratio: float = 2.0 / 3.0
+    # sigma_r = rear_ratio * sigma_h (the paper: 1/2).
+    rear_ratio: float = 0.5
+    # AGF values <= threshold count as 0 (the paper: 0.2), in [0, 1).
+    threshold: float = 0.2
+    # One weight >= 0 per interest point, in the order base, link-1 tip,
+    # link-2 tip, then the object's points. None = 1 for every point.
+    weights: Optional[list[float]] = None
+    # Path-length weight lambda >= 0 added to the social integral
+    # (0 = the paper's pure social cost).
+    length_weight: float = 0.0
+    # Largest workspace displacement of any weighted interest point between two
+    # samples of the trapezoid rule along a motion, metres (> 0). Threshold
+    # crossings are located inside steps, so 0.1 m keeps Msc within ~0.5% of
+    # a 2000-step reference on nearly every edge.
+    resolution: float = 0.1
+
+
+@dc.dataclass
+class PlannerOptions:
+    """Options of the RRT* family (the paper's Algorithm 2)."""
+
+    # One of ALGORITHMS.
+    algorithm: str = "social_rrt_star"
+    # Number of samples drawn, K (>= 1).
+    iterations: int = 2000
+    # Steer distance delta in configuration space (> 0).
+    planning_range: float = 1.5
+    # Near-set radius r_near in configuration space (> 0).
+    near_radius: float = 2.5
+    # Probability in [0, 1) of sampling the goal instead of a random state.
+    goal_bias: float = 0.05
+    # Informed variants: "paper" (ellipse from the best path's XY length) or
+    # "admissible" (from best cost / length_weight; needs length_weight > 0).
+    informed_mode: str = "paper"
+    # Per-coordinate weights (> 0, 4 values) of the configuration distance.
+    distance_weights: list[float] = dc.field(default_factory=lambda: [1.0, 1.0, 1.0, 1.0])
+    # Largest displacement of any robot or object point between two checked
+    # configurations of a motion, metres (> 0).
+    collision_resolution: float = 0.05
+    # Near-set radius rule: "fixed" (r_near, the paper's Algorithm 2) or
+    # "shrinking" (standard RRT*: min(r_near, gamma (log n / n)^(1/4)) with n
+    # the tree's size, so the near set stops growing with the tree).
+    near_radius_mode: str = "fixed"
+    # gamma of the shrinking radius, configuration-space units (> 0), or 0 for
+    # OMPL's choice: 1.1 * 2 (1 + 1/d)^(1/d) (volume / unit-ball volume)^(1/d)
+    # of the weighted configuration box, d = 4 (15.0 on office_bar, whose
+    # radius then stays at r_near = 3 up to about 5,000 nodes).
+    near_radius_gamma: float = 0.0
+    # Optimise the returned path (shortcuts and a local descent on the
+    # waypoints, drake_social.planning.optimize); false keeps the raw RRT*
+    # path of the paper. Never raises the cost, keeps every motion valid.
+    optimize: bool = False
+
+
+@dc.dataclass
+class ExecutionOptions:
+    """How a planned path is executed and simulated (the paper's Section IV-C).
+
+    Defaults are the paper's values where it gives one (Kp = 1.5, four
+    mecanum wheels); the rest are those of a small indoor mobile manipulator.
+    """
+
+    # "kinematic" or "dynamic" (see SIM_MODES).
+    mode: str = "kinematic"
+    # "synchronized" or "paper" (see EXECUTIONS).
+    execution: str = "synchronized"
+    # Proportional gain Kp of the base controller, 1/s (> 0; the paper: 1.5).
+    kp: float = 1.5
+    # Largest base speed (norm of [vx, vy]), m/s (> 0). The synchronized
+    # reference also keeps to what the wheels give along each segment,
+    # max_wheel_speed * wheel_radius * |d| / (|dx| + |dy|), whichever is lower.
+    max_base_speed: float = 0.5
+    # Largest base acceleration and jerk per axis of the synchronized
+    # reference, m/s^2 and m/s^3 (> 0).
+    max_base_acceleration: float = 1.0
+    max_base_jerk: float = 5.0
+    # Mecanum wheel radius r, metres (> 0).
+    wheel_radius: float = 0.05
+    # Largest wheel speed, rad/s (> 0); commands beyond it are scaled down
+    # uniformly, keeping the direction.
+    max_wheel_speed: float = 20.0
+    # Arm joint limits [psi1, psi2] of the Ruckig trajectories: velocity
+    # rad/s, acceleration rad/s^2, jerk rad/s^3 (> 0).
+    arm_max_velocity: list[float] = dc.field(default_factory=lambda: [1.0, 1.0])
+    arm_max_acceleration: list[float] = dc.field(default_factory=lambda: [2.0, 2.0])
+    arm_max_jerk: list[float] = dc.field(default_factory=lambda: [10.0, 10.0])
+    # The sequencer advances when the base is within base_tolerance (metres)
+    # and both arm joints within joint_tolerance (radians) of the target (> 0).
+    base_tolerance: float = 0.05
+    joint_tolerance: float = 0.05
+    # Period of the sequencer, controller and trajectory updates, seconds (> 0).
+    control_period: float = 0.01
+    # Time step of the discrete MultibodyPlant in "dynamic" mode, seconds (> 0).
+    plant_time_step: float = 0.002
+    # A run that has not reached the goal after this long stops and says so,
+    # seconds (> 0, <= MAX_TIME_LIMIT = 600; at most MAX_CONTROL_STEPS control
+    # periods and MAX_PLANT_STEPS plant steps).
+    time_limit: float = 300.0
+    # Frames per second of the Meshcat recording (> 0, <= MAX_REPLAY_FPS = 60).
+    replay_fps: float = 30.0
+
+
+@dc.dataclass
+class Scenario:
+    """Everything needed to plan and simulate one transport task."""
+
+    # Free text shown in figures and reports.
+    description: str = ""
+    # The room and its obstacles.
+    world: World = dc.field(default_factory=World)
+    # Static people.
+    people: list[Person] = dc.field(default_factory=list)
+    # The mobile manipulator.
+    robot: Robot = dc.field(default_factory=Robot)
+    # The carried object, tagged in YAML as !Bar, !LShape or !Polyline.
+    object: Union[Bar, LShape, Polyline] = dc.field(default_factory=Bar)
+    # Start configuration [x, y, psi1, psi2] (metres, radians).
+    start: list[float] = dc.field(default_factory=lambda: [1.0, 1.0, 0.0, 0.0])
+    # Goal configuration [x, y, psi1, psi2] (metres, radians).
+    goal: list[float] = dc.field(default_factory=lambda: [9.0, 9.0, 0.0, 0.0])
+    # Social cost options.
+    social: SocialCostOptions = dc.field(default_factory=SocialCostOptions)
+    # Planner options.
+    planner: PlannerOptions = dc.field(default_factory=PlannerOptions)
+    # Execution and simulation options.
+    execution: ExecutionOptions = dc.field(default_factory=ExecutionOptions)
+    # Seed of every random choice (planner sampling, studies), an integer >= 0.
+    random_seed: int = 0
+
+
+def interest_point_count(obj: Union[Bar, LShape, Polyline]) -> int:
+    """The number of the object's interest points (explicit or default)."""
+    if obj.interest_points is not None:
+        return len(obj.interest_points)
+    return len(obj.default_interest_points())
