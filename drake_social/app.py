@@ -41,7 +41,7 @@ from drake_social.scenario import Scenario, ScenarioError, compose_yaml, load_sc
 
 __all__ = ["PLAN_OUTPUTS", "SIMULATE_OUTPUTS", "PlanRun", "Progress", "SimulateRun", "StudyRun", "check_scheduler",
            "listed",
-           "load_with_overrides", "paper_experiment", "run_bench", "run_plan", "run_show", "run_simulate",
+           "load_with_overrides", "paper_experiment", "read_path_csv", "run_bench", "run_plan", "run_show", "run_simulate",
            "run_study"]
 
 _log = logging.getLogger(__name__)
@@ -77,6 +77,45 @@ def load_with_overrides(path: str | Path, sets: Sequence[str] | None = None) -> 
             raise ScenarioError(f"{path} (--set {shorten(repr(text))}): must be a YAML mapping such as "
                                 f"'random_seed: 3'")
     return load_scenario(path, texts, overrides_name="--set")
+
+
+def read_path_csv(path: str | Path, scenario: Scenario, checker=None, option: str = "--path"):
+    """Reads a path CSV (:func:`drake_social.io.paths.parse_path_csv`) for
+    ``scenario`` and checks it as every path to execute is checked
+    (:func:`drake_social.waypoints.check_waypoints`).
+
+    Args:
+        path: the CSV file (header ``x,y,psi1,psi2``).
+        scenario: the scenario the path is for.
+        checker: the validity checker of the run; None = the exact planar checker.
+        option: the command-line option that named the file, for the messages.
+
+    Returns:
+        The waypoints, an (N, 4) float array (metres, radians).
+
+    Raises:
+        ScenarioError: the file is missing or malformed, a waypoint is
+            outside the room or the joint limits or in collision, a segment
+            collides, or its first and last rows are not the scenario's start
+            and goal (to ``waypoints.ENDPOINT_TOLERANCE``); the message names
+            the file and the line.
+    """
+    from drake_social.io.paths import parse_path_csv
+
+    return _checked_rows(path, parse_path_csv(path, option), scenario, checker, option)
+
+
+def _checked_rows(path, parsed, scenario: Scenario, checker=None, option: str = "--path"):
+    """The ``(rows, lines)`` of :func:`~drake_social.io.paths.parse_path_csv` checked by
+    :func:`~drake_social.waypoints.check_waypoints` (None = the planar checker)."""
+    from drake_social.waypoints import check_waypoints
+
+    if checker is None:
+        from drake_social.collision.drake_checker import make_checker
+
+        checker = make_checker(scenario, "planar")
+    rows, lines = parsed
+    return check_waypoints(scenario, rows, checker, source=f"{path} ({option})", lines=lines)
 
 
 def listed(names: Sequence[str]) -> str:
@@ -258,7 +297,7 @@ def run_simulate(*, scenario: str | Path, out: str | Path, overrides: Sequence[s
 
     from drake_social.collision.drake_checker import make_checker
     from drake_social.io.outputs import OutputSet
-    from drake_social.io.paths import check_path_rows, parse_path_csv, write_executed_csv
+    from drake_social.io.paths import parse_path_csv, write_executed_csv
     from drake_social.io.records import json_lines
     from drake_social.planning.result import PlanningInputError
     from drake_social.scenario import plant_time_step_problem, validate_scenario
@@ -285,7 +324,7 @@ def run_simulate(*, scenario: str | Path, out: str | Path, overrides: Sequence[s
             raise ScenarioError(f"{source} (--mode {mode}): {problem[0]}: {problem[1]}")
     parsed = parse_path_csv(path) if path is not None else None  # a malformed file before the checker
     chk = make_checker(loaded, checker, source=str(source))
-    waypoints = check_path_rows(path, parsed, loaded, chk) if parsed is not None else None
+    waypoints = _checked_rows(path, parsed, loaded, chk) if parsed is not None else None
     meshcat = None
     if replay:
         from drake_social.sim.replay import make_meshcat

@@ -39,10 +39,9 @@ from typing import Callable, Sequence
 import matplotlib
 
 from drake_social import app
-from drake_social.app import load_with_overrides  # noqa: F401  (the --set loader, where scripts found it)
+from drake_social.app import load_with_overrides, read_path_csv  # noqa: F401  (where scripts found them)
 from drake_social.cli_parser import MAX_BENCH_REPEATS, MAX_BENCH_SEEDS, MAX_WORKERS, build_parser  # noqa: F401
 from drake_social.cli_progress import BarProgress, ProgressBar  # noqa: F401  (ProgressBar: the bar itself)
-from drake_social.io.paths import read_path_csv  # noqa: F401  (the --path reader, where scripts found it)
 from drake_social.planning.result import PlanningInputError
 from drake_social.scenario import CHECKERS, ScenarioError  # noqa: F401  (CHECKERS: the --checker choices)
 

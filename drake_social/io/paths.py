@@ -2,23 +2,23 @@
 
 A path CSV has the header ``x,y,psi1,psi2`` and one configuration per row
 (metres, radians), written with 17 significant digits so that a path read
-back is the path written, bit for bit. Reading it checks the path as every
-path to execute is checked (:func:`drake_social.waypoints.check_waypoints`):
-the errors (:class:`~drake_social.scenario.ScenarioError`) name the file and
-the line.
+back is the path written, bit for bit. :func:`parse_path_csv` reads the rows
+and the line of each; the errors (:class:`~drake_social.errors.ScenarioError`)
+name the file and the line. Checking them against a scenario (start, goal,
+limits, collisions) is :func:`drake_social.app.read_path_csv`.
 
 Example::
 
-    from drake_social.io.paths import read_path_csv, write_path_csv
+    from drake_social.io.paths import parse_path_csv, write_path_csv
 
     write_path_csv("out/office_bar/path.csv", result.waypoints)
-    waypoints = read_path_csv("out/office_bar/path.csv", scenario, checker)
+    rows, lines = parse_path_csv("out/office_bar/path.csv")
 """
 
 from __future__ import annotations
 
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 
@@ -26,11 +26,7 @@ from drake_social.errors import ScenarioError
 from drake_social.io.textfile import MAX_PATH_FILE_BYTES, read_text_file, shorten
 from drake_social.limits import MAX_WAYPOINTS
 
-if TYPE_CHECKING:
-    from drake_social.scenario import Scenario
-
-__all__ = ["PATH_HEADER", "EXECUTED_HEADER", "check_path_rows", "parse_path_csv", "read_path_csv",
-           "write_executed_csv", "write_path_csv"]
+__all__ = ["PATH_HEADER", "EXECUTED_HEADER", "parse_path_csv", "write_executed_csv", "write_path_csv"]
 
 #: The header of a path CSV: the four values of a configuration.
 PATH_HEADER = "x,y,psi1,psi2"
@@ -115,51 +111,3 @@ def parse_path_csv(path: str | Path, option: str = "--path") -> tuple[np.ndarray
     if len(rows) < 2:
         raise ScenarioError(f"{path}: needs at least 2 waypoints (start and goal), got {len(rows)} ({option})")
     return np.array(rows), numbers
-
-
-def check_path_rows(path: str | Path, parsed: tuple[np.ndarray, list[int]], scenario: Scenario, checker=None,
-                    option: str = "--path") -> np.ndarray:
-    """The rows of :func:`parse_path_csv` checked by :func:`~drake_social.waypoints.check_waypoints`.
-
-    Args:
-        path: the CSV file the rows came from (for the messages).
-        parsed: ``(rows, line numbers)`` from :func:`parse_path_csv`.
-        scenario: the scenario the path is for.
-        checker: the validity checker of the run; None = the exact planar checker.
-        option: the command-line option that named the file.
-
-    Returns:
-        The waypoints as a new (N, 4) float array.
-    """
-    from drake_social.waypoints import check_waypoints
-
-    if checker is None:
-        from drake_social.collision.drake_checker import make_checker  # Drake: only when no checker is given
-
-        checker = make_checker(scenario, "planar")
-    rows, numbers = parsed
-    return check_waypoints(scenario, rows, checker, source=f"{path} ({option})", lines=numbers)
-
-
-def read_path_csv(path: str | Path, scenario: Scenario, checker=None, option: str = "--path") -> np.ndarray:
-    """Reads a path CSV (header :data:`PATH_HEADER`) for ``scenario`` and
-    checks it as every path to execute is checked
-    (:func:`drake_social.waypoints.check_waypoints`).
-
-    Args:
-        path: the CSV file.
-        scenario: the scenario the path is for.
-        checker: the validity checker of the run; None = the exact planar checker.
-        option: the command-line option that named the file, for the messages.
-
-    Returns:
-        The waypoints, an (N, 4) float array (metres, radians).
-
-    Raises:
-        ScenarioError: the file is missing or malformed (:func:`parse_path_csv`),
-            a waypoint is outside the room or the joint limits or in
-            collision, a segment collides, or its first and last rows are not
-            the scenario's start and goal (to ``waypoints.ENDPOINT_TOLERANCE``);
-            the message names the file and the line.
-    """
-    return check_path_rows(path, parse_path_csv(path, option), scenario, checker, option)

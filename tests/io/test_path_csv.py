@@ -1,4 +1,4 @@
-"""drake_social.io.paths: the path CSV round trip and its errors, the executed CSV."""
+"""drake_social.io.paths: the path CSV round trip and its errors (and app.read_path_csv's check), the executed CSV."""
 
 from __future__ import annotations
 
@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 
 from drake_social.collision.geometric import GeometricChecker
-from drake_social.io.paths import (EXECUTED_HEADER, PATH_HEADER, parse_path_csv, read_path_csv, write_executed_csv,
-                                   write_path_csv)
+from drake_social.app import read_path_csv
+from drake_social.io.paths import EXECUTED_HEADER, PATH_HEADER, parse_path_csv, write_executed_csv, write_path_csv
 from drake_social.limits import MAX_WAYPOINTS
 from drake_social.scenario import ScenarioError
 
