@@ -30,21 +30,24 @@ from __future__ import annotations
 
 import copy
 import dataclasses as dc
-import logging
 import shutil
 import signal
 from pathlib import Path
-from typing import Any, Callable, Sequence
+from typing import TYPE_CHECKING, Any, Callable, Sequence
 
 from drake_social.io.textfile import check_regular_file, shorten
 from drake_social.scenario import Scenario, ScenarioError, compose_yaml, load_scenario
 
-__all__ = ["PLAN_OUTPUTS", "SIMULATE_OUTPUTS", "PlanRun", "Progress", "SimulateRun", "StudyRun", "check_scheduler",
-           "listed",
-           "load_with_overrides", "paper_experiment", "read_path_csv", "run_bench", "run_plan", "run_show", "run_simulate",
-           "run_study"]
+if TYPE_CHECKING:
+    import numpy as np
 
-_log = logging.getLogger(__name__)
+    from drake_social.experiments.study import Study, StudyResult
+    from drake_social.planning.result import PlannerResult
+    from drake_social.sim.run import SimulationResult
+
+__all__ = ["PLAN_OUTPUTS", "SIMULATE_OUTPUTS", "PlanRun", "Progress", "SimulateRun", "StudyRun", "check_scheduler",
+           "load_with_overrides", "paper_experiment", "read_path_csv", "run_bench", "run_plan", "run_show",
+           "run_simulate", "run_study"]
 
 #: The files ``plan`` writes into ``out`` (a folder of such a name is refused before planning).
 PLAN_OUTPUTS = ("path.csv", "result.json", "path.png", "cost_profile.png", "convergence.png")
@@ -79,7 +82,7 @@ def load_with_overrides(path: str | Path, sets: Sequence[str] | None = None) -> 
     return load_scenario(path, texts, overrides_name="--set")
 
 
-def read_path_csv(path: str | Path, scenario: Scenario, checker=None, option: str = "--path"):
+def read_path_csv(path: str | Path, scenario: Scenario, checker=None, option: str = "--path") -> np.ndarray:
     """Reads a path CSV (:func:`drake_social.io.paths.parse_path_csv`) for
     ``scenario`` and checks it as every path to execute is checked
     (:func:`drake_social.waypoints.check_waypoints`).
@@ -105,7 +108,7 @@ def read_path_csv(path: str | Path, scenario: Scenario, checker=None, option: st
     return _checked_rows(path, parse_path_csv(path, option), scenario, checker, option)
 
 
-def _checked_rows(path, parsed, scenario: Scenario, checker=None, option: str = "--path"):
+def _checked_rows(path, parsed, scenario: Scenario, checker=None, option: str = "--path") -> np.ndarray:
     """The ``(rows, lines)`` of :func:`~drake_social.io.paths.parse_path_csv` checked by
     :func:`~drake_social.waypoints.check_waypoints` (None = the planar checker)."""
     from drake_social.waypoints import check_waypoints
@@ -118,28 +121,51 @@ def _checked_rows(path, parsed, scenario: Scenario, checker=None, option: str = 
     return check_waypoints(scenario, rows, checker, source=f"{path} ({option})", lines=lines)
 
 
-def listed(names: Sequence[str]) -> str:
+def _listed(names: Sequence[str]) -> str:
     """``a``, ``a and b``, ``a, b and c``."""
     return names[0] if len(names) == 1 else f"{', '.join(names[:-1])} and {names[-1]}"
 
 
-def _title(scenario: Scenario, path: Path) -> str:
-    return scenario.description or path.name
+def _scenario(scenario: Scenario | str | Path, overrides: Sequence[str], who: str) -> tuple[Scenario, str, str | None]:
+    """The scenario of a ``run_*`` call, its name in messages and its file (None: given as an object).
+
+    Raises:
+        ValueError: ``overrides`` with a Scenario object (they apply to a file).
+        ScenarioError: the file, an override or a value is invalid.
+    """
+    from drake_social.scenario import validate_scenario
+
+    if isinstance(scenario, Scenario):
+        if overrides:
+            raise ValueError(f"{who}: overrides apply to a scenario file; change the Scenario object instead")
+        validate_scenario(scenario, source=f"{who}: scenario")
+        return scenario, f"{who}: scenario", None
+    return load_with_overrides(scenario, overrides), str(scenario), str(scenario)
+
+
+def _title(scenario: Scenario, file: str | None) -> str:
+    return scenario.description or (Path(file).name if file else "scenario")
 
 
 # ---- show --------------------------------------------------------------------
 
 
-def run_show(*, scenario: str | Path, out: str | Path, overrides: Sequence[str] = ()) -> Path:
+def run_show(*, scenario: Scenario | str | Path, out: str | Path, overrides: Sequence[str] = ()) -> Path:
     """Draws the scenario (map, people, social-cost heat map, robot at start
-    and goal) as ``out/scene.png``; returns that file."""
+    and goal) as ``out/scene.png``; returns that file.
+
+    Args:
+        scenario: the scenario YAML file, or a :class:`~drake_social.scenario.Scenario`.
+        out: the output folder.
+        overrides: ``--set`` texts applied over the file.
+    """
     from drake_social.io.outputs import OutputSet
     from drake_social.viz import write_show  # matplotlib figures: only when drawing
 
-    path, out = Path(scenario), Path(out)
-    loaded = load_with_overrides(path, overrides)
+    loaded, _, file = _scenario(scenario, overrides, "run_show")
+    out = Path(out)
     with OutputSet(out, "show", names=["scene.png"]) as outputs:
-        write_show(loaded, outputs.folder, title=_title(loaded, path))
+        write_show(loaded, outputs.folder, title=_title(loaded, file))
     return out / "scene.png"
 
 
@@ -161,7 +187,7 @@ class PlanRun:
     """
 
     record: dict[str, Any]
-    result: Any
+    result: PlannerResult
     files: list[str]
     rejected_segment: int | None
 
@@ -177,7 +203,7 @@ def _planner_progress(progress: Progress | None, total: int) -> Callable[[int, f
     return report
 
 
-def run_plan(*, scenario: str | Path, out: str | Path, overrides: Sequence[str] = (), algorithm: str | None = None,
+def run_plan(*, scenario: Scenario | str | Path, out: str | Path, overrides: Sequence[str] = (), algorithm: str | None = None,
              iterations: int | None = None, seed: int | None = None, checker: str = "planar",
              progress: Progress | None = None) -> PlanRun:
     """Plans the scenario and writes ``out``: path.csv, result.json, path.png,
@@ -187,7 +213,8 @@ def run_plan(*, scenario: str | Path, out: str | Path, overrides: Sequence[str] 
     SceneGraphCollisionChecker before anything is written (``drake_verified``).
 
     Args:
-        scenario: the scenario YAML file.
+        scenario: the scenario YAML file, or a :class:`~drake_social.scenario.Scenario`
+            (validated here; the record's ``scenario`` is then null).
         out: the output folder (created; the files appear together or not at all).
         overrides: ``--set`` texts applied over the file (:func:`load_with_overrides`).
         algorithm, iterations, seed: override the scenario's ``planner.algorithm``,
@@ -212,13 +239,13 @@ def run_plan(*, scenario: str | Path, out: str | Path, overrides: Sequence[str] 
     from drake_social.scenario import validate_planner_choice
     from drake_social.viz.path import write_plan_figures  # matplotlib figures: only when drawing
 
-    path, out = Path(scenario), Path(out)
-    loaded = load_with_overrides(path, overrides)
+    loaded, path, file = _scenario(scenario, overrides, "run_plan")
+    out = Path(out)
     k = iterations or loaded.planner.iterations
     chosen = [f"--{name}" for name, value in (("algorithm", algorithm), ("iterations", iterations)) if value is not None]
     if chosen:  # the scenario was validated with its own planner options
-        validate_planner_choice(loaded, algorithm or loaded.planner.algorithm, k, source=f"{path} ({listed(chosen)})")
-    chk = make_checker(loaded, checker, source=str(path))
+        validate_planner_choice(loaded, algorithm or loaded.planner.algorithm, k, source=f"{path} ({_listed(chosen)})")
+    chk = make_checker(loaded, checker, source=file)
     # Entered before planning: an unwritable or busy out fails early, and
     # nothing of this run lands in out unless all of it does.
     with OutputSet(out, "plan", names=PLAN_OUTPUTS) as outputs:
@@ -230,7 +257,7 @@ def run_plan(*, scenario: str | Path, out: str | Path, overrides: Sequence[str] 
         bad = verify_path(chk, result.waypoints) if result.success else None  # Drake's second opinion
         write_path_csv(outputs.path("path.csv"), result.waypoints)
         record = {
-            "scenario": str(path),
+            "scenario": file,
             "overrides": list(overrides or []),
             "checker": checker,
             "iterations": k,
@@ -238,7 +265,7 @@ def run_plan(*, scenario: str | Path, out: str | Path, overrides: Sequence[str] 
             **run_record(loaded, result, make_objective(loaded, result.algorithm), history=True),
         }
         outputs.write_text("result.json", json_lines(record))
-        figures = write_plan_figures(loaded, result, outputs.folder, title=_title(loaded, path))
+        figures = write_plan_figures(loaded, result, outputs.folder, title=_title(loaded, file))
     return PlanRun(record, result, ["path.csv", "result.json"] + [p.name for p in figures.values()], bad)
 
 
@@ -258,12 +285,12 @@ class SimulateRun:
     """
 
     record: dict[str, Any]
-    run: Any
+    run: SimulationResult
     files: list[str]
     replay_bytes: int | None
 
 
-def run_simulate(*, scenario: str | Path, out: str | Path, overrides: Sequence[str] = (),
+def run_simulate(*, scenario: Scenario | str | Path, out: str | Path, overrides: Sequence[str] = (),
                  path: str | Path | None = None, mode: str | None = None, execution: str | None = None,
                  algorithm: str | None = None, iterations: int | None = None, seed: int | None = None,
                  checker: str = "planar", replay: bool = True, progress: Progress | None = None) -> SimulateRun:
@@ -272,7 +299,7 @@ def run_simulate(*, scenario: str | Path, out: str | Path, overrides: Sequence[s
     executed.csv, tracking.png and sim.json.
 
     Args:
-        scenario: the scenario YAML file.
+        scenario: the scenario YAML file, or a :class:`~drake_social.scenario.Scenario`.
         out: the output folder.
         overrides: ``--set`` texts applied over the file.
         path: a path CSV to follow instead of planning (checked with
@@ -304,26 +331,26 @@ def run_simulate(*, scenario: str | Path, out: str | Path, overrides: Sequence[s
     from drake_social.sim.run import run_checked
     from drake_social.viz.tracking import tracking_figure
 
-    source, out = Path(scenario), Path(out)
+    out = Path(out)
     planning_only = [f"--{name}" for name, value in (("algorithm", algorithm), ("iterations", iterations),
                                                       ("seed", seed)) if value is not None]
     if path is not None and planning_only:
         pronoun = "it" if len(planning_only) == 1 else "them"
-        raise ScenarioError(f"{listed(planning_only)}: only for planning; with --path {path} nothing is "
+        raise ScenarioError(f"{_listed(planning_only)}: only for planning; with --path {path} nothing is "
                             f"planned (the path is executed as given): leave {pronoun} out, or leave out --path to plan")
-    loaded = load_with_overrides(source, overrides)
+    loaded, source, file = _scenario(scenario, overrides, "run_simulate")
     if planning_only:
         loaded = copy.deepcopy(loaded)
         loaded.planner.iterations = iterations or loaded.planner.iterations
         loaded.planner.algorithm = algorithm or loaded.planner.algorithm
         loaded.random_seed = loaded.random_seed if seed is None else seed
-        validate_scenario(loaded, source=f"{source} ({listed(planning_only)})")
+        validate_scenario(loaded, source=f"{source} ({_listed(planning_only)})")
     if mode is not None:  # the scenario's own mode was checked when it was loaded
         problem = plant_time_step_problem(loaded.execution, mode)
         if problem:
             raise ScenarioError(f"{source} (--mode {mode}): {problem[0]}: {problem[1]}")
     parsed = parse_path_csv(path) if path is not None else None  # a malformed file before the checker
-    chk = make_checker(loaded, checker, source=str(source))
+    chk = make_checker(loaded, checker, source=file)
     waypoints = _checked_rows(path, parsed, loaded, chk) if parsed is not None else None
     meshcat = None
     if replay:
@@ -351,9 +378,9 @@ def run_simulate(*, scenario: str | Path, out: str | Path, overrides: Sequence[s
             files.append("replay.html")
         write_executed_csv(outputs.path("executed.csv"), run.times, run.q, run.v)
         fig = tracking_figure(run, max_base_speed=opts.max_base_speed, max_wheel_speed=opts.max_wheel_speed,
-                              title=f"{_title(loaded, source)}\n{run.mode} / {run.execution}: {run.message}")
+                              title=f"{_title(loaded, file)}\n{run.mode} / {run.execution}: {run.message}")
         fig.savefig(outputs.path("tracking.png"), dpi=130)
-        record = {"scenario": str(source), "overrides": list(overrides or []),
+        record = {"scenario": file, "overrides": list(overrides or []),
                   "path": None if path is None else str(path), "checker": checker,
                   **run.to_json_dict(), "waypoints": np.asarray(run.waypoints).tolist()}
         outputs.write_text("sim.json", json_lines(record))
@@ -409,7 +436,7 @@ class StudyRun:
             records were committed), or None.
     """
 
-    result: Any
+    result: StudyResult | None
     files: list[str]
     interrupted: bool = False
     failure: Exception | None = None
@@ -421,7 +448,7 @@ class StudyRun:
         return f"{n} run{'' if n == 1 else 's'}"
 
 
-def paper_experiment(*, runs: int, iterations: int, seed: int, simulate: bool, scenario_dir: str | Path):
+def paper_experiment(*, runs: int, iterations: int, seed: int, simulate: bool, scenario_dir: str | Path) -> Study:
     """The paper's study (:func:`drake_social.experiments.study.paper_study`),
     its two scenario files checked first."""
     from drake_social.experiments.study import paper_study
@@ -448,7 +475,7 @@ def check_scheduler(executor: str, scheduler: str | None) -> None:
             raise ScenarioError(f"--scheduler: {e}") from None
 
 
-def run_study(*, study, out: str | Path, executor: str = "process", workers: int = 1, scheduler: str | None = None,
+def run_study(*, study: Study, out: str | Path, executor: str = "process", workers: int = 1, scheduler: str | None = None,
               progress: Callable[[int, int, dict], None] | None = None) -> StudyRun:
     """Runs a study and writes its outputs into ``out`` as one output set:
     results.csv and results.json (every run's record), the figures, REPORT.md

@@ -160,3 +160,20 @@ def test_check_scheduler_names_what_is_wrong():
     app.check_scheduler("process", None)
     with pytest.raises(ScenarioError, match="--scheduler needs --executor dask"):
         app.check_scheduler("process", "tcp://127.0.0.1:8786")
+
+
+def test_run_plan_takes_a_scenario_object_as_it_takes_the_file(tmp_path, tiny_scenario_path):
+    scenario = load_scenario(tiny_scenario_path)
+    scenario.random_seed = 2
+    dut = app.run_plan(scenario=scenario, out=tmp_path / "object", iterations=100, checker="numpy").record
+    by_file = app.run_plan(scenario=tiny_scenario_path, out=tmp_path / "file", overrides=["random_seed: 2"],
+                           iterations=100, checker="numpy").record
+    assert dut["scenario"] is None and by_file["scenario"] == str(tiny_scenario_path)
+    for field in SHARED_FIELDS:
+        if field != "planning_time":
+            assert dut[field] == by_file[field], field
+    with pytest.raises(ValueError, match="run_plan: overrides apply to a scenario file"):
+        app.run_plan(scenario=scenario, out=tmp_path / "x", overrides=["random_seed: 3"])
+    scenario.planner.iterations = 0
+    with pytest.raises(ScenarioError, match=r"run_plan: scenario.*planner\.iterations"):
+        app.run_plan(scenario=scenario, out=tmp_path / "y", checker="numpy")
