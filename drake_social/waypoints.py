@@ -17,7 +17,7 @@ before anything runs, a path that
 The error (:class:`~drake_social.scenario.ScenarioError`) names the source
 (the file and line of a CSV, the function and argument of the API), the
 waypoint, the field and what is allowed. ``simulate --path``
-(:func:`drake_social.cli.read_path_csv`), :func:`drake_social.sim.run.simulate`
+(:func:`drake_social.app.read_path_csv`), :func:`drake_social.sim.run.simulate`
 and :func:`drake_social.sim.diagram.build_diagram` all use it.
 
 Example::

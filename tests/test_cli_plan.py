@@ -66,7 +66,7 @@ def test_plan_tiny_writes_a_path_from_start_to_goal(tmp_path, capsys):
     assert len(record["cost_history"]) == 300 and record["cost_history"][-1] == pytest.approx(record["cost"])
     # The costs in the file are those of the written waypoints, recomputed independently.
     parts = evaluate_path(scenario, dut, make_objective(scenario, "social_rrt_star"))
-    assert record["social_cost_full"] == pytest.approx(parts["social_cost_full"], rel=1e-12)
+    assert record["F_multi"] == pytest.approx(parts["social_cost_full"], rel=1e-12)
     assert record["cost"] == pytest.approx(parts["objective"], rel=1e-9)
     assert record["base_length"] == pytest.approx(parts["base_length"], rel=1e-12)
 
@@ -239,7 +239,7 @@ def test_bench_runs_on_tiny_and_prints_its_table(tmp_path, capsys):
     scenario = load_scenario(TINY)
     for seed, run in enumerate(runs):  # the bench's runs are the planner's, seed by seed
         expected = plan(scenario, GeometricChecker(scenario), algorithm="social_rrt_star", iterations=40, seed=seed)
-        assert run["seed"] == seed and run["social_cost_full"] == pytest.approx(expected.social_cost_full, rel=1e-12)
+        assert run["seed"] == seed and run["F_multi"] == pytest.approx(expected.social_cost_full, rel=1e-12)
 
 
 def test_cli_offers_exactly_the_library_checkers():

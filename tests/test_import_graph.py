@@ -27,7 +27,7 @@ The rules, each checked over the whole graph:
    5     ``control``, ``viz``
    6     ``sim``, ``io.paths`` (path CSVs, which a run may read)
    7     ``io.outputs``, ``io.records``, ``experiments``, ``app``
-   8     ``cli``
+   8     ``cli``, ``cli_parser``, ``cli_progress``
    ===== ==================================================================
 
    ``drake_social`` itself (the package's ``__init__``) is layer 0, and so is
@@ -86,6 +86,8 @@ LAYERS: dict[str, int] = {
     "drake_social.experiments": 7,
     "drake_social.app": 7,
     "drake_social.cli": 8,
+    "drake_social.cli_parser": 8,
+    "drake_social.cli_progress": 8,
 }
 
 

@@ -56,7 +56,7 @@ from drake_social.cost.agf import agf_xy
 from drake_social.cost.social import SocialCost
 from drake_social.kinematics import ArmGeometry, config_distance
 from drake_social.people import people_model
-from drake_social.planning.algorithms import base_only_weights
+from drake_social.experiments.records import path_costs
 
 __all__ = [
     "HEADING_STEP",
@@ -285,29 +285,17 @@ def path_metrics(scenario, waypoints: np.ndarray, planner_weights: np.ndarray | 
             moves at most ``social.resolution / refine`` metres between samples).
 
     Returns:
-        ``F_multi``, ``F_base``, ``F_planner``, ``path_length``,
-        ``base_length``, ``irregularity`` and :func:`trajectory_metrics`.
+        :func:`path_costs` (``F_multi``, ``F_base``, ``F_planner``,
+        ``path_length``, ``base_length``), ``irregularity`` and
+        :func:`trajectory_metrics`.
     """
     from drake_social.viz.path import sample_path  # the sampling of the cost-profile figure
 
     wp = np.asarray(waypoints, float).reshape(-1, 4)
     n = ArmGeometry.from_scenario(scenario).num_interest_points
-    multi = SocialCost.from_scenario(scenario, np.ones(n))
-    a, b = wp[:-1], wp[1:]
-
-    def integral(cost: SocialCost) -> float:
-        return float(cost.motion_cost(a, b).sum()) if len(a) else 0.0
-
-    planner = SocialCost.from_scenario(scenario, planner_weights)
-    out = {
-        "F_multi": integral(multi),
-        "F_base": integral(multi.with_weights(base_only_weights(n))),
-        "F_planner": integral(planner),
-        "path_length": float(config_distance(a, b).sum()),
-        "base_length": float(np.hypot(*(b - a)[:, :2].T).sum()),
-        "irregularity": base_irregularity(wp[:, :2]),
-    }
-    s, q = sample_path(wp, multi, refine)
+    out = path_costs(scenario, wp, planner_weights)
+    out["irregularity"] = base_irregularity(wp[:, :2])
+    s, q = sample_path(wp, SocialCost.from_scenario(scenario, np.ones(n)), refine)
     out.update(trajectory_metrics(scenario, q, s))
     return out
 

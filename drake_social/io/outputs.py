@@ -73,7 +73,7 @@ from collections.abc import Iterable
 from pathlib import Path
 
 __all__ = ["CommittedSet", "DeferredSignals", "InterruptedAfterCommit", "OutputBusyError", "OutputInTheWayError",
-           "OutputSet", "current_set"]
+           "OutputSet", "check_out_folder", "current_set"]
 
 _log = logging.getLogger(__name__)
 
@@ -497,6 +497,48 @@ class DeferredSignals:
     def reraise(self) -> None:
         for sig in dict.fromkeys(self.received):
             signal.raise_signal(sig)
+
+
+def check_out_folder(out: str | os.PathLike, option: str = "--out") -> None:
+    """Refuses an output folder that is not a folder, nor could become one:
+    it, or the nearest of its parents that exists, must be a directory.
+
+    Args:
+        out: the output folder.
+        option: the command-line option that named it, for the message.
+
+    Raises:
+        NotADirectoryError: ``<out>: --out must be a folder ...`` naming what
+            is in the way (an output that cannot be written).
+    """
+    import stat
+
+    from drake_social.io.textfile import describe_mode, shorten
+
+    out = Path(out)
+    here = out
+    while True:
+        try:
+            mode = os.stat(here).st_mode
+        except (FileNotFoundError, NotADirectoryError):
+            if os.path.islink(here):  # a link to nothing: mkdir cannot make the folder there
+                where = "it is" if here == out else f"{here} is"
+                raise NotADirectoryError(
+                    f"{shorten(str(out), 300)}: {option} must be a folder (its outputs are written inside it); "
+                    f"{where} a symbolic link to {shorten(os.readlink(here), 300)}, which does not exist") from None
+            if here == here.parent:
+                return
+            here = here.parent
+            continue
+        except (OSError, ValueError) as e:
+            raise NotADirectoryError(f"{shorten(str(out), 300)}: {option} cannot be used "
+                                     f"({getattr(e, 'strerror', None) or e})") from None
+        if stat.S_ISDIR(mode):
+            return
+        what = "a file" if stat.S_ISREG(mode) else describe_mode(mode)
+        where = "it is" if here == out else f"{here} is"
+        raise NotADirectoryError(f"{shorten(str(out), 300)}: {option} must be a folder (its outputs are written "
+                                 f"inside it); {where} {what}")
 
 
 #: Holds back SIGINT and SIGTERM over a ``with`` block (main thread only):

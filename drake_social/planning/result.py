@@ -99,8 +99,12 @@ class PlannerResult:
             f"{self.wall_time:.3f} s"
         )
 
-    def to_json_dict(self) -> dict[str, Any]:
-        """JSON-ready summary (the tree is left out; the waypoints are kept)."""
+    def to_record(self) -> dict[str, Any]:
+        """The planner's part of a run record, JSON-ready (the tree is left out).
+
+        Keys and units: ``drake_social.io.records.PLANNER_FIELDS`` (``planning_time`` is
+        :attr:`wall_time`); non-finite numbers become None.
+        """
 
         def num(x):
             return None if x is None or not np.isfinite(x) else float(x)
@@ -109,21 +113,18 @@ class PlannerResult:
             "algorithm": self.algorithm,
             "success": self.success,
             "message": self.message,
-            "cost": num(self.cost),
-            "optimized": self.optimized,
-            "raw_cost": num(self.raw_cost),
-            "near_radius_mode": self.near_radius_mode,
-            "social_cost_full": num(self.social_cost_full),
-            "social_cost_planner": num(self.social_cost_planner),
-            "path_length": num(self.path_length),
-            "base_length": num(self.base_length),
-            "first_solution_iteration": self.first_solution_iteration,
-            "tree_size": self.tree_size,
-            "num_config_checks": self.num_config_checks,
-            "num_motion_checks": self.num_motion_checks,
-            "num_cost_evaluations": self.num_cost_evaluations,
-            "wall_time": self.wall_time,
             "seed": self.seed,
+            "planning_time": float(self.wall_time),
+            "cost": num(self.cost),
+            "raw_cost": num(self.raw_cost),
+            "optimized": self.optimized,
+            "near_radius_mode": self.near_radius_mode,
+            "first_solution_iteration": self.first_solution_iteration,
+            "tree_size": int(self.tree_size),
+            "num_config_checks": int(self.num_config_checks),
+            "num_motion_checks": int(self.num_motion_checks),
+            "num_cost_evaluations": int(self.num_cost_evaluations),
+            "num_waypoints": int(len(self.waypoints)),
             "closest_distance_to_goal": num(self.closest_distance_to_goal),
             "waypoints": np.asarray(self.waypoints).tolist(),
             "cost_history": [num(c) for c in np.asarray(self.cost_history)],

@@ -222,7 +222,7 @@ class SimulationResult:
             r["min_clearance"] = num(r["min_clearance"])
             out.update(r)
         if self.planner is not None:
-            out["planner"] = {k: v for k, v in self.planner.to_json_dict().items() if k != "cost_history"}
+            out["planner"] = {k: v for k, v in self.planner.to_record().items() if k != "cost_history"}
         return out
 
 

@@ -56,13 +56,13 @@ def test_small_bench_reports_its_runs(tiny_scenario_path, tiny_scenario, tmp_pat
         runs, summary = data["runs"], data["summary"]
         assert [r["seed"] for r in runs] == [0, 1] and all(r["success"] for r in runs)
         assert data["vs_ompl"] is None
-        walls = [r["wall_time"] for r in runs]
-        social = [r["social_cost_full"] for r in runs]
-        assert summary["wall_time"]["median"] == pytest.approx(np.median(walls), rel=1e-12)
-        assert summary["social_cost_full"]["median"] == pytest.approx(np.median(social), rel=1e-12)
-        assert summary["social_cost_full"]["iqr"] == pytest.approx(
+        planning_times = [r["planning_time"] for r in runs]
+        social = [r["F_multi"] for r in runs]
+        assert summary["planning_time"]["median"] == pytest.approx(np.median(planning_times), rel=1e-12)
+        assert summary["F_multi"]["median"] == pytest.approx(np.median(social), rel=1e-12)
+        assert summary["F_multi"]["iqr"] == pytest.approx(
             np.percentile(social, 75) - np.percentile(social, 25), rel=1e-12, abs=1e-12)
-        assert summary["social_cost_full"]["min"] == min(social) and summary["social_cost_full"]["max"] == max(social)
+        assert summary["F_multi"]["min"] == min(social) and summary["F_multi"]["max"] == max(social)
         assert summary["median_first_solution_iteration"] == np.median([r["first_solution_iteration"] for r in runs])
         assert summary["success_rate"] == 1.0 and summary["paths_valid"]
         for run in runs:
@@ -71,24 +71,24 @@ def test_small_bench_reports_its_runs(tiny_scenario_path, tiny_scenario, tmp_pat
             np.testing.assert_array_equal(wp[-1], tiny_scenario.goal)
             # Independent recomputation: the social integral edge by edge, the base length by hand.
             by_edge = sum(float(full.motion_cost(wp[i:i + 1], wp[i + 1:i + 2])[0]) for i in range(len(wp) - 1))
-            assert run["social_cost_full"] == pytest.approx(by_edge, rel=1e-9)
+            assert run["F_multi"] == pytest.approx(by_edge, rel=1e-9)
             assert run["base_length"] == pytest.approx(sum(math.dist(a[:2], b[:2]) for a, b in zip(wp, wp[1:])))
             # The planner's own cost is the objective recomputed from the path.
-            assert run["reported_cost"] == pytest.approx(run["objective"], rel=1e-9)
+            assert run["cost"] == pytest.approx(run["objective"], rel=1e-9)
             assert checker.are_valid(wp).all() and checker.are_motions_valid(wp[:-1], wp[1:]).all()
             assert run["path_valid"]
             # One configuration check per sample, but for goal samples once the goal is a node.
             assert run["tree_size"] <= 201 and 150 <= run["num_config_checks"] <= 200
         # The Markdown row carries the same medians.
         row = next(line for line in md.splitlines() if line.startswith(f"| tiny | {algorithm} |"))
-        assert f"{summary['social_cost_full']['median']:.3g}" in row and "| 2 | 100% |" in row
+        assert f"{summary['F_multi']['median']:.3g}" in row and "| 2 | 100% |" in row
 
     # Same seeds, same paths and costs (times may differ).
     again = _small(tiny_scenario_path, tmp_path / "b")
     for algorithm in ALGOS:
         first = dut["scenarios"]["tiny.yaml"]["algorithms"][algorithm]["runs"]
         second = again["scenarios"]["tiny.yaml"]["algorithms"][algorithm]["runs"]
-        assert [r["social_cost_full"] for r in first] == [r["social_cost_full"] for r in second]
+        assert [r["F_multi"] for r in first] == [r["F_multi"] for r in second]
         assert [r["waypoints"] for r in first] == [r["waypoints"] for r in second]
     # Different seeds gave different paths.
     runs = dut["scenarios"]["tiny.yaml"]["algorithms"]["social_rrt_star"]["runs"]
@@ -213,8 +213,9 @@ def test_bench_with_ompl_reports_ratios(tiny_scenario_path, tmp_path, extra):
     for field, key in (("algorithms", "informed_social_rrt_star"), ("ompl", "social_rrt_star"),
                        ("ompl_same_checker", "social_rrt_star")):
         for run, single in zip(entry[field][key]["runs"], once[field][key]["runs"]):
-            assert len(run["wall_times"]) == 3 and len(single["wall_times"]) == 1
-            assert run["wall_time"] == np.median(run["wall_times"]) and single["wall_time"] == single["wall_times"][0]
+            assert len(run["planning_times"]) == 3 and len(single["planning_times"]) == 1
+            assert run["planning_time"] == np.median(run["planning_times"])
+            assert single["planning_time"] == single["planning_times"][0]
             assert run["waypoints"] == single["waypoints"] and run["objective"] == single["objective"]
     assert list(entry["ompl"]) == ["social_rrt_star"]  # the informed variant's objective
     assert entry["ompl"]["social_rrt_star"]["checker"] == "planar"
@@ -226,12 +227,12 @@ def test_bench_with_ompl_reports_ratios(tiny_scenario_path, tmp_path, extra):
     ompl = entry["ompl"]["social_rrt_star"]
     assert ompl["summary"]["runs"] == 2 and ompl["summary"]["paths_valid"]
     for run in ompl["runs"]:
-        assert run["reported_cost"] == pytest.approx(run["objective"], rel=1e-9)
+        assert run["cost"] == pytest.approx(run["objective"], rel=1e-9)
     vs = entry["algorithms"]["informed_social_rrt_star"]["vs_ompl"]
-    assert vs["time"] == pytest.approx(ours["wall_time"]["median"] / ompl["summary"]["wall_time"]["median"])
-    assert vs_same["time"] == pytest.approx(ours["wall_time"]["median"] / same["summary"]["wall_time"]["median"])
+    assert vs["time"] == pytest.approx(ours["planning_time"]["median"] / ompl["summary"]["planning_time"]["median"])
+    assert vs_same["time"] == pytest.approx(ours["planning_time"]["median"] / same["summary"]["planning_time"]["median"])
     assert vs["social_cost"] == pytest.approx(
-        ours["social_cost_full"]["median"] / ompl["summary"]["social_cost_full"]["median"])
+        ours["F_multi"]["median"] / ompl["summary"]["F_multi"]["median"])
     md = (tmp_path / "bench.md").read_text()
     assert "| tiny | ompl_rrt_star[social_rrt_star] (planar) | 2 |" in md and "rewire factor" in md
     assert "| tiny | ompl_rrt_star[social_rrt_star] (numpy) | 2 |" in md
@@ -256,17 +257,17 @@ def test_ratios_where_a_median_is_zero_are_not_defined():
 
     def summary(time, cost):
         stat = lambda m: {"n": 2, "median": m, "q25": m, "q75": m, "iqr": 0.0, "min": m, "max": m}  # noqa: E731
-        return {"runs": 2, "success_rate": 1.0, "wall_time": stat(time), "social_cost_full": stat(cost),
+        return {"runs": 2, "success_rate": 1.0, "planning_time": stat(time), "F_multi": stat(cost),
                 "objective": stat(cost), "median_first_solution_iteration": 3.0}
 
     ours, ompl = summary(0.5, 0.0), summary(2.0, 1.5)
-    assert bench._ratio(ours, ompl, "wall_time") == pytest.approx(0.25)
-    assert bench._ratio(ours, ompl, "social_cost_full") is None  # 0 / 1.5
-    assert bench._ratio(ompl, ours, "social_cost_full") is None  # 1.5 / 0
+    assert bench._ratio(ours, ompl, "planning_time") == pytest.approx(0.25)
+    assert bench._ratio(ours, ompl, "F_multi") is None  # 0 / 1.5
+    assert bench._ratio(ompl, ours, "F_multi") is None  # 1.5 / 0
     assert bench._ratio(summary(0.5, 0.0), summary(2.0, 0.0), "objective") is None  # 0 / 0
     vs = {"ompl": "ompl_rrt_star[social_rrt_star]",
           **{f: bench._ratio(ours, ompl, g)
-             for f, g in (("time", "wall_time"), ("social_cost", "social_cost_full"), ("objective", "objective"))}}
+             for f, g in (("time", "planning_time"), ("social_cost", "F_multi"), ("objective", "objective"))}}
     out = {"settings": {"iterations": 10, "seeds": [0, 1], "checker": "numpy"},
            "machine": {"platform": "p", "cpu_count": 2, "numpy": "n", "drake": "d", "ompl": None},
            "ompl": {"requested": False}, "checker_bench": None,

@@ -52,23 +52,21 @@ def test_raise_if_failed_raises_the_message_only_on_failure():
         a_result(success=False, message="tree too small").raise_if_failed()
 
 
-def test_json_dict_has_every_field_and_none_for_non_finite_numbers():
-    got = a_result().to_json_dict()
+def test_record_has_every_planner_field_and_none_for_non_finite_numbers():
+    got = a_result().to_record()
     assert got == {
-        "algorithm": "social_rrt_star", "success": True, "message": "path found", "cost": 3.25,
-        "optimized": True, "raw_cost": 3.5, "near_radius_mode": "shrinking", "social_cost_full": 1.5,
-        "social_cost_planner": 1.25, "path_length": 2.5, "base_length": 2.0, "first_solution_iteration": 7,
-        "tree_size": 12, "num_config_checks": 20, "num_motion_checks": 30, "num_cost_evaluations": 40,
-        "wall_time": 0.125, "seed": 5, "closest_distance_to_goal": 0.0,
+        "algorithm": "social_rrt_star", "success": True, "message": "path found", "seed": 5, "planning_time": 0.125,
+        "cost": 3.25, "raw_cost": 3.5, "optimized": True, "near_radius_mode": "shrinking",
+        "first_solution_iteration": 7, "tree_size": 12, "num_config_checks": 20, "num_motion_checks": 30,
+        "num_cost_evaluations": 40, "num_waypoints": 2, "closest_distance_to_goal": 0.0,
         "waypoints": [[0.0, 0.0, 0.0, 0.0], [1.0, 2.0, 0.5, -0.5]], "cost_history": [None, 4.0, 3.25],
     }
-    assert all(type(got[k]) is float for k in ("cost", "raw_cost", "social_cost_full", "closest_distance_to_goal"))
-    failed = a_result(success=False, cost=np.inf, raw_cost=np.inf, social_cost_full=float("nan"),
-                      path_length=-np.inf, first_solution_iteration=None, seed=None,
-                      cost_history=np.full(2, np.inf)).to_json_dict()
-    assert [failed[k] for k in ("cost", "raw_cost", "social_cost_full", "path_length", "first_solution_iteration",
-                                "seed", "cost_history")] == [None, None, None, None, None, None, [None, None]]
-    assert failed["base_length"] == 2.0 and failed["success"] is False
+    assert all(type(got[k]) is float for k in ("cost", "raw_cost", "planning_time", "closest_distance_to_goal"))
+    failed = a_result(success=False, cost=np.inf, raw_cost=np.inf, closest_distance_to_goal=float("nan"),
+                      first_solution_iteration=None, seed=None, cost_history=np.full(2, np.inf)).to_record()
+    assert [failed[k] for k in ("cost", "raw_cost", "closest_distance_to_goal", "first_solution_iteration",
+                                "seed", "cost_history")] == [None, None, None, None, None, [None, None]]
+    assert failed["tree_size"] == 12 and failed["success"] is False
 
 
 # ---- variants.py -------------------------------------------------------------

@@ -12,18 +12,18 @@ Every run gets a fresh checker (built outside the timing), so no run profits
 from another's caches. Every path, ours and OMPL's, is measured by the same
 code afterwards: :func:`evaluate_path` gives its objective, social cost with
 the scenario's full weights and lengths, and the checker verifies every
-waypoint and motion (``path_valid``). ``wall_time`` is the planner's search
-only (``RrtStar.solve``, OMPL's ``solve``).
+waypoint and motion (``path_valid``). ``planning_time`` is the planner's search
+only (``RrtStar.solve``, OMPL's ``solve``). Each run is a run record
+(:data:`drake_social.io.records.RUN_FIELDS`), as ``plan`` and the studies write.
 
-Ratios are ours / OMPL of the medians: ``time`` (wall time), ``social_cost``
-(full weights) and ``objective``; not defined (null, "n/a" in the table)
+Ratios are ours / OMPL of the medians: ``time`` (planning time), ``social_cost``
+(``F_multi``) and ``objective``; not defined (null, "n/a" in the table)
 where either median is 0.
 """
 
 from __future__ import annotations
 
 import importlib.metadata
-import json
 import logging
 import os
 import platform
@@ -35,16 +35,17 @@ import numpy as np
 from drake_social.collision.drake_checker import CHECKERS, make_checker
 from drake_social.planning.space import ConfigurationSpace
 from drake_social.collision.validity import ValidityChecker
+from drake_social.experiments.records import run_record
+from drake_social.io.records import write_json
 from drake_social.planning.algorithms import evaluate_path, make_objective, plan
 from drake_social.scenario import ALGORITHMS, EXECUTIONS, SIM_MODES, Scenario, load_scenario, validate_planner_choice
-from drake_social.io.json_numbers import finite_or_none
 
 __all__ = ["CHECKERS", "ompl_available", "run_bench", "summarize"]
 
 _log = logging.getLogger(__name__)
 
 #: Per-run fields summarised with median and spread.
-_STAT_FIELDS = ("wall_time", "social_cost_full", "objective", "base_length", "path_length")
+_STAT_FIELDS = ("planning_time", "F_multi", "objective", "base_length", "path_length")
 #: Per-run fields summarised with their median only.
 _MEDIAN_FIELDS = ("first_solution_iteration", "tree_size", "num_config_checks", "num_motion_checks",
                   "num_cost_evaluations")
@@ -71,34 +72,19 @@ def _objective_key(algorithm: str) -> str:
     return algorithm.removeprefix("informed_")
 
 
-def _record(scenario: Scenario, result, objective, checker: ValidityChecker) -> dict:
-    """One run's numbers, its path re-measured and re-checked by our code."""
-    run = {
-        "seed": result.seed,
-        "success": bool(result.success),
-        "wall_time": float(result.wall_time),
-        "reported_cost": float(result.cost) if result.success else None,
-        "first_solution_iteration": result.first_solution_iteration,
-        "tree_size": int(result.tree_size),
-        "num_config_checks": int(result.num_config_checks),
-        "num_motion_checks": int(result.num_motion_checks),
-        "num_cost_evaluations": int(result.num_cost_evaluations),
-        "num_waypoints": int(len(result.waypoints)),
-        # How the path was made: planner.optimize (then raw_cost is the tree
-        # path's cost before optimisation) and planner.near_radius_mode.
-        "optimized": bool(getattr(result, "optimized", False)),
-        "raw_cost": float(result.raw_cost) if result.success and np.isfinite(result.raw_cost) else None,
-        "near_radius_mode": getattr(result, "near_radius_mode", "fixed"),
-    }
+def _record(scenario: Scenario, result, objective, checker: ValidityChecker, iterations: int) -> dict:
+    """One run's record (:data:`drake_social.io.records.RUN_FIELDS`) of K =
+    ``iterations``, its path re-measured and re-checked by our code:
+    ``objective`` recomputed from the waypoints and ``path_valid``."""
+    run = {"iterations": int(iterations), **run_record(scenario, result, objective)}
+    waypoints = run.pop("waypoints")
     if result.success:
         wp = np.asarray(result.waypoints, float)
-        run.update(evaluate_path(scenario, wp, objective))
+        run["objective"] = evaluate_path(scenario, wp, objective)["objective"]
         run["path_valid"] = bool(np.all(checker.are_valid(wp)) and np.all(checker.are_motions_valid(wp[:-1], wp[1:])))
-        run["waypoints"] = wp.tolist()
     else:
-        run.update({k: None for k in ("social_cost_full", "social_cost_planner", "objective", "path_length",
-                                      "base_length", "path_valid")})
-        run["waypoints"] = []
+        run.update({"objective": None, "path_valid": None})
+    run["waypoints"] = waypoints
     return run
 
 
@@ -115,14 +101,14 @@ def _stats(values: Sequence[float]) -> dict:
 def summarize(runs: Sequence[dict]) -> dict:
     """Summary of one (scenario, planner)'s runs.
 
-    Wall time is over all runs; costs, lengths and the other medians over the
+    Planning time is over all runs; costs, lengths and the other medians over the
     successful ones.
     """
     ok = [r for r in runs if r["success"]]
     out = {"runs": len(runs), "successes": len(ok), "success_rate": len(ok) / len(runs) if runs else None,
            "paths_valid": all(r["path_valid"] for r in ok) if ok else None}
     for f in _STAT_FIELDS:
-        out[f] = _stats([r[f] for r in (runs if f == "wall_time" else ok)])
+        out[f] = _stats([r[f] for r in (runs if f == "planning_time" else ok)])
     for f in _MEDIAN_FIELDS:
         out[f"median_{f}"] = _stats([r[f] for r in ok])["median"]
     return out
@@ -177,7 +163,7 @@ def _plan_ompl_runs(scenario: Scenario, key: str, iterations: int, seeds: int, c
             )
 
         (result, settings), times = _repeated(once, repeats)
-        runs.append({**_record(scenario, result, objective, chk), "wall_times": times})
+        runs.append({**_record(scenario, result, objective, chk, iterations), "planning_times": times})
         tick(f"ompl_rrt_star[{key}] seed {seed}")
     return {"objective_of": key, "checker": checker, "settings": settings.to_json_dict(), "runs": runs,
             "summary": summarize(runs)}
@@ -258,8 +244,8 @@ def run_bench(
         scaling: also :func:`~drake_social.experiments.bench.scaling.run_scaling_bench`
             (K up to 50,000 with the shrinking radius, optimisation against
             K = 50,000, 50 far people) on every scenario with ``checker``.
-        repeats: runs of each seed, ours and OMPL's: a run's wall_time is the
-            median of its repeats' (``wall_times``: all of them). A seeded run
+        repeats: runs of each seed, ours and OMPL's: a run's planning_time is the
+            median of its repeats' (``planning_times``: all of them). A seeded run
             repeats its path exactly, so this only filters the machine's
             noise (other processes, a shared host) out of the times.
         out_dir: where the two files go (created).
@@ -269,11 +255,13 @@ def run_bench(
         ``{"settings", "machine", "ompl", "scenarios", "checker_bench"}``;
         ``scenarios[file name]`` has ``algorithms[name] = {"runs": [...],
         "summary": {...}, "vs_ompl": {...}}`` and ``ompl[objective] =
-        {"settings", "runs", "summary"}``. Per run: seed, success, wall_time
-        (s), objective, social_cost_full, social_cost_planner, path_length,
-        base_length (m), reported_cost (the planner's own), path_valid,
-        first_solution_iteration, tree_size, check and cost counts, waypoints.
-        Summaries give ``{n, median, q25, q75, iqr, min, max}`` of wall time
+        {"settings", "runs", "summary"}``. Per run: a run record
+        (:data:`drake_social.io.records.RUN_FIELDS`: planning_time (s), cost
+        (the planner's own), raw_cost, F_multi, F_base, F_planner,
+        path_length, base_length (m), first_solution_iteration, tree_size,
+        check and cost counts, waypoints) with objective (recomputed),
+        path_valid and planning_times.
+        Summaries give ``{n, median, q25, q75, iqr, min, max}`` of planning time
         (all runs) and of the costs and lengths (successful runs).
     """
     algorithms = list(ALGORITHMS if algorithms is None else algorithms)
@@ -333,7 +321,7 @@ def run_bench(
                 chk = _make_checker(scenario, checker)
                 (result,), times = _repeated(
                     lambda: (plan(scenario, chk, algorithm=algorithm, iterations=iterations, seed=seed),), repeats)
-                runs.append({**_record(scenario, result, objective, chk), "wall_times": times})
+                runs.append({**_record(scenario, result, objective, chk, iterations), "planning_times": times})
                 tick(f"{path.stem} {algorithm} seed {seed}")
             entry["algorithms"][algorithm] = {"runs": runs, "summary": summarize(runs)}
         for field, ompl_chk in ompl_sets:
@@ -346,7 +334,7 @@ def run_bench(
                 data[f"vs_{field}"] = None if base is None else {
                     "ompl": f"ompl_rrt_star[{_objective_key(algorithm)}]", "ompl_checker": base["checker"],
                     **{f: _ratio(data["summary"], base["summary"], g)
-                       for f, g in (("time", "wall_time"), ("social_cost", "social_cost_full"),
+                       for f, g in (("time", "planning_time"), ("social_cost", "F_multi"),
                                     ("objective", "objective"))},
                 }
         scenarios[path.name] = entry
@@ -383,7 +371,7 @@ def run_bench(
     }
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
-    (out_dir / "bench.json").write_text(json.dumps(finite_or_none(out), indent=1, allow_nan=False))
+    write_json(out_dir / "bench.json", out, indent=1)
     (out_dir / "bench.md").write_text(_markdown(out))
     _log.info("bench written to %s", out_dir)
     return out
@@ -429,14 +417,15 @@ def _markdown(out: dict) -> str:
             f"optimize {'on' if e['planner_options']['optimize'] else 'off'}"
             for name, e in out["scenarios"].items() if "planner_options" in e) + ".",
         "",
-        "Wall time (s) over all runs and social cost (the scenario's full weights) over successful runs: "
+        "Planning time (s, the search alone) over all runs and social cost (F_multi: weight 1 on every interest "
+        "point) over successful runs: "
         "median [25th, 75th percentile]"
         + (f"; each run's time is the median of {s.get('repeats', 1)} repeats of it" if s.get("repeats", 1) > 1 else "")
         + ". Ratios: ours / OMPL RRTstar with the same objective, of the medians "
         f"(objective: each planner's own, recomputed from its path); OMPL checks with "
         f"`{s.get('ompl_checker', s['checker'])}`, and where that is not ours also with ours (\"same checks\").",
         "",
-        "| scenario | algorithm | runs | success | wall time s | social cost | first solution it. "
+        "| scenario | algorithm | runs | success | planning time s | social cost | first solution it. "
         "| time ratio vs OMPL | time ratio vs OMPL, same checks | social cost ratio vs OMPL "
         "| objective ratio vs OMPL |",
         "|---|---|---:|---:|---|---|---:|---:|---:|---:|---:|",
@@ -448,8 +437,8 @@ def _markdown(out: dict) -> str:
                  for field in ("ompl", "ompl_same_checker") for k, d in entry.get(field, {}).items()]
         for label, sm, vs, same in rows:
             lines.append(
-                f"| {Path(name).stem} | {label} | {sm['runs']} | {sm['success_rate']:.0%} | {_fmt(sm['wall_time'])} "
-                f"| {_fmt(sm['social_cost_full'])} | {_num(sm['median_first_solution_iteration'], '.0f')} "
+                f"| {Path(name).stem} | {label} | {sm['runs']} | {sm['success_rate']:.0%} | {_fmt(sm['planning_time'])} "
+                f"| {_fmt(sm['F_multi'])} | {_num(sm['median_first_solution_iteration'], '.0f')} "
                 f"| {_num(vs and vs['time'])} | {_num(same and same['time'])} | {_num(vs and vs['social_cost'])} "
                 f"| {_num(vs and vs['objective'])} |"
             )

@@ -69,7 +69,7 @@ def _plan(scenario: Scenario, checker_kind: str, algorithm: str, iterations: int
     s.planner = dc.replace(s.planner, **planner)
     checker = make_checker(s, checker_kind, parallelism=1)
     r = plan(s, checker, algorithm=algorithm, iterations=iterations, seed=seed)
-    return {"iterations": iterations, "seed": seed, "wall_time": float(r.wall_time), "success": bool(r.success),
+    return {"iterations": iterations, "seed": seed, "planning_time": float(r.wall_time), "success": bool(r.success),
             "cost": float(r.cost) if r.success else None, "raw_cost": float(r.raw_cost) if r.success else None,
             "tree_size": int(r.tree_size), "cost_evaluations_per_iteration": r.num_cost_evaluations / iterations,
             "motion_checks": int(r.num_motion_checks), "optimized": bool(getattr(r, "optimized", False))}
@@ -114,7 +114,7 @@ def run_scaling_bench(
         for k in ks:
             runs.append(_plan(scenario, checker, algorithm, k, 0, near_radius_mode="shrinking"))
             tick(f"{path.stem} K = {k} (shrinking radius)")
-        big = [(r["iterations"], r["wall_time"]) for r in runs if r["iterations"] >= 2000]
+        big = [(r["iterations"], r["planning_time"]) for r in runs if r["iterations"] >= 2000]
         entry["scaling"] = {"near_radius_mode": "shrinking", "runs": runs,
                             "exponent": fit_exponent(*zip(*big)) if len(big) >= 2 else None}
         # ---- optimisation at K = 2000 against the reference K
@@ -172,7 +172,7 @@ def markdown(out: dict) -> list[str]:
              "| scenario | " + " | ".join(f"K = {k}" for k in s["ks"]) + " | b |",
              "|---|" + "---:|" * (len(s["ks"]) + 1)]
     for name, e in out["scenarios"].items():
-        cells = [f"{r['wall_time']:.3g} s ({r['cost_evaluations_per_iteration']:.0f} costs/it.)"
+        cells = [f"{r['planning_time']:.3g} s ({r['cost_evaluations_per_iteration']:.0f} costs/it.)"
                  for r in e["scaling"]["runs"]]
         b = e["scaling"]["exponent"]
         lines.append(f"| {Path(name).stem} | " + " | ".join(cells) + f" | {'n/a' if b is None else f'{b:.2f}'} |")

@@ -38,10 +38,12 @@ def _checker(source: str, text: str, overrides: tuple[str, ...], overrides_name:
 def run_task(task: dict) -> dict:
     """Plans one task and measures it; returns a record of plain data.
 
-    The record has the task's keys (without the scenario text), ``success``,
-    ``cost`` (the planner's objective), ``planning_time`` (s),
-    ``first_solution_iteration``, ``tree_size``, every metric of
-    :func:`~drake_social.experiments.metrics.path_metrics` (NaN on failure),
+    The record has the task's keys (without the scenario text), the run
+    record's fields (:data:`drake_social.io.records.RUN_FIELDS`: ``success``,
+    ``cost`` (the planner's objective), ``planning_time`` (s), ``raw_cost``,
+    ``first_solution_iteration``, ``tree_size``, ...; ``F_multi`` and the
+    other path measures None on failure), every metric of
+    :func:`~drake_social.experiments.metrics.path_metrics` (on success),
     ``waypoints``, the anytime curve ``progress`` ([iteration, best cost]
     at :data:`PROGRESS_POINTS` iterations) and ``progress_time`` (seconds
     since the start of solve at those iterations); with ``simulate``, the
@@ -49,6 +51,7 @@ def run_task(task: dict) -> dict:
     """
     # Imported when a task runs, not with the package: defining and checking a study needs neither.
     from drake_social.experiments.metrics import executed_metrics, path_metrics
+    from drake_social.experiments.records import run_record
     from drake_social.planning.algorithms import make_objective, plan
     from drake_social.planning.objective import SocialObjective
 
@@ -72,14 +75,8 @@ def run_task(task: dict) -> dict:
     weights = objective.social.weights if isinstance(objective, SocialObjective) else None
     record = {key: task[key] for key in ("index", "group", "scenario", "overrides", "algorithm", "run", "seed",
                                          "iterations")}
-    record.update({
-        "success": bool(result.success),
-        "cost": float(result.cost) if result.success else None,
-        "planning_time": float(result.wall_time),
-        "first_solution_iteration": result.first_solution_iteration,
-        "tree_size": int(result.tree_size),
-        "num_waypoints": int(len(result.waypoints)),
-    })
+    shared = run_record(scenario, result, objective)  # the run-record schema of plan and bench
+    record.update({k: v for k, v in shared.items() if k not in record and k != "waypoints"})
     if result.success:
         record.update(path_metrics(scenario, result.waypoints, weights))
     if task["simulate"] and result.success:

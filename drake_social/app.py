@@ -1,0 +1,548 @@
+"""The application layer: each command of ``drake-social`` as a function a script can call.
+
+Each ``run_*`` function takes keyword arguments only, does the whole job of
+its command (loads the scenario with its overrides, builds the checker, plans
+or simulates, verifies, writes the command's files as one output set into
+``out``) and returns what a caller needs: the run record
+(:mod:`drake_social.io.records`) and the objects behind it. Nothing here
+prints; progress goes to an optional callback, errors are exceptions:
+
+* :class:`~drake_social.scenario.ScenarioError`,
+  :class:`~drake_social.planning.result.PlanningInputError`: invalid input
+  (the message names the file and the field);
+* ``OSError``: an output could not be written (another run writing the same
+  ``out`` included: :class:`~drake_social.io.outputs.OutputBusyError`);
+* ``KeyboardInterrupt``: interrupted; no file of the run is left.
+
+A path that is not found, one that Drake's check rejects, or an execution
+that misses the goal, collides or passes a limit are outcomes, not errors:
+they are in the returned record (and its files are written).
+
+Example::
+
+    from drake_social.app import run_plan
+
+    run = run_plan(scenario="scenarios/office_bar.yaml", out="out/office_bar", overrides=["random_seed: 3"])
+    print(run.record["cost"], run.record["planning_time"], run.record["drake_verified"])
+"""
+
+from __future__ import annotations
+
+import copy
+import dataclasses as dc
+import shutil
+import signal
+from pathlib import Path
+from typing import TYPE_CHECKING, Any, Callable, Sequence
+
+from drake_social.io.textfile import check_regular_file, shorten
+from drake_social.scenario import Scenario, ScenarioError, compose_yaml, load_scenario
+
+if TYPE_CHECKING:
+    import numpy as np
+
+    from drake_social.experiments.study import Study, StudyResult
+    from drake_social.planning.result import PlannerResult
+    from drake_social.sim.run import SimulationResult
+
+__all__ = ["PLAN_OUTPUTS", "SIMULATE_OUTPUTS", "PlanRun", "Progress", "SimulateRun", "StudyRun", "check_scheduler",
+           "load_with_overrides", "paper_experiment", "read_path_csv", "run_bench", "run_plan", "run_show",
+           "run_simulate", "run_study"]
+
+#: The files ``plan`` writes into ``out`` (a folder of such a name is refused before planning).
+PLAN_OUTPUTS = ("path.csv", "result.json", "path.png", "cost_profile.png", "convergence.png")
+#: The files ``simulate`` may write into ``out`` (replay.html when Meshcat records).
+SIMULATE_OUTPUTS = ("replay.html", "executed.csv", "tracking.png", "sim.json")
+
+#: A progress callback: ``progress(done, total, status)`` (steps done of
+#: ``total``, and a short text such as ``"best 5.1"`` or ``"t = 3.2 s"``).
+Progress = Callable[[int, int, str], None]
+
+
+def load_with_overrides(path: str | Path, sets: Sequence[str] | None = None) -> Scenario:
+    """Loads a scenario with overrides, as ``--set`` gives them.
+
+    Each text is a YAML mapping applied over the file in turn, e.g.
+    ``"random_seed: 3"`` or ``"social: {sigma_h: 1.5}"``; a later one merges
+    into what the earlier ones left (``"social: {sigma_h: 1.5}"`` then
+    ``"social: {threshold: 0.1}"`` sets both).
+
+    Raises:
+        ScenarioError: the file, an override or a value is invalid; the
+            message names the ``--set`` at fault.
+    """
+    import yaml  # to name the --set at fault before Drake's loader sees it
+
+    texts = list(sets or [])
+    for text in texts:
+        node = compose_yaml(text, f"{path} (--set {shorten(repr(text))})")
+        if not isinstance(node, yaml.MappingNode):
+            raise ScenarioError(f"{path} (--set {shorten(repr(text))}): must be a YAML mapping such as "
+                                f"'random_seed: 3'")
+    return load_scenario(path, texts, overrides_name="--set")
+
+
+def read_path_csv(path: str | Path, scenario: Scenario, checker=None, option: str = "--path") -> np.ndarray:
+    """Reads a path CSV (:func:`drake_social.io.paths.parse_path_csv`) for
+    ``scenario`` and checks it as every path to execute is checked
+    (:func:`drake_social.waypoints.check_waypoints`).
+
+    Args:
+        path: the CSV file (header ``x,y,psi1,psi2``).
+        scenario: the scenario the path is for.
+        checker: the validity checker of the run; None = the exact planar checker.
+        option: the command-line option that named the file, for the messages.
+
+    Returns:
+        The waypoints, an (N, 4) float array (metres, radians).
+
+    Raises:
+        ScenarioError: the file is missing or malformed, a waypoint is
+            outside the room or the joint limits or in collision, a segment
+            collides, or its first and last rows are not the scenario's start
+            and goal (to ``waypoints.ENDPOINT_TOLERANCE``); the message names
+            the file and the line.
+    """
+    from drake_social.io.paths import parse_path_csv
+
+    return _checked_rows(path, parse_path_csv(path, option), scenario, checker, option)
+
+
+def _checked_rows(path, parsed, scenario: Scenario, checker=None, option: str = "--path") -> np.ndarray:
+    """The ``(rows, lines)`` of :func:`~drake_social.io.paths.parse_path_csv` checked by
+    :func:`~drake_social.waypoints.check_waypoints` (None = the planar checker)."""
+    from drake_social.waypoints import check_waypoints
+
+    if checker is None:
+        from drake_social.collision.drake_checker import make_checker
+
+        checker = make_checker(scenario, "planar")
+    rows, lines = parsed
+    return check_waypoints(scenario, rows, checker, source=f"{path} ({option})", lines=lines)
+
+
+def _listed(names: Sequence[str]) -> str:
+    """``a``, ``a and b``, ``a, b and c``."""
+    return names[0] if len(names) == 1 else f"{', '.join(names[:-1])} and {names[-1]}"
+
+
+def _scenario(scenario: Scenario | str | Path, overrides: Sequence[str], who: str) -> tuple[Scenario, str, str | None]:
+    """The scenario of a ``run_*`` call, its name in messages and its file (None: given as an object).
+
+    Raises:
+        ValueError: ``overrides`` with a Scenario object (they apply to a file).
+        ScenarioError: the file, an override or a value is invalid.
+    """
+    from drake_social.scenario import validate_scenario
+
+    if isinstance(scenario, Scenario):
+        if overrides:
+            raise ValueError(f"{who}: overrides apply to a scenario file; change the Scenario object instead")
+        validate_scenario(scenario, source=f"{who}: scenario")
+        return scenario, f"{who}: scenario", None
+    return load_with_overrides(scenario, overrides), str(scenario), str(scenario)
+
+
+def _title(scenario: Scenario, file: str | None) -> str:
+    return scenario.description or (Path(file).name if file else "scenario")
+
+
+# ---- show --------------------------------------------------------------------
+
+
+def run_show(*, scenario: Scenario | str | Path, out: str | Path, overrides: Sequence[str] = ()) -> Path:
+    """Draws the scenario (map, people, social-cost heat map, robot at start
+    and goal) as ``out/scene.png``; returns that file.
+
+    Args:
+        scenario: the scenario YAML file, or a :class:`~drake_social.scenario.Scenario`.
+        out: the output folder.
+        overrides: ``--set`` texts applied over the file.
+    """
+    from drake_social.io.outputs import OutputSet
+    from drake_social.viz import write_show  # matplotlib figures: only when drawing
+
+    loaded, _, file = _scenario(scenario, overrides, "run_show")
+    out = Path(out)
+    with OutputSet(out, "show", names=["scene.png"]) as outputs:
+        write_show(loaded, outputs.folder, title=_title(loaded, file))
+    return out / "scene.png"
+
+
+# ---- plan --------------------------------------------------------------------
+
+
+@dc.dataclass
+class PlanRun:
+    """What :func:`run_plan` did.
+
+    Attributes:
+        record: the run record written as ``result.json``
+            (:data:`drake_social.io.records.RUN_FIELDS`).
+        result: the planner's result (waypoints, tree, anytime curve).
+        files: the names of the files written into ``out``, in order.
+        rejected_segment: the first segment of the path that Drake's
+            independent check rejects (a bug of the checker that planned);
+            None when it accepts them all or there is no path.
+    """
+
+    record: dict[str, Any]
+    result: PlannerResult
+    files: list[str]
+    rejected_segment: int | None
+
+
+def _planner_progress(progress: Progress | None, total: int) -> Callable[[int, float], None] | None:
+    """The planners' ``progress(iteration, best_cost)`` as a :data:`Progress`."""
+    if progress is None:
+        return None
+
+    def report(iteration: int, best_cost: float) -> None:
+        progress(iteration, total, f"best {best_cost:.4g}" if best_cost < float("inf") else "no path yet")
+
+    return report
+
+
+def run_plan(*, scenario: Scenario | str | Path, out: str | Path, overrides: Sequence[str] = (), algorithm: str | None = None,
+             iterations: int | None = None, seed: int | None = None, checker: str = "planar",
+             progress: Progress | None = None) -> PlanRun:
+    """Plans the scenario and writes ``out``: path.csv, result.json, path.png,
+    cost_profile.png and convergence.png (:data:`PLAN_OUTPUTS`).
+
+    A path the planner returns is checked again by Drake's
+    SceneGraphCollisionChecker before anything is written (``drake_verified``).
+
+    Args:
+        scenario: the scenario YAML file, or a :class:`~drake_social.scenario.Scenario`
+            (validated here; the record's ``scenario`` is then null).
+        out: the output folder (created; the files appear together or not at all).
+        overrides: ``--set`` texts applied over the file (:func:`load_with_overrides`).
+        algorithm, iterations, seed: override the scenario's ``planner.algorithm``,
+            ``planner.iterations`` and ``random_seed``.
+        checker: the validity checker that plans: planar, drake or numpy.
+        progress: optional :data:`Progress` over the iterations.
+
+    Returns:
+        A :class:`PlanRun`; ``record["success"]`` is False when no path was found.
+
+    Raises:
+        ScenarioError, PlanningInputError: invalid input, named.
+        OSError: an output could not be written.
+    """
+    from drake_social.collision.drake_checker import make_checker, verify_path
+    from drake_social.experiments.records import run_record
+    from drake_social.io.outputs import OutputSet
+    from drake_social.io.paths import write_path_csv
+    from drake_social.io.records import json_lines
+    from drake_social.planning.algorithms import make_objective, plan
+    from drake_social.planning.result import PlanningInputError
+    from drake_social.scenario import validate_planner_choice
+    from drake_social.viz.path import write_plan_figures  # matplotlib figures: only when drawing
+
+    loaded, path, file = _scenario(scenario, overrides, "run_plan")
+    out = Path(out)
+    k = iterations or loaded.planner.iterations
+    chosen = [f"--{name}" for name, value in (("algorithm", algorithm), ("iterations", iterations)) if value is not None]
+    if chosen:  # the scenario was validated with its own planner options
+        validate_planner_choice(loaded, algorithm or loaded.planner.algorithm, k, source=f"{path} ({_listed(chosen)})")
+    chk = make_checker(loaded, checker, source=file)
+    # Entered before planning: an unwritable or busy out fails early, and
+    # nothing of this run lands in out unless all of it does.
+    with OutputSet(out, "plan", names=PLAN_OUTPUTS) as outputs:
+        try:
+            result = plan(loaded, chk, algorithm=algorithm, iterations=k, seed=seed,
+                          progress=_planner_progress(progress, k))
+        except PlanningInputError as e:
+            raise PlanningInputError(f"{path}: {e}") from e
+        bad = verify_path(chk, result.waypoints) if result.success else None  # Drake's second opinion
+        write_path_csv(outputs.path("path.csv"), result.waypoints)
+        record = {
+            "scenario": file,
+            "overrides": list(overrides or []),
+            "checker": checker,
+            "iterations": k,
+            "drake_verified": (bad is None) if result.success else None,
+            **run_record(loaded, result, make_objective(loaded, result.algorithm), history=True),
+        }
+        outputs.write_text("result.json", json_lines(record))
+        figures = write_plan_figures(loaded, result, outputs.folder, title=_title(loaded, file))
+    return PlanRun(record, result, ["path.csv", "result.json"] + [p.name for p in figures.values()], bad)
+
+
+# ---- simulate ------------------------------------------------------------------
+
+
+@dc.dataclass
+class SimulateRun:
+    """What :func:`run_simulate` did.
+
+    Attributes:
+        record: the record written as ``sim.json`` (the execution's summary
+            and report, the planner's record under ``planner`` when it planned).
+        run: the :class:`~drake_social.sim.run.SimulationResult` (logs, report).
+        files: the names of the files written into ``out``, in order.
+        replay_bytes: the size of replay.html, bytes (None: no replay).
+    """
+
+    record: dict[str, Any]
+    run: SimulationResult
+    files: list[str]
+    replay_bytes: int | None
+
+
+def run_simulate(*, scenario: Scenario | str | Path, out: str | Path, overrides: Sequence[str] = (),
+                 path: str | Path | None = None, mode: str | None = None, execution: str | None = None,
+                 algorithm: str | None = None, iterations: int | None = None, seed: int | None = None,
+                 checker: str = "planar", replay: bool = True, progress: Progress | None = None) -> SimulateRun:
+    """Plans the scenario (or reads ``path``), executes the path in Drake's
+    Simulator and writes ``out``: replay.html (with ``replay``),
+    executed.csv, tracking.png and sim.json.
+
+    Args:
+        scenario: the scenario YAML file, or a :class:`~drake_social.scenario.Scenario`.
+        out: the output folder.
+        overrides: ``--set`` texts applied over the file.
+        path: a path CSV to follow instead of planning (checked with
+            ``checker`` before anything runs); then ``algorithm``,
+            ``iterations`` and ``seed`` are refused.
+        mode, execution: override ``execution.mode`` and ``execution.execution``.
+        algorithm, iterations, seed: override the planner's, as in :func:`run_plan`.
+        checker: the validity checker: planar, drake or numpy.
+        replay: record the run in Meshcat and write replay.html.
+        progress: optional :data:`Progress` over simulated time (tenths of a second).
+
+    Returns:
+        A :class:`SimulateRun`: ``run.planner`` failed (no path),
+        ``record["reached"]``, ``record["collision_free"]`` and
+        ``record["within_limits"]`` are the outcomes.
+
+    Raises:
+        ScenarioError, PlanningInputError: invalid input, named.
+        OSError: an output could not be written.
+    """
+    import numpy as np
+
+    from drake_social.collision.drake_checker import make_checker
+    from drake_social.io.outputs import OutputSet
+    from drake_social.io.paths import parse_path_csv, write_executed_csv
+    from drake_social.io.records import json_lines
+    from drake_social.planning.result import PlanningInputError
+    from drake_social.scenario import plant_time_step_problem, validate_scenario
+    from drake_social.sim.run import run_checked
+    from drake_social.viz.tracking import tracking_figure
+
+    out = Path(out)
+    planning_only = [f"--{name}" for name, value in (("algorithm", algorithm), ("iterations", iterations),
+                                                      ("seed", seed)) if value is not None]
+    if path is not None and planning_only:
+        pronoun = "it" if len(planning_only) == 1 else "them"
+        raise ScenarioError(f"{_listed(planning_only)}: only for planning; with --path {path} nothing is "
+                            f"planned (the path is executed as given): leave {pronoun} out, or leave out --path to plan")
+    loaded, source, file = _scenario(scenario, overrides, "run_simulate")
+    if planning_only:
+        loaded = copy.deepcopy(loaded)
+        loaded.planner.iterations = iterations or loaded.planner.iterations
+        loaded.planner.algorithm = algorithm or loaded.planner.algorithm
+        loaded.random_seed = loaded.random_seed if seed is None else seed
+        validate_scenario(loaded, source=f"{source} ({_listed(planning_only)})")
+    if mode is not None:  # the scenario's own mode was checked when it was loaded
+        problem = plant_time_step_problem(loaded.execution, mode)
+        if problem:
+            raise ScenarioError(f"{source} (--mode {mode}): {problem[0]}: {problem[1]}")
+    parsed = parse_path_csv(path) if path is not None else None  # a malformed file before the checker
+    chk = make_checker(loaded, checker, source=file)
+    waypoints = _checked_rows(path, parsed, loaded, chk) if parsed is not None else None
+    meshcat = None
+    if replay:
+        from drake_social.sim.replay import make_meshcat
+
+        meshcat = make_meshcat()
+    opts = loaded.execution
+    steps = int(round(opts.time_limit * 10))
+    report = None if progress is None else (lambda t: progress(int(t * 10), steps, f"t = {t:.1f} s"))
+    with OutputSet(out, "simulate", names=SIMULATE_OUTPUTS) as outputs:
+        try:
+            # The scenario is validated (loaded) and the path checked with the checker above: once.
+            run = run_checked(loaded, mode=mode or opts.mode, execution=execution or opts.execution,
+                              waypoints=waypoints, checker=chk, meshcat=meshcat, time_limit=float(opts.time_limit),
+                              analyze=True, analysis_checker=None, progress=report)
+        except PlanningInputError as e:
+            raise PlanningInputError(f"{source}: {e}") from e
+        files, size = [], None
+        if meshcat is not None:
+            from drake_social.sim.replay import draw_overlays, set_top_view, write_replay_html
+
+            draw_overlays(meshcat, loaded, run.waypoints if len(run.waypoints) else None)
+            fit = set_top_view(meshcat, loaded)
+            size = write_replay_html(meshcat, outputs.path("replay.html"), fit=fit)
+            files.append("replay.html")
+        write_executed_csv(outputs.path("executed.csv"), run.times, run.q, run.v)
+        fig = tracking_figure(run, max_base_speed=opts.max_base_speed, max_wheel_speed=opts.max_wheel_speed,
+                              title=f"{_title(loaded, file)}\n{run.mode} / {run.execution}: {run.message}")
+        fig.savefig(outputs.path("tracking.png"), dpi=130)
+        record = {"scenario": file, "overrides": list(overrides or []),
+                  "path": None if path is None else str(path), "checker": checker,
+                  **run.to_json_dict(), "waypoints": np.asarray(run.waypoints).tolist()}
+        outputs.write_text("sim.json", json_lines(record))
+        files += ["executed.csv", "tracking.png", "sim.json"]
+    return SimulateRun(record, run, files, size)
+
+
+# ---- bench -------------------------------------------------------------------
+
+
+def run_bench(*, scenario_paths: Sequence[str | Path], out: str | Path, progress: Progress | None = None,
+              **options: Any) -> dict:
+    """Benchmarks the planners (:func:`drake_social.experiments.bench.planners.run_bench`)
+    and writes ``out/bench.json`` and ``out/bench.md`` as one output set.
+
+    Args:
+        scenario_paths: scenario YAML files (each checked to be a regular file first).
+        out: the output folder.
+        progress: optional :data:`Progress` over the runs.
+        **options: the other keyword arguments of the bench's ``run_bench``
+            (algorithms, iterations, seeds, checker, ompl_checker, include_ompl,
+            include_checker, sim_runs, scaling, repeats).
+
+    Returns:
+        The bench's dictionary (as ``bench.json`` holds it); its runs are run
+        records (:data:`drake_social.io.records.RUN_FIELDS`).
+    """
+    for path in scenario_paths:
+        check_regular_file(path, "scenario", "--scenarios")
+    from drake_social.experiments.bench.planners import run_bench as bench
+    from drake_social.io.outputs import OutputSet
+
+    # Held over the run: a second bench into the same folder is refused at once.
+    with OutputSet(out, "bench", names=["bench.json", "bench.md"]) as outputs:
+        result = bench(scenario_paths=list(scenario_paths), **options, out_dir=outputs.folder,
+                                 progress=progress)
+    return result
+
+
+# ---- experiment ----------------------------------------------------------------
+
+
+@dc.dataclass
+class StudyRun:
+    """What :func:`run_study` did.
+
+    Attributes:
+        result: the :class:`~drake_social.experiments.study.StudyResult` (every run's record).
+        files: the names of the files written into ``out``.
+        interrupted: Ctrl-C came while the outputs after the runs were
+            written: only the records were committed.
+        failure: the error of an output after the records (then only the
+            records were committed), or None.
+    """
+
+    result: StudyResult | None
+    files: list[str]
+    interrupted: bool = False
+    failure: Exception | None = None
+
+    @property
+    def runs(self) -> str:
+        """"1 run", "12 runs": the number of the study's records."""
+        n = len(self.result.records)
+        return f"{n} run{'' if n == 1 else 's'}"
+
+
+def paper_experiment(*, runs: int, iterations: int, seed: int, simulate: bool, scenario_dir: str | Path) -> Study:
+    """The paper's study (:func:`drake_social.experiments.study.paper_study`),
+    its two scenario files checked first."""
+    from drake_social.experiments.study import paper_study
+
+    for name in ("office_bar.yaml", "generic_L.yaml"):
+        check_regular_file(Path(scenario_dir) / name, "scenario", "--scenario-dir")
+    return paper_study(runs=runs, iterations=iterations, seed=seed, simulate=simulate, scenario_dir=scenario_dir)
+
+
+def check_scheduler(executor: str, scheduler: str | None) -> None:
+    """Refuses a Dask scheduler address without the dask executor, or a malformed one.
+
+    Raises:
+        ScenarioError: ``--scheduler: ...`` naming what is wrong.
+    """
+    if scheduler is not None and executor != "dask":
+        raise ScenarioError("--scheduler needs --executor dask")
+    if scheduler is not None:
+        from drake_social.experiments.study.executors import check_scheduler_address
+
+        try:
+            check_scheduler_address(scheduler)
+        except ValueError as e:
+            raise ScenarioError(f"--scheduler: {e}") from None
+
+
+def run_study(*, study: Study, out: str | Path, executor: str = "process", workers: int = 1, scheduler: str | None = None,
+              progress: Callable[[int, int, dict], None] | None = None) -> StudyRun:
+    """Runs a study and writes its outputs into ``out`` as one output set:
+    results.csv and results.json (every run's record), the figures, REPORT.md
+    and the Planner Arena files.
+
+    When an output after the records fails (or Ctrl-C comes while they are
+    written), the records alone are committed and the returned
+    :class:`StudyRun` says so (``failure``, ``interrupted``).
+
+    Args:
+        study: a :class:`~drake_social.experiments.study.Study`
+            (:func:`paper_experiment`, ``load_sweep(file)``).
+        out: the output folder.
+        executor, workers, scheduler: where the runs go
+            (:func:`~drake_social.experiments.study.executors.map_tasks`).
+        progress: optional ``progress(done, total, record)`` after each run.
+
+    Raises:
+        ScenarioError: ``scheduler`` without the dask executor, or a malformed address.
+        StudyOutputError: not even the records could be committed into
+            ``out`` (the message says where they were saved instead).
+    """
+    from drake_social.experiments.study import (StudyOutputError, output_names, rescue_records, write_records,
+                                                write_study)
+    from drake_social.experiments.study import run_study as run_tasks
+    from drake_social.io.outputs import DeferredSignals, OutputSet
+
+    check_scheduler(executor, scheduler)
+    out = Path(out)
+    done = StudyRun(None, [])
+    try:
+        # Entered first: a busy out, or a folder in the way of any of its files, is refused before any run.
+        with OutputSet(out, "experiment", names=output_names(study)) as outputs:
+            done.result = run_tasks(study, executor=executor, workers=workers, scheduler=scheduler,
+                                    progress=progress)
+            try:
+                done.files = write_study(done.result, outputs.folder)
+                outputs.check_names(done.files)  # a folder in the way of a figure or log: the records alone
+            except (Exception, KeyboardInterrupt) as e:  # the finished runs are kept: the set becomes the records
+                done.interrupted = isinstance(e, KeyboardInterrupt)
+                done.failure = StudyOutputError("interrupted (Ctrl-C)" if done.interrupted
+                                                else str(e).replace(str(outputs.folder), str(out)))
+                # A (further) Ctrl-C here must not lose the finished runs: noted, and the records committed.
+                with DeferredSignals() as held:
+                    for entry in outputs.folder.iterdir():
+                        if entry.is_dir() and not entry.is_symlink():
+                            shutil.rmtree(entry)
+                        else:
+                            entry.unlink()
+                    done.files = write_records(done.result, outputs.folder)
+                done.interrupted = done.interrupted or signal.SIGINT in held.received
+                for sig in dict.fromkeys(held.received):  # another signal (SIGTERM) as it would have acted
+                    if sig != signal.SIGINT:
+                        signal.raise_signal(sig)
+    except Exception as e:
+        if done.result is None:
+            raise
+        # Not even the records could be committed into out: they go elsewhere.
+        why = str(e) if done.failure is None else f"{done.failure}; then committing the records alone failed: {e}"
+        cause = f"writing the study's outputs into {out} failed: {why}"
+        try:
+            rescued = rescue_records(done.result)
+        except Exception as second:
+            raise StudyOutputError(f"{cause}; saving the records of its {done.runs} into the temporary "
+                                   f"directory failed too: {second}") from e
+        raise StudyOutputError(f"{cause}; the records of its {done.runs} were saved to "
+                               f"{rescued / 'results.json'} and {rescued / 'results.csv'} instead") from e
+    if done.interrupted:
+        done.failure = None
+    return done

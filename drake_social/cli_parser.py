@@ -1,0 +1,244 @@
+"""The arguments of ``drake-social``: one ``_add_<name>(subparsers)`` per
+subcommand declares its options, their types, bounds and help texts;
+:func:`build_parser` assembles them. What each subcommand does with them is
+:mod:`drake_social.cli` (and the library's :mod:`drake_social.app`).
+"""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+from typing import Callable
+
+from drake_social import __version__
+from drake_social.io.textfile import shorten
+from drake_social.scenario import ALGORITHMS, CHECKERS
+
+__all__ = ["MAX_BENCH_REPEATS", "MAX_BENCH_SEEDS", "MAX_WORKERS", "build_parser"]
+
+#: Most seeds of ``bench --seeds``: as many as a study's runs per planner
+#: (``experiments.study.MAX_RUNS``); each seed plans every algorithm on every scenario.
+MAX_BENCH_SEEDS = 10_000
+#: Most timings of one run in ``bench --repeats``: the median of 100 already
+#: filters the machine's noise, and each repeat replans the whole path.
+MAX_BENCH_REPEATS = 100
+#: Most worker processes of ``experiment --workers``: each holds Drake and a
+#: scenario's checker (a few hundred MB), so 64 already needs tens of GB; a
+#: cluster is the place for more (``--executor dask --scheduler``).
+MAX_WORKERS = 64
+
+
+def _add_scenario_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("scenario", type=Path, help="scenario YAML file, e.g. scenarios/office_bar.yaml")
+    parser.add_argument(
+        "--set",
+        action="append",
+        metavar="YAML",
+        help="override scenario fields with a YAML mapping, e.g. \"social: {sigma_h: 1.5}\" "
+        "(repeatable: applied in turn, each merging into the result of the earlier ones)",
+    )
+
+
+def _add_show(subparsers) -> None:
+    p = subparsers.add_parser(
+        "show",
+        help="draw the scenario: map, people, social-cost heat map, robot at start and goal",
+        description="Writes DIR/scene.png: the map, obstacles, people with facing arrows, the social-cost "
+        "heat map with its colour bar, and the robot with arm and object at start and goal.",
+    )
+    _add_scenario_arguments(p)
+    p.add_argument("--out", type=Path, metavar="DIR", help="output directory (default: out/<scenario name>)")
+
+
+def _int_at_least(minimum: int, maximum: int | None = None) -> Callable[[str], int]:
+    allowed = f"an integer >= {minimum}" if maximum is None else f"an integer in [{minimum}, {maximum:,}]"
+
+    def parse(text: str) -> int:
+        try:
+            value = int(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"must be {allowed}, got {shorten(repr(text))}") from None
+        if value < minimum or (maximum is not None and value > maximum):
+            raise argparse.ArgumentTypeError(f"must be {allowed}, got {shorten(text)}")
+        return value
+
+    return parse
+
+
+_positive_int = _int_at_least(1)
+_nonnegative_int = _int_at_least(0)
+
+
+def _add_checker_argument(parser: argparse.ArgumentParser, default: str = "drake") -> None:
+    parser.add_argument("--checker", choices=CHECKERS, default=default,
+                        help=f"validity checker (default: {default}): planar (exact planar distances of the "
+                        "SceneGraph's shapes, compiled; sound motion checks), drake (Drake's SceneGraph alone; "
+                        "its motion checks are approximate: they trust Drake's clearance, which overestimates "
+                        "some cylinder-box distances) or numpy (the pure-numpy reference, sound motion checks)")
+
+
+def _add_planner_arguments(parser: argparse.ArgumentParser) -> None:
+    """--algorithm, --iterations, --seed and --checker, as plan and simulate take them."""
+    parser.add_argument("--algorithm", choices=ALGORITHMS, help="planner (default: the scenario's planner.algorithm)")
+    parser.add_argument("--iterations", type=_positive_int, metavar="K",
+                        help="samples drawn (default: the scenario's planner.iterations)")
+    parser.add_argument("--seed", type=_nonnegative_int, metavar="S",
+                        help="random seed >= 0 (default: the scenario's random_seed)")
+    _add_checker_argument(parser, default="planar")
+
+
+def _add_output_arguments(parser: argparse.ArgumentParser) -> None:
+    """--out and --progress."""
+    parser.add_argument("--out", type=Path, metavar="DIR", help="output directory (default: out/<scenario name>)")
+    parser.add_argument("--progress", action="store_true",
+                        help="draw the progress bar on stderr even when it is not a terminal")
+
+
+def _add_plan(subparsers) -> None:
+    p = subparsers.add_parser(
+        "plan",
+        help="plan a path from start to goal; write path.csv, result.json and figures",
+        description="Plans the scenario with one of the RRT* family, prints a one-line summary and writes "
+        "DIR/path.csv (waypoints x,y,psi1,psi2), DIR/result.json (costs, counters, the anytime curve), "
+        "DIR/path.png (the path over the social heat map with the robot along it), DIR/cost_profile.png "
+        "(social cost versus cumulative configuration distance) and DIR/convergence.png (best cost per "
+        "iteration). Exit code 3 when no path was found, 4 when Drake's independent check rejects the "
+        "returned path (the files are written in both cases).",
+    )
+    _add_scenario_arguments(p)
+    _add_planner_arguments(p)
+    _add_output_arguments(p)
+
+
+def _add_simulate(subparsers) -> None:
+    from drake_social.scenario import EXECUTIONS, SIM_MODES
+
+    p = subparsers.add_parser(
+        "simulate",
+        help="plan (or load a path), execute it in a Drake diagram, write a Meshcat replay",
+        description="Plans the scenario (or loads --path), executes the path with the waypoint sequencer, the "
+        "holonomic P-controller on four mecanum wheels and Ruckig trajectories in Drake's Simulator, checks "
+        "the executed trajectory for collisions, integrates its social cost and measures its deviation from "
+        "the plan. Writes DIR/replay.html (a standalone Meshcat replay: open it in a browser, no server), "
+        "DIR/executed.csv (t,x,y,psi1,psi2 and velocities), DIR/tracking.png (references against actual "
+        "over time) and DIR/sim.json. Exit code 3 no path, 5 goal not reached "
+        "within execution.time_limit, 6 the executed trajectory collides, 7 it "
+        "passes a joint limit or a room bound (files are written in every case; stderr names each finding).",
+    )
+    _add_scenario_arguments(p)
+    p.add_argument("--mode", choices=SIM_MODES,
+                   help="kinematic (the base integrates its velocity, fast) or dynamic (the MultibodyPlant "
+                        "driven by a computed-torque servo); default: the scenario's execution.mode")
+    p.add_argument("--execution", choices=EXECUTIONS,
+                   help="synchronized (one phase-synchronized reference per segment, stays on the planned "
+                        "segment) or paper (independent base P-control and arm trajectory, the paper's); "
+                        "default: the scenario's execution.execution")
+    p.add_argument("--path", type=Path, metavar="CSV",
+                   help="follow this path (a path.csv of 'drake-social plan': header x,y,psi1,psi2, from the "
+                        "scenario's start to its goal, at most 10,000 rows; every waypoint and segment is checked "
+                        "with --checker before anything runs) instead of planning; --algorithm, --iterations and "
+                        "--seed are then refused")
+    _add_planner_arguments(p)
+    p.add_argument("--no-replay", action="store_true", help="do not record nor write replay.html (faster)")
+    _add_output_arguments(p)
+
+
+#: Scenarios of ``drake-social bench`` (relative to the working directory: the repository).
+BENCH_SCENARIOS = ("scenarios/office_bar.yaml", "scenarios/generic_L.yaml")
+
+
+def _add_bench(subparsers) -> None:
+    p = subparsers.add_parser(
+        "bench",
+        help="benchmark the planners over seeds: wall time and social cost (JSON and Markdown)",
+        description="Runs every algorithm on every scenario for N seeds and reports the median and spread "
+        "of wall time and final social cost; with the ompl package importable, also OMPL's RRTstar on "
+        "the same problem (same checks, same cost). Writes JSON and a Markdown table into DIR.",
+    )
+    p.add_argument("--scenarios", nargs="+", type=Path, metavar="YAML", default=[Path(s) for s in BENCH_SCENARIOS],
+                   help=f"scenario files (default: {' '.join(BENCH_SCENARIOS)})")
+    p.add_argument("--algorithms", nargs="+", choices=ALGORITHMS, default=list(ALGORITHMS), metavar="A",
+                   help=f"planners (default: all of {', '.join(ALGORITHMS)})")
+    p.add_argument("--iterations", type=_positive_int, default=2000, metavar="K", help="samples per run (default 2000)")
+    p.add_argument("--seeds", type=_int_at_least(1, MAX_BENCH_SEEDS), default=10, metavar="N",
+                   help=f"seeds 0..N-1 per planner, at most {MAX_BENCH_SEEDS:,} (default 10)")
+    p.add_argument("--repeats", type=_int_at_least(1, MAX_BENCH_REPEATS), default=1, metavar="R",
+                   help=f"time each seeded run R times (at most {MAX_BENCH_REPEATS}), ours and OMPL's, and report the "
+                        "median (the same path each time: this only filters out the machine's noise; default 1)")
+    _add_checker_argument(p, default="planar")
+    p.add_argument("--ompl-checker", choices=CHECKERS, default="drake",
+                   help="the checker of OMPL's RRTstar (default: drake, Drake's SceneGraph checks as before "
+                        "the planar checker); when it is not --checker, OMPL also runs with --checker")
+    p.add_argument("--no-ompl", action="store_true", help="leave out OMPL's RRTstar even when ompl is importable")
+    p.add_argument("--no-checker-bench", action="store_true",
+                   help="leave out the validity-checker throughput measurement")
+    p.add_argument("--sim-runs", type=_nonnegative_int, default=3, metavar="N",
+                   help="timed simulations per (mode, execution) of the execution benchmark, plus one recorded "
+                        "(default 3; 0 leaves it out)")
+    p.add_argument("--scaling", action="store_true",
+                   help="also the scaling benchmark per scenario (minutes): social_rrt_star at K = 2000 .. 50,000 "
+                        "with the shrinking radius and the fitted exponent of time ~ K^b, K = 2000 with "
+                        "planner.optimize against the median of three K = 50,000 runs, and 50 people far away")
+    p.add_argument("--out", type=Path, default=Path("out/bench"), metavar="DIR",
+                   help="output directory (default: out/bench)")
+    p.add_argument("--progress", action="store_true",
+                   help="draw the progress bar on stderr even when it is not a terminal")
+
+
+def _add_experiment(subparsers) -> None:
+    from drake_social.experiments.study.executors import EXECUTORS
+    from drake_social.experiments.study import MAX_PAPER_RUNS, MAX_STUDY_TASKS, PAPER_PAIRS
+    from drake_social.scenario import MAX_ITERATIONS
+
+    p = subparsers.add_parser(
+        "experiment",
+        help="the paper's studies (or your own sweep) with per-body-part metrics, figures and REPORT.md",
+        description="Runs a study (scenarios x algorithms x seeds x overrides) in parallel and writes, as one "
+        "output set, DIR/results.csv and DIR/results.json (every run), boxplots, cost-vs-distance and best-path "
+        "figures, DIR/REPORT.md (tables and each claim checked by a paired comparison over seeds) and the "
+        "Planner Arena files (DIR/arena_<group>.log, DIR/arena.db).",
+    )
+    kinds = p.add_subparsers(dest="study", metavar="STUDY", required=True)
+    paper = kinds.add_parser("paper", help="the paper's Section V: A office_bar, B generic_L, D weight study",
+                             description="A: office_bar (bar) and B: generic_L (L object) with RRT*, Social "
+                             "Risk-RRT* multi-point and base-only, Informed multi-point and base-only; D: generic_L "
+                             "with the 1.5 m bar, Social Risk-RRT* with object, base and equal weights.")
+    paper.add_argument("--runs", type=_int_at_least(1, MAX_PAPER_RUNS), default=10, metavar="N",
+                       help=f"runs per algorithm, at most {MAX_PAPER_RUNS:,} (the study's {PAPER_PAIRS} group x "
+                       f"algorithm pairs x N runs stay within {MAX_STUDY_TASKS:,}; default 10)")
+    paper.add_argument("--iterations", type=_int_at_least(1, MAX_ITERATIONS), default=2000, metavar="K",
+                       help=f"K, at most {MAX_ITERATIONS:,} (default 2000)")
+    paper.add_argument("--seed", type=_nonnegative_int, default=0, metavar="S",
+                       help="study seed; run seeds are drawn from it with SeedSequence (default 0)")
+    paper.add_argument("--scenario-dir", type=Path, default=Path("scenarios"), metavar="DIR",
+                       help="folder of office_bar.yaml and generic_L.yaml (default: scenarios)")
+    paper.add_argument("--simulate", action="store_true",
+                       help="also execute every path (kinematic simulation) and measure the executed trajectory")
+    sweep = kinds.add_parser("sweep", help="your own study from a YAML file (see studies/example_sweep.yaml)")
+    sweep.add_argument("config", type=Path, help="the sweep's YAML file")
+    for q in (paper, sweep):
+        q.add_argument("--out", type=Path, metavar="DIR", help="output directory (default: out/<study name>)")
+        q.add_argument("--workers", type=_int_at_least(1, MAX_WORKERS), default=1, metavar="N",
+                       help=f"parallel worker processes, at most {MAX_WORKERS} (each holds Drake: a few hundred MB; "
+                       "default 1: in this process); results do not depend on it")
+        q.add_argument("--executor", choices=EXECUTORS, default="process",
+                       help="process (concurrent.futures, default) or dask (the distributed package)")
+        q.add_argument("--scheduler", metavar="ADDRESS",
+                       help="with --executor dask: a running scheduler, e.g. tcp://10.0.0.5:8786 "
+                       "(default: a LocalCluster of --workers processes)")
+        q.add_argument("--progress", action="store_true",
+                       help="draw the progress bar on stderr even when it is not a terminal")
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The argument parser with every subcommand; ``args.command`` names the one chosen."""
+    parser = argparse.ArgumentParser(
+        prog="drake-social",
+        description="Socially-aware object transport by a planar mobile manipulator, built on Drake.",
+    )
+    parser.add_argument("--version", action="version", version=f"%(prog)s {__version__}")
+    parser.add_argument("-v", "--verbose", action="store_true", help="log progress (INFO level)")
+    subparsers = parser.add_subparsers(dest="command", metavar="COMMAND")
+    for add in (_add_show, _add_plan, _add_simulate, _add_bench, _add_experiment):
+        add(subparsers)
+    return parser
