@@ -106,7 +106,6 @@ class PlanarChecker(CheckerBase):
         context = diagram.CreateDefaultContext()
         plant_context = plant.GetMyContextFromRoot(context)
         plant.SetPositions(plant_context, self.model.robot, np.zeros(4))
-        world = plant.world_body().index()
 
         self.body_names = [name for name, _, _ in _CHAIN]
         index = {name: i for i, name in enumerate(self.body_names)}
