@@ -448,7 +448,7 @@ def test_optimise_stops_when_a_round_improves_too_little():
 
 def test_default_options():
     o = OptimizeOptions()
-    assert (o.rounds, o.descent_steps, o.max_segment, o.step, o.epsilon, o.tolerance) == (4, 4, 0.5, 0.3, 1e-3, 1e-4)
+    assert (o.rounds, o.descent_steps, o.max_segment, o.step, o.epsilon, o.tolerance) == (4, 8, 0.5, 0.3, 1e-3, 1e-4)
 
 
 def test_optimise_takes_integer_waypoints_as_floats():
