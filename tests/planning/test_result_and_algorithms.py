@@ -32,6 +32,7 @@ def a_result(**changes) -> PlannerResult:
         first_solution_iteration=7, cost_history=np.array([np.inf, 4.0, 3.25]), tree_size=12,
         num_config_checks=20, num_motion_checks=30, num_cost_evaluations=40, wall_time=0.125, seed=5,
         closest_distance_to_goal=0.0, optimized=True, raw_cost=3.5, near_radius_mode="shrinking",
+        optimize_time=0.25,
     )
     fields.update(changes)
     return PlannerResult(**fields)
@@ -39,7 +40,10 @@ def a_result(**changes) -> PlannerResult:
 
 def test_summary_of_a_success_and_of_a_failure():
     assert a_result(cost=3.14159, social_cost_full=0.123456, base_length=2.0 / 3).summary() == (
-        "social_rrt_star: 2 waypoints, cost 3.142, social (full weights) 0.1235, base path 0.67 m, "
+        "social_rrt_star: 2 waypoints, cost 3.142 (raw 3.5), social (full weights) 0.1235, base path 0.67 m, "
+        "first solution at iteration 7, tree 12 nodes, 0.125 s + 0.250 s optimising")
+    assert a_result(optimized=False, raw_cost=3.25).summary() == (
+        "social_rrt_star: 2 waypoints, cost 3.25, social (full weights) 1.5, base path 2.00 m, "
         "first solution at iteration 7, tree 12 nodes, 0.125 s")
     failed = a_result(success=False, message="tree too small", waypoints=np.zeros((0, 4)), cost=np.inf)
     assert failed.summary() == "social_rrt_star: no path (tree too small)"
@@ -59,7 +63,7 @@ def test_json_dict_has_every_field_and_none_for_non_finite_numbers():
         "optimized": True, "raw_cost": 3.5, "near_radius_mode": "shrinking", "social_cost_full": 1.5,
         "social_cost_planner": 1.25, "path_length": 2.5, "base_length": 2.0, "first_solution_iteration": 7,
         "tree_size": 12, "num_config_checks": 20, "num_motion_checks": 30, "num_cost_evaluations": 40,
-        "wall_time": 0.125, "seed": 5, "closest_distance_to_goal": 0.0,
+        "wall_time": 0.125, "optimize_time": 0.25, "seed": 5, "closest_distance_to_goal": 0.0,
         "waypoints": [[0.0, 0.0, 0.0, 0.0], [1.0, 2.0, 0.5, -0.5]], "cost_history": [None, 4.0, 3.25],
     }
     assert all(type(got[k]) is float for k in ("cost", "raw_cost", "social_cost_full", "closest_distance_to_goal"))
