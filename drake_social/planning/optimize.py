@@ -77,16 +77,20 @@ def _motion_costs(objective: Objective, wp: np.ndarray) -> np.ndarray:
     return objective.motion_cost(wp[:-1], wp[1:]) if len(wp) > 1 else np.zeros(0)
 
 
+#: Shortcut candidates checked per batched call of ``are_motions_valid``.
+_CHECK_CHUNK = 8
+
+
 def _shortcut(wp: np.ndarray, objective: Objective, checker: ValidityChecker,
               seg: np.ndarray | None = None) -> np.ndarray:
     """Greedy shortcut: from each kept waypoint u, the farthest later waypoint
     v whose direct motion is valid and costs less than the path from u to v
     replaces the waypoints between them; the walk goes on from v. Only
     waypoints after u are compared, and those are still the input's, so the
-    costs of the input's motions (``seg``) serve every step. The motions from
-    u are checked first, in one batched call, and only the valid ones are
-    costed: a motion check of the planar checker costs a fraction of a social
-    motion cost, and most long shortcuts in a room are blocked."""
+    costs of the input's motions (``seg``) serve every step. The costs of the
+    motions from u go in one batched call; the cheaper ones are checked
+    farthest first, :data:`_CHECK_CHUNK` per batched call, so that a slow
+    checker (Drake's) checks few motions past the first valid one."""
     n = len(wp)
     if n < 3:
         return wp
@@ -94,13 +98,15 @@ def _shortcut(wp: np.ndarray, objective: Objective, checker: ValidityChecker,
     keep, u = [0], 0
     while u < n - 2:
         later = np.arange(n - 1, u + 1, -1)  # farthest first
-        later = later[checker.are_motions_valid(np.repeat(wp[u : u + 1], len(later), axis=0), wp[later])]
+        direct = objective.motion_cost(np.repeat(wp[u : u + 1], len(later), axis=0), wp[later])
+        cheaper = later[direct < np.cumsum(seg[u:])[later - u - 1]]
         nxt = u + 1
-        if len(later):
-            direct = objective.motion_cost(np.repeat(wp[u : u + 1], len(later), axis=0), wp[later])
-            along = np.cumsum(seg[u:])[later - u - 1]
-            cheaper = later[direct < along]
-            nxt = int(cheaper[0]) if len(cheaper) else nxt
+        for at in range(0, len(cheaper), _CHECK_CHUNK):
+            chunk = cheaper[at : at + _CHECK_CHUNK]
+            ok = checker.are_motions_valid(np.repeat(wp[u : u + 1], len(chunk), axis=0), wp[chunk])
+            if ok.any():
+                nxt = int(chunk[np.argmax(ok)])
+                break
         keep.append(nxt)
         u = nxt
     keep.extend(range(u + 1, n))
