@@ -163,7 +163,7 @@ def corridor_scenario() -> Scenario:
         start=[1.5, 2.0, 0.0, PI / 2],
         goal=[12.0, 2.0, 0.0, PI / 2],
     )
-    scenario.planner = dc.replace(scenario.planner, iterations=700)
+    scenario.planner = dc.replace(scenario.planner, iterations=700, near_radius_mode="fixed", optimize=False)
     validate_scenario(scenario)
     return scenario
 
@@ -250,7 +250,8 @@ def empty_room(length_weight: float) -> Scenario:
         goal=[8.0, 2.5, 0.3, -0.5],
     )
     scenario.social.length_weight = length_weight
-    scenario.planner = dc.replace(scenario.planner, iterations=500, informed_mode="admissible")
+    scenario.planner = dc.replace(scenario.planner, iterations=500, informed_mode="admissible",
+                                  near_radius_mode="fixed", optimize=False)
     validate_scenario(scenario)
     return scenario
 
@@ -304,7 +305,7 @@ def walled_goal_scenario() -> Scenario:
         start=[2.0, 3.0, 0.0, PI / 2],
         goal=[10.5, 3.0, 0.0, PI / 2],
     )
-    scenario.planner = dc.replace(scenario.planner, iterations=300)
+    scenario.planner = dc.replace(scenario.planner, iterations=300, near_radius_mode="fixed", optimize=False)
     validate_scenario(scenario)
     return scenario
 
