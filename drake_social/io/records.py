@@ -40,6 +40,7 @@ PLANNER_FIELDS: dict[str, str] = {
     "seed": "the seed of the planner's random generator (numpy.random.default_rng(seed))",
     "planning_time": "seconds of the search alone (the solve loop: no checker construction, no kernel "
                      "compilation, no optimisation of the path afterwards; bench: the median of its repeats)",
+    "optimize_time": "seconds spent optimising the path after the search (0 when planner.optimize is false)",
     "cost": "the returned path's objective (the algorithm's own: length for rrt_star, social integral plus "
             "weighted length otherwise), as the planner reports it; null on failure",
     "raw_cost": "the tree path's objective before planner.optimize (= cost when the path is not optimised); "
@@ -87,7 +88,7 @@ RUN_FIELDS: dict[str, str] = {**CONTEXT_FIELDS, **PLANNER_FIELDS, **PATH_FIELDS}
 
 #: The fields every producer's record has (plan's result.json, bench's runs, a study's runs).
 SHARED_FIELDS: tuple[str, ...] = (
-    "algorithm", "success", "seed", "iterations", "planning_time", "cost", "raw_cost", "optimized",
+    "algorithm", "success", "seed", "iterations", "planning_time", "optimize_time", "cost", "raw_cost", "optimized",
     "near_radius_mode", "first_solution_iteration", "tree_size", "num_config_checks", "num_motion_checks",
     "num_cost_evaluations", "num_waypoints", *PATH_FIELDS, "waypoints",
 )

@@ -27,7 +27,9 @@ class PlannerResult:
         success: whether a path from start to exactly the goal was found.
         message: a human-readable summary (why it failed, when it did).
         waypoints: (N, 4) configurations from start to goal; (0, 4) on failure.
-        cost: the planner's objective along the path (inf on failure).
+        cost: the planner's objective along the returned path (inf on
+            failure): the optimised path's when ``optimized``, else the
+            tree's (then equal to ``raw_cost``).
         social_cost_full: the social integral with the scenario's full
             multi-point weights (comparable across planners).
         social_cost_planner: the social integral with the planner's own weights.
@@ -39,9 +41,9 @@ class PlannerResult:
         num_config_checks: configurations checked for validity.
         num_motion_checks: motions checked for validity.
         num_cost_evaluations: motions whose cost was computed.
-        wall_time: seconds spent in solve (the compiled loop: not the one-off
-            load of its machine code from numba's cache at its first call in a
-            process).
+        wall_time: seconds spent in the search (the compiled loop: not the
+            one-off load of its machine code from numba's cache at its first
+            call in a process); the optimiser's time is ``optimize_time``.
         seed: the seed the random generator came from, when known.
         closest_distance_to_goal: configuration distance of the tree's closest
             node to the goal (useful on failure).
@@ -53,7 +55,10 @@ class PlannerResult:
         optimized: whether the path was optimised after planning
             (``planner.optimize``); ``cost`` and ``waypoints`` are then the
             optimised ones and ``cost_history`` stays the tree's.
-        raw_cost: the tree path's cost before optimisation (= cost when not optimised).
+        raw_cost: the tree path's cost before optimisation (= cost when not
+            optimised; inf on failure).
+        optimize_time: seconds spent optimising the path after the search
+            (0 when not optimised).
         near_radius_mode: "fixed" or "shrinking" (see ``planning.rrt_star``).
     """
 
@@ -81,6 +86,7 @@ class PlannerResult:
     informed_diameters: np.ndarray = dc.field(default_factory=lambda: np.zeros(0))
     optimized: bool = False
     raw_cost: float = float("nan")
+    optimize_time: float = 0.0
     near_radius_mode: str = "fixed"
 
     def raise_if_failed(self) -> "PlannerResult":
@@ -92,11 +98,13 @@ class PlannerResult:
         """One line for the terminal."""
         if not self.success:
             return f"{self.algorithm}: no path ({self.message})"
+        cost = f"cost {self.cost:.4g}" + (f" (raw {self.raw_cost:.4g})" if self.optimized else "")
+        seconds = f"{self.wall_time:.3f} s" + (f" + {self.optimize_time:.3f} s optimising" if self.optimized else "")
         return (
-            f"{self.algorithm}: {len(self.waypoints)} waypoints, cost {self.cost:.4g}, "
+            f"{self.algorithm}: {len(self.waypoints)} waypoints, {cost}, "
             f"social (full weights) {self.social_cost_full:.4g}, base path {self.base_length:.2f} m, "
             f"first solution at iteration {self.first_solution_iteration}, tree {self.tree_size} nodes, "
-            f"{self.wall_time:.3f} s"
+            f"{seconds}"
         )
 
     def to_record(self) -> dict[str, Any]:
@@ -115,6 +123,7 @@ class PlannerResult:
             "message": self.message,
             "seed": self.seed,
             "planning_time": float(self.wall_time),
+            "optimize_time": float(self.optimize_time),
             "cost": num(self.cost),
             "raw_cost": num(self.raw_cost),
             "optimized": self.optimized,

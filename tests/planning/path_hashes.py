@@ -1,7 +1,8 @@
 """The raw planner's paths as hashes: every shipped planning scenario x algorithm x seed.
 
 ``tests/data/path_hashes.json`` holds, for K = 2000, seeds 0-2, the five
-algorithms, ``office_bar`` and ``generic_L`` with the planar checker, the
+algorithms, ``office_bar`` and ``generic_L`` with the planar checker and the
+paper's planner settings (:data:`PAPER_PLANNER`), the
 SHA-256 of each path's waypoints (little-endian float64, row-major) and its
 cost. ``tests/planning/test_path_hashes.py`` compares today's planner against
 it bit for bit: a refactoring must not change a single path. Regenerate only
@@ -24,6 +25,9 @@ SCENARIO_DIR = Path(__file__).resolve().parents[2] / "scenarios"
 SCENARIOS = ("office_bar", "generic_L")
 SEEDS = (0, 1, 2)
 ITERATIONS = 2000
+#: The paper's planner (the raw tree path, the fixed r_near), pinned over the
+#: scenario files' defaults (an optimised path, the shrinking radius).
+PAPER_PLANNER = "planner: {optimize: false, near_radius_mode: fixed}"
 
 
 def path_hash(waypoints: np.ndarray) -> str:
@@ -37,7 +41,7 @@ def plan_case(scenario_name: str, algorithm: str, seed: int, checker=None) -> di
     from drake_social.planning.algorithms import plan
     from drake_social.scenario import load_scenario
 
-    scenario = load_scenario(SCENARIO_DIR / f"{scenario_name}.yaml", "planner: {optimize: false}")
+    scenario = load_scenario(SCENARIO_DIR / f"{scenario_name}.yaml", PAPER_PLANNER)
     checker = checker if checker is not None else make_checker(scenario, "planar")
     result = plan(scenario, checker, algorithm=algorithm, iterations=ITERATIONS, seed=seed)
     return {"scenario": scenario_name, "algorithm": algorithm, "seed": seed, "success": bool(result.success),

@@ -78,7 +78,8 @@ def room_with_weights(weights) -> Scenario:
         goal=[8.0, 7.0, 0.3, -0.5],
     )
     scenario.social.length_weight = 0.5
-    scenario.planner = dc.replace(scenario.planner, distance_weights=list(weights))
+    scenario.planner = dc.replace(scenario.planner, distance_weights=list(weights), near_radius_mode="fixed",
+                                  optimize=False)
     validate_scenario(scenario)
     return scenario
 

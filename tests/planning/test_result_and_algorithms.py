@@ -32,6 +32,7 @@ def a_result(**changes) -> PlannerResult:
         first_solution_iteration=7, cost_history=np.array([np.inf, 4.0, 3.25]), tree_size=12,
         num_config_checks=20, num_motion_checks=30, num_cost_evaluations=40, wall_time=0.125, seed=5,
         closest_distance_to_goal=0.0, optimized=True, raw_cost=3.5, near_radius_mode="shrinking",
+        optimize_time=0.25,
     )
     fields.update(changes)
     return PlannerResult(**fields)
@@ -39,7 +40,10 @@ def a_result(**changes) -> PlannerResult:
 
 def test_summary_of_a_success_and_of_a_failure():
     assert a_result(cost=3.14159, social_cost_full=0.123456, base_length=2.0 / 3).summary() == (
-        "social_rrt_star: 2 waypoints, cost 3.142, social (full weights) 0.1235, base path 0.67 m, "
+        "social_rrt_star: 2 waypoints, cost 3.142 (raw 3.5), social (full weights) 0.1235, base path 0.67 m, "
+        "first solution at iteration 7, tree 12 nodes, 0.125 s + 0.250 s optimising")
+    assert a_result(optimized=False, raw_cost=3.25).summary() == (
+        "social_rrt_star: 2 waypoints, cost 3.25, social (full weights) 1.5, base path 2.00 m, "
         "first solution at iteration 7, tree 12 nodes, 0.125 s")
     failed = a_result(success=False, message="tree too small", waypoints=np.zeros((0, 4)), cost=np.inf)
     assert failed.summary() == "social_rrt_star: no path (tree too small)"
@@ -56,6 +60,7 @@ def test_record_has_every_planner_field_and_none_for_non_finite_numbers():
     got = a_result().to_record()
     assert got == {
         "algorithm": "social_rrt_star", "success": True, "message": "path found", "seed": 5, "planning_time": 0.125,
+        "optimize_time": 0.25,
         "cost": 3.25, "raw_cost": 3.5, "optimized": True, "near_radius_mode": "shrinking",
         "first_solution_iteration": 7, "tree_size": 12, "num_config_checks": 20, "num_motion_checks": 30,
         "num_cost_evaluations": 40, "num_waypoints": 2, "closest_distance_to_goal": 0.0,

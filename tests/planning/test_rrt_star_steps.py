@@ -33,7 +33,8 @@ def room(**planner) -> Scenario:
         start=[1.0, 3.0, 0.0, PI / 2],
         goal=[8.2, 3.0, 0.0, PI / 2],
     )
-    scenario.planner = dc.replace(scenario.planner, **planner)
+    # the paper's raw planner (fixed r_near, no optimisation): these tests check Algorithm 2's steps
+    scenario.planner = dc.replace(scenario.planner, **{"near_radius_mode": "fixed", "optimize": False, **planner})
     validate_scenario(scenario)
     return scenario
 

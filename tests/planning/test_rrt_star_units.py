@@ -25,6 +25,7 @@ def room() -> Scenario:
     scenario = Scenario(world=World(bounds=[0.0, 0.0, 10.0, 6.0], obstacles=[Box(center=[5.0, 3.0], size=[1.0, 2.4])]),
                         people=[], object=Bar(length=1.0), start=[1.0, 3.0, 0.0, math.pi / 2],
                         goal=[8.2, 3.0, 0.0, math.pi / 2])
+    scenario.planner = dc.replace(scenario.planner, near_radius_mode="fixed", optimize=False)  # the paper's planner
     validate_scenario(scenario)
     return scenario
 

@@ -103,6 +103,11 @@ class Study:
         return dc.asdict(self)
 
 
+#: The paper's planner settings, applied over every group of :func:`paper_study`:
+#: the raw RRT* path (no optimisation) and the fixed near radius of Algorithm 2.
+PAPER_PLANNER = "planner: {optimize: false, near_radius_mode: fixed}"
+
+
 def paper_weights(num_points: int) -> dict[str, list[float]]:
     """Section V-D's weightings: object points 0.95 and the rest 0.05; base
     0.95 and the rest 0.05; equal (1 everywhere). Base, link-1 tip, link-2
@@ -119,17 +124,19 @@ def paper_study(*, runs: int = 10, iterations: int = 2000, seed: int = 0, simula
     D is "the generic map with the bar": generic_L.yaml with the office's
     1.5 m bar (``object: !Bar {length: 1.5, thickness: 0.05}``), 5 interest
     points, planned with Social Risk-RRT* under each of :func:`paper_weights`.
+    Every group runs the paper's planner (:data:`PAPER_PLANNER`: the raw tree
+    path and the fixed r_near), whatever the scenario files' defaults.
     """
     d = Path(scenario_dir)
     bar = "object: !Bar {length: 1.5, thickness: 0.05}"
     n = 3 + interest_point_count(Bar(length=1.5, thickness=0.05))
     groups = [
-        Group("A", str(d / "office_bar.yaml"), label="A: office, 1.5 m bar"),
-        Group("B", str(d / "generic_L.yaml"), label="B: generic map, L-shaped object"),
+        Group("A", str(d / "office_bar.yaml"), overrides=(PAPER_PLANNER,), label="A: office, 1.5 m bar"),
+        Group("B", str(d / "generic_L.yaml"), overrides=(PAPER_PLANNER,), label="B: generic map, L-shaped object"),
     ]
     for name, w in paper_weights(n).items():
         groups.append(Group(f"D_{name}", str(d / "generic_L.yaml"),
-                            overrides=(bar, f"social: {{weights: {json.dumps(w)}}}"),
+                            overrides=(bar, f"social: {{weights: {json.dumps(w)}}}", PAPER_PLANNER),
                             algorithms=("social_rrt_star",), label=f"D: generic map, bar, {name} weights {w}"))
     study = Study("paper", tuple(groups), runs=runs, iterations=iterations, seed=seed, simulate=simulate)
     check_study(study, "paper study")

@@ -515,11 +515,12 @@ class RrtStar:
         if self.options.optimize and result.success:
             from drake_social.planning.optimize import optimize_path
 
+            t_opt = time.perf_counter()
             waypoints, cost = optimize_path(result.waypoints, self.objective, self.checker, self.space)
             if cost < result.cost:
                 result.waypoints, result.cost = waypoints, cost
             result.optimized = True
-            result.wall_time = time.perf_counter() - t0
+            result.optimize_time = time.perf_counter() - t_opt
         return result
 
     def near_radius(self, n: int) -> float:
