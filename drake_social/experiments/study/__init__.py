@@ -34,7 +34,7 @@ from drake_social.experiments.study.output import output_names, write_study
 from drake_social.experiments.study.results import (RECORD_FILES, TIMING_FIELDS, StudyOutputError, StudyResult,
                                                     best_runs, comparable, rescue_records, results_csv, write_records)
 from drake_social.experiments.study.runs import PROGRESS_POINTS, run_study, run_task
-from drake_social.experiments.study.spec import (MAX_PAPER_RUNS, MAX_RUNS, MAX_STUDY_TASKS, NAME_PATTERN,
+from drake_social.experiments.study.spec import (MAX_PAPER_RUNS, MAX_RUNS, MAX_STUDY_TASKS, NAME_PATTERN, PAPER_PLANNER,
                                                  PAPER_ALGORITHMS, PAPER_PAIRS, Group, Study, check_study,
                                                  paper_study, paper_weights, study_tasks)
 from drake_social.experiments.study.sweep import Sweep, load_sweep
@@ -48,6 +48,7 @@ __all__ = [
     "MAX_STUDY_TASKS",
     "NAME_PATTERN",
     "PAPER_ALGORITHMS",
+    "PAPER_PLANNER",
     "PAPER_PAIRS",
     "PROGRESS_POINTS",
     "RECORD_FILES",
