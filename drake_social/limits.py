@@ -74,6 +74,9 @@ ALGORITHMS = (
     "informed_social_rrt_star",
     "informed_base_rrt_star",
 )
+#: The planners of ALGORITHMS that sample in the informed ellipse (a test keeps
+#: it equal to the informed samplers of ``planning.algorithms.ALGORITHM_SPECS``).
+INFORMED_ALGORITHMS = ("informed_social_rrt_star", "informed_base_rrt_star")
 
 #: Validity checkers (``drake_social.collision.drake_checker.make_checker``; the first is
 #: the default of the planner): the exact planar one, Drake's SceneGraph and

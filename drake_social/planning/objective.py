@@ -3,11 +3,12 @@
 Following OMPL's split, an objective gives a *state cost* (S for the social
 objectives; the planner does not need it, the OMPL baseline and reports do)
 and a *motion cost* for straight motions, batched over motions. Variants
-of the paper's planners are configurations of these two classes, not copies:
+of the paper's planners are configurations of these two classes, not copies
+(:data:`drake_social.planning.algorithms.ALGORITHM_SPECS` says which):
 
-* ``rrt_star``: :class:`PathLengthObjective`;
-* ``social_rrt_star``: :class:`SocialObjective` with the scenario's weights;
-* ``base_rrt_star``: :class:`SocialObjective` with weight 1 on the base, 0 elsewhere.
+* objective ``"length"``: :class:`PathLengthObjective`;
+* objective ``"social"``: :class:`SocialObjective` with the scenario's weights,
+  or with weight 1 on the base and 0 elsewhere (``weights="base_only"``).
 """
 
 from __future__ import annotations

@@ -16,8 +16,8 @@ import numpy as np
 from drake_social.errors import ScenarioError
 from drake_social.io.textfile import shorten
 from drake_social.kinematics import ArmGeometry, displacement_bound
-from drake_social.limits import (ALGORITHMS, MAX_CONTROL_STEPS, MAX_DYNAMIC_PLANT_TIME_STEP, MAX_ITERATIONS,
-                                 MAX_MOTION_STEPS, MAX_OBJECT_POINTS, MAX_PLANT_STEPS, MAX_REPLAY_FPS,
+from drake_social.limits import (ALGORITHMS, INFORMED_ALGORITHMS, MAX_CONTROL_STEPS, MAX_DYNAMIC_PLANT_TIME_STEP,
+                                 MAX_ITERATIONS, MAX_MOTION_STEPS, MAX_OBJECT_POINTS, MAX_PLANT_STEPS, MAX_REPLAY_FPS,
                                  MAX_TIME_LIMIT, MIN_CONTROL_PERIODS, SERVO_BANDWIDTH)
 from drake_social.scenario.schema import (EXECUTIONS, INFORMED_MODES, NEAR_RADIUS_MODES, SIM_MODES, Bar,
                                           ExecutionOptions, LShape, Scenario, interest_point_count)
@@ -307,7 +307,7 @@ def validate_scenario(scenario: Scenario, source: str = "<scenario>") -> None:
         c.fail("planner.goal_bias", f"must be in [0, 1), got {p.goal_bias}")
     if p.informed_mode not in INFORMED_MODES:
         c.fail("planner.informed_mode", f"unknown mode {_shown(p.informed_mode)}; allowed: {', '.join(INFORMED_MODES)}")
-    if p.informed_mode == "admissible" and p.algorithm.startswith("informed") and s.length_weight <= 0:
+    if p.informed_mode == "admissible" and p.algorithm in INFORMED_ALGORITHMS and s.length_weight <= 0:
         c.fail("planner.informed_mode", "'admissible' needs social.length_weight > 0")
     c.length("planner.distance_weights", p.distance_weights, 4)
     c.positive("planner.distance_weights", p.distance_weights)

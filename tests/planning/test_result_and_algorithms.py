@@ -100,10 +100,11 @@ def test_make_objective_for_each_algorithm(tiny_scenario):
     for algorithm in ALGORITHMS[1:]:
         dut = make_objective(scenario, algorithm)
         assert type(dut) is SocialObjective and dut.length_weight == 0.3
-        expected = base_only_weights(full.geometry.num_interest_points) if "base" in algorithm else full.weights
+        base_only = algorithm in ("base_rrt_star", "informed_base_rrt_star")
+        expected = base_only_weights(full.geometry.num_interest_points) if base_only else full.weights
         np.testing.assert_array_equal(dut.social.weights, expected)
         np.testing.assert_array_equal(dut.social.distance_weights, [1.0, 2.0, 0.5, 0.25])
-    assert "base" in ALGORITHMS[2] and full.weights[1:].any()  # the base-only weights differ from the full ones
+    assert ALGORITHMS[2] == "base_rrt_star" and full.weights[1:].any()  # the base-only weights differ from the full ones
 
 
 def test_make_planner_takes_the_scenarios_options(tiny_scenario):
@@ -235,3 +236,63 @@ def test_plan_passes_the_progress_callback(short):
     dut = plan(short, GeometricChecker(short), iterations=30, seed=2, progress=lambda k, c: calls.append((k, c)))
     assert [k for k, _ in calls] == list(range(1, 31))
     np.testing.assert_array_equal([c for _, c in calls], dut.cost_history)
+
+
+# ---- the table of algorithm specs --------------------------------------------
+
+
+def test_the_spec_table_names_exactly_the_scenarios_algorithms_in_order():
+    from drake_social.limits import INFORMED_ALGORITHMS
+
+    assert tuple(variants.ALGORITHM_SPECS) == ALGORITHMS
+    assert all(name == spec.name for name, spec in variants.ALGORITHM_SPECS.items())
+    assert INFORMED_ALGORITHMS == tuple(n for n, s in variants.ALGORITHM_SPECS.items() if s.sampler == "informed")
+    # The paper's five planners, written out: objective, weights, sampler.
+    assert {n: (s.objective, s.weights, s.sampler) for n, s in variants.ALGORITHM_SPECS.items()} == {
+        "rrt_star": ("length", "all_points", "uniform"),
+        "social_rrt_star": ("social", "all_points", "uniform"),
+        "base_rrt_star": ("social", "base_only", "uniform"),
+        "informed_social_rrt_star": ("social", "all_points", "informed"),
+        "informed_base_rrt_star": ("social", "base_only", "informed"),
+    }
+    with pytest.raises(TypeError):
+        variants.ALGORITHM_SPECS["x"] = variants.ALGORITHM_SPECS["rrt_star"]  # read-only
+
+
+def test_an_unknown_name_lists_the_known_ones():
+    message = r"^plan: unknown algorithm 'informed_rrt_star'; allowed: " + ", ".join(ALGORITHMS) + "$"
+    with pytest.raises(ValueError, match=message):
+        variants.algorithm_spec("informed_rrt_star", "plan")
+    with pytest.raises(TypeError, match=r"^algorithm_spec: algorithm must be one of rrt_star, "):
+        variants.algorithm_spec(3)
+
+
+def test_a_spec_field_outside_its_values_is_refused_by_name():
+    with pytest.raises(ValueError, match=r"^AlgorithmSpec 'x': unknown sampler 'ellipse'; allowed: uniform, informed$"):
+        variants.AlgorithmSpec("x", "social", "all_points", "ellipse", "")
+    with pytest.raises(ValueError, match=r"^AlgorithmSpec 'x': the length objective has no social weights"):
+        variants.AlgorithmSpec("x", "length", "base_only", "uniform", "")
+
+
+def test_new_names_are_configured_by_their_spec_not_by_their_letters(tiny_scenario):
+    """A name starting with "informed" or containing "base" means nothing by itself:
+    an informed length planner and a multi-point planner called "baseline" get
+    what their specs say."""
+    scenario = weighted(tiny_scenario)
+    informed_length = variants.AlgorithmSpec("informed_rrt_star", "length", "all_points", "informed", "")
+    baseline = variants.AlgorithmSpec("baseline_social", "social", "all_points", "uniform", "")
+    table = {**variants.ALGORITHM_SPECS, informed_length.name: informed_length, baseline.name: baseline}
+    checker = GeometricChecker(scenario)
+    full = SocialCost.from_scenario(scenario)
+    dut = make_planner(scenario, checker, variants.algorithm_spec("informed_rrt_star", specs=table))
+    assert type(dut.objective) is PathLengthObjective and dut.options.informed and dut.name == "informed_rrt_star"
+    np.testing.assert_array_equal(dut.objective.distance_weights, [1.0, 2.0, 0.5, 0.25])
+    dut = make_planner(scenario, checker, variants.algorithm_spec("baseline_social", specs=table))
+    assert type(dut.objective) is SocialObjective and not dut.options.informed
+    np.testing.assert_array_equal(dut.objective.social.weights, full.weights)
+    assert full.weights[1:].any()  # differs from the base-only weights
+    result = plan(scenario, checker, algorithm=informed_length, iterations=40, seed=1)
+    assert result.algorithm == "informed_rrt_star" and len(result.informed_diameters) == 40
+    # A spec is not a name of the shipped table.
+    with pytest.raises(ValueError, match=r"^make_planner: unknown algorithm 'baseline_social'"):
+        make_planner(scenario, checker, "baseline_social")
