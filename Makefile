@@ -12,7 +12,15 @@ $(VENV)/.installed: pyproject.toml
 	$(PY) -m pip install --quiet -e '.[test,bench,docs]'
 	touch $@
 
-install: $(VENV)/.installed
+# numba's cache of the compiled kernels, filled with the commands' argument
+# types (a minute or more of CPU once; seconds when the cache is current), so
+# that the first command loads machine code instead of compiling it. Redone
+# when a source changes (a kernel's edit drops its cached code).
+$(VENV)/.kernels: $(VENV)/.installed $(shell find drake_social -name '*.py' 2>/dev/null)
+	$(PY) -m drake_social.warmup
+	touch $@
+
+install: $(VENV)/.installed $(VENV)/.kernels
 
 # The main job: draw the office scenario, plan it with Social Risk-RRT*, execute
 # the path in Drake's Simulator and write the figures, the path, the results and

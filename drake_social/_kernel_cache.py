@@ -10,7 +10,8 @@ when the hash changes: the ``__pycache__`` folders beside the sources, and
 the folders numba uses instead (``NUMBA_CACHE_DIR`` when set; the user-wide
 ``numba`` cache folder when the package's folder is read-only), where only
 files below a ``drake_social`` folder are touched. Nothing here imports
-numba or pydrake.
+numba or pydrake. Filling the cache ahead of the first command is
+:mod:`drake_social.warmup`'s job (``make install`` runs it).
 """
 
 from __future__ import annotations
@@ -22,9 +23,12 @@ from pathlib import Path
 __all__ = ["KERNEL_SOURCES", "ensure_fresh", "sources_hash"]
 
 _PACKAGE = Path(__file__).resolve().parent
-#: The kernel modules, which call each other's compiled functions, and the
-#: limits they compile in.
-KERNEL_SOURCES = ("cost/kernel.py", "collision/planar_kernel.py", "planning/rrt_star/tree_kernel.py", "limits.py")
+#: The kernel modules, which call each other's compiled functions, the limits
+#: they compile in, and the NamedTuple of the checker's scene they take.
+KERNEL_SOURCES = (
+    "cost/kernel.py", "collision/planar_kernel.py", "planning/rrt_star/tree_kernel.py", "limits.py",
+    "collision/validity.py",
+)
 _STAMP = "drake_social_kernels.stamp"
 _done = False
 

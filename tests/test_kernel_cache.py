@@ -79,3 +79,74 @@ def test_numbas_other_cache_folders_are_kept_fresh_too(package, monkeypatch, tmp
     monkeypatch.setattr(dut, "_done", False)
     dut.ensure_fresh()
     assert ours.exists()  # stamp current: kept
+
+
+# ---- the warm-up: make install fills the cache ------------------------------
+
+_PLAN_AND_COUNT = """
+import json, sys
+from drake_social.cli import main
+from drake_social.collision.drake_checker import make_checker
+from drake_social.planning.algorithms import ALGORITHM_SPECS, plan
+from drake_social.planning.rrt_star.compiled import kernel_dispatchers
+from drake_social.scenario import load_scenario
+tiny, out = sys.argv[1], sys.argv[2]
+assert main(["plan", tiny, "--out", out]) == 0
+scenario = load_scenario(tiny)
+checker = make_checker(scenario, "planar")
+for name in ALGORITHM_SPECS:
+    plan(scenario, checker, algorithm=name, seed=3)
+stats = {name: d.stats for name, d in kernel_dispatchers().items()}
+print(json.dumps({"misses": {n: sum(s.cache_misses.values()) for n, s in stats.items() if s.cache_misses},
+                  "hits": {n: sum(s.cache_hits.values()) for n, s in stats.items() if s.cache_hits}}))
+"""
+
+
+def test_after_the_warm_up_a_plan_in_a_fresh_process_compiles_nothing(tmp_path, repo_root):
+    """``python -m drake_social.warmup`` (what make install runs), then the CLI's
+    plan and every algorithm in a new process: numba's statistics show every
+    kernel loaded from the cache (hits) and none compiled (no misses), and
+    stderr has no cold-cache line."""
+    import json
+    import subprocess
+    import sys
+
+    warm = subprocess.run([sys.executable, "-m", "drake_social.warmup"], capture_output=True, text=True,
+                          timeout=1800, cwd=tmp_path)
+    assert warm.returncode == 0, warm.stderr
+    assert warm.stdout.startswith("drake_social kernels ready: ")
+    run = subprocess.run([sys.executable, "-c", _PLAN_AND_COUNT, str(repo_root / "scenarios/tiny.yaml"),
+                          str(tmp_path / "out")], capture_output=True, text=True, timeout=600, cwd=tmp_path)
+    assert run.returncode == 0, run.stderr
+    counts = json.loads(run.stdout.splitlines()[-1])
+    assert counts["misses"] == {}
+    assert counts["hits"].get("drake_social.planning.rrt_star.tree_kernel.grow", 0) >= 1
+    assert counts["hits"].get("drake_social.collision.planar_kernel.valid", 0) >= 1
+    assert "cold" not in run.stderr
+
+
+def test_a_cold_cache_is_said_once_with_the_compile_time(monkeypatch, caplog):
+    """When loading the kernels had to compile (numba's cache misses grew), one
+    warning says so with the time it took; the next run says nothing."""
+    import logging
+    import types
+
+    import numpy as np
+
+    from drake_social.planning.rrt_star import compiled
+
+    misses = iter([0, 7, 7, 7])
+    monkeypatch.setattr(compiled, "cache_misses", lambda: next(misses))
+    monkeypatch.setattr(compiled, "_cold_cache_reported", False)
+    monkeypatch.setattr(compiled, "grow_params", lambda *args: "params")
+    fake = types.SimpleNamespace(grow=types.SimpleNamespace(signatures=["loaded"]))
+    monkeypatch.setattr(compiled, "tree_kernel", fake)
+    options = types.SimpleNamespace(iterations=5)
+    with caplog.at_level(logging.INFO, logger=compiled.__name__):
+        run = compiled.prepare(None, None, None, options, 1.0, np.zeros(4), np.ones(4))
+        compiled.prepare(None, None, None, options, 1.0, np.zeros(4), np.ones(4))
+    assert run.params == "params" and run.iterations == 5
+    assert len(caplog.records) == 1 and caplog.records[0].levelno == logging.WARNING
+    message = caplog.records[0].getMessage()
+    assert message.startswith("numba's cache of the planning kernels was cold: compiled them once in ")
+    assert "python -m drake_social.warmup" in message

@@ -33,7 +33,7 @@ from pydrake.geometry import Cylinder, Role
 from drake_social.model.plant import ScenarioDiagram, build_robot_diagram, environment_parts, registration_order
 from drake_social.collision import planar_kernel as kernel
 from drake_social.collision.geometric import CheckerBase
-from drake_social.collision.validity import Contact
+from drake_social.collision.validity import Contact, PlanarScene
 from drake_social.scenario import Scenario
 
 __all__ = ["PlanarChecker"]
@@ -249,6 +249,13 @@ class PlanarChecker(CheckerBase):
         q_a = np.ascontiguousarray(q_a, float).reshape(-1, 4)
         q_b = np.ascontiguousarray(q_b, float).reshape(-1, 4)
         return kernel.motions_valid(q_a, q_b, self.lower, self.upper, self.bodies, self.robot, self.env, self.levers)
+
+    def compiled_scene(self) -> PlanarScene:
+        """The scene as the kernel's arrays (the validity protocol's
+        :class:`~drake_social.collision.validity.CompiledSceneChecker` capability)."""
+        f = np.ascontiguousarray
+        return PlanarScene(f(self.lower, float), f(self.upper, float), f(self.bodies, float), f(self.robot, float),
+                           f(self.env, float), f(self.levers, float))
 
     # ---- reports and the second opinion ----------------------------------------
 

@@ -4,11 +4,11 @@ and the :class:`Contact` a checker reports."""
 from __future__ import annotations
 
 import dataclasses as dc
-from typing import Protocol, runtime_checkable
+from typing import NamedTuple, Protocol, runtime_checkable
 
 import numpy as np
 
-__all__ = ["Contact", "ValidityChecker"]
+__all__ = ["CompiledSceneChecker", "Contact", "PlanarScene", "ValidityChecker"]
 
 
 @runtime_checkable
@@ -55,3 +55,25 @@ class Contact:
 
     def __str__(self) -> str:
         return f"{self.robot_body} with {self.other} ({self.distance:+.3f} m)"
+
+
+class PlanarScene(NamedTuple):
+    """A checker's geometry as the arrays of :mod:`drake_social.collision.planar_kernel`
+    (formats there), which compiled planners call directly."""
+
+    lower: np.ndarray  #: (4,) float configuration limits (metres, radians)
+    upper: np.ndarray
+    bodies: np.ndarray  #: (B, 6) float the planar chain
+    robot: np.ndarray  #: (S, 6) float the robot's capsules in their body frames
+    env: np.ndarray  #: (K, 8) float the environment's boxes and discs
+    levers: np.ndarray  #: (S, 2) float each capsule's lever arms, metres
+
+
+@runtime_checkable
+class CompiledSceneChecker(ValidityChecker, Protocol):
+    """The capability of a checker whose answers are exactly those of the
+    planar kernel on its :meth:`compiled_scene`: a compiled planner may then
+    check configurations and motions itself, without calling the checker."""
+
+    def compiled_scene(self) -> PlanarScene:
+        """The scene, C-contiguous float64 arrays."""

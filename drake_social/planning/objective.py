@@ -13,6 +13,8 @@ of the paper's planners are configurations of these two classes, not copies
 
 from __future__ import annotations
 
+from typing import ClassVar
+
 import numpy as np
 
 from drake_social.cost.social import SocialCost
@@ -31,6 +33,20 @@ class Objective:
 
     #: Whether :meth:`length_bound` is the motion cost itself (no social term).
     length_is_cost: bool = True
+
+    #: The objective's form in the compiled tree loop
+    #: (:mod:`drake_social.planning.rrt_star.tree_kernel`): ``"length"``,
+    #: ``"social"``, or None when it has none (the Python loop then plans).
+    #: A subclass that overrides :meth:`motion_cost` or :meth:`length_bound`
+    #: has none unless it declares one itself (the compiled loop would not run
+    #: its code).
+    compiled_form: ClassVar[str | None] = None
+
+    def __init_subclass__(cls, **kwargs):
+        super().__init_subclass__(**kwargs)
+        overrides = {"motion_cost", "length_bound"} & set(vars(cls))
+        if overrides and "compiled_form" not in vars(cls):
+            cls.compiled_form = None
 
     def state_cost(self, q: np.ndarray) -> np.ndarray:
         """The cost rate at configurations (..., 4) (S for social objectives)."""
@@ -57,6 +73,7 @@ class PathLengthObjective(Objective):
     """Configuration-space path length, the RRT* baseline of the paper."""
 
     name = "path_length"
+    compiled_form = "length"
 
     def __init__(self, distance_weights: np.ndarray | None = None):
         self.length_weight = 1.0
@@ -72,6 +89,7 @@ class SocialObjective(Objective):
     """
 
     name = "social"
+    compiled_form = "social"
 
     def __init__(self, social: SocialCost, length_weight: float = 0.0):
         if not length_weight >= 0:

@@ -62,7 +62,7 @@ def test_lazy_costs_give_the_eager_result_bit_for_bit(tiny_lambda, algorithm):
 def test_kd_tree_neighbours_give_the_direct_scan_result(tiny_lambda, algorithm, monkeypatch):
     scenario, checker = tiny_lambda
     reference = solve(scenario, checker, algorithm, 4, kd_tree=False)
-    monkeypatch.setattr(rrt_star, "KD_TREE_MIN_NODES", 20)  # from the 20th node on
+    monkeypatch.setattr(rrt_star.reference, "KD_TREE_MIN_NODES", 20)  # from the 20th node on
     dut = solve(scenario, checker, algorithm, 4, kd_tree=True)
     same_run(reference, dut)
 

@@ -15,7 +15,7 @@ import pytest
 
 from drake_social.collision.geometric import GeometricChecker
 from drake_social.planning.result import PlanningInputError
-from drake_social.planning.rrt_star import RrtStar, RrtStarOptions, _Tree, default_gamma
+from drake_social.planning.rrt_star import RrtStar, RrtStarOptions, _Tree, compiled_support, default_gamma
 from drake_social.planning.space import ConfigurationSpace
 from drake_social.planning.algorithms import make_objective
 from drake_social.scenario import Bar, Box, Scenario, World, validate_scenario
@@ -145,7 +145,7 @@ def run_room(iterations=150, seed=2, **options):
 def test_python_loop_uses_the_kd_tree_once_large_and_finds_the_same_tree(monkeypatch):
     """The Python loop (the numpy checker) with the KD-tree from the 16th node
     on: the KD-tree does answer queries, and the tree is the direct scan's."""
-    from drake_social.planning import rrt_star
+    from drake_social.planning.rrt_star import reference as rrt_star
 
     reference = run_room(kd_tree=False)
     served = []
@@ -265,7 +265,7 @@ def test_a_goal_drawn_again_adds_nothing_and_counts_like_the_compiled_loop():
         planner = RrtStar(ConfigurationSpace.from_scenario(scenario), checker, make_objective(scenario, "rrt_star"),
                           dc.replace(RrtStarOptions.from_scenario(scenario.planner), iterations=40, goal_bias=0.5,
                                      compiled=compiled))
-        assert planner._compiled_applies()
+        assert compiled_support(planner.checker, planner.objective, RrtStarOptions())[0]
         runs.append(planner.solve(np.array(scenario.start), np.array(scenario.goal), np.random.default_rng(4)))
     python, compiled = runs
     assert sum(np.array_equal(q, scenario.goal) for q in python.tree_nodes) == 1  # the goal, once
@@ -294,7 +294,7 @@ def test_compiled_and_python_loops_fill_the_result_alike(case):
         planner = RrtStar(ConfigurationSpace.from_scenario(scenario), PlanarChecker(scenario),
                           make_objective(scenario, "rrt_star"),
                           dc.replace(RrtStarOptions.from_scenario(scenario.planner), compiled=compiled, **options))
-        assert planner._compiled_applies()
+        assert compiled_support(planner.checker, planner.objective, RrtStarOptions())[0]
         before = time.perf_counter()
         runs.append(planner.solve(np.array(scenario.start), np.array(scenario.goal), np.random.default_rng(2)))
         spent = time.perf_counter() - before
@@ -480,16 +480,20 @@ def test_the_compiled_loop_applies_to_the_planar_checker_and_known_objectives_on
     social = make_objective(scenario, "social_rrt_star")
     assert type(social) is SocialObjective and social.social.backend == "numba"
 
-    class Longer(PathLengthObjective):
-        pass
+    class Longer(PathLengthObjective):  # other costs: the compiled loop would not run them
+        def motion_cost(self, q_a, q_b):
+            return 2.0 * super().motion_cost(q_a, q_b)
+
+    class Named(PathLengthObjective):  # the same costs: keeps the declared compiled form
+        name = "named"
 
     slow = copy.deepcopy(social)
     slow.social.backend = "numpy"
     for objective, checker, applies in ((make_objective(scenario, "rrt_star"), planar, True), (social, planar, True),
                                         (social, numpy_checker, False), (slow, planar, False),
-                                        (Longer(), planar, False)):
+                                        (Longer(), planar, False), (Named(), planar, True)):
         planner = RrtStar(space, checker, objective)
-        assert planner._compiled_applies() is applies
+        assert compiled_support(checker, objective, planner.options)[0] is applies
 
 
 def test_near_radius_by_hand():
@@ -554,7 +558,7 @@ def test_the_starts_own_goal_connection_is_reported_even_when_no_node_is_added(c
     planner.options = dc.replace(planner.options, planning_range=20.0)  # a sample anywhere: often no node
     if checker_kind.startswith("planar"):
         planner.checker = PlanarChecker(room())
-        assert planner._compiled_applies()
+        assert compiled_support(planner.checker, planner.objective, RrtStarOptions())[0]
     for iterations in (1, 2, 5):
         planner.options = dc.replace(planner.options, iterations=iterations)
         dut = planner.solve(start, goal, np.random.default_rng(0))

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from drake_social.collision.planar_checker import PlanarChecker
-from drake_social.planning.rrt_star import tree_kernel
+from drake_social.planning.rrt_star import compiled_support, tree_kernel
 from drake_social.planning.algorithms import make_planner
 from drake_social.scenario import load_scenario
 
@@ -20,7 +20,7 @@ pytestmark = pytest.mark.skipif(not tree_kernel.AVAILABLE, reason="numba is not 
 def run(scenario, checker, algorithm, seed, compiled, **options):
     planner = make_planner(scenario, checker, algorithm)
     planner.options = dc.replace(planner.options, compiled=compiled, **{"lazy_costs": False, **options})
-    assert planner._compiled_applies()
+    assert compiled_support(planner.checker, planner.objective, dc.replace(planner.options, compiled=True))[0]
     return planner.solve(np.array(scenario.start), np.array(scenario.goal), np.random.default_rng(seed))
 
 
@@ -89,7 +89,10 @@ def test_other_checkers_use_the_python_loop(tiny, tiny_scenario):
     from drake_social.collision.geometric import GeometricChecker
 
     scenario, _ = tiny
-    assert not make_planner(scenario, GeometricChecker(scenario))._compiled_applies()
+    planner = make_planner(scenario, GeometricChecker(scenario))
+    assert compiled_support(planner.checker, planner.objective, planner.options) == (
+        False, "the checker GeometricChecker declares no compiled_scene() (the validity protocol's "
+        "CompiledSceneChecker capability)")
 
 
 @pytest.mark.parametrize("mode", ["paper", "admissible"])

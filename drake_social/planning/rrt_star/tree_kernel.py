@@ -1,6 +1,7 @@
-"""The RRT* tree loop compiled (numba), for the planar checker.
+"""The RRT* tree loop compiled (numba), for checkers with a compiled planar scene.
 
-:meth:`drake_social.planning.rrt_star.RrtStar.solve` stays the tested
+:meth:`drake_social.planning.rrt_star.RrtStar.solve`'s Python loop
+(:mod:`~drake_social.planning.rrt_star.reference`) stays the tested
 reference; :func:`grow` runs the same iterations (uniform or informed
 sampling with goal bias, fixed or shrinking near radius, eager or lazy
 motion costs, choose parent in order of F + Msc, rewiring with cost
@@ -19,16 +20,110 @@ checker's compiled functions), motion costs :func:`drake_social.cost.kernel.msc_
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import numpy as np
 
 from drake_social.cost import kernel as cost_kernel
 from drake_social.collision import planar_kernel
+from drake_social.collision.validity import PlanarScene
 
 njit = cost_kernel.njit
 AVAILABLE = cost_kernel.AVAILABLE
 
-__all__ = ["AVAILABLE", "grow", "init_state"]
+__all__ = ["AVAILABLE", "GrowParams", "InformedParams", "PeopleGrid", "SocialParams", "TreeState", "grow",
+           "init_state"]
+
+
+class SocialParams(NamedTuple):
+    """The social cost's inputs of :func:`drake_social.cost.kernel.msc_sums`
+    (empty arrays and zeros for the length objective)."""
+
+    people: np.ndarray  #: (P, 3) float: x, y (metres), heading (radians)
+    l1: float  #: link lengths, metres
+    l2: float
+    object_interest: np.ndarray  #: (n, 2) float: the object's interest points in the gripper frame, metres
+    active: np.ndarray  #: (K,) int64: the weighted interest points
+    weights: np.ndarray  #: (K,) float: their weights
+    lever: np.ndarray  #: (2,) float: lever arms of the displacement bound, metres
+    resolution: float  #: trapezoid step bound, metres
+    reach: float  #: the AGF's reach, metres
+    inv_front: float  #: 1 / (2 sigma^2) of the front, rear and side Gaussians, 1 / m^2
+    inv_rear: float
+    inv_side: float
+    threshold: float  #: the AGF's threshold tau
+
+
+class PeopleGrid(NamedTuple):
+    """The people bucketed in square cells (:func:`drake_social.cost.kernel.people_grid`)."""
+
+    point_reach: float  #: reach of the weighted points from the base, metres
+    cell: float  #: cell side, metres
+    x0: float  #: the grid's corner, metres
+    y0: float
+    nx: int  #: cells along x and y
+    ny: int
+    start: np.ndarray  #: (nx ny + 1,) int64: first entry of each cell in ``order``
+    order: np.ndarray  #: (P,) int64: people by cell
+
+
+class InformedParams(NamedTuple):
+    """The informed sampler (:class:`drake_social.planning.sampling.EllipseSampler`)."""
+
+    informed: bool  #: sample in the ellipse once a solution exists
+    mode: int  #: 0 = "paper", 1 = "admissible"
+    f1: np.ndarray  #: (2,) foci: start and goal base positions, metres
+    f2: np.ndarray
+    centre: np.ndarray  #: (2,) the ellipse's centre, metres
+    rotation: np.ndarray  #: (2, 2) its axes in the world
+    focal: float  #: the foci's distance, metres
+    xy_scale: float  #: lambda min(w_x, w_y) of the admissible diameter
+
+
+class GrowParams(NamedTuple):
+    """Everything :func:`grow` reads but never changes (configuration-space units)."""
+
+    goal: np.ndarray  #: (4,) the goal configuration
+    lower: np.ndarray  #: (4,) the space's bounds
+    upper: np.ndarray
+    weights: np.ndarray  #: (4,) the space's distance weights
+    planning_range: float  #: Steer distance delta
+    near_radius: float  #: r_near (also the goal-connection radius)
+    goal_bias: float  #: probability of sampling the goal
+    shrinking: bool  #: the near radius shrinks as min(r_near, gamma (log n / n)^(1/4))
+    gamma: float
+    kind: int  #: objective: 0 = path length, 1 = social
+    length_weight: float  #: lambda
+    distance_weights: np.ndarray  #: (4,) the objective's distance weights
+    social: SocialParams
+    grid: PeopleGrid
+    scene: PlanarScene  #: the checker's compiled scene
+    informed: InformedParams
+    lazy: bool  #: lazy motion costs
+
+
+class TreeState(NamedTuple):
+    """A run's tree between chunks of :func:`grow` (arrays grow by doubling)."""
+
+    q: np.ndarray  #: (cap, 4) node configurations
+    parent: np.ndarray  #: (cap,) int64, -1 for the start
+    cost: np.ndarray  #: (cap,) cost from the start
+    edge: np.ndarray  #: (cap,) cost of the motion from the parent
+    first_child: np.ndarray  #: (cap,) int64 children as linked lists
+    next_sib: np.ndarray
+    prev_sib: np.ndarray
+    clear: np.ndarray  #: (cap, S) every node's capsule clearances, metres
+    g_next: np.ndarray  #: (cap,) int64 the node grid's linked lists
+    goal_nodes: np.ndarray  #: int64 nodes with a valid, costed motion to the goal
+    goal_edges: np.ndarray  #: their motion costs
+    counts: np.ndarray  #: (3,) int64 configurations checked, motions checked, motions costed
+    history: np.ndarray  #: (K,) best cost after each iteration
+    diameters: np.ndarray  #: (K,) or (0,) the informed ellipse's diameter after each iteration
+    g_head: np.ndarray  #: int64 the node grid's first node per cell
+    g_geom: np.ndarray  #: (5,) the node grid: x0, y0, cell side, nx, ny
+    goal_clear: np.ndarray  #: (S,) the goal's capsule clearances
+    ints: np.ndarray  #: (4,) int64 nodes, goal nodes, best node, first solution iteration (-1: none)
+    floats: np.ndarray  #: (2,) best cost, ellipse diameter
 
 
 @njit(cache=True)
@@ -68,14 +163,17 @@ def _costs(q_a, q_b, kind, lam, dw, soc, grid):
 
 
 @njit(cache=True)
-def grow(rng, it_start, it_stop, goal, lower, upper, w, delta, r_near, goal_bias, shrinking, gamma,
-         kind, lam, dw, soc, grid, chk, inf, lazy, state):
+def grow(rng, it_start, it_stop, params, state):
     """Iterations ``it_start .. it_stop - 1`` of the RRT* run (-1: the start's
-    goal connection, before the first sample) on ``state`` from
-    :func:`init_state` or the previous chunk; returns the new state (arrays
-    may be replaced as they grow)."""
-    c_lower, c_upper, bodies, robot, env, levers = chk
-    (informed, mode, f1, f2, centre, rot, focal, xy_scale) = inf
+    goal connection, before the first sample) with the :class:`GrowParams`
+    ``params`` on the :class:`TreeState` ``state`` from :func:`init_state` or
+    the previous chunk; returns the new state (arrays may be replaced as they grow)."""
+    goal, lower, upper, w = params.goal, params.lower, params.upper, params.weights
+    delta, r_near, goal_bias = params.planning_range, params.near_radius, params.goal_bias
+    shrinking, gamma, lazy = params.shrinking, params.gamma, params.lazy
+    kind, lam, dw, soc, grid = params.kind, params.length_weight, params.distance_weights, params.social, params.grid
+    c_lower, c_upper, bodies, robot, env, levers = params.scene
+    (informed, mode, f1, f2, centre, rot, focal, xy_scale) = params.informed
     (q, parent, cost, edge, first_child, next_sib, prev_sib, clear, g_next, goal_nodes, goal_edges,
      counts, history, diameters, g_head, g_geom, goal_clear, ints, floats) = state
     n, n_goal, best_node, first_iteration = ints[0], ints[1], ints[2], ints[3]
@@ -318,8 +416,8 @@ def grow(rng, it_start, it_stop, goal, lower, upper, w, delta, r_near, goal_bias
                 diameters[it] = ellipse_c
     ints[0], ints[1], ints[2], ints[3] = n, n_goal, best_node, first_iteration
     floats[0], floats[1] = best_cost, ellipse_c
-    return (q, parent, cost, edge, first_child, next_sib, prev_sib, clear, g_next, goal_nodes, goal_edges,
-            counts, history, diameters, g_head, g_geom, goal_clear, ints, floats)
+    return TreeState(q, parent, cost, edge, first_child, next_sib, prev_sib, clear, g_next, goal_nodes, goal_edges,
+                     counts, history, diameters, g_head, g_geom, goal_clear, ints, floats)
 
 
 @njit(cache=True)
@@ -336,9 +434,13 @@ def _cost_slots(slots, phi, q_a, q_b, kind, lam, dw, soc, grid, counts):
 
 
 @njit(cache=True)
-def init_state(start, goal, lower, upper, w, iterations, r_near, chk, informed):
-    """The state of a run before its first chunk: the tree of the start alone."""
-    c_lower, c_upper, bodies, robot, env, levers = chk
+def init_state(start, iterations, params):
+    """The :class:`TreeState` of a run of ``iterations`` iterations with the
+    :class:`GrowParams` ``params`` before its first chunk: the tree of the
+    start alone."""
+    goal, lower, upper, w, r_near = params.goal, params.lower, params.upper, params.weights, params.near_radius
+    informed = params.informed.informed
+    bodies, robot, env = params.scene.bodies, params.scene.robot, params.scene.env
     s_count = robot.shape[0]
     cap = 256
     q = np.empty((cap, 4))
@@ -365,8 +467,8 @@ def init_state(start, goal, lower, upper, w, iterations, r_near, chk, informed):
     goal_clear = planar_kernel.capsule_clearances(goal, bodies, robot, env)
     ints = np.array([1, 0, -1, -1], dtype=np.int64)  # n, goal nodes, best node, first solution iteration
     floats = np.array([np.inf, np.inf])  # best cost, ellipse diameter
-    return (q, parent, cost, edge, first_child, next_sib, prev_sib, clear, g_next, goal_nodes, goal_edges,
-            counts, history, diameters, g_head, g_geom, goal_clear, ints, floats)
+    return TreeState(q, parent, cost, edge, first_child, next_sib, prev_sib, clear, g_next, goal_nodes, goal_edges,
+                     counts, history, diameters, g_head, g_geom, goal_clear, ints, floats)
 
 
 @njit(cache=True)

@@ -1,0 +1,194 @@
+"""The compiled tree loop's glue: when it can run, its inputs, its loading, its chunks.
+
+:func:`compiled_support` decides from declared capabilities whether a
+configuration can run compiled: the checker declares a compiled scene
+(:class:`~drake_social.collision.validity.CompiledSceneChecker`), the
+objective a compiled form (:attr:`~drake_social.planning.objective.Objective.compiled_form`).
+:func:`prepare` packs the inputs into a :class:`~.tree_kernel.GrowParams`
+(building the people grid) and has numba load, or compile, every kernel
+the run calls on a throwaway tree, so that :meth:`CompiledRun.run`, which
+the planner times, is the search alone. Where numba's on-disk cache was
+cold, one warning says that the kernels were compiled and how long that took
+(``make install`` fills the cache: :mod:`drake_social.warmup`).
+"""
+
+from __future__ import annotations
+
+import logging
+import time
+from typing import Callable, NamedTuple
+
+import numpy as np
+
+from drake_social.collision import planar_kernel
+from drake_social.collision.validity import CompiledSceneChecker
+from drake_social.cost import kernel as cost_kernel
+from drake_social.planning.objective import Objective
+from drake_social.planning.rrt_star import tree_kernel
+from drake_social.planning.rrt_star.options import RrtStarOptions
+from drake_social.planning.rrt_star.tree_kernel import GrowParams, InformedParams, PeopleGrid, SocialParams
+from drake_social.planning.sampling import EllipseSampler
+from drake_social.planning.space import ConfigurationSpace
+
+__all__ = ["CHUNK", "PROGRESS_CHUNK", "CompiledRun", "CompiledTree", "cache_misses", "compiled_support",
+           "kernel_dispatchers", "prepare"]
+
+_log = logging.getLogger(__name__)
+
+#: Iterations per call of the compiled loop (Ctrl-C is noticed between calls).
+CHUNK = 1024
+#: ... and with a progress callback (called after each call, for each of its iterations).
+PROGRESS_CHUNK = 64
+
+_cold_cache_reported = False
+
+
+def compiled_support(checker, objective: Objective, options: RrtStarOptions) -> tuple[bool, str]:
+    """Whether the compiled loop can plan this configuration, and why not.
+
+    The checker must declare a compiled scene (the validity protocol's
+    :class:`~drake_social.collision.validity.CompiledSceneChecker`), the
+    objective a compiled form, and a social objective must use the
+    compiled social cost; both samplers (uniform, informed) and both radius
+    modes are compiled.
+
+    Returns:
+        ``(True, "")``, or ``(False, reason)`` with the reason in words.
+    """
+    if not options.compiled:
+        return False, "RrtStarOptions.compiled is False (the Python reference loop was asked for)"
+    if not tree_kernel.AVAILABLE:
+        return False, "numba is not importable"
+    if not isinstance(checker, CompiledSceneChecker):
+        return False, (f"the checker {type(checker).__name__} declares no compiled_scene() "
+                       "(the validity protocol's CompiledSceneChecker capability)")
+    form = getattr(objective, "compiled_form", None)
+    if form not in ("length", "social"):
+        return False, f"the objective {type(objective).__name__} declares no compiled form (compiled_form = {form!r})"
+    if form == "social" and objective.social.backend != "numba":
+        return False, f"the social cost's backend is {objective.social.backend!r}, not 'numba'"
+    return True, ""
+
+
+def kernel_dispatchers() -> dict[str, object]:
+    """Every compiled function of the kernels the planner calls, by
+    ``module.function`` (numba dispatchers; empty without numba)."""
+    out = {}
+    for module in (cost_kernel, planar_kernel, tree_kernel):
+        for name, value in vars(module).items():
+            if hasattr(value, "stats") and hasattr(value, "signatures"):
+                out[f"{module.__name__}.{name}"] = value
+    return out
+
+
+def cache_misses() -> int:
+    """How many compilations this process made because numba's on-disk cache
+    lacked them (summed over :func:`kernel_dispatchers`)."""
+    return sum(sum(d.stats.cache_misses.values()) for d in kernel_dispatchers().values())
+
+
+def _social_params(objective: Objective) -> tuple[int, SocialParams, PeopleGrid]:
+    """The objective's kind (0 length, 1 social), its social inputs and people grid."""
+    f = np.ascontiguousarray
+    if objective.compiled_form == "social":
+        sc = objective.social
+        social = SocialParams(f(sc.people), *map(float, sc.geometry.link_lengths), f(sc.geometry.object_interest, float),
+                              f(sc._active, np.int64), f(sc._active_weights), f(sc._lever, float), sc.resolution,
+                              float(sc.space.max_reach), *sc._inverse_variances, float(sc.space.threshold))
+        g = sc._people_grid()
+        grid = PeopleGrid(float(g[0]), float(g[1]), float(g[2]), float(g[3]), int(g[4]), int(g[5]),
+                          f(g[6], np.int64), f(g[7], np.int64))
+        return 1, social, grid
+    social = SocialParams(np.zeros((0, 3)), 0.0, 0.0, np.zeros((0, 2)), np.zeros(0, np.int64), np.zeros(0),
+                          np.zeros(2), 1.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+    grid = PeopleGrid(0.0, 1.0, 0.0, 0.0, 1, 1, np.zeros(2, np.int64), np.zeros(0, np.int64))
+    return 0, social, grid
+
+
+def grow_params(space: ConfigurationSpace, checker: CompiledSceneChecker, objective: Objective,
+                options: RrtStarOptions, gamma: float, start: np.ndarray, goal: np.ndarray) -> GrowParams:
+    """The compiled loop's inputs for one run from start (4,) to goal (4,)."""
+    f = np.ascontiguousarray
+    kind, social, grid = _social_params(objective)
+    if options.informed:
+        sampler = EllipseSampler(space, start[:2], goal[:2])
+        xy_scale = float(objective.length_weight * min(objective.distance_weights[0], objective.distance_weights[1]))
+        informed = InformedParams(True, 0 if options.informed_mode == "paper" else 1, f(sampler.f1), f(sampler.f2),
+                                  f(sampler.centre), f(sampler.rotation), float(sampler.focal_distance), xy_scale)
+    else:
+        z = np.zeros(2)
+        informed = InformedParams(False, 0, z, z, z, np.eye(2), 0.0, 0.0)
+    return GrowParams(
+        f(goal), f(space.lower), f(space.upper), f(space.weights), float(options.planning_range),
+        float(options.near_radius), float(options.goal_bias), options.near_radius_mode == "shrinking",
+        float(gamma), kind, float(objective.length_weight), f(objective.distance_weights, float), social, grid,
+        checker.compiled_scene(), informed, bool(options.lazy_costs),
+    )
+
+
+class CompiledTree(NamedTuple):
+    """What a compiled run returns to the planner."""
+
+    nodes: np.ndarray  #: (n, 4) configurations
+    parents: np.ndarray  #: (n,) int64, -1 for the start
+    costs: np.ndarray  #: (n,) cost from the start
+    best_node: int  #: the node of the best goal connection, -1 when none
+    best_cost: float  #: its cost (inf when none)
+    first_iteration: int | None  #: the iteration of the first solution
+    history: np.ndarray  #: (K,) best cost after each iteration
+    diameters: np.ndarray  #: (K,) or (0,) informed ellipse diameters
+    counts: tuple[int, int, int]  #: configurations checked, motions checked, motions costed
+
+
+class CompiledRun:
+    """A run ready to start: inputs packed, kernels loaded (see :func:`prepare`)."""
+
+    def __init__(self, start: np.ndarray, params: GrowParams, iterations: int):
+        self.start = np.ascontiguousarray(start)
+        self.params = params
+        self.iterations = int(iterations)
+
+    def run(self, rng: np.random.Generator, progress: Callable[[int, float], None] | None = None) -> CompiledTree:
+        """All iterations, in chunks: between them Python runs (Ctrl-C is
+        seen, ``progress`` is called for each iteration of the chunk)."""
+        k = self.iterations
+        state = tree_kernel.init_state(self.start, k, self.params)
+        chunk = PROGRESS_CHUNK if progress is not None else CHUNK
+        done = -1
+        while done < k:
+            stop = min(k, done + chunk)
+            state = tree_kernel.grow(rng, done, stop, self.params, state)
+            if progress is not None:
+                for it in range(max(done, 0), stop):
+                    progress(it + 1, float(state.history[it]))
+            done = stop
+        n, best_node, first = int(state.ints[0]), int(state.ints[2]), int(state.ints[3])
+        return CompiledTree(state.q[:n].copy(), state.parent[:n].copy(), state.cost[:n].copy(), best_node,
+                            float(state.floats[0]), None if first < 0 else first, state.history.copy(),
+                            state.diameters.copy(), tuple(int(c) for c in state.counts))
+
+
+def prepare(space: ConfigurationSpace, checker: CompiledSceneChecker, objective: Objective, options: RrtStarOptions,
+            gamma: float, start: np.ndarray, goal: np.ndarray) -> CompiledRun:
+    """Packs a run's inputs and has numba load (or, with a cold cache,
+    compile) every kernel it calls, before anyone starts a clock.
+
+    numba loads a kernel's cached machine code at its first call in a
+    process (about 0.1 s for the tree loop and all it calls): here, once per
+    process, on a throwaway tree with only the start's goal connection and
+    its own generator. When that had to compile (numba's cache was cold),
+    one warning per process says so and how long it took.
+    """
+    global _cold_cache_reported
+    t_load = time.perf_counter()
+    misses = cache_misses()
+    params = grow_params(space, checker, objective, options, gamma, start, goal)
+    run = CompiledRun(start, params, options.iterations)
+    if not tree_kernel.grow.signatures:  # nothing loaded or compiled yet in this process
+        tree_kernel.grow(np.random.default_rng(0), -1, 0, params, tree_kernel.init_state(run.start, 1, params))
+    if cache_misses() > misses and not _cold_cache_reported:
+        _cold_cache_reported = True
+        _log.warning("numba's cache of the planning kernels was cold: compiled them once in %.1f s, outside the "
+                     "plan time (`make install` or `python -m drake_social.warmup` fills the cache)",
+                     time.perf_counter() - t_load)
+    return run

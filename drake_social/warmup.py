@@ -1,0 +1,86 @@
+"""Fills numba's on-disk cache of every compiled kernel, with the argument types the commands use.
+
+numba compiles a kernel at its first call with new argument types and keeps
+the machine code on disk (``cache=True``); a later process loads it in a
+fraction of a second. Compiling the social cost, the planar checker and the
+tree loop takes a minute or more of CPU, so ``make install`` runs
+``python -m drake_social.warmup`` once: the user's first ``plan`` then loads
+instead of compiling. The warm-up goes through the same code as the commands
+(the planar checker of a small built-in room, :func:`~drake_social.planning.algorithms.plan`
+with every algorithm and both near-radius modes, the optimiser, every checker
+query and the social cost), so numba sees exactly their argument types.
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses as dc
+import time
+
+import numpy as np
+
+__all__ = ["WARMUP_SCENARIO", "warm_up"]
+
+#: One room, one person, one desk: small enough to plan in milliseconds, with
+#: every kind of input the kernels take (people, boxes, the arm and a bar).
+WARMUP_SCENARIO = """
+description: "warm-up: one 8 x 5 m room, one person, a desk, a 1.5 m bar"
+world:
+  bounds: [0.0, 0.0, 8.0, 5.0]
+  obstacles:
+    - {center: [4.0, 0.6], size: [1.6, 0.8], yaw: 0.0}
+people:
+  - {x: 4.0, y: 3.8, theta: -1.5708, radius: 0.25, name: "standing"}
+robot:
+  base_radius: 0.35
+  link_lengths: [0.6, 0.5]
+  link_width: 0.08
+object: !Bar {length: 1.5, thickness: 0.05}
+start: [1.0, 2.5, 0.0, 1.5708]
+goal: [6.5, 2.5, 0.0, 1.5708]
+random_seed: 1
+planner:
+  iterations: 60
+"""
+
+
+def warm_up() -> dict[str, float | int]:
+    """Compiles (or loads) every kernel with the commands' argument types.
+
+    Returns:
+        ``seconds`` (wall time), ``compiled`` (compilations numba's cache
+        lacked) and ``functions`` (compiled functions of the kernels).
+    """
+    from drake_social.collision.drake_checker import make_checker
+    from drake_social.planning.algorithms import ALGORITHM_SPECS, plan
+    from drake_social.planning.rrt_star.compiled import cache_misses, kernel_dispatchers
+    from drake_social.scenario import load_scenario_text
+
+    t0 = time.perf_counter()
+    scenario = load_scenario_text(WARMUP_SCENARIO, "<drake_social.warmup>")
+    checker = make_checker(scenario, "planar")
+    for name in ALGORITHM_SPECS:
+        plan(scenario, checker, algorithm=name, seed=0)
+    for mode, optimize in (("shrinking", True), ("fixed", True)):
+        s = dc.replace(scenario, planner=dc.replace(scenario.planner, near_radius_mode=mode, optimize=optimize))
+        plan(s, checker, seed=1, progress=lambda k, c: None)
+    q_a, q_b = np.array(scenario.start, float), np.array(scenario.goal, float)
+    qs = np.stack([q_a, q_b])
+    checker.is_valid(q_a), checker.are_valid(qs), checker.clearance(q_a), checker.clearances(qs)
+    checker.is_motion_valid(q_a, q_b), checker.are_motions_valid(qs[:1], qs[1:])
+    checker.contacts(q_a), checker.body_poses(q_a), checker.capsules(q_a)
+    return {"seconds": time.perf_counter() - t0, "compiled": cache_misses(),
+            "functions": sum(len(d.signatures) for d in kernel_dispatchers().values())}
+
+
+def main(argv: list[str] | None = None) -> int:
+    """``python -m drake_social.warmup``: warms the cache and says what it did."""
+    argparse.ArgumentParser(prog="python -m drake_social.warmup", description=__doc__.splitlines()[0]).parse_args(argv)
+    report = warm_up()
+    print(f"drake_social kernels ready: {report['functions']} compiled functions, {report['compiled']} compiled "
+          f"now, {report['seconds']:.1f} s")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
