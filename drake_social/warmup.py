@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import argparse
 import dataclasses as dc
+import logging
 import time
 
 import numpy as np
@@ -76,6 +77,8 @@ def warm_up() -> dict[str, float | int]:
 def main(argv: list[str] | None = None) -> int:
     """``python -m drake_social.warmup``: warms the cache and says what it did."""
     argparse.ArgumentParser(prog="python -m drake_social.warmup", description=__doc__.splitlines()[0]).parse_args(argv)
+    # The planner's own cold-cache warning would repeat what this reports.
+    logging.getLogger("drake_social.planning.rrt_star.compiled").setLevel(logging.ERROR)
     report = warm_up()
     print(f"drake_social kernels ready: {report['functions']} compiled functions, {report['compiled']} compiled "
           f"now, {report['seconds']:.1f} s")

@@ -567,3 +567,55 @@ def test_the_starts_own_goal_connection_is_reported_even_when_no_node_is_added(c
         np.testing.assert_array_equal(dut.waypoints, [start, goal])
         if iterations <= 2:
             assert dut.tree_size == 1  # the first two samples of seed 0 add no node
+
+
+def test_a_checker_without_the_compiled_capability_runs_the_python_loop_and_the_log_says_why(monkeypatch, caplog):
+    """The numpy checker declares no compiled scene: the compiled loop is never
+    prepared, the Python loop plans (its tree equals the reference run's),
+    and one INFO line names the planner and the reason."""
+    import logging
+
+    from drake_social.planning.rrt_star import compiled
+
+    reference = run_room(iterations=60, compiled=False)
+
+    def refuse(*args, **kwargs):
+        raise AssertionError("the compiled loop was prepared")
+
+    monkeypatch.setattr(compiled, "prepare", refuse)
+    with caplog.at_level(logging.INFO, logger="drake_social.planning.rrt_star"):
+        dut = run_room(iterations=60)
+    np.testing.assert_array_equal(dut.tree_nodes, reference.tree_nodes)
+    assert dut.tree_size > 10
+    assert [r.getMessage() for r in caplog.records] == [
+        "rrt_star plans with the Python loop: the checker GeometricChecker declares no compiled_scene() "
+        "(the validity protocol's CompiledSceneChecker capability)"]
+
+
+def test_compiled_support_names_each_missing_capability(tiny_scenario):
+    """Each reason of compiled_support, from declared capabilities only."""
+    from drake_social.collision.validity import PlanarScene
+    from drake_social.planning.objective import Objective, SocialObjective
+
+    class SceneChecker(GeometricChecker):  # declares the capability: that is all it takes
+        def compiled_scene(self) -> PlanarScene:
+            raise NotImplementedError
+
+    checker = SceneChecker(tiny_scenario)
+    social = make_objective(tiny_scenario, "social_rrt_star")
+    assert compiled_support(checker, social, RrtStarOptions()) == (True, "")
+    assert compiled_support(checker, make_objective(tiny_scenario, "rrt_star"), RrtStarOptions()) == (True, "")
+    assert compiled_support(checker, social, RrtStarOptions(compiled=False)) == (
+        False, "RrtStarOptions.compiled is False (the Python reference loop was asked for)")
+    assert compiled_support(checker, Objective(), RrtStarOptions()) == (
+        False, "the objective Objective declares no compiled form (compiled_form = None)")
+    slow = copy.deepcopy(social)
+    slow.social.backend = "numpy"
+    assert compiled_support(checker, slow, RrtStarOptions()) == (
+        False, "the social cost's backend is 'numpy', not 'numba'")
+
+    class Doubled(SocialObjective):
+        def motion_cost(self, q_a, q_b):
+            return 2.0 * super().motion_cost(q_a, q_b)
+
+    assert Doubled.compiled_form is None and SocialObjective.compiled_form == "social"
