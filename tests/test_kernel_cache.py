@@ -139,13 +139,20 @@ def test_a_cold_cache_is_said_once_with_the_compile_time(monkeypatch, caplog):
     monkeypatch.setattr(compiled, "cache_misses", lambda: next(misses))
     monkeypatch.setattr(compiled, "_cold_cache_reported", False)
     monkeypatch.setattr(compiled, "grow_params", lambda *args: "params")
-    fake = types.SimpleNamespace(grow=types.SimpleNamespace(signatures=["loaded"]))
+    calls = []
+
+    def grow(rng, it_start, it_stop, params, state):  # the throwaway load: the start's goal connection
+        calls.append((it_start, it_stop, params, state))
+
+    grow.signatures = []  # not loaded in this process
+    fake = types.SimpleNamespace(grow=grow, init_state=lambda start, iterations, params: ("state", iterations))
     monkeypatch.setattr(compiled, "tree_kernel", fake)
     options = types.SimpleNamespace(iterations=5)
     with caplog.at_level(logging.INFO, logger=compiled.__name__):
         run = compiled.prepare(None, None, None, options, 1.0, np.zeros(4), np.ones(4))
         compiled.prepare(None, None, None, options, 1.0, np.zeros(4), np.ones(4))
     assert run.params == "params" and run.iterations == 5
+    assert calls == [(-1, 0, "params", ("state", 1))] * 2
     assert len(caplog.records) == 1 and caplog.records[0].levelno == logging.WARNING
     message = caplog.records[0].getMessage()
     assert message.startswith("numba's cache of the planning kernels was cold: compiled them once in ")

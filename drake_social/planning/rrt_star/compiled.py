@@ -181,12 +181,13 @@ def prepare(space: ConfigurationSpace, checker: CompiledSceneChecker, objective:
     """
     global _cold_cache_reported
     t_load = time.perf_counter()
-    misses = cache_misses()
-    params = grow_params(space, checker, objective, options, gamma, start, goal)
+    loading = not tree_kernel.grow.signatures  # nothing loaded or compiled yet in this process
+    misses = cache_misses() if loading else 0
+    params = grow_params(space, checker, objective, options, gamma, start, goal)  # the people grid's kernel too
     run = CompiledRun(start, params, options.iterations)
-    if not tree_kernel.grow.signatures:  # nothing loaded or compiled yet in this process
+    if loading:
         tree_kernel.grow(np.random.default_rng(0), -1, 0, params, tree_kernel.init_state(run.start, 1, params))
-    if cache_misses() > misses and not _cold_cache_reported:
+    if loading and cache_misses() > misses and not _cold_cache_reported:
         _cold_cache_reported = True
         _log.warning("numba's cache of the planning kernels was cold: compiled them once in %.1f s, outside the "
                      "plan time (`make install` or `python -m drake_social.warmup` fills the cache)",
