@@ -163,9 +163,10 @@ class CompiledRun:
                     progress(it + 1, float(state.history[it]))
             done = stop
         n, best_node, first = int(state.ints[0]), int(state.ints[2]), int(state.ints[3])
-        return CompiledTree(state.q[:n].copy(), state.parent[:n].copy(), state.cost[:n].copy(), best_node,
-                            float(state.floats[0]), None if first < 0 else first, state.history.copy(),
-                            state.diameters.copy(), tuple(int(c) for c in state.counts))
+        # Views of the run's own arrays: nobody else holds the state.
+        return CompiledTree(state.q[:n], state.parent[:n], state.cost[:n], best_node, float(state.floats[0]),
+                            None if first < 0 else first, state.history, state.diameters,
+                            tuple(int(c) for c in state.counts))
 
 
 def prepare(space: ConfigurationSpace, checker: CompiledSceneChecker, objective: Objective, options: RrtStarOptions,
