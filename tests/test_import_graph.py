@@ -85,6 +85,7 @@ LAYERS: dict[str, int] = {
     "drake_social.io.records": 7,
     "drake_social.experiments": 7,
     "drake_social.app": 7,
+    "drake_social.warmup": 7,
     "drake_social.cli": 8,
     "drake_social.cli_parser": 8,
     "drake_social.cli_progress": 8,

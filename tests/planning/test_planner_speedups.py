@@ -17,7 +17,8 @@ from drake_social.planning import rrt_star
 from drake_social.collision.planar_checker import PlanarChecker
 from drake_social.collision.geometric import GeometricChecker
 from drake_social.planning.optimize import optimize_path, path_cost
-from drake_social.planning.rrt_star import RrtStarOptions, _Neighbors, _Tree, default_gamma
+from drake_social.planning.rrt_star import RrtStarOptions, default_gamma
+from drake_social.planning.rrt_star.reference import _Neighbors, _Tree
 from drake_social.planning.space import ConfigurationSpace
 from drake_social.planning.algorithms import make_planner, plan
 from drake_social.scenario import ALGORITHMS, MAX_ITERATIONS, Person, ScenarioError, validate_scenario

@@ -395,7 +395,7 @@ def test_tree_costs_are_recomputed_so_descendants_never_undercut_ancestors():
     """Shifting a subtree by a cost difference can leave a child one ulp below
     its ancestor; with zero-cost motions the strict rewiring test then picked
     that ancestor and the tree grew a cycle. Costs are recomputed instead."""
-    from drake_social.planning.rrt_star import _Tree
+    from drake_social.planning.rrt_star.reference import _Tree
 
     dut = _Tree(8)
     dut.add(np.zeros(4), -1, 0.0)

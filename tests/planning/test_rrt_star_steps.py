@@ -14,7 +14,8 @@ import numpy as np
 import pytest
 
 from drake_social.collision.geometric import GeometricChecker
-from drake_social.planning.rrt_star import RrtStar, RrtStarOptions, _Counts, _Tree
+from drake_social.planning.rrt_star import RrtStar, RrtStarOptions
+from drake_social.planning.rrt_star.reference import _Counts, _Tree
 from drake_social.planning.space import ConfigurationSpace
 from drake_social.planning.algorithms import make_objective
 from drake_social.scenario import Bar, Box, Person, Scenario, World, validate_scenario

@@ -15,7 +15,8 @@ import pytest
 
 from drake_social.collision.geometric import GeometricChecker
 from drake_social.planning.result import PlanningInputError
-from drake_social.planning.rrt_star import RrtStar, RrtStarOptions, _Tree, compiled_support, default_gamma
+from drake_social.planning.rrt_star import RrtStar, RrtStarOptions, compiled_support, default_gamma
+from drake_social.planning.rrt_star.reference import _Tree
 from drake_social.planning.space import ConfigurationSpace
 from drake_social.planning.algorithms import make_objective
 from drake_social.scenario import Bar, Box, Scenario, World, validate_scenario
@@ -403,7 +404,7 @@ def test_neighbours_through_the_kd_tree_equal_a_plain_scan_ties_included():
     radius) plus random ones and four lattice nodes again, queried at
     lattice points, midpoints, random points and nodes; and the rebuild
     rule (more than max(256, n / 16) nodes added since the last build)."""
-    from drake_social.planning.rrt_star import _Neighbors
+    from drake_social.planning.rrt_star.reference import _Neighbors
 
     rng = np.random.default_rng(3)
     w = np.array([1.0, 2.0, 0.5, 0.25])
@@ -517,7 +518,7 @@ def test_near_set_is_the_nodes_within_the_radius_of_the_grown_tree_then_the_near
     """_near: the ascending indices within near_radius(n + 1) (the tree with
     the new node), inclusive, then the nearest node when it is not among
     them; with or without a neighbour structure."""
-    from drake_social.planning.rrt_star import _Neighbors
+    from drake_social.planning.rrt_star.reference import _Neighbors
 
     dut = rrt_star_with(near_radius=1.0)
     tree = _Tree(4)

@@ -44,7 +44,7 @@ from __future__ import annotations
 from drake_social.limits import MAX_ITERATIONS
 from drake_social.planning.rrt_star.compiled import CHUNK, PROGRESS_CHUNK, compiled_support
 from drake_social.planning.rrt_star.options import NEAR_RADIUS_MODES, RrtStarOptions, default_gamma
-from drake_social.planning.rrt_star.reference import KD_TREE_MIN_NODES, RrtStar, _Counts, _Neighbors, _Tree
+from drake_social.planning.rrt_star.reference import KD_TREE_MIN_NODES, RrtStar
 
 __all__ = ["CHUNK", "KD_TREE_MIN_NODES", "MAX_ITERATIONS", "NEAR_RADIUS_MODES", "PROGRESS_CHUNK", "RrtStar",
            "RrtStarOptions", "compiled_support", "default_gamma"]
