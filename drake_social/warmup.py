@@ -8,7 +8,8 @@ tree loop takes a minute or more of CPU, so ``make install`` runs
 instead of compiling. The warm-up goes through the same code as the commands
 (the planar checker of a small built-in room, :func:`~drake_social.planning.algorithms.plan`
 with every algorithm and both near-radius modes, the optimiser, every checker
-query and the social cost), so numba sees exactly their argument types.
+query and the social cost), so numba sees exactly their argument types; the
+execution analysis's searches are called with the types it passes.
 """
 
 from __future__ import annotations
@@ -70,8 +71,23 @@ def warm_up() -> dict[str, float | int]:
     checker.is_valid(q_a), checker.are_valid(qs), checker.clearance(q_a), checker.clearances(qs)
     checker.is_motion_valid(q_a, q_b), checker.are_motions_valid(qs[:1], qs[1:])
     checker.contacts(q_a), checker.body_poses(q_a), checker.capsules(q_a)
+    _warm_up_analysis()
     return {"seconds": time.perf_counter() - t0, "compiled": cache_misses(),
             "functions": sum(len(d.signatures) for d in kernel_dispatchers().values())}
+
+
+def _warm_up_analysis() -> None:
+    """The execution analysis's searches (:mod:`drake_social.sim.analysis_kernel`)
+    with the argument types :func:`drake_social.sim.analysis.point_deviation` gives them."""
+    from drake_social.sim import analysis_kernel
+
+    points = np.ascontiguousarray([[0.5, 0.1], [1.5, -0.1]])
+    curve = np.ascontiguousarray([[0.0, 0.0], [1.0, 0.0], [2.0, 0.0]])
+    nearest = np.asarray([[0, 1], [1, 2]], np.int64)
+    steps = np.asarray(analysis_kernel.nearest_segments(points, curve, nearest), np.int64)
+    dense = np.ascontiguousarray([[0.0, 0.0, 0.0, 0.0], [1.0, 0.0, 0.0, 0.0], [2.0, 0.0, 0.0, 0.0]])
+    newton_steps = 8  # an int, as the analysis's own count
+    analysis_kernel.step_distances(dense, points, steps, 2, 0.6, 0.5, 0.1, 0.0, newton_steps)
 
 
 def main(argv: list[str] | None = None) -> int:
