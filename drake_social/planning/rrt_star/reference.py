@@ -342,7 +342,7 @@ class RrtStar:
 
         result = self._result(tree, goal, best_node, best_cost, first_iteration, history, counts, t0)
         result.informed_diameters = diameters
-        return self._finish(result, t0)
+        return self._finish(result)
 
     @property
     def gamma(self) -> float:
@@ -363,7 +363,7 @@ class RrtStar:
         result = self._result(tree, goal, out.best_node, out.best_cost, out.first_iteration, out.history,
                               _Counts(*out.counts), t0)
         result.informed_diameters = out.diameters
-        return self._finish(result, t0)
+        return self._finish(result)
 
     def _load_python_kernels(self, start: np.ndarray) -> None:
         """Has numba load (or compile) the social cost's kernel before the
@@ -372,7 +372,7 @@ class RrtStar:
         if self.objective.compiled_form == "social" and social.backend == "numba":
             social.motion_cost(start[None], start[None])
 
-    def _finish(self, result: PlannerResult, t0: float) -> PlannerResult:
+    def _finish(self, result: PlannerResult) -> PlannerResult:
         """Records the raw cost and, when asked, optimises the path (kept only
         when strictly cheaper, so rounding in the recomputed sum can never
         report a higher cost than the planner's own)."""
