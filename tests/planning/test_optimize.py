@@ -521,7 +521,7 @@ def test_plan_optimises_the_path_with_the_shrinking_radius_by_default(tiny_scena
     objective = make_objective(scenario, "social_rrt_star")
     independent = sum(float(objective.motion_cost(a, b)[0]) for a, b in zip(dut.waypoints[:-1], dut.waypoints[1:]))
     assert dut.cost == pytest.approx(independent, rel=1e-12)
-    record = dut.to_json_dict()
+    record = dut.to_record()
     assert (record["cost"], record["raw_cost"], record["optimize_time"]) == (dut.cost, raw.cost, dut.optimize_time)
 
 
