@@ -33,6 +33,8 @@ written as one set, see :mod:`drake_social.io.outputs`).
 from __future__ import annotations
 
 import argparse
+import atexit
+import gc
 import json
 import logging
 import shutil
@@ -41,7 +43,6 @@ import sys
 from pathlib import Path
 from typing import Callable, Sequence, TextIO
 
-import matplotlib
 import numpy as np
 
 from drake_social import __version__
@@ -51,6 +52,18 @@ from drake_social.scenario import (ALGORITHMS, CHECKERS, Scenario, ScenarioError
 from drake_social.io.textfile import check_regular_file, read_text_file, shorten
 
 __all__ = ["EXIT_NO_PATH", "ProgressBar", "main", "build_parser", "load_with_overrides"]
+
+
+def _skip_the_last_collection() -> None:
+    """A command's process would end with a garbage collection over every
+    object that numba, Drake and matplotlib made (about 1 s); the OS frees
+    them anyway. Not when OMPL is loaded: its nanobind bindings would report
+    the objects left as leaks."""
+    if "ompl" not in sys.modules:
+        gc.freeze()
+
+
+atexit.register(_skip_the_last_collection)
 
 #: Most seeds of ``bench --seeds``: as many as a study's runs per planner
 #: (``experiments.study.MAX_RUNS``); each seed plans every algorithm on every scenario.
@@ -899,7 +912,6 @@ def main(argv: Sequence[str] | None = None) -> int:
     Args:
         argv: the arguments after the program name; None = ``sys.argv[1:]``.
     """
-    matplotlib.use("Agg")  # files only, never a window (CI has no display)
     parser = build_parser()
     try:
         args = parser.parse_args(argv)
