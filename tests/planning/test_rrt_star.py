@@ -180,6 +180,7 @@ def _median_social(scenario, checker, algorithm, seeds):
     return results, float(np.median([r.social_cost_full for r in results]))
 
 
+@pytest.mark.slow
 def test_social_rrt_star_ends_with_lower_social_cost_than_rrt_star(corridor):
     scenario, checker = corridor
     _, rrt = _median_social(scenario, checker, "rrt_star", range(3))
@@ -198,6 +199,7 @@ def _closest_object_approach(scenario, waypoints, person) -> float:
     return float(np.hypot(p[..., 0] - person.x, p[..., 1] - person.y).min())
 
 
+@pytest.mark.slow
 def test_multi_point_keeps_the_object_farther_from_people_than_base_only(corridor):
     """Base-only cost is blind to the bar, so its arm swings the bar wherever
     the tree happens to; the multi-point cost keeps the bar away from the
@@ -424,6 +426,7 @@ def test_zero_cost_motions_never_rewire_into_a_cycle():
 # ---- every scenario file, with Drake's checker ---------------------------------------------------
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", ["office_bar", "generic_L", "tiny"])
 def test_every_scenario_plans_a_valid_path_with_drake(name, repo_root):
     """A short run per shipped scenario with the SceneGraph checker (clearance
