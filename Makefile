@@ -35,8 +35,8 @@ chromium:
 	fi
 
 # Test markers (registered in pyproject.toml, [tool.pytest.ini_options]):
-#   slow        takes more than about 2 s alone: planner statistics, simulations,
-#               benchmarks, studies, the path-hash table (each module's pytestmark)
+#   slow        whole plans, simulations, benchmarks, studies, the path-hash table
+#               (by hand: a module's pytestmark or a test's decorator)
 #   browser     drives headless Chromium (tests/sim/browser.py; given by rule in
 #               tests/conftest.py to every test calling browser.require_chromium())
 #   subprocess  starts another process, mostly a Python interpreter or drake-social

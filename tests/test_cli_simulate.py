@@ -18,7 +18,7 @@ from drake_social.cli import main
 sys.path.insert(0, str(Path(__file__).parent / "sim"))
 import browser  # noqa: E402  (the shared headless-Chromium harness of tests/sim)
 
-# Drake-social simulate end to end: plans and Drake simulations.
+# ``drake-social simulate`` end to end: plans and Drake simulations.
 pytestmark = pytest.mark.slow
 
 
