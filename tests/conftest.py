@@ -37,7 +37,7 @@ def import_extra(package: str, module: str | None = None):
     Skips only when ``package`` itself is not installed, and fails instead
     where it must be (:func:`extras_must_be_installed`). Any error while
     importing ``module`` (say, a broken import inside the project's own
-    ``drake_social.experiments.bench.planners.ompl_baseline``) propagates: a test error,
+    ``drake_social.experiments.bench.ompl_baseline``) propagates: a test error,
     never a skip.
     """
     if importlib.util.find_spec(package) is None:
@@ -86,7 +86,7 @@ def tiny_scenario(tiny_scenario_path):
 
 @pytest.fixture(scope="session")
 def extra():
-    """:func:`import_extra` as a fixture: ``extra("ompl", "drake_social.experiments.bench.planners.ompl_baseline")``."""
+    """:func:`import_extra` as a fixture: ``extra("ompl", "drake_social.experiments.bench.ompl_baseline")``."""
     return import_extra
 
 

@@ -26,7 +26,7 @@ def dut(extra, monkeypatch, tmp_path):
 
 def test_a_missing_package_skips_where_it_is_optional(dut):
     with pytest.raises(pytest.skip.Exception, match=f"optional '{MISSING}' package is not installed"):
-        dut(MISSING, "drake_social.experiments.bench.planners.ompl_baseline")
+        dut(MISSING, "drake_social.experiments.bench.ompl_baseline")
 
 
 @pytest.mark.parametrize("ci", ["true", "1", "True"])

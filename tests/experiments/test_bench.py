@@ -113,7 +113,7 @@ def test_bench_rejects_bad_arguments(tiny_scenario_path, tmp_path):
 
 
 def test_radius_formula_by_hand(extra):
-    ompl_baseline = extra("ompl", "drake_social.experiments.bench.planners.ompl_baseline")
+    ompl_baseline = extra("ompl", "drake_social.experiments.bench.ompl_baseline")
     assert ompl_baseline.unit_ball_measure(2) == pytest.approx(math.pi)
     assert ompl_baseline.unit_ball_measure(3) == pytest.approx(4 * math.pi / 3)
     assert ompl_baseline.unit_ball_measure(4) == pytest.approx(math.pi**2 / 2)
@@ -130,7 +130,7 @@ def test_radius_formula_by_hand(extra):
 
 
 def test_ompl_path_is_valid_and_costed_by_our_code(tiny_scenario, extra):
-    ompl_baseline = extra("ompl", "drake_social.experiments.bench.planners.ompl_baseline")
+    ompl_baseline = extra("ompl", "drake_social.experiments.bench.ompl_baseline")
     objective = make_objective(tiny_scenario, "social_rrt_star")
     p = tiny_scenario.planner
 
@@ -167,7 +167,7 @@ def test_ompl_path_is_valid_and_costed_by_our_code(tiny_scenario, extra):
 
 
 def test_objective_adapter_equals_our_motion_cost(tiny_scenario_path, rng, extra):
-    ompl_baseline = extra("ompl", "drake_social.experiments.bench.planners.ompl_baseline")
+    ompl_baseline = extra("ompl", "drake_social.experiments.bench.ompl_baseline")
     from ompl import base as ob
     from ompl import geometric as og
 

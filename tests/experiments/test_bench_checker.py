@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from drake_social.experiments.bench.planners.checkers import random_edges, run_checker_bench
+from drake_social.experiments.bench.checkers import random_edges, run_checker_bench
 from drake_social.kinematics import config_distance
 
 

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from drake_social.experiments import bench_scaling as dut
+from drake_social.experiments.bench import scaling as dut
 from drake_social.collision.drake_checker import make_checker
 
 

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import pytest
 
-from drake_social.experiments.bench.planners.execution import run_sim_bench, sim_markdown
+from drake_social.experiments.bench.execution import run_sim_bench, sim_markdown
 from drake_social.collision.drake_checker import make_checker
 from drake_social.planning.algorithms import plan
 from drake_social.sim.run import simulate

@@ -3,7 +3,7 @@
 :func:`run_bench` plans every (scenario, algorithm) with seeds
 ``0 .. seeds - 1`` and reports per run and as medians with spread. When
 ``ompl`` is importable it also runs OMPL's RRTstar in the same run on the
-same problem (:mod:`drake_social.experiments.bench.planners.ompl_baseline`), once per
+same problem (:mod:`drake_social.experiments.bench.ompl_baseline`), once per
 objective: ``rrt_star`` (path length), ``social_rrt_star`` (multi-point)
 and ``base_rrt_star`` (base-only); the informed variants are compared with
 OMPL on their objective (OMPL's RRTstar does not sample informed).
@@ -160,7 +160,7 @@ def _repeated(run_once: Callable[[], tuple], repeats: int) -> tuple:
 
 def _plan_ompl_runs(scenario: Scenario, key: str, iterations: int, seeds: int, checker: str, tick,
                     repeats: int = 1) -> dict:
-    from drake_social.experiments.bench.planners.ompl_baseline import plan_ompl
+    from drake_social.experiments.bench.ompl_baseline import plan_ompl
 
     objective = make_objective(scenario, key)
     p = scenario.planner
@@ -252,9 +252,9 @@ def run_bench(
         include_checker: also measure the checkers
             (:func:`run_checker_bench` on 2000 configurations and 200 motions).
         sim_runs: when > 0, also the execution benchmark
-            (:func:`~drake_social.experiments.bench.planners.execution.run_sim_bench`) with
+            (:func:`~drake_social.experiments.bench.execution.run_sim_bench`) with
             this many timed runs per (mode, execution).
-        scaling: also :func:`~drake_social.experiments.bench.planners.scaling.run_scaling_bench`
+        scaling: also :func:`~drake_social.experiments.bench.scaling.run_scaling_bench`
             (K up to 50,000 with the shrinking radius, optimisation against
             K = 50,000, 50 far people) on every scenario with ``checker``.
         repeats: runs of each seed, ours and OMPL's: a run's wall_time is the
@@ -352,20 +352,20 @@ def run_bench(
 
     checker_bench = None
     if include_checker:
-        from drake_social.experiments.bench.planners.checkers import run_checker_bench
+        from drake_social.experiments.bench.checkers import run_checker_bench
 
         checker_bench = run_checker_bench(scenario_paths=paths, num_configs=2000, num_edges=200, repeats=1)
         tick("checker bench")
 
     sim_bench = None
     if sim_runs > 0:
-        from drake_social.experiments.bench.planners.execution import run_sim_bench
+        from drake_social.experiments.bench.execution import run_sim_bench
 
         sim_bench = run_sim_bench(scenario_paths=paths, runs=sim_runs, progress=tick)
 
     scaling_bench = None
     if scaling:
-        from drake_social.experiments.bench.planners.scaling import run_scaling_bench
+        from drake_social.experiments.bench.scaling import run_scaling_bench
 
         scaling_bench = run_scaling_bench(scenario_paths=paths, checker=checker, progress=tick)
 
@@ -496,11 +496,11 @@ def _markdown(out: dict) -> str:
                          f"| {u['planar_is_valid']:.1f} | {u['drake_is_valid']:.1f} | {u['planar_motion']:.1f} "
                          f"| {u['drake_motion']:.1f} | {u['drake_motion'] / u['planar_motion']:.0f}x |")
     if out.get("sim_bench"):
-        from drake_social.experiments.bench.planners.execution import sim_markdown
+        from drake_social.experiments.bench.execution import sim_markdown
 
         lines += sim_markdown(out["sim_bench"])
     if out.get("scaling_bench"):
-        from drake_social.experiments.bench.planners.scaling import markdown as scaling_markdown
+        from drake_social.experiments.bench.scaling import markdown as scaling_markdown
 
         lines += scaling_markdown(out["scaling_bench"])
     return "\n".join(lines) + "\n"
