@@ -95,6 +95,7 @@ OBJECTS = [
 ]
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("obj", OBJECTS, ids=["bar", "L", "polyline"])
 def test_clearances_equal_dense_sampling(obj, rng):
     scenario = cluttered_scenario(obj)
@@ -148,6 +149,7 @@ def _point_segment_rows(c, a, b):
 finite = st.floats(-3.0, 3.0, allow_nan=False)
 
 
+@pytest.mark.slow
 @given(
     a=st.tuples(finite, finite),
     b=st.tuples(finite, finite),

@@ -297,6 +297,7 @@ def test_msc_matches_2000_step_reference_without_threshold(cost, rng):
     np.testing.assert_allclose(got, ref, rtol=0.01)
 
 
+@pytest.mark.slow
 def test_msc_error_at_the_paper_threshold_is_explained_by_the_jumps(cost, rng):
     """tau = 0.2: |Msc - reference| <= 1% + what the threshold jumps can cause.
 
@@ -476,6 +477,7 @@ person = st.tuples(
 L_GEOMETRY = l_shape_cost().geometry
 
 
+@pytest.mark.slow
 @settings(max_examples=200)
 @given(q=st.tuples(finite, finite, finite, finite), people=st.lists(person, min_size=1, max_size=4))
 def test_property_s_is_finite_and_non_negative(q, people):

@@ -50,6 +50,7 @@ def solved(request, tiny, tiny_checker):
 # ---- every returned path ----------------------------------------------------------------
 
 
+@pytest.mark.slow
 def test_path_runs_from_start_to_exactly_the_goal(solved):
     scenario, _, dut = solved
     assert dut.success, dut.message
@@ -124,6 +125,7 @@ def test_result_reports_its_counts_and_parts(solved):
 # ---- determinism ------------------------------------------------------------------------
 
 
+@pytest.mark.slow
 def test_same_seed_gives_the_identical_result(tiny, tiny_checker):
     a = plan(tiny, tiny_checker, seed=11)
     b = plan(tiny, tiny_checker, seed=11)
@@ -133,6 +135,7 @@ def test_same_seed_gives_the_identical_result(tiny, tiny_checker):
     assert a.cost == b.cost
 
 
+@pytest.mark.slow
 def test_different_seeds_give_different_trees(tiny, tiny_checker):
     a = plan(tiny, tiny_checker, seed=1)
     b = plan(tiny, tiny_checker, seed=2)
@@ -140,6 +143,7 @@ def test_different_seeds_give_different_trees(tiny, tiny_checker):
     assert not np.array_equal(a.tree_nodes[:n], b.tree_nodes[:n])
 
 
+@pytest.mark.slow
 def test_scenario_seed_is_the_default(tiny, tiny_checker):
     a = plan(tiny, tiny_checker)
     b = plan(tiny, tiny_checker, seed=tiny.random_seed)
@@ -221,6 +225,7 @@ def test_multi_point_keeps_the_object_farther_from_people_than_base_only(corrido
 # ---- informed sampling -------------------------------------------------------------------
 
 
+@pytest.mark.slow
 def test_informed_planner_samples_only_inside_its_ellipse(tiny, tiny_checker, monkeypatch):
     from drake_social.planning import sampling
 
@@ -257,6 +262,7 @@ def empty_room(length_weight: float) -> Scenario:
     return scenario
 
 
+@pytest.mark.slow
 def test_admissible_ellipse_never_excludes_the_optimum():
     """With lambda > 0 and a far person the optimum is the straight motion
     (its social cost is 0 and its length minimal). Every ellipse used must
@@ -311,6 +317,7 @@ def walled_goal_scenario() -> Scenario:
     return scenario
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("algorithm", ["rrt_star", "informed_social_rrt_star"])
 def test_walled_off_goal_returns_a_clear_no_path_result(algorithm):
     scenario = walled_goal_scenario()
@@ -412,6 +419,7 @@ def test_tree_costs_are_recomputed_so_descendants_never_undercut_ancestors():
         dut.reparent(d, c, 0.0)
 
 
+@pytest.mark.slow
 def test_zero_cost_motions_never_rewire_into_a_cycle():
     """A social objective with nobody around: every motion costs exactly 0, the
     situation in which the shifted costs used to loop forever."""
