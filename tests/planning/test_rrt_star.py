@@ -48,6 +48,7 @@ def solved(request, tiny, tiny_checker):
 
 
 # ---- every returned path ----------------------------------------------------------------
+# (slow: the module's `solved` fixture runs the Python loop of every algorithm, 3-5 s each)
 
 
 @pytest.mark.slow
@@ -58,6 +59,7 @@ def test_path_runs_from_start_to_exactly_the_goal(solved):
     np.testing.assert_array_equal(dut.waypoints[-1], scenario.goal)
 
 
+@pytest.mark.slow
 def test_every_waypoint_and_motion_is_valid(solved, tiny_checker):
     _, _, dut = solved
     wp = dut.waypoints
@@ -65,6 +67,7 @@ def test_every_waypoint_and_motion_is_valid(solved, tiny_checker):
     assert tiny_checker.are_motions_valid(wp[:-1], wp[1:]).all()
 
 
+@pytest.mark.slow
 def test_cost_equals_the_cost_recomputed_from_the_waypoints(solved):
     scenario, planner, dut = solved
     wp = dut.waypoints
@@ -74,6 +77,7 @@ def test_cost_equals_the_cost_recomputed_from_the_waypoints(solved):
     assert parts["objective"] == pytest.approx(dut.cost, rel=1e-9, abs=1e-12)
 
 
+@pytest.mark.slow
 def test_best_cost_never_increases(solved):
     _, _, dut = solved
     h = dut.cost_history
@@ -89,6 +93,7 @@ def test_best_cost_never_increases(solved):
     assert h[-1] < 0.95 * h[first], (h[first], h[-1])
 
 
+@pytest.mark.slow
 def test_tree_costs_are_parent_cost_plus_edge_cost(solved):
     """After all the rewiring: F(node) = F(parent) + Msc(parent, node) for every node."""
     _, planner, dut = solved
@@ -111,6 +116,7 @@ def test_tree_costs_are_parent_cost_plus_edge_cost(solved):
         depth[i] = steps
 
 
+@pytest.mark.slow
 def test_result_reports_its_counts_and_parts(solved):
     scenario, planner, dut = solved
     assert dut.tree_size == len(dut.tree_nodes) <= 401
