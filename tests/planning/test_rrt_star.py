@@ -48,7 +48,7 @@ def solved(request, tiny, tiny_checker):
 
 
 # ---- every returned path ----------------------------------------------------------------
-# (slow: the module's `solved` fixture runs the Python loop of every algorithm, 3-5 s each)
+# Slow: the module's `solved` fixture runs the Python loop of every algorithm (3-5 s each).
 
 
 @pytest.mark.slow
