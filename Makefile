@@ -4,7 +4,7 @@ VENV   := .venv
 PY     := $(VENV)/bin/python
 OUT    ?= out
 
-.PHONY: demo test bench install clean chromium mutate docs
+.PHONY: demo test test-fast bench install clean chromium mutate docs
 
 $(VENV)/.installed: pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -42,9 +42,26 @@ chromium:
 	    || echo "warning: could not install chromium; the browser tests will skip"; \
 	fi
 
-# The whole test suite. pytest exits 5 when it collected no test: that is a failure here.
+# Test markers (registered in pyproject.toml, [tool.pytest.ini_options]):
+#   slow        whole plans, simulations, benchmarks, studies, the path-hash table
+#               (by hand: a module's pytestmark or a test's decorator)
+#   browser     drives headless Chromium (tests/sim/browser.py; given by rule in
+#               tests/conftest.py to every test calling browser.require_chromium())
+#   subprocess  starts another process, mostly a Python interpreter or drake-social
+#               paying pydrake's imports (by rule in tests/conftest.py)
+# make test runs them all (under 8 minutes on two cores); make test-fast leaves the
+# three out (under 90 s) to iterate with. PYTEST_ARGS adds options to both, e.g.
+# make test-fast PYTEST_ARGS='-x -k social'. pytest exits 5 when it collected no
+# test: that is a failure here too.
+PYTEST_ARGS ?=
+FAST := not slow and not browser and not subprocess
+
 test: install chromium
-	$(PY) -m pytest -q -p no:cacheprovider tests; rc=$$?; \
+	$(PY) -m pytest -q -p no:cacheprovider $(PYTEST_ARGS) tests; rc=$$?; \
+	if [ $$rc -eq 5 ]; then echo "error: pytest collected no tests"; exit 1; fi; exit $$rc
+
+test-fast: install
+	$(PY) -m pytest -q -p no:cacheprovider -m '$(FAST)' $(PYTEST_ARGS) tests; rc=$$?; \
 	if [ $$rc -eq 5 ]; then echo "error: pytest collected no tests"; exit 1; fi; exit $$rc
 
 # The documentation site (mkdocs.yml, docs/): the README, the guides and an API

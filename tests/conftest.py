@@ -94,3 +94,50 @@ def extra():
 def rng() -> np.random.Generator:
     """A fresh generator with a fixed seed for every test (order-independent)."""
     return np.random.default_rng(20240531)
+
+
+# ---- markers by rule (registered in pyproject.toml; `make test-fast` leaves them out)
+
+
+def _code_names(funcs) -> set[str]:
+    """The global and attribute names that the code of ``funcs`` uses, with
+    those of the functions and classes of their own module that it names
+    (and so on); names that resolve to the ``subprocess`` module come back
+    as ``"subprocess"``."""
+    import subprocess
+
+    names: set[str] = set()
+    seen: set = set()
+    stack = [(getattr(f, "__code__", None), getattr(f, "__globals__", {})) for f in funcs]
+    while stack:
+        code, module_globals = stack.pop()
+        if code is None or code in seen:
+            continue
+        seen.add(code)
+        names.update(code.co_names)
+        stack.extend((c, module_globals) for c in code.co_consts if hasattr(c, "co_names"))
+        for name in code.co_names:
+            value = module_globals.get(name)
+            if value is subprocess:
+                names.add("subprocess")
+            elif getattr(value, "__module__", None) == module_globals.get("__name__"):
+                members = vars(value).values() if isinstance(value, type) else [value]
+                stack.extend((getattr(m, "__code__", None), module_globals) for m in members)
+    return names
+
+
+def pytest_collection_modifyitems(config, items):
+    """Marks ``browser`` every test that asks for headless Chromium
+    (``browser.require_chromium()``), and ``subprocess`` every test that
+    starts another process (its code, a fixture it requests or a helper of
+    their module uses the ``subprocess`` module)."""
+    for item in items:
+        func = getattr(item, "function", None)
+        if func is None:
+            continue
+        fixtures = [d.func for defs in item._fixtureinfo.name2fixturedefs.values() for d in defs]
+        names = _code_names([func, *fixtures])
+        if "require_chromium" in names:
+            item.add_marker(pytest.mark.browser)
+        if "subprocess" in names:
+            item.add_marker(pytest.mark.subprocess)

@@ -45,6 +45,7 @@ def test_unknown_option_is_a_usage_error(capsys):
     assert "unrecognized arguments: --bogus" in capsys.readouterr().err
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("scenario", SCENARIO_FILES, ids=[p.stem for p in SCENARIO_FILES])
 def test_show_writes_a_png_of_every_scenario(scenario, tmp_path, capsys):
     assert main(["show", str(scenario), "--out", str(tmp_path)]) == 0
@@ -62,6 +63,7 @@ def test_show_writes_a_png_of_every_scenario(scenario, tmp_path, capsys):
     assert (rgb.min(-1) > 0.95).mean() > 0.1
 
 
+@pytest.mark.slow
 def test_show_writes_to_out_slash_scenario_name_by_default(tmp_path, monkeypatch, capsys):
     monkeypatch.chdir(tmp_path)
     assert main(["show", str(SCENARIO_DIR / "tiny.yaml")]) == 0
@@ -150,6 +152,7 @@ def test_unwritable_output_exits_1(tmp_path, capsys):
     assert "drake-social: error:" in capsys.readouterr().err
 
 
+@pytest.mark.slow
 def test_overrides_reach_the_picture(tmp_path):
     """Removing the people through --set leaves no red on the map (the left
     three quarters of the picture; the colour bar is on the right)."""

@@ -43,6 +43,7 @@ def _read_csv(path: Path) -> np.ndarray:
     return np.array([[float(v) for v in line.split(",")] for line in lines[1:]]).reshape(-1, 4)
 
 
+@pytest.mark.slow
 def test_plan_tiny_writes_a_path_from_start_to_goal(tmp_path, capsys):
     out = tmp_path / "tiny"
     assert main(["plan", str(TINY), "--iterations", "300", "--checker", "numpy", "--out", str(out)]) == 0
@@ -71,6 +72,7 @@ def test_plan_tiny_writes_a_path_from_start_to_goal(tmp_path, capsys):
     assert record["base_length"] == pytest.approx(parts["base_length"], rel=1e-12)
 
 
+@pytest.mark.slow
 def test_algorithm_and_seed_options_reach_the_planner(tmp_path, capsys):
     assert main(["plan", str(TINY), "--algorithm", "rrt_star", "--seed", "5", "--iterations", "120",
                  "--checker", "numpy", "--out", str(tmp_path)]) == 0
@@ -84,6 +86,7 @@ def test_algorithm_and_seed_options_reach_the_planner(tmp_path, capsys):
     assert record["cost"] == pytest.approx(record["path_length"], rel=1e-9)
 
 
+@pytest.mark.slow
 def test_walled_off_goal_exits_3_and_still_writes_the_result(tmp_path, capsys):
     scenario = tmp_path / "walled.yaml"
     scenario.write_text(WALLED)
@@ -132,6 +135,7 @@ def test_bad_options_are_usage_errors(tmp_path, capsys):
     assert "invalid choice: 'fcl'" in capsys.readouterr().err
 
 
+@pytest.mark.slow
 def test_progress_bar_only_when_asked_or_on_a_terminal(tmp_path, capsys):
     base = ["plan", str(TINY), "--iterations", "40", "--checker", "numpy"]
     assert main(base + ["--out", str(tmp_path / "a")]) == 0
@@ -225,6 +229,7 @@ def test_bench_parses_and_calls_run_bench_with_keywords(tmp_path, monkeypatch, c
     assert "none.yaml: no such scenario file" in capsys.readouterr().err
 
 
+@pytest.mark.slow
 def test_bench_runs_on_tiny_and_prints_its_table(tmp_path, capsys):
     argv = ["bench", "--scenarios", str(TINY), "--algorithms", "social_rrt_star", "rrt_star", "--iterations", "40",
             "--seeds", "2", "--checker", "numpy", "--no-ompl", "--no-checker-bench", "--sim-runs", "0",

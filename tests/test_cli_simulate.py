@@ -18,6 +18,9 @@ from drake_social.cli import main
 sys.path.insert(0, str(Path(__file__).parent / "sim"))
 import browser  # noqa: E402  (the shared headless-Chromium harness of tests/sim)
 
+# ``drake-social simulate`` end to end: plans and Drake simulations.
+pytestmark = pytest.mark.slow
+
 
 @pytest.fixture(scope="module")
 def planned(tmp_path_factory, tiny_scenario_path):

@@ -23,6 +23,9 @@ from drake_social.scenario import load_scenario
 from drake_social.viz.labels import ELLIPSIS, MAX_LABEL_CHARS, MAX_TITLE_CHARS, fit_text
 from drake_social.viz.world import field_grid, field_resolution
 
+# Crowds and rooms of thousands of boxes.
+pytestmark = pytest.mark.slow
+
 REPO = Path(__file__).resolve().parent.parent
 
 

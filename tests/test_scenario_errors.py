@@ -241,12 +241,14 @@ def test_depth_through_aliases_counts(tmp_path):
     assert _message(dut) == _depth_message(dut, 2)
 
 
+@pytest.mark.slow
 def test_a_document_of_too_many_plain_nodes_is_refused(tmp_path):
     dut = tmp_path / "wide.yaml"
     dut.write_text("start: [" + ", ".join(["0"] * 100_000) + "]\n")
     assert _message(dut) == _nodes_message(dut, 1)
 
 
+@pytest.mark.slow
 def test_the_limits_leave_real_scenarios_alone(tmp_path):
     """2,000 obstacles and 300 people (the crowds to come) and the shipped files load."""
     obstacles = "".join(f"    - {{center: [{10 + (i % 50) * 1.5}, {10 + (i // 50) * 1.5}], size: [0.5, 0.5]}}\n"
@@ -387,6 +389,7 @@ def _short(message: str, total: int) -> None:
     assert f"... ({total:,} characters)" in message
 
 
+@pytest.mark.slow
 def test_a_long_list_is_not_repeated_whole():
     override = f"social: {{weights: [{', '.join(['1'] * 99_000)}]}}"
     message = _message(TINY, [override])

@@ -133,6 +133,7 @@ def test_a_collision_is_also_the_reference_checkers_verdict(tiny_scenario, path)
     assert GeometricChecker(tiny_scenario).are_valid(person).tolist() == [True, False, True]
 
 
+@pytest.mark.slow
 def test_endpoints_within_the_tolerance_are_accepted_and_run(tiny_scenario, path):
     nearly = path + [[1e-10, 0.0, 0.0, -1e-10], [0.0, 0.0, 0.0, 0.0]]
     dut = simulate(tiny_scenario, waypoints=nearly, analyze=False)
@@ -456,6 +457,7 @@ def _counting(monkeypatch, owner, name):
     return calls
 
 
+@pytest.mark.slow
 def test_a_path_file_and_the_scenario_are_checked_once(tmp_path, tiny_scenario_path, capsys, monkeypatch):
     import drake_social.scenario
     import drake_social.scenario.load

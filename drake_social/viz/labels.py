@@ -117,6 +117,9 @@ def fit_width(text: str, width: float, fontsize: float, max_lines: int = MAX_TIT
     bounded = fit_text(text, max_chars=max_lines * MAX_TITLE_CHARS, max_lines=max_lines)
     lines: list[str] = []
     for paragraph in bounded.split("\n"):
+        if text_width(paragraph, fontsize) <= room:  # the usual case: one measurement
+            lines.append(paragraph)
+            continue
         line = ""
         for word in paragraph.split(" "):
             candidate = f"{line} {word}" if line else word

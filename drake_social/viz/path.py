@@ -31,7 +31,7 @@ from drake_social.planning.result import PlannerResult
 from drake_social.scenario import Scenario
 from drake_social.viz.labels import fit_width
 from drake_social.viz.robot import RobotStyle, draw_robot
-from drake_social.viz.show import map_titles, scene_with_field
+from drake_social.viz.show import MAP_DPI, map_titles, scene_with_field
 
 __all__ = [
     "PATH_COLOR",
@@ -361,7 +361,7 @@ def convergence_figure(histories: Mapping[str, np.ndarray], *, title: str | None
 
 
 def write_plan_figures(scenario: Scenario, result: PlannerResult, out_dir: str | Path, *,
-                       title: str | None = None, dpi: int = 150) -> dict[str, Path]:
+                       title: str | None = None, dpi: int = MAP_DPI) -> dict[str, Path]:
     """Writes ``path.png``, ``cost_profile.png`` and ``convergence.png`` into ``out_dir``.
 
     Returns:

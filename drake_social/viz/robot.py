@@ -77,20 +77,26 @@ def draw_robot(
     def label(text: str) -> str | None:
         return text if labels else None
 
-    base = Circle((q[0], q[1]), geometry.base_radius, facecolor=style.base, edgecolor=style.edge,
+    # Patches go in with add_artist and the data limits get the outlines' points
+    # once: add_patch would walk every patch's Bezier curves (a third of a map's cost).
+    r = geometry.base_radius
+    base = Circle((q[0], q[1]), r, facecolor=style.base, edgecolor=style.edge,
                   linewidth=0.8, alpha=alpha, zorder=zorder, label=label("robot base"))
-    out["base"].append(ax.add_patch(base))
+    out["base"].append(ax.add_artist(base))
+    extent = [q[:2] - r, q[:2] + r]
     segments = geometry.segments(q)
     radii = geometry.segment_radii
     parts = [("link1", style.link1, "link 1"), ("link2", style.link2, "link 2")]
     parts += [("object", style.object, "object")] * (len(segments) - 2)
     for s, (part, color, text) in enumerate(parts):
         outline = capsule_outline(segments[s, 0], segments[s, 1], radii[s])
+        extent += [outline.min(0), outline.max(0)]
         # The object is drawn above the links, as it is held above them.
         patch = Polygon(outline, closed=True, facecolor=color, edgecolor=style.edge, linewidth=0.5, alpha=alpha,
                         zorder=zorder + (1.0 if part == "link1" else 1.1 if part == "link2" else 1.2),
                         label=label(text) if s < 3 else None)
-        out[part].append(ax.add_patch(patch))
+        out[part].append(ax.add_artist(patch))
+    ax.update_datalim(np.array(extent))
     if interest_points:
         pts = geometry.interest_points(q)
         (line,) = ax.plot(pts[:, 0], pts[:, 1], linestyle="none", marker="o", markersize=3.5,

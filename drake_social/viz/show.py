@@ -19,7 +19,7 @@ from drake_social.viz.labels import fit_width
 from drake_social.viz.robot import draw_robot
 from drake_social.viz.world import VIEW_MARGIN, draw_social_field, draw_world
 
-__all__ = ["START_COLOR", "GOAL_COLOR", "draw_start_goal", "scene_figure", "show_figure", "write_show"]
+__all__ = ["MAP_DPI", "START_COLOR", "GOAL_COLOR", "draw_start_goal", "scene_figure", "show_figure", "write_show"]
 
 _log = logging.getLogger(__name__)
 
@@ -27,6 +27,9 @@ _log = logging.getLogger(__name__)
 START_COLOR = "#e6c200"
 #: Ring around the base at the goal (the paper: a green circle).
 GOAL_COLOR = "#2ca02c"
+#: Resolution of the written pictures, dots per inch: an 11-inch map is 1320
+#: pixels wide, its 7-point labels 12 pixels tall.
+MAP_DPI = 120
 #: Narrowest map figure, inches: a tall room's map is centred in it, so that
 #: the titles (one line each) and the two-row legend below have room.
 MIN_FIGURE_WIDTH = 8.5
@@ -126,7 +129,7 @@ def show_figure(scenario: Scenario, *, title: str | None = None, resolution: flo
 
 
 def write_show(scenario: Scenario, out_dir: str | Path, *, name: str = "scene.png", title: str | None = None,
-               dpi: int = 150) -> Path:
+               dpi: int = MAP_DPI) -> Path:
     """Writes :func:`show_figure` as a PNG into ``out_dir`` (created if needed).
 
     Returns:

@@ -116,6 +116,7 @@ def test_outside_the_bounds_or_joint_limits_is_invalid(tiny, q):
     assert not dut.is_motion_valid(q_in, q) and not numpy_.is_motion_valid(q_in, q)
 
 
+@pytest.mark.slow
 def test_batched_calls_equal_single_calls(tiny, rng):
     _, dut, numpy_ = tiny
     qs = rng.uniform(dut.lower - 0.2, dut.upper + 0.2, size=(300, 4))
@@ -128,6 +129,7 @@ def test_batched_calls_equal_single_calls(tiny, rng):
         )
 
 
+@pytest.mark.slow
 def test_sequential_and_parallel_agree(tiny_scenario, rng):
     single = SceneGraphChecker(tiny_scenario, parallelism=False)
     dut = SceneGraphChecker(tiny_scenario, parallelism=2)
@@ -210,6 +212,7 @@ def test_no_body_point_moves_more_than_the_resolution_between_drake_edge_samples
 # ---- numpy vs SceneGraph, start and goal of every scenario
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("path", SCENARIOS, ids=[p.name for p in SCENARIOS])
 def test_numpy_and_scenegraph_agree_on_10000_random_configurations(path, rng):
     scenario, dut, numpy_ = _checkers(path)
@@ -242,6 +245,7 @@ def _dense_min_clearance(checker, q_a: np.ndarray, q_b: np.ndarray, step: float 
     return float(checker.clearances(q_a + np.linspace(0.0, 1.0, n + 1)[:, None] * (q_b - q_a)).min())
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("path", SCENARIOS, ids=[p.name for p in SCENARIOS])
 def test_numpy_and_scenegraph_motions_agree(path, rng):
     """Random motions between valid ends (the planner's case), checked by

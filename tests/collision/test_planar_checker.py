@@ -111,6 +111,7 @@ def _near_configs(dut: PlanarChecker, rng: np.random.Generator, n: int) -> np.nd
 # ---- (1) the clearance is never larger than the exact planar distance -------------
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", NAMES)
 def test_clearance_never_exceeds_the_exact_planar_distance(name, rng):
     """1,500 configurations per map (6 maps: 9,000), half of them within 0.3 m
@@ -148,6 +149,7 @@ def _near_motions(name: str, n: int = 300):
     return q_a[keep], q_b[keep]
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("kind", CHECKERS)
 @pytest.mark.parametrize("name", NAMES)
 def test_accepted_motions_near_obstacles_are_free_at_1_mm(name, kind):
@@ -244,6 +246,7 @@ def test_body_poses_and_capsules_equal_drakes_and_the_scenarios(name, rng):
     assert np.all(dut.lever <= g.lever(include_body=True) + 1e-12)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", NAMES)
 def test_each_capsule_moves_no_more_than_its_lever_bound(name, rng):
     """The motion check advances capsule j by displacement(dq, levers[j]):

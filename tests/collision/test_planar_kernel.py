@@ -33,6 +33,7 @@ def box_sdf(px, py, cx, cy, yaw, hx, hy):
     return np.hypot(np.maximum(ux, 0), np.maximum(uy, 0)) + np.minimum(np.maximum(ux, uy), 0)
 
 
+@pytest.mark.slow
 def test_segment_box_distance_equals_an_independent_minimisation(rng):
     """30,000 random (segment, rotated box) pairs: disjoint ones exact to 1e-9,
     crossing ones negative and never below the least box signed distance along the axis."""

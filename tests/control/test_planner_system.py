@@ -35,6 +35,7 @@ def _initialized(dut: PlannerSystem):
     return context
 
 
+@pytest.mark.slow
 def test_outputs_equal_plan_with_the_same_seed_bit_for_bit(tiny_scenario):
     checker = GeometricChecker(tiny_scenario)
     expected = plan(tiny_scenario, checker, algorithm="social_rrt_star", iterations=ITERATIONS, seed=7)
@@ -72,6 +73,7 @@ def test_the_default_checker_is_the_planar_one_and_gives_the_same_path_as_plan(t
     assert np.array_equal(dut.GetOutputPort("waypoints").Eval(context), expected.waypoints)
 
 
+@pytest.mark.slow
 def test_plans_once_however_often_outputs_are_evaluated_or_time_advances(tiny_scenario, counted_plan, monkeypatch):
     calc_calls = {"waypoints": 0, "path": 0}
     for name, method in (("waypoints", "_CalcWaypoints"), ("path", "_CalcPath")):

@@ -128,6 +128,7 @@ def test_rest_to_rest_duration_by_hand():
     np.testing.assert_allclose([p[0], v[0], a[0]], [3.0, 0.0, 0.0], atol=1e-12)
 
 
+@pytest.mark.slow
 def test_seeded_random_targets_respect_limits_and_end_at_rest_at_the_target():
     rng = np.random.default_rng(20240607)
     dut = _source()
@@ -220,6 +221,7 @@ def test_reference_base_speed_by_hand():
     np.testing.assert_allclose(p, [1.5, 2.0, 0.1, -0.05], atol=1e-9)  # halfway, all DoFs
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("seed", [5, 6, 7])
 def test_reference_rest_to_rest_stays_on_the_segment_with_the_speed_norm_limited(seed):
     rng = np.random.default_rng(seed)
@@ -260,6 +262,7 @@ def test_reference_rest_to_rest_stays_on_the_segment_with_the_speed_norm_limited
         previous = target
 
 
+@pytest.mark.slow
 def test_reference_retargeted_mid_motion_in_a_new_direction_stays_within_per_axis_limits():
     # Moving along +x at full speed, then told to go along +y: the x limit must
     # still allow braking (a share of the x limits that is not ~0).
@@ -436,6 +439,7 @@ def test_a_target_outside_the_position_limits_is_an_error_naming_it():
 # ---- the wheels' limit on the base ---------------------------------------------------
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("direction, expected", [
     # wheel limit r * w_max = 0.05 * 20 = 1 m/s on |vx| + |vy|; speed s along u: s (|ux| + |uy|) <= 1.
     ([4.0, 0.0], 1.0),                    # along x: |ux| + |uy| = 1

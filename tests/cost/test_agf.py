@@ -166,6 +166,7 @@ def test_left_right_symmetry_about_the_facing_direction(dut, rng):
             assert a == pytest.approx(b, rel=1e-9, abs=1e-12)
 
 
+@pytest.mark.slow
 def test_vectorised_equals_algorithm1_on_random_points_and_people(rng):
     near_pi = [math.pi, -math.pi, math.pi - 1e-12, -math.pi + 1e-12, math.pi + 1e-9, 3 * math.pi]
     thetas = np.concatenate(
@@ -244,6 +245,7 @@ finite = st.floats(allow_nan=False, allow_infinity=False)
 person_xy = st.floats(min_value=-1e9, max_value=1e9, allow_nan=False)
 
 
+@pytest.mark.slow
 @settings(max_examples=300)
 @given(x=finite, y=finite, px=person_xy, py=person_xy, theta=finite)
 def test_property_values_are_zero_or_above_threshold(x, y, px, py, theta):

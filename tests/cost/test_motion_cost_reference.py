@@ -60,6 +60,7 @@ def crossing_edges(dut: SocialCost, rng, n: int):
     return out
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("backend", ["numpy", "numba"])
 def test_threshold_aware_msc_is_second_order_where_the_plain_trapezoid_is_not(geometry, backend):
     """Against a 20,000-point midpoint integral (its own error is below

@@ -10,6 +10,9 @@ import pytest
 from drake_social.experiments.study.arena import build_database, statistics_script, write_logs
 from drake_social.experiments.study import Group, Study, run_study
 
+# A study exported to Planner Arena: many plans.
+pytestmark = pytest.mark.slow
+
 
 @pytest.fixture(scope="module")
 def small(tiny_scenario_path):

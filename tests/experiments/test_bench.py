@@ -17,6 +17,9 @@ from drake_social.planning.space import ConfigurationSpace
 from drake_social.planning.algorithms import evaluate_path, make_objective
 from drake_social.scenario import load_scenario
 
+# Benchmark runs: many plans per test.
+pytestmark = pytest.mark.slow
+
 ALGOS = ["rrt_star", "social_rrt_star"]
 
 

@@ -9,6 +9,7 @@ from drake_social.experiments.bench.checkers import random_edges, run_checker_be
 from drake_social.kinematics import config_distance
 
 
+@pytest.mark.slow
 def test_bench_report_on_tiny(tiny_scenario_path):
     dut = run_checker_bench(scenario_paths=[tiny_scenario_path], num_configs=400, num_edges=60, seed=5, repeats=1)
     assert dut["machine"]["cpu_count"] >= 1

@@ -25,6 +25,7 @@ def test_far_people_stand_outside_the_room_and_are_in_the_checker(tiny_scenario)
     assert len(b.env) == len(a.env) + 7
 
 
+@pytest.mark.slow
 def test_small_scaling_bench(tiny_scenario_path):
     out = dut.run_scaling_bench(scenario_paths=[tiny_scenario_path], ks=(100, 200), reference_k=200,
                                 reference_seeds=2, seeds=2, far_people=5, far_repeats=1)

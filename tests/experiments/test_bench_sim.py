@@ -9,6 +9,9 @@ from drake_social.collision.drake_checker import make_checker
 from drake_social.planning.algorithms import plan
 from drake_social.sim.run import simulate
 
+# Simulation benchmark runs in Drake's Simulator.
+pytestmark = pytest.mark.slow
+
 
 def test_sim_bench_reports_what_simulate_measures(tiny_scenario_path, tiny_scenario):
     labels = []

@@ -69,6 +69,7 @@ def tls_settings():
         yield
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("address", ["tcp://10.0.0.5:8786", "localhost:8786", "tls://scheduler.example.org:1",
                                      "tcp://[::1]:65535", "127.0.0.1:8786", "dask_scheduler:8786",
                                      "tcp://my_cluster.dask_scheduler_1:8786", "_host_:1"])
@@ -246,6 +247,7 @@ def _assert_the_records_alone(out):
 
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("where, failure, message", [
     (report, ("write_figures", _no_space), "[Errno 28] No space left on device"),
     (arena, ("build_database", _script_failed), "ompl_benchmark_statistics.py failed on the logs"),
@@ -264,6 +266,7 @@ def test_an_output_error_after_the_runs_keeps_their_records_in_out(tmp_path, tin
     _assert_the_records_alone(out)
 
 
+@pytest.mark.slow
 def test_records_that_out_cannot_take_are_saved_in_the_temporary_directory(tmp_path, tiny_scenario_path, monkeypatch,
                                                                            capsys):
     sweep = _sweep(tmp_path, tiny_scenario_path)
@@ -316,6 +319,7 @@ def _interrupt(*args, **kwargs):
     raise KeyboardInterrupt
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("where, name", [(report, "write_figures"), (arena, "write_logs"),
                                          (report, "report_markdown")])
 def test_ctrl_c_after_the_runs_keeps_their_records_in_out(tmp_path, tiny_scenario_path, monkeypatch, capsys, where,
@@ -383,6 +387,7 @@ def test_a_folder_in_the_way_of_any_output_is_refused_before_the_runs(tmp_path, 
     assert current_set(out, "experiment") is None
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("algorithms", [("social_rrt_star",), ("rrt_star", "social_rrt_star")])
 def test_the_names_refused_up_front_are_the_files_a_study_writes(tmp_path, tiny_scenario_path, algorithms):
     """output_names(study) lists every file write_study writes (arena.db only
@@ -398,6 +403,7 @@ def test_the_names_refused_up_front_are_the_files_a_study_writes(tmp_path, tiny_
     assert written <= expected
 
 
+@pytest.mark.slow
 def test_a_study_on_a_scheduler_says_so_not_the_workers_default(tmp_path, tiny_scenario_path, capsys):
     distributed = pytest.importorskip("distributed")
     sweep = _sweep(tmp_path, tiny_scenario_path)

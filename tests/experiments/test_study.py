@@ -23,6 +23,9 @@ from drake_social.experiments.study import (
 )
 from drake_social.scenario import ScenarioError
 
+# Studies: many plans per test.
+pytestmark = pytest.mark.slow
+
 _FILES = {"results.csv", "results.json", "REPORT.md", "boxplot_T.png", "cost_profile_T.png", "paths_T.png",
           "paths_single_algorithm_groups.png", "boxplot_single_algorithm_groups.png", "arena_T.log", "arena_W.log"}
 

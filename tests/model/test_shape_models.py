@@ -219,6 +219,7 @@ def robots(draw):
     return Robot(base_radius=draw(sizes), link_lengths=[draw(sizes), draw(sizes)], link_width=draw(sizes))
 
 
+@pytest.mark.slow
 @settings(max_examples=80)
 @given(obj=objects(), robot=robots())
 def test_every_accepted_shape_builds_in_every_model(tiny_scenario, obj, robot):

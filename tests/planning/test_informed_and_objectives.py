@@ -21,6 +21,7 @@ from drake_social.scenario import Person, Scenario, World, validate_scenario
 PI = math.pi
 
 
+@pytest.mark.slow
 def test_informed_samples_lie_in_the_ellipse_of_start_goal_and_c(tiny_scenario, monkeypatch):
     """The ellipse is computed here from the scenario's start and goal (the
     foci) and the diameter c the planner passed, not with the sampler's own

@@ -11,6 +11,9 @@ import pytest
 from drake_social.scenario import ALGORITHMS
 from path_hashes import SCENARIO_DIR, SCENARIOS, SEEDS, plan_case  # tests/planning/path_hashes.py
 
+# Thirty plans of K = 2000 against the committed table: minutes.
+pytestmark = pytest.mark.slow
+
 TABLE = json.loads((SCENARIO_DIR.parent / "tests" / "data" / "path_hashes.json").read_text())
 
 

@@ -23,6 +23,9 @@ from drake_social.planning.space import ConfigurationSpace
 from drake_social.planning.algorithms import make_planner, plan
 from drake_social.scenario import ALGORITHMS, MAX_ITERATIONS, Person, ScenarioError, validate_scenario
 
+# Each speed-up against the plain loop, every algorithm: whole plans twice over.
+pytestmark = pytest.mark.slow
+
 PI = math.pi
 
 

@@ -192,6 +192,7 @@ def test_plan_overrides_iterations_on_a_copy_and_fills_the_parts(short):
     assert dut.social_cost_planner < dut.social_cost_full  # base-only weights: the planner's part differs
 
 
+@pytest.mark.slow
 def test_plan_defaults_to_the_scenarios_seed_algorithm_and_iterations(short):
     dut = plan(short, GeometricChecker(short), seed=None)
     _, expected = solve(short, None, short.random_seed)

@@ -48,8 +48,10 @@ def solved(request, tiny, tiny_checker):
 
 
 # ---- every returned path ----------------------------------------------------------------
+# Slow: the module's `solved` fixture runs the Python loop of every algorithm (3-5 s each).
 
 
+@pytest.mark.slow
 def test_path_runs_from_start_to_exactly_the_goal(solved):
     scenario, _, dut = solved
     assert dut.success, dut.message
@@ -57,6 +59,7 @@ def test_path_runs_from_start_to_exactly_the_goal(solved):
     np.testing.assert_array_equal(dut.waypoints[-1], scenario.goal)
 
 
+@pytest.mark.slow
 def test_every_waypoint_and_motion_is_valid(solved, tiny_checker):
     _, _, dut = solved
     wp = dut.waypoints
@@ -64,6 +67,7 @@ def test_every_waypoint_and_motion_is_valid(solved, tiny_checker):
     assert tiny_checker.are_motions_valid(wp[:-1], wp[1:]).all()
 
 
+@pytest.mark.slow
 def test_cost_equals_the_cost_recomputed_from_the_waypoints(solved):
     scenario, planner, dut = solved
     wp = dut.waypoints
@@ -73,6 +77,7 @@ def test_cost_equals_the_cost_recomputed_from_the_waypoints(solved):
     assert parts["objective"] == pytest.approx(dut.cost, rel=1e-9, abs=1e-12)
 
 
+@pytest.mark.slow
 def test_best_cost_never_increases(solved):
     _, _, dut = solved
     h = dut.cost_history
@@ -88,6 +93,7 @@ def test_best_cost_never_increases(solved):
     assert h[-1] < 0.95 * h[first], (h[first], h[-1])
 
 
+@pytest.mark.slow
 def test_tree_costs_are_parent_cost_plus_edge_cost(solved):
     """After all the rewiring: F(node) = F(parent) + Msc(parent, node) for every node."""
     _, planner, dut = solved
@@ -110,6 +116,7 @@ def test_tree_costs_are_parent_cost_plus_edge_cost(solved):
         depth[i] = steps
 
 
+@pytest.mark.slow
 def test_result_reports_its_counts_and_parts(solved):
     scenario, planner, dut = solved
     assert dut.tree_size == len(dut.tree_nodes) <= 401
@@ -124,6 +131,7 @@ def test_result_reports_its_counts_and_parts(solved):
 # ---- determinism ------------------------------------------------------------------------
 
 
+@pytest.mark.slow
 def test_same_seed_gives_the_identical_result(tiny, tiny_checker):
     a = plan(tiny, tiny_checker, seed=11)
     b = plan(tiny, tiny_checker, seed=11)
@@ -133,6 +141,7 @@ def test_same_seed_gives_the_identical_result(tiny, tiny_checker):
     assert a.cost == b.cost
 
 
+@pytest.mark.slow
 def test_different_seeds_give_different_trees(tiny, tiny_checker):
     a = plan(tiny, tiny_checker, seed=1)
     b = plan(tiny, tiny_checker, seed=2)
@@ -140,6 +149,7 @@ def test_different_seeds_give_different_trees(tiny, tiny_checker):
     assert not np.array_equal(a.tree_nodes[:n], b.tree_nodes[:n])
 
 
+@pytest.mark.slow
 def test_scenario_seed_is_the_default(tiny, tiny_checker):
     a = plan(tiny, tiny_checker)
     b = plan(tiny, tiny_checker, seed=tiny.random_seed)
@@ -180,6 +190,7 @@ def _median_social(scenario, checker, algorithm, seeds):
     return results, float(np.median([r.social_cost_full for r in results]))
 
 
+@pytest.mark.slow
 def test_social_rrt_star_ends_with_lower_social_cost_than_rrt_star(corridor):
     scenario, checker = corridor
     _, rrt = _median_social(scenario, checker, "rrt_star", range(3))
@@ -198,6 +209,7 @@ def _closest_object_approach(scenario, waypoints, person) -> float:
     return float(np.hypot(p[..., 0] - person.x, p[..., 1] - person.y).min())
 
 
+@pytest.mark.slow
 def test_multi_point_keeps_the_object_farther_from_people_than_base_only(corridor):
     """Base-only cost is blind to the bar, so its arm swings the bar wherever
     the tree happens to; the multi-point cost keeps the bar away from the
@@ -219,6 +231,7 @@ def test_multi_point_keeps_the_object_farther_from_people_than_base_only(corrido
 # ---- informed sampling -------------------------------------------------------------------
 
 
+@pytest.mark.slow
 def test_informed_planner_samples_only_inside_its_ellipse(tiny, tiny_checker, monkeypatch):
     from drake_social.planning import sampling
 
@@ -256,6 +269,7 @@ def empty_room(length_weight: float) -> Scenario:
     return scenario
 
 
+@pytest.mark.slow
 def test_admissible_ellipse_never_excludes_the_optimum():
     """With lambda > 0 and a far person the optimum is the straight motion
     (its social cost is 0 and its length minimal). Every ellipse used must
@@ -310,6 +324,7 @@ def walled_goal_scenario() -> Scenario:
     return scenario
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("algorithm", ["rrt_star", "informed_social_rrt_star"])
 def test_walled_off_goal_returns_a_clear_no_path_result(algorithm):
     scenario = walled_goal_scenario()
@@ -411,6 +426,7 @@ def test_tree_costs_are_recomputed_so_descendants_never_undercut_ancestors():
         dut.reparent(d, c, 0.0)
 
 
+@pytest.mark.slow
 def test_zero_cost_motions_never_rewire_into_a_cycle():
     """A social objective with nobody around: every motion costs exactly 0, the
     situation in which the shifted costs used to loop forever."""
@@ -425,6 +441,7 @@ def test_zero_cost_motions_never_rewire_into_a_cycle():
 # ---- every scenario file, with Drake's checker ---------------------------------------------------
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", ["office_bar", "generic_L", "tiny"])
 def test_every_scenario_plans_a_valid_path_with_drake(name, repo_root):
     """A short run per shipped scenario with the SceneGraph checker (clearance

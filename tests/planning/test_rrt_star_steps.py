@@ -128,6 +128,7 @@ def test_near_set_is_the_nodes_within_r_near_plus_the_nearest(planning_range, ne
 # ---- choose parent and rewire --------------------------------------------------------------
 
 
+@pytest.mark.slow
 def test_parent_minimises_f_plus_msc_and_rewiring_reparents_exactly_the_improved():
     scenario = room(planning_range=1.5, near_radius=2.2)
     dut = planner_for(scenario)
@@ -192,6 +193,7 @@ def goal_run():
     return scenario, dut, result
 
 
+@pytest.mark.slow
 def test_path_ends_through_the_best_goal_connection_within_r_near(goal_run):
     scenario, dut, result = goal_run
     assert result.success
@@ -212,6 +214,7 @@ def test_path_ends_through_the_best_goal_connection_within_r_near(goal_run):
     np.testing.assert_array_equal(result.waypoints[-2], q[best])
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("planning_range, near_radius", [(0.8, 2.0), (2.0, 0.7)])
 def test_every_tree_edge_is_within_the_insertion_or_rewiring_reach(planning_range, near_radius):
     """A node's parent is a near node (within r_near) or its nearest (within

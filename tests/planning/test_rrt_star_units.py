@@ -143,6 +143,7 @@ def run_room(iterations=150, seed=2, **options):
     return planner.solve(np.array(scenario.start), np.array(scenario.goal), np.random.default_rng(seed))
 
 
+@pytest.mark.slow
 def test_python_loop_uses_the_kd_tree_once_large_and_finds_the_same_tree(monkeypatch):
     """The Python loop (the numpy checker) with the KD-tree from the 16th node
     on: the KD-tree does answer queries, and the tree is the direct scan's."""
@@ -236,6 +237,7 @@ def test_a_node_on_the_goal_costs_nothing_more():
     assert any(np.array_equal(q, goal) for q in dut.tree_nodes)
 
 
+@pytest.mark.slow
 def test_lazy_path_length_costs_count_like_the_eager_loop():
     """For a length objective the lazy loop takes the motion costs as the
     length bounds it computes anyway: the same tree and the same counts as

@@ -218,6 +218,7 @@ def test_ctrl_c_stops_the_compiled_loop_between_chunks(tiny):
     assert seen == list(range(1, 11))
 
 
+@pytest.mark.slow
 def test_grid_neighbour_queries_equal_the_direct_scan(rng):
     """Nearest (lowest index on ties) and near sets (ascending) over the grid
     equal a brute-force scan, on clustered nodes with exact duplicates."""

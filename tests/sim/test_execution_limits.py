@@ -19,6 +19,9 @@ from drake_social.sim.diagram import build_diagram
 from drake_social.planning.algorithms import plan
 from drake_social.sim.run import LimitViolation, analyze_execution, limit_violations, simulate
 
+# Whole executions in Drake's Simulator.
+pytestmark = pytest.mark.slow
+
 #: Stated tolerances of "on the checked segments": every body point within
 #: this distance (metres) of its planned curve.
 ON_PATH_KINEMATIC = 1e-6

@@ -20,6 +20,9 @@ from drake_social.sim.analysis import body_points, config_deviation, densify, po
 from drake_social.sim.diagram import build_diagram
 from drake_social.sim.run import simulate
 
+# Whole executions in Drake's Simulator.
+pytestmark = pytest.mark.slow
+
 
 @pytest.fixture(scope="module")
 def tiny_path(tiny_scenario):

@@ -48,6 +48,7 @@ def _path_by_hand(waypoints: np.ndarray, s: np.ndarray) -> np.ndarray:
     return np.stack([np.interp(s, knots, waypoints[:, i]) for i in range(4)], -1)
 
 
+@pytest.mark.slow
 def test_cost_profile_line_is_S_at_the_samples_and_integrates_to_the_social_cost(tiny_scenario, planned):
     cost = SocialCost.from_scenario(tiny_scenario)
     fig = cost_profile_figure(tiny_scenario, {"social": planned.waypoints})
@@ -103,6 +104,7 @@ def test_poses_along_are_evenly_spaced_in_configuration_distance():
         poses_along(wp[:, :3], 3)
 
 
+@pytest.mark.slow
 def test_draw_path_draws_robots_at_the_even_poses_with_opaque_ends(tiny_scenario, planned):
     from matplotlib.figure import Figure
 
@@ -152,6 +154,7 @@ def test_several_paths_share_one_cost_axes(tiny_scenario, planned):
     assert max(ax.get_lines()[1].get_ydata()) > tiny_scenario.social.threshold
 
 
+@pytest.mark.slow
 def test_write_plan_figures_writes_three_non_empty_pngs(tiny_scenario, planned, tmp_path):
     dut = write_plan_figures(tiny_scenario, planned, tmp_path / "new")
     assert sorted(dut) == ["convergence", "cost_profile", "path"]

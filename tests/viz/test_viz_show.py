@@ -42,6 +42,7 @@ def test_show_figure_has_the_scene_elements(tiny_scenario):
     assert show_figure(tiny_scenario, title="custom").get_suptitle() == "custom"
 
 
+@pytest.mark.slow
 def test_png_colours_follow_the_social_field(tiny_scenario, tmp_path):
     """Pixels of the written PNG over free floor show the colour of G(x, y),
     computed with the paper's Algorithm 1 at the heat-map cell centre: dark
@@ -66,6 +67,7 @@ def test_png_colours_follow_the_social_field(tiny_scenario, tmp_path):
     assert np.abs(near - far).max() > 0.3
 
 
+@pytest.mark.slow
 def test_png_follows_the_scenario_not_a_fixed_picture(tiny_scenario, tmp_path):
     """A quarter of sigma_h (reach 0.9 m) empties the floor 1.3 m in front of the person."""
     point = (4.025, 2.525)
@@ -91,6 +93,7 @@ def test_write_show_creates_the_directory_and_names_the_file(tiny_scenario, tmp_
     assert (w, h) == pytest.approx(tuple(50 * fig.get_size_inches()), abs=1)
 
 
+@pytest.mark.slow
 def test_readme_drawing_snippet_runs(tmp_path, monkeypatch):
     """The README's composition example runs as printed and writes its PNG."""
     readme = (Path(__file__).resolve().parents[2] / "README.md").read_text()

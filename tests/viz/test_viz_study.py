@@ -194,6 +194,7 @@ def test_boxplot_with_few_algorithms_fits_title_note_and_ticks(algorithms, group
     assert not any(a.overlaps(b) for i, a in enumerate(ticks) for b in ticks[i + 1:])
 
 
+@pytest.mark.slow
 def test_study_figure_titles_fit_their_figures(tiny_scenario):
     from drake_social.viz.path import cost_profile_figure
 
