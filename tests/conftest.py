@@ -5,12 +5,19 @@ from __future__ import annotations
 import importlib
 import importlib.util
 import os
+import signal
 import sys
 from pathlib import Path
 
 import numpy as np
 import pytest
 from hypothesis import HealthCheck, settings
+
+# A test run started in the background of a non-interactive shell (`make test &`)
+# inherits SIGINT ignored, and so would every command the tests start: the Ctrl-C
+# tests need it live. A handled signal is reset to the default in a child.
+if signal.getsignal(signal.SIGINT) is signal.SIG_IGN:
+    signal.signal(signal.SIGINT, signal.default_int_handler)
 
 #: The repository root (the folder holding ``scenarios/`` and ``drake_social/``).
 REPO_ROOT = Path(__file__).resolve().parent.parent
