@@ -487,8 +487,8 @@ def test_a_bench_scenario_invalid_with_a_bench_algorithm_is_refused_before_any_r
     monkeypatch.setattr(bench_module, "plan", no_run)
     bad = tmp_path / "adm.yaml"
     text = TINY.read_text()
-    assert "\nsocial:" not in text and "\nplanner:" in text
-    bad.write_text(text.replace("\nplanner:", "\nplanner:\n  informed_mode: admissible", 1)
+    assert "\nsocial:" not in text and "\nplanner: {" in text
+    bad.write_text(text.replace("\nplanner: {", "\nplanner: {informed_mode: admissible, ", 1)
                    + "\nsocial: {length_weight: 0}\n")
     with pytest.raises(ScenarioError) as info:
         bench_module.run_bench(scenario_paths=[TINY, bad], algorithms=["social_rrt_star", "informed_social_rrt_star"],

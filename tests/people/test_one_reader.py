@@ -20,7 +20,7 @@ ROOT = Path(drake_social.__file__).resolve().parent
 COST_PEOPLE = {
     ("cost/social.py", "self.people"),
     ("experiments/metrics.py", "cost.people"),
-    ("planning/rrt_star/__init__.py", "sc.people"),
+    ("planning/rrt_star/compiled.py", "sc.people"),
 }
 
 

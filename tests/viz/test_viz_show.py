@@ -95,8 +95,8 @@ def test_write_show_creates_the_directory_and_names_the_file(tiny_scenario, tmp_
 
 @pytest.mark.slow
 def test_readme_drawing_snippet_runs(tmp_path, monkeypatch):
-    """The README's composition example runs as printed and writes its PNG."""
-    readme = (Path(__file__).resolve().parents[2] / "README.md").read_text()
+    """The composition example of docs/architecture.md runs as printed and writes its PNG."""
+    readme = (Path(__file__).resolve().parents[2] / "docs" / "architecture.md").read_text()
     start = readme.index("```python\n", readme.index("The drawing functions compose")) + len("```python\n")
     code = readme[start : readme.index("```", start)]
     monkeypatch.chdir(Path(__file__).resolve().parents[2])
