@@ -83,3 +83,23 @@ INFORMED_ALGORITHMS = ("informed_social_rrt_star", "informed_base_rrt_star")
 #: the pure-numpy reference. Named here so that the command line and
 #: studies can name them without importing Drake.
 CHECKERS = ("planar", "drake", "numpy")
+
+#: The values of ``execution.contact_approximation``: Drake's discrete contact
+#: approximations (``MultibodyPlantConfig.discrete_contact_approximation``).
+CONTACT_APPROXIMATIONS = ("tamsi", "sap", "similar", "lagged")
+#: The values of ``execution.integration_scheme``: the names
+#: ``pydrake.systems.analysis.GetIntegrationSchemes()`` returns, written out so
+#: that the scenario check need not import Drake (a test keeps them equal).
+INTEGRATION_SCHEMES = (
+    "bogacki_shampine3",
+    "cenic",
+    "explicit_euler",
+    "implicit_euler",
+    "radau1",
+    "radau3",
+    "runge_kutta2",
+    "runge_kutta3",
+    "runge_kutta5",
+    "semi_explicit_euler",
+    "velocity_implicit_euler",
+)

@@ -117,8 +117,8 @@ def test_the_simulator_config_follows_the_scenario(tiny_scenario):
 
 
 @pytest.mark.parametrize("field, value, rule", [
-    ("integration_scheme", "rk9", "must be one of .*runge_kutta3"),
-    ("contact_approximation", "soft", "must be one of tamsi, sap, similar, lagged"),
+    ("integration_scheme", "rk9", "unknown scheme 'rk9'; allowed: .*runge_kutta3"),
+    ("contact_approximation", "soft", "unknown approximation 'soft'; allowed: tamsi, sap, similar, lagged"),
     ("accuracy", 0.0, "must be > 0"),
     ("target_realtime_rate", -1.0, "must be >= 0"),
     ("accuracy", float("nan"), "must be a finite number"),
