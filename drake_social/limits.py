@@ -103,3 +103,9 @@ INTEGRATION_SCHEMES = (
     "semi_explicit_euler",
     "velocity_implicit_euler",
 )
+
+#: The paper's planner settings (``--set`` text over a scenario file): the raw
+#: RRT* path (no optimisation) and the fixed near radius of Algorithm 2. The
+#: paper study applies it over every group and ``bench`` over every scenario
+#: (its last override), so both run the planner OMPL's RRTstar is compared with.
+PAPER_PLANNER = "planner: {optimize: false, near_radius_mode: fixed}"

@@ -322,3 +322,24 @@ def test_cpu_model_and_the_machine_line(tmp_path):
     assert bench._machine_line({"cpu_model": None, "load_average_start": [2.0, 1.0, 1.0]}) == [
         "Load average (1, 5, 15 min) at the start: 2.00, 1.00, 1.00.", ""]
     assert bench._machine_line({"cpu_model": None}) == []
+
+
+def test_bench_plans_with_the_papers_planner_whatever_the_file_says(tiny_scenario_path, tmp_path):
+    """A file asking for the shrinking radius and the optimiser is benched
+    as OMPL's RRTstar plans: fixed radius, raw path (limits.PAPER_PLANNER)."""
+    text = tiny_scenario_path.read_text()
+    old = "planner: {near_radius_mode: fixed, optimize: false,"
+    assert text.count(old) == 1
+    path = tmp_path / "optimised.yaml"
+    path.write_text(text.replace(old, "planner: {near_radius_mode: shrinking, optimize: true,"))
+    assert load_scenario(path).planner.optimize is True  # the file's own setting
+    dut = run_bench(scenario_paths=[path], algorithms=["rrt_star"], iterations=300, seeds=1, checker="numpy",
+                    include_ompl=False, include_checker=False, out_dir=tmp_path / "out")
+    entry = dut["scenarios"]["optimised.yaml"]
+    assert entry["planner_options"]["near_radius_mode"] == "fixed"
+    assert entry["planner_options"]["optimize"] is False
+    (run,) = entry["algorithms"]["rrt_star"]["runs"]
+    assert run["success"] is True  # a found path the file's settings would have optimised
+    assert run["optimized"] is False
+    table = (tmp_path / "out" / "bench.md").read_text()
+    assert "Planner options (the paper's, set over every scenario file): optimised.yaml: near radius fixed, optimize off." in table

@@ -8,6 +8,12 @@ objective: ``rrt_star`` (path length), ``social_rrt_star`` (multi-point)
 and ``base_rrt_star`` (base-only); the informed variants are compared with
 OMPL on their objective (OMPL's RRTstar does not sample informed).
 
+Every scenario file is loaded with the paper's planner settings as its last
+override (:data:`drake_social.limits.PAPER_PLANNER`: the fixed near radius,
+no optimisation), whatever its own ``planner`` section says: OMPL's RRTstar
+runs a fixed radius and returns its raw path, so ours do too (``bench.md``
+prints these options per scenario).
+
 Every run gets a fresh checker (built outside the timing), so no run profits
 from another's caches. Every path, ours and OMPL's, is measured by the same
 code afterwards: :func:`evaluate_path` gives its objective, social cost with
@@ -37,6 +43,7 @@ from drake_social.planning.space import ConfigurationSpace
 from drake_social.collision.validity import ValidityChecker
 from drake_social.experiments.records import run_record
 from drake_social.io.records import write_json
+from drake_social.limits import PAPER_PLANNER
 from drake_social.planning.algorithms import evaluate_path, make_objective, plan
 from drake_social.scenario import ALGORITHMS, EXECUTIONS, SIM_MODES, Scenario, load_scenario, validate_planner_choice
 
@@ -294,9 +301,11 @@ def run_bench(
             progress(done, total, label)
 
     machine = _machine()  # the load average before this run's planning
-    # Every file is loaded, and checked with each planner of the bench (which
-    # replaces its planner.algorithm), before the first run.
-    loaded = [load_scenario(path) for path in paths]
+    # Every file is loaded with the paper's planner settings over its own (as
+    # OMPL's RRTstar plans: fixed radius, raw path), and checked with each
+    # planner of the bench (which replaces its planner.algorithm), before the
+    # first run.
+    loaded = [load_scenario(path, [PAPER_PLANNER]) for path in paths]
     for path, scenario in zip(paths, loaded):
         for algorithm in algorithms:
             validate_planner_choice(scenario, algorithm, source=f"{path} with the bench's algorithm {algorithm}")
@@ -412,7 +421,7 @@ def _markdown(out: dict) -> str:
         f"{m['platform']}, {m['cpu_count']} CPUs, numpy {m['numpy']}, drake {m['drake']}, ompl {m['ompl']}.",
         "",
         *_machine_line(m),
-        "Planner options: " + "; ".join(
+        "Planner options (the paper's, set over every scenario file): " + "; ".join(
             f"{name}: near radius {e['planner_options']['near_radius_mode']}, "
             f"optimize {'on' if e['planner_options']['optimize'] else 'off'}"
             for name, e in out["scenarios"].items() if "planner_options" in e) + ".",

@@ -23,7 +23,7 @@ import numpy as np
 from drake_social.errors import ScenarioError
 from drake_social.experiments.study.scenarios import check_run_settings, load_cached
 from drake_social.io.textfile import read_yaml_file, shorten
-from drake_social.limits import ALGORITHMS, CHECKERS, MAX_ITERATIONS
+from drake_social.limits import ALGORITHMS, CHECKERS, MAX_ITERATIONS, PAPER_PLANNER
 from drake_social.scenario.schema import Bar, interest_point_count
 
 __all__ = [
@@ -34,6 +34,7 @@ __all__ = [
     "NAME_RULE",
     "PAPER_ALGORITHMS",
     "PAPER_PAIRS",
+    "PAPER_PLANNER",
     "Group",
     "Study",
     "algorithms_problem",
@@ -101,11 +102,6 @@ class Study:
 
     def to_json_dict(self) -> dict:
         return dc.asdict(self)
-
-
-#: The paper's planner settings, applied over every group of :func:`paper_study`:
-#: the raw RRT* path (no optimisation) and the fixed near radius of Algorithm 2.
-PAPER_PLANNER = "planner: {optimize: false, near_radius_mode: fixed}"
 
 
 def paper_weights(num_points: int) -> dict[str, list[float]]:
