@@ -138,7 +138,8 @@ def drake_config_problem(execution: ExecutionOptions) -> tuple[str, str] | None:
     if not e.accuracy > 0:
         return "execution.accuracy", f"must be > 0, got {e.accuracy!r}"
     if e.target_realtime_rate < 0:
-        return "execution.target_realtime_rate", f"must be >= 0 (0 = as fast as possible), got {e.target_realtime_rate!r}"
+        return "execution.target_realtime_rate", (f"must be >= 0 (0 = as fast as possible), "
+                                                  f"got {e.target_realtime_rate!r}")
     return None
 
 

@@ -15,7 +15,7 @@ from drake_social.io.json_numbers import finite_or_none
 from drake_social.collision.geometric import GeometricChecker
 from drake_social.planning.space import ConfigurationSpace
 from drake_social.planning.algorithms import evaluate_path, make_objective
-from drake_social.scenario import load_scenario
+from drake_social.scenario import ALGORITHMS, load_scenario
 
 # Benchmark runs: many plans per test.
 pytestmark = pytest.mark.slow
@@ -342,4 +342,15 @@ def test_bench_plans_with_the_papers_planner_whatever_the_file_says(tiny_scenari
     assert run["success"] is True  # a found path the file's settings would have optimised
     assert run["optimized"] is False
     table = (tmp_path / "out" / "bench.md").read_text()
-    assert "Planner options (the paper's, set over every scenario file): optimised.yaml: near radius fixed, optimize off." in table
+    assert ("Planner options (the paper's, set over every scenario file): optimised.yaml: near radius fixed, "
+            "optimize off.") in table
+
+
+def test_each_algorithm_is_compared_with_ompl_as_the_uniform_one_of_its_objective():
+    from drake_social.experiments.bench.planners import ompl_counterpart
+
+    assert {a: ompl_counterpart(a) for a in ALGORITHMS} == {
+        "rrt_star": "rrt_star", "social_rrt_star": "social_rrt_star", "base_rrt_star": "base_rrt_star",
+        "informed_social_rrt_star": "social_rrt_star", "informed_base_rrt_star": "base_rrt_star"}
+    with pytest.raises(ValueError, match="unknown"):
+        ompl_counterpart("informed_rrt_star")
