@@ -129,3 +129,7 @@ PAPER_PAIRS = 2 * len(PAPER_ALGORITHMS) + len(PAPER_WEIGHTINGS)
 MAX_PAPER_RUNS = min(MAX_RUNS, MAX_STUDY_TASKS // PAPER_PAIRS)
 #: Backends of a study (``experiments.study.executors.map_tasks``, ``experiment --executor``).
 EXECUTORS = ("process", "dask")
+
+#: Values of ``planner.near_radius_mode`` and ``RrtStarOptions.near_radius_mode``:
+#: the near set's radius is r_near, or shrinks with the tree (capped at r_near).
+NEAR_RADIUS_MODES = ("fixed", "shrinking")
