@@ -17,7 +17,7 @@ from drake_social.scenario import ALGORITHMS, CHECKERS
 __all__ = ["MAX_BENCH_REPEATS", "MAX_BENCH_SEEDS", "MAX_WORKERS", "build_parser"]
 
 #: Most seeds of ``bench --seeds``: as many as a study's runs per planner
-#: (``experiments.study.MAX_RUNS``); each seed plans every algorithm on every scenario.
+#: (``limits.MAX_RUNS``); each seed plans every algorithm on every scenario.
 MAX_BENCH_SEEDS = 10_000
 #: Most timings of one run in ``bench --repeats``: the median of 100 already
 #: filters the machine's noise, and each repeat replans the whole path.
@@ -186,9 +186,7 @@ def _add_bench(subparsers) -> None:
 
 
 def _add_experiment(subparsers) -> None:
-    from drake_social.experiments.study.executors import EXECUTORS
-    from drake_social.experiments.study import MAX_PAPER_RUNS, MAX_STUDY_TASKS, PAPER_PAIRS
-    from drake_social.scenario import MAX_ITERATIONS
+    from drake_social.limits import EXECUTORS, MAX_ITERATIONS, MAX_PAPER_RUNS, MAX_STUDY_TASKS, PAPER_PAIRS
 
     p = subparsers.add_parser(
         "experiment",

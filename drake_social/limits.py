@@ -83,3 +83,53 @@ INFORMED_ALGORITHMS = ("informed_social_rrt_star", "informed_base_rrt_star")
 #: the pure-numpy reference. Named here so that the command line and
 #: studies can name them without importing Drake.
 CHECKERS = ("planar", "drake", "numpy")
+
+#: The values of ``execution.contact_approximation``: Drake's discrete contact
+#: approximations (``MultibodyPlantConfig.discrete_contact_approximation``).
+CONTACT_APPROXIMATIONS = ("tamsi", "sap", "similar", "lagged")
+#: The values of ``execution.integration_scheme``: the names
+#: ``pydrake.systems.analysis.GetIntegrationSchemes()`` returns, written out so
+#: that the scenario check need not import Drake (a test keeps them equal).
+INTEGRATION_SCHEMES = (
+    "bogacki_shampine3",
+    "cenic",
+    "explicit_euler",
+    "implicit_euler",
+    "radau1",
+    "radau3",
+    "runge_kutta2",
+    "runge_kutta3",
+    "runge_kutta5",
+    "semi_explicit_euler",
+    "velocity_implicit_euler",
+)
+
+#: The paper's planner settings (``--set`` text over a scenario file): the raw
+#: RRT* path (no optimisation) and the fixed near radius of Algorithm 2. The
+#: paper study applies it over every group and ``bench`` over every scenario
+#: (its last override), so both run the planner OMPL's RRTstar is compared with.
+PAPER_PLANNER = "planner: {optimize: false, near_radius_mode: fixed}"
+
+#: The paper's algorithms, in its order (the non-social baseline first).
+PAPER_ALGORITHMS = ("rrt_star", "social_rrt_star", "base_rrt_star", "informed_social_rrt_star",
+                    "informed_base_rrt_star")
+#: The weightings of the paper's study D (``experiments.study.paper_weights``).
+PAPER_WEIGHTINGS = ("object", "base", "equal")
+#: Most runs per (group, algorithm) of a study (each run's seed is drawn up front).
+MAX_RUNS = 10_000
+#: Most tasks of a study (groups x algorithms x runs): every run's record is
+#: kept in memory until the study is written (a few kilobytes each).
+MAX_STUDY_TASKS = 100_000
+#: (group, algorithm) pairs of the paper study (``experiments.study.paper_study``):
+#: A and B with the paper's five planners, D with Social Risk-RRT* under
+#: three weightings (a test counts them in the study).
+PAPER_PAIRS = 2 * len(PAPER_ALGORITHMS) + len(PAPER_WEIGHTINGS)
+#: Most runs of the paper study (``experiment paper --runs``): its
+#: PAPER_PAIRS pairs x runs stay within MAX_STUDY_TASKS.
+MAX_PAPER_RUNS = min(MAX_RUNS, MAX_STUDY_TASKS // PAPER_PAIRS)
+#: Backends of a study (``experiments.study.executors.map_tasks``, ``experiment --executor``).
+EXECUTORS = ("process", "dask")
+
+#: Values of ``planner.near_radius_mode`` and ``RrtStarOptions.near_radius_mode``:
+#: the near set's radius is r_near, or shrinks with the tree (capped at r_near).
+NEAR_RADIUS_MODES = ("fixed", "shrinking")

@@ -353,6 +353,21 @@ def test_each_low_module_imports_first_in_a_fresh_interpreter(module):
     assert out.returncode == 0, out.stderr
 
 
+def test_the_command_line_parser_does_not_import_the_studies():
+    """``import drake_social.cli`` and building its parser (every subcommand's
+    arguments, ``experiment``'s bounds included) read their constants from
+    :mod:`drake_social.limits`, not from :mod:`drake_social.experiments.study`
+    (which imports the report, the figures and the records)."""
+    import subprocess
+    import sys
+
+    code = ("import sys, drake_social.cli; from drake_social.cli_parser import build_parser; build_parser(); "
+            "print(sorted(m for m in sys.modules if m.startswith('drake_social.experiments')))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120, check=False)
+    assert out.returncode == 0, out.stderr
+    assert out.stdout.strip() == "[]"
+
+
 def test_arguments_checks_the_checker_protocol_by_its_methods():
     from drake_social.arguments import CHECKER_METHODS
     from drake_social.collision.validity import ValidityChecker

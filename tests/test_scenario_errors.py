@@ -523,3 +523,47 @@ def test_a_field_name_under_a_tag_is_not_called_unknown(override, field, key):
     assert _message(TINY, [override]) == (
         f"{TINY} (--set {override!r}): line 1: {field}a key must be a field name ({fields}) as plain text, without "
         f"a tag, got {key}")
+
+
+# ---- execution: Drake's settings, checked with the scenario (not only when a diagram is built)
+
+
+@pytest.mark.parametrize("override, message", [
+    ("execution: {integration_scheme: foo}",
+     "execution.integration_scheme: unknown scheme 'foo'; allowed: bogacki_shampine3, cenic, explicit_euler, "
+     "implicit_euler, radau1, radau3, runge_kutta2, runge_kutta3, runge_kutta5, semi_explicit_euler, "
+     "velocity_implicit_euler"),
+    ("execution: {contact_approximation: bar}",
+     "execution.contact_approximation: unknown approximation 'bar'; allowed: tamsi, sap, similar, lagged"),
+    ("execution: {accuracy: 0}", "execution.accuracy: must be > 0, got 0.0"),
+    ("execution: {accuracy: -1e-3}", "execution.accuracy: must be > 0, got -0.001"),
+    ("execution: {accuracy: .nan}", "execution.accuracy: must be a finite number, got nan"),
+    ("execution: {target_realtime_rate: -1}",
+     "execution.target_realtime_rate: must be >= 0 (0 = as fast as possible), got -1.0"),
+    ("execution: {target_realtime_rate: .inf}", "execution.target_realtime_rate: must be a finite number, got inf"),
+])
+def test_drakes_execution_settings_are_checked_with_the_scenario(override, message):
+    assert _message(TINY, [override]) == f"{TINY} (--set {override!r}): {message}"
+
+
+def test_the_drake_settings_bounds_are_accepted():
+    dut = load_scenario(TINY, ["execution: {contact_approximation: lagged, integration_scheme: cenic, "
+                               "accuracy: 1e-9, target_realtime_rate: 0}"])
+    assert (dut.execution.contact_approximation, dut.execution.integration_scheme) == ("lagged", "cenic")
+    assert (dut.execution.accuracy, dut.execution.target_realtime_rate) == (1e-9, 0.0)
+
+
+def test_the_integration_schemes_are_drakes():
+    from pydrake.systems.analysis import GetIntegrationSchemes
+
+    from drake_social.limits import INTEGRATION_SCHEMES
+
+    assert list(INTEGRATION_SCHEMES) == list(GetIntegrationSchemes())
+
+
+def test_simulate_refuses_an_unknown_integration_scheme_with_exit_2(tmp_path, capsys):
+    override = "execution: {integration_scheme: foo}"
+    assert main(["simulate", str(TINY), "--set", override, "--out", str(tmp_path / "o")]) == 2
+    err = capsys.readouterr().err
+    assert f"{TINY} (--set {override!r}): execution.integration_scheme: unknown scheme 'foo'; allowed: " in err
+    assert "Traceback" not in err

@@ -122,7 +122,8 @@ def main(argv: list[str] | None = None) -> None:
     print(f"{len(waypoints)} waypoints planned")
     for kp in (1.5, 6.0):
         result = run(scenario, waypoints, kp)
-        print(f"kp = {kp:g} 1/s: reached {result['reached']}, time to goal {result['time_to_goal']:.2f} s, "
+        to_goal = "not reached" if result["time_to_goal"] is None else f"{result['time_to_goal']:.2f} s"
+        print(f"kp = {kp:g} 1/s: reached {result['reached']}, time to goal {to_goal}, "
               f"max tracking error {1000 * result['max_tracking_error']:.3f} mm, "
               f"max point deviation {1000 * result['max_point_deviation']:.3f} mm")
 

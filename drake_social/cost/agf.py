@@ -8,7 +8,7 @@ from typing import Sequence
 
 import numpy as np
 
-__all__ = ["PersonalSpace", "agf", "agf_algorithm1", "agf_xy", "people_array"]
+__all__ = ["PersonalSpace", "agf", "agf_algorithm1", "agf_xy"]
 
 
 @dc.dataclass(frozen=True)
@@ -54,11 +54,6 @@ class PersonalSpace:
         if self.threshold <= 0:
             return math.inf
         return sigma * math.sqrt(-2.0 * math.log(self.threshold))
-
-
-def people_array(people) -> np.ndarray:
-    """(H, 3) array of [x, y, theta] from scenario :class:`Person` objects."""
-    return np.array([[p.x, p.y, p.theta] for p in people], dtype=float).reshape(-1, 3)
 
 
 def agf(points: np.ndarray, people: np.ndarray, space: PersonalSpace) -> np.ndarray:

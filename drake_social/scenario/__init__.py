@@ -24,8 +24,8 @@ from drake_social.scenario.load import (MAX_YAML_DEPTH, MAX_YAML_NODES, check_no
 from drake_social.scenario.schema import (EXECUTIONS, INFORMED_MODES, NEAR_RADIUS_MODES, SIM_MODES, Bar, Box,
                                           ExecutionOptions, LShape, Person, PlannerOptions, Polyline, Robot,
                                           Scenario, SocialCostOptions, World, interest_point_count)
-from drake_social.scenario.validate import (period_count, plant_time_step_problem, time_limit_problem,
-                                            validate_planner_choice, validate_scenario)
+from drake_social.scenario.validate import (drake_config_problem, period_count, plant_time_step_problem,
+                                            time_limit_problem, validate_planner_choice, validate_scenario)
 
 __all__ = [
     "ALGORITHMS",
@@ -62,6 +62,7 @@ __all__ = [
     "check_node",
     "check_yaml",
     "compose_yaml",
+    "drake_config_problem",
     "interest_point_count",
     "load_scenario",
     "load_scenario_text",

@@ -23,7 +23,7 @@ from typing import Optional, Union
 import numpy as np
 
 from drake_social.errors import ScenarioError
-from drake_social.limits import ALGORITHMS, CHECKERS
+from drake_social.limits import ALGORITHMS, CHECKERS, NEAR_RADIUS_MODES
 
 __all__ = [
     "ALGORITHMS",
@@ -46,9 +46,6 @@ __all__ = [
     "World",
     "interest_point_count",
 ]
-
-#: Values of ``planner.near_radius_mode``.
-NEAR_RADIUS_MODES = ("fixed", "shrinking")
 
 #: Modes of the informed sampler (see ``drake_social.planning.sampling``).
 INFORMED_MODES = ("paper", "admissible")

@@ -16,13 +16,15 @@ import numpy as np
 from drake_social.errors import ScenarioError
 from drake_social.io.textfile import shorten
 from drake_social.kinematics import ArmGeometry, displacement_bound
-from drake_social.limits import (ALGORITHMS, INFORMED_ALGORITHMS, MAX_CONTROL_STEPS, MAX_DYNAMIC_PLANT_TIME_STEP,
+from drake_social.limits import (ALGORITHMS, CONTACT_APPROXIMATIONS, INFORMED_ALGORITHMS, INTEGRATION_SCHEMES,
+                                 MAX_CONTROL_STEPS, MAX_DYNAMIC_PLANT_TIME_STEP,
                                  MAX_ITERATIONS, MAX_MOTION_STEPS, MAX_OBJECT_POINTS, MAX_PLANT_STEPS, MAX_REPLAY_FPS,
                                  MAX_TIME_LIMIT, MIN_CONTROL_PERIODS, SERVO_BANDWIDTH)
 from drake_social.scenario.schema import (EXECUTIONS, INFORMED_MODES, NEAR_RADIUS_MODES, SIM_MODES, Bar,
                                           ExecutionOptions, LShape, Scenario, interest_point_count)
 
 __all__ = [
+    "drake_config_problem",
     "period_count",
     "plant_time_step_problem",
     "time_limit_problem",
@@ -109,6 +111,35 @@ def plant_time_step_problem(execution: ExecutionOptions, mode: str) -> tuple[str
         return "execution.plant_time_step", (
             f"must be <= {MAX_DYNAMIC_PLANT_TIME_STEP:.6g} s in dynamic mode (the servo's damping gain "
             f"{2 * SERVO_BANDWIDTH:g} /s times the step must be <= 1 for the plant to stay stable), got {step}")
+    return None
+
+
+def drake_config_problem(execution: ExecutionOptions) -> tuple[str, str] | None:
+    """What is wrong with the Drake settings of a scenario's ``execution``
+    section, or None: ``contact_approximation`` (one of
+    :data:`CONTACT_APPROXIMATIONS`), ``integration_scheme`` (one of
+    :data:`INTEGRATION_SCHEMES`), ``accuracy`` (> 0, finite) and
+    ``target_realtime_rate`` (>= 0, finite).
+
+    Returns:
+        (the field at fault, what is allowed and what was given), or None.
+    """
+    e = execution
+    if e.contact_approximation not in CONTACT_APPROXIMATIONS:
+        return "execution.contact_approximation", (f"unknown approximation {_shown(e.contact_approximation)}; "
+                                                   f"allowed: {', '.join(CONTACT_APPROXIMATIONS)}")
+    if e.integration_scheme not in INTEGRATION_SCHEMES:
+        return "execution.integration_scheme", (f"unknown scheme {_shown(e.integration_scheme)}; "
+                                                f"allowed: {', '.join(INTEGRATION_SCHEMES)}")
+    for name in ("accuracy", "target_realtime_rate"):
+        value = getattr(e, name)
+        if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+            return f"execution.{name}", f"must be a finite number, got {_shown(value)}"
+    if not e.accuracy > 0:
+        return "execution.accuracy", f"must be > 0, got {e.accuracy!r}"
+    if e.target_realtime_rate < 0:
+        return "execution.target_realtime_rate", (f"must be >= 0 (0 = as fast as possible), "
+                                                  f"got {e.target_realtime_rate!r}")
     return None
 
 
@@ -331,6 +362,9 @@ def validate_scenario(scenario: Scenario, source: str = "<scenario>") -> None:
     if problem:
         c.fail(*problem)
     problem = plant_time_step_problem(e, e.mode)
+    if problem:
+        c.fail(*problem)
+    problem = drake_config_problem(e)
     if problem:
         c.fail(*problem)
     if e.kp * e.control_period >= 2.0:

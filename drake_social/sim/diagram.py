@@ -140,7 +140,7 @@ from drake_social.scenario import (EXECUTIONS, SIM_MODES, SERVO_BANDWIDTH, SERVO
 from drake_social.waypoints import check_waypoints
 
 __all__ = ["DiagramArguments", "TransportDiagram", "build_diagram", "check_diagram_arguments", "check_diagram_options",
-           "check_diagram_waypoints", "drake_config_problem", "scenario_plant_config", "servo_gains"]
+           "check_diagram_waypoints", "scenario_plant_config", "servo_gains"]
 
 
 @dc.dataclass
@@ -320,43 +320,14 @@ def check_diagram_options(
     require_choice(execution, who, "execution", EXECUTIONS, optional=True)
     require_checker(checker, who, optional=True)
     require_instance(meshcat, Meshcat, who, "meshcat", "a pydrake.geometry.Meshcat", optional=True)
-    validate_scenario(scenario, source=f"{who}: scenario")  # also one changed in code after loading
+    # also one changed in code after loading; this checks the Drake settings
+    # too (contact approximation, integration scheme, accuracy, realtime rate)
+    validate_scenario(scenario, source=f"{who}: scenario")
     mode = mode or scenario.execution.mode
     problem = plant_time_step_problem(scenario.execution, mode)  # the scenario's mode was checked above
     if problem:
         raise ScenarioError(f"{who}: scenario: {problem[0]}: {problem[1]}")
-    problem = drake_config_problem(scenario.execution)
-    if problem:
-        raise ScenarioError(f"{who}: scenario: {problem[0]}: {problem[1]}")
     return mode, execution or scenario.execution.execution
-
-
-#: The values of ``execution.contact_approximation`` (Drake's discrete contact approximations).
-CONTACT_APPROXIMATIONS = ("tamsi", "sap", "similar", "lagged")
-
-
-def drake_config_problem(execution) -> tuple[str, str] | None:
-    """What is wrong with the Drake settings of a scenario's ``execution``
-    section (``contact_approximation``, ``integration_scheme``, ``accuracy``,
-    ``target_realtime_rate``) as ``(field, rule)``, or None."""
-    from pydrake.systems.analysis import GetIntegrationSchemes
-
-    e = execution
-    if e.contact_approximation not in CONTACT_APPROXIMATIONS:
-        return "execution.contact_approximation", (f"must be one of {', '.join(CONTACT_APPROXIMATIONS)}, "
-                                                   f"got {e.contact_approximation!r}")
-    if e.integration_scheme not in GetIntegrationSchemes():
-        return "execution.integration_scheme", (f"must be one of {', '.join(GetIntegrationSchemes())}, "
-                                                f"got {e.integration_scheme!r}")
-    for name in ("accuracy", "target_realtime_rate"):
-        value = getattr(e, name)
-        if isinstance(value, bool) or not isinstance(value, (int, float)) or not np.isfinite(value):
-            return f"execution.{name}", f"must be a finite number, got {value!r}"
-    if not e.accuracy > 0:
-        return "execution.accuracy", f"must be > 0, got {e.accuracy!r}"
-    if e.target_realtime_rate < 0:
-        return "execution.target_realtime_rate", f"must be >= 0 (0 = as fast as possible), got {e.target_realtime_rate!r}"
-    return None
 
 
 def check_diagram_waypoints(scenario: Scenario, waypoints, checker: ValidityChecker | None, who: str) -> np.ndarray:

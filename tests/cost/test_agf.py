@@ -9,8 +9,8 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from drake_social.cost import PersonalSpace, agf, agf_algorithm1, people_array
-from drake_social.scenario import Person, SocialCostOptions
+from drake_social.cost import PersonalSpace, agf, agf_algorithm1
+from drake_social.scenario import SocialCostOptions
 
 PAPER = PersonalSpace()  # sigma_h = 2, sigma_s = 4/3, sigma_r = 1, tau = 0.2
 LN5 = math.log(5.0)  # exp(-Q) = 0.2  <=>  Q = ln 5
@@ -222,12 +222,6 @@ def test_shapes_and_empty_people():
     assert agf(np.zeros((4, 2)), np.zeros((0, 3)), PAPER).shape == (4, 0)
     assert agf(np.zeros((4, 2)), [0.0, 0.0, 0.0], PAPER).shape == (4, 1)
     np.testing.assert_array_equal(agf(np.zeros((4, 2)), people, PAPER)[:, 0], 1.0)
-
-
-def test_people_array_from_scenario_people():
-    dut = people_array([Person(x=1.0, y=2.0, theta=3.0), Person(x=-1.0, y=0.5, theta=-0.25)])
-    np.testing.assert_array_equal(dut, [[1.0, 2.0, 3.0], [-1.0, 0.5, -0.25]])
-    assert people_array([]).shape == (0, 3)
 
 
 def test_other_threshold_and_sigmas():

@@ -15,7 +15,7 @@ from drake_social.io.json_numbers import finite_or_none
 from drake_social.collision.geometric import GeometricChecker
 from drake_social.planning.space import ConfigurationSpace
 from drake_social.planning.algorithms import evaluate_path, make_objective
-from drake_social.scenario import load_scenario
+from drake_social.scenario import ALGORITHMS, load_scenario
 
 # Benchmark runs: many plans per test.
 pytestmark = pytest.mark.slow
@@ -322,3 +322,35 @@ def test_cpu_model_and_the_machine_line(tmp_path):
     assert bench._machine_line({"cpu_model": None, "load_average_start": [2.0, 1.0, 1.0]}) == [
         "Load average (1, 5, 15 min) at the start: 2.00, 1.00, 1.00.", ""]
     assert bench._machine_line({"cpu_model": None}) == []
+
+
+def test_bench_plans_with_the_papers_planner_whatever_the_file_says(tiny_scenario_path, tmp_path):
+    """A file asking for the shrinking radius and the optimiser is benched
+    as OMPL's RRTstar plans: fixed radius, raw path (limits.PAPER_PLANNER)."""
+    text = tiny_scenario_path.read_text()
+    old = "planner: {near_radius_mode: fixed, optimize: false,"
+    assert text.count(old) == 1
+    path = tmp_path / "optimised.yaml"
+    path.write_text(text.replace(old, "planner: {near_radius_mode: shrinking, optimize: true,"))
+    assert load_scenario(path).planner.optimize is True  # the file's own setting
+    dut = run_bench(scenario_paths=[path], algorithms=["rrt_star"], iterations=300, seeds=1, checker="numpy",
+                    include_ompl=False, include_checker=False, out_dir=tmp_path / "out")
+    entry = dut["scenarios"]["optimised.yaml"]
+    assert entry["planner_options"]["near_radius_mode"] == "fixed"
+    assert entry["planner_options"]["optimize"] is False
+    (run,) = entry["algorithms"]["rrt_star"]["runs"]
+    assert run["success"] is True  # a found path the file's settings would have optimised
+    assert run["optimized"] is False
+    table = (tmp_path / "out" / "bench.md").read_text()
+    assert ("Planner options (the paper's, set over every scenario file): optimised.yaml: near radius fixed, "
+            "optimize off.") in table
+
+
+def test_each_algorithm_is_compared_with_ompl_as_the_uniform_one_of_its_objective():
+    from drake_social.experiments.bench.planners import ompl_counterpart
+
+    assert {a: ompl_counterpart(a) for a in ALGORITHMS} == {
+        "rrt_star": "rrt_star", "social_rrt_star": "social_rrt_star", "base_rrt_star": "base_rrt_star",
+        "informed_social_rrt_star": "social_rrt_star", "informed_base_rrt_star": "base_rrt_star"}
+    with pytest.raises(ValueError, match="unknown"):
+        ompl_counterpart("informed_rrt_star")

@@ -370,13 +370,14 @@ def test_a_long_variant_name_is_blamed_for_a_long_group_name(tmp_path):
 
 def test_the_paper_runs_argument_bound_is_the_real_one(tmp_path, capsys):
     from drake_social.cli import build_parser
-    from drake_social.experiments.study import MAX_PAPER_RUNS
+    from drake_social.experiments.study import MAX_PAPER_RUNS, PAPER_PAIRS
 
     study = paper_study(runs=MAX_PAPER_RUNS)  # the largest the argument allows passes the study's own check
     assert study.runs * sum(len(g.algorithms) for g in study.groups) <= MAX_STUDY_TASKS
     with pytest.raises(ScenarioError):
         paper_study(runs=MAX_PAPER_RUNS + 1)
     assert MAX_PAPER_RUNS == 100_000 // 13
+    assert sum(len(g.algorithms) for g in study.groups) == PAPER_PAIRS == 13  # limits' count is the study's
     assert main(["experiment", "paper", "--runs", str(MAX_PAPER_RUNS + 1), "--out", str(tmp_path / "o")]) == 2
     assert capsys.readouterr().err.endswith("argument --runs: must be an integer in [1, 7,692], got 7693\n")
     parser = build_parser()

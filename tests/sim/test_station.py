@@ -117,8 +117,8 @@ def test_the_simulator_config_follows_the_scenario(tiny_scenario):
 
 
 @pytest.mark.parametrize("field, value, rule", [
-    ("integration_scheme", "rk9", "must be one of .*runge_kutta3"),
-    ("contact_approximation", "soft", "must be one of tamsi, sap, similar, lagged"),
+    ("integration_scheme", "rk9", "unknown scheme 'rk9'; allowed: .*runge_kutta3"),
+    ("contact_approximation", "soft", "unknown approximation 'soft'; allowed: tamsi, sap, similar, lagged"),
     ("accuracy", 0.0, "must be > 0"),
     ("target_realtime_rate", -1.0, "must be >= 0"),
     ("accuracy", float("nan"), "must be a finite number"),
@@ -156,3 +156,15 @@ def test_the_example_without_feedforward_lags_by_speed_over_gain(tiny_scenario, 
     assert result["reached"]
     lag = tiny_scenario.execution.max_base_speed / kp
     assert 0.9 * lag <= result["max_tracking_error"] <= lag * (1 + 1e-6)
+
+
+def test_the_example_says_when_the_goal_is_not_reached(monkeypatch, capsys, tiny_scenario_path):
+    """A run that stops short has no time to goal (None): the script says so
+    instead of formatting None as a number."""
+    example = _example()
+    result = {"reached": False, "time_to_goal": None, "max_tracking_error": 0.25, "max_point_deviation": 0.125}
+    monkeypatch.setattr(example, "run", lambda scenario, waypoints, kp: result)
+    example.main([str(tiny_scenario_path)])
+    lines = capsys.readouterr().out.splitlines()
+    assert lines[1:] == [f"kp = {kp} 1/s: reached False, time to goal not reached, max tracking error 250.000 mm, "
+                         "max point deviation 125.000 mm" for kp in ("1.5", "6")]

@@ -8,6 +8,12 @@ objective: ``rrt_star`` (path length), ``social_rrt_star`` (multi-point)
 and ``base_rrt_star`` (base-only); the informed variants are compared with
 OMPL on their objective (OMPL's RRTstar does not sample informed).
 
+Every scenario file is loaded with the paper's planner settings as its last
+override (:data:`drake_social.limits.PAPER_PLANNER`: the fixed near radius,
+no optimisation), whatever its own ``planner`` section says: OMPL's RRTstar
+runs a fixed radius and returns its raw path, so ours do too (``bench.md``
+prints these options per scenario).
+
 Every run gets a fresh checker (built outside the timing), so no run profits
 from another's caches. Every path, ours and OMPL's, is measured by the same
 code afterwards: :func:`evaluate_path` gives its objective, social cost with
@@ -37,10 +43,12 @@ from drake_social.planning.space import ConfigurationSpace
 from drake_social.collision.validity import ValidityChecker
 from drake_social.experiments.records import run_record
 from drake_social.io.records import write_json
-from drake_social.planning.algorithms import evaluate_path, make_objective, plan
+from drake_social.limits import PAPER_PLANNER
+from drake_social.planning.algorithms import (ALGORITHM_SPECS, algorithm_spec, evaluate_path, make_objective,
+                                              plan)
 from drake_social.scenario import ALGORITHMS, EXECUTIONS, SIM_MODES, Scenario, load_scenario, validate_planner_choice
 
-__all__ = ["CHECKERS", "ompl_available", "run_bench", "summarize"]
+__all__ = ["CHECKERS", "ompl_available", "ompl_counterpart", "run_bench", "summarize"]
 
 _log = logging.getLogger(__name__)
 
@@ -67,9 +75,17 @@ def _make_checker(scenario: Scenario, checker: str, path: Path | None = None) ->
     return make_checker(scenario, checker, parallelism=1, source=None if path is None else str(path))
 
 
-def _objective_key(algorithm: str) -> str:
-    """The non-informed algorithm with the same objective."""
-    return algorithm.removeprefix("informed_")
+def ompl_counterpart(algorithm: str) -> str:
+    """The uniform-sampling algorithm of :data:`ALGORITHM_SPECS` with the same
+    objective and social weights as ``algorithm`` (the algorithm itself when it
+    samples uniformly): the one OMPL's RRTstar is run as."""
+    spec = algorithm_spec(algorithm, "bench")
+    matches = [s.name for s in ALGORITHM_SPECS.values()
+               if s.sampler == "uniform" and (s.objective, s.weights) == (spec.objective, spec.weights)]
+    if len(matches) != 1:
+        raise ValueError(f"bench: algorithm {algorithm!r} needs exactly one uniform-sampling algorithm with its "
+                         f"objective {spec.objective!r} and weights {spec.weights!r} in ALGORITHM_SPECS, got {matches}")
+    return matches[0]
 
 
 def _record(scenario: Scenario, result, objective, checker: ValidityChecker, iterations: int) -> dict:
@@ -279,7 +295,7 @@ def run_bench(
     use_ompl = include_ompl and ompl_available()
     if include_ompl and not use_ompl:
         _log.info("ompl is not importable (pip install 'drake-social[bench]'); skipping the OMPL baseline")
-    keys = list(dict.fromkeys(_objective_key(a) for a in algorithms)) if use_ompl else []
+    keys = list(dict.fromkeys(ompl_counterpart(a) for a in algorithms)) if use_ompl else []
     ompl_sets = [("ompl", ompl_checker)] + ([("ompl_same_checker", checker)] if ompl_checker != checker else [])
     total = len(paths) * seeds * (len(algorithms) + len(keys) * len(ompl_sets)) + (1 if include_checker else 0)
     total += len(paths) * len(SIM_MODES) * len(EXECUTIONS) * (sim_runs + 1) if sim_runs > 0 else 0
@@ -294,9 +310,11 @@ def run_bench(
             progress(done, total, label)
 
     machine = _machine()  # the load average before this run's planning
-    # Every file is loaded, and checked with each planner of the bench (which
-    # replaces its planner.algorithm), before the first run.
-    loaded = [load_scenario(path) for path in paths]
+    # Every file is loaded with the paper's planner settings over its own (as
+    # OMPL's RRTstar plans: fixed radius, raw path), and checked with each
+    # planner of the bench (which replaces its planner.algorithm), before the
+    # first run.
+    loaded = [load_scenario(path, [PAPER_PLANNER]) for path in paths]
     for path, scenario in zip(paths, loaded):
         for algorithm in algorithms:
             validate_planner_choice(scenario, algorithm, source=f"{path} with the bench's algorithm {algorithm}")
@@ -330,9 +348,9 @@ def run_bench(
                                                     lambda label: tick(f"{path.stem} {label} ({ompl_chk})"), repeats)
         for algorithm, data in entry["algorithms"].items():
             for field in ("ompl", "ompl_same_checker"):
-                base = entry[field].get(_objective_key(algorithm))
+                base = entry[field].get(ompl_counterpart(algorithm))
                 data[f"vs_{field}"] = None if base is None else {
-                    "ompl": f"ompl_rrt_star[{_objective_key(algorithm)}]", "ompl_checker": base["checker"],
+                    "ompl": f"ompl_rrt_star[{ompl_counterpart(algorithm)}]", "ompl_checker": base["checker"],
                     **{f: _ratio(data["summary"], base["summary"], g)
                        for f, g in (("time", "planning_time"), ("social_cost", "F_multi"),
                                     ("objective", "objective"))},
@@ -412,7 +430,7 @@ def _markdown(out: dict) -> str:
         f"{m['platform']}, {m['cpu_count']} CPUs, numpy {m['numpy']}, drake {m['drake']}, ompl {m['ompl']}.",
         "",
         *_machine_line(m),
-        "Planner options: " + "; ".join(
+        "Planner options (the paper's, set over every scenario file): " + "; ".join(
             f"{name}: near radius {e['planner_options']['near_radius_mode']}, "
             f"optimize {'on' if e['planner_options']['optimize'] else 'off'}"
             for name, e in out["scenarios"].items() if "planner_options" in e) + ".",

@@ -35,12 +35,11 @@ import threading
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from typing import Callable, Iterator, Sequence
 
+from drake_social.limits import EXECUTORS  # the backends of map_tasks
 from drake_social.io.outputs import DeferredSignals  # SIGINT and SIGTERM held back over a block
 
 __all__ = ["EXECUTORS", "SCHEDULER_SCHEMES", "check_scheduler_address", "map_tasks"]
 
-#: Backends of :func:`map_tasks`.
-EXECUTORS = ("process", "dask")
 #: Protocols of a Dask scheduler address (the plain TCP of ``dask scheduler``, and TLS).
 SCHEDULER_SCHEMES = ("tcp", "tls")
 

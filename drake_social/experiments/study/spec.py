@@ -23,7 +23,8 @@ import numpy as np
 from drake_social.errors import ScenarioError
 from drake_social.experiments.study.scenarios import check_run_settings, load_cached
 from drake_social.io.textfile import read_yaml_file, shorten
-from drake_social.limits import ALGORITHMS, CHECKERS, MAX_ITERATIONS
+from drake_social.limits import (ALGORITHMS, CHECKERS, MAX_ITERATIONS, MAX_PAPER_RUNS, MAX_RUNS, MAX_STUDY_TASKS,
+                                 PAPER_ALGORITHMS, PAPER_PAIRS, PAPER_PLANNER, PAPER_WEIGHTINGS)
 from drake_social.scenario.schema import Bar, interest_point_count
 
 __all__ = [
@@ -34,6 +35,8 @@ __all__ = [
     "NAME_RULE",
     "PAPER_ALGORITHMS",
     "PAPER_PAIRS",
+    "PAPER_PLANNER",
+    "PAPER_WEIGHTINGS",
     "Group",
     "Study",
     "algorithms_problem",
@@ -45,11 +48,6 @@ __all__ = [
     "study_tasks",
     "valid_name",
 ]
-
-#: The paper's algorithms, in its order (the non-social baseline first).
-PAPER_ALGORITHMS = ("rrt_star", "social_rrt_star", "base_rrt_star", "informed_social_rrt_star",
-                    "informed_base_rrt_star")
-
 
 @dc.dataclass(frozen=True)
 class Group:
@@ -103,18 +101,13 @@ class Study:
         return dc.asdict(self)
 
 
-#: The paper's planner settings, applied over every group of :func:`paper_study`:
-#: the raw RRT* path (no optimisation) and the fixed near radius of Algorithm 2.
-PAPER_PLANNER = "planner: {optimize: false, near_radius_mode: fixed}"
-
-
 def paper_weights(num_points: int) -> dict[str, list[float]]:
     """Section V-D's weightings: object points 0.95 and the rest 0.05; base
     0.95 and the rest 0.05; equal (1 everywhere). Base, link-1 tip, link-2
-    tip, then the object's points."""
+    tip, then the object's points. Keyed by :data:`PAPER_WEIGHTINGS`, in its order."""
     obj = [0.05, 0.05, 0.05] + [0.95] * (num_points - 3)
     base = [0.95] + [0.05] * (num_points - 1)
-    return {"object": obj, "base": base, "equal": [1.0] * num_points}
+    return dict(zip(PAPER_WEIGHTINGS, (obj, base, [1.0] * num_points)))
 
 
 def paper_study(*, runs: int = 10, iterations: int = 2000, seed: int = 0, simulate: bool = False,
@@ -143,17 +136,6 @@ def paper_study(*, runs: int = 10, iterations: int = 2000, seed: int = 0, simula
     return study
 
 
-#: Most runs per (group, algorithm) of a study (each run's seed is drawn up front).
-MAX_RUNS = 10_000
-#: Most tasks of a study (groups x algorithms x runs): every run's record is
-#: kept in memory until the study is written (a few kilobytes each).
-MAX_STUDY_TASKS = 100_000
-#: (group, algorithm) pairs of :func:`paper_study`: A and B with the paper's
-#: five planners, D with Social Risk-RRT* under three weightings.
-PAPER_PAIRS = 2 * len(PAPER_ALGORITHMS) + len(paper_weights(5))
-#: Most runs of :func:`paper_study` (``experiment paper --runs``): its
-#: :data:`PAPER_PAIRS` pairs x runs stay within :data:`MAX_STUDY_TASKS`.
-MAX_PAPER_RUNS = min(MAX_RUNS, MAX_STUDY_TASKS // PAPER_PAIRS)
 #: Study, group and variant names: a letter, digit or ``_`` first, then
 #: letters, digits, ``_``, ``-`` and ``.``; at most 100 characters. They name
 #: output files (``arena_<group>.log``) and the default folder ``out/<study>``.

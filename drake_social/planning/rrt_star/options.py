@@ -8,12 +8,10 @@ import math
 
 import numpy as np
 
+from drake_social.limits import NEAR_RADIUS_MODES  # the allowed near_radius_mode values
 from drake_social.planning.space import ConfigurationSpace
 
 __all__ = ["NEAR_RADIUS_MODES", "RrtStarOptions", "default_gamma"]
-
-#: Allowed ``RrtStarOptions.near_radius_mode`` values.
-NEAR_RADIUS_MODES = ("fixed", "shrinking")
 
 
 def default_gamma(space: ConfigurationSpace) -> float:
@@ -30,6 +28,13 @@ def default_gamma(space: ConfigurationSpace) -> float:
 @dc.dataclass
 class RrtStarOptions:
     """Options of :class:`RrtStar` (configuration-space units).
+
+    The defaults are the paper's Algorithm 2: the fixed near radius and the
+    raw path (``near_radius_mode="fixed"``, ``optimize=False``). A scenario's
+    :class:`~drake_social.scenario.PlannerOptions` carries the user-facing
+    defaults (the shrinking radius and the optimised path) and
+    :meth:`from_scenario` copies them, so a plan of a scenario runs those;
+    only code that builds these options itself gets the paper's.
 
     Attributes:
         iterations: samples drawn, K (1 .. MAX_ITERATIONS).
