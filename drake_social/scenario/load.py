@@ -259,8 +259,6 @@ def check_yaml(text: str, source: str, schema: type = Scenario) -> None:
     Raises:
         ScenarioError: ``<source>: line <n>: <dotted field>: <what is allowed>, got <value>``.
     """
-    import yaml
-
     root = compose_yaml(text, source)
     if root is None:
         raise ScenarioError(f"{source}: empty; a {schema.__name__.lower()} is a mapping "

@@ -29,7 +29,6 @@ import math
 import os
 import tempfile
 from pathlib import Path
-from typing import Sequence
 
 import numpy as np
 from matplotlib.image import imsave
