@@ -55,7 +55,8 @@ import numpy as np
 from drake_social.cost.agf import agf_xy
 from drake_social.cost.social import SocialCost
 from drake_social.kinematics import ArmGeometry, config_distance
-from drake_social.people import people_model
+from drake_social.people import people_model, proximity
+from drake_social.people.proximity import part_names
 from drake_social.experiments.records import path_costs
 
 __all__ = [
@@ -106,44 +107,12 @@ class HallZones:
 ZONES = HallZones()
 
 
-def part_names(geometry: ArmGeometry) -> list[str]:
-    """The interest points (base first), then ``arm``, ``object`` and ``robot``."""
-    return geometry.interest_names + ["arm", "object", "robot"]
-
-
-def _segment_distance(p: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """Distance from points p (H, 2) to segments a-b (..., S, 2): (..., S, H)."""
-    d = b - a
-    ap = p - a[..., None, :]  # (..., S, H, 2)
-    denom = np.einsum("...i,...i->...", d, d)[..., None]
-    with np.errstate(invalid="ignore", divide="ignore"):
-        t = np.where(denom > 0, np.einsum("...hi,...i->...h", ap, d) / np.where(denom > 0, denom, 1.0), 0.0)
-    t = np.clip(t, 0.0, 1.0)
-    closest = a[..., None, :] + t[..., None] * d[..., None, :]
-    return np.linalg.norm(p - closest, axis=-1)
-
-
 def part_distances(geometry: ArmGeometry, people: np.ndarray, radii: np.ndarray, q: np.ndarray) -> dict[str, np.ndarray]:
     """Surface-to-surface distance (M,) of every part to the nearest person's
-    body disc at configurations q (M, 4), metres; +inf in an empty room."""
-    q = np.asarray(q, float).reshape(-1, 4)
+    body disc at configurations q (M, 4), metres, people standing at
+    ``people`` (P, 3) rows [x, y, theta]; +inf in an empty room."""
     people = np.asarray(people, float).reshape(-1, 3)
-    radii = np.asarray(radii, float).reshape(-1)
-    names = part_names(geometry)
-    if len(people) == 0:
-        return {n: np.full(len(q), np.inf) for n in names}
-    centres = people[:, :2]
-    pts = geometry.interest_points(q)  # (M, K, 2)
-    d_pts = np.linalg.norm(pts[:, :, None, :] - centres, axis=-1) - radii  # (M, K, H)
-    d_pts[:, 0] -= geometry.base_radius
-    out = {n: d_pts[:, k].min(-1) for k, n in enumerate(geometry.interest_names)}
-    seg = geometry.segments(q)  # (M, S, 2, 2)
-    d_seg = _segment_distance(centres, seg[..., 0, :], seg[..., 1, :]) - radii  # (M, S, H)
-    d_seg -= geometry.segment_radii[:, None]
-    out["arm"] = d_seg[:, :2].min(axis=(1, 2))
-    out["object"] = d_seg[:, 2:].min(axis=(1, 2))
-    out["robot"] = np.minimum.reduce([out["base"], out["arm"], out["object"]])
-    return out
+    return proximity.part_distances(geometry, q, people[:, :2], radii)
 
 
 def _shape_points(geometry: ArmGeometry, q: np.ndarray, which: slice) -> np.ndarray:

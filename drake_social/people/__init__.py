@@ -7,6 +7,8 @@ first model (people who stand still); walking people are further models
 behind the same protocol.
 """
 
+from drake_social.people.log import PEOPLE_CSV_FIELDS, PeopleLog, person_ids
 from drake_social.people.model import PeopleModel, PeopleState, StaticPeople, people_model, with_people
 
-__all__ = ["PeopleModel", "PeopleState", "StaticPeople", "people_model", "with_people"]
+__all__ = ["PEOPLE_CSV_FIELDS", "PeopleLog", "PeopleModel", "PeopleState", "StaticPeople", "people_model",
+           "person_ids", "with_people"]

@@ -24,6 +24,11 @@ class PeopleState:
         velocities: (P, 2) velocities [vx, vy], metres per second.
         radii: (P,) body radii, metres.
         names: P labels for figures and messages ("" where unnamed).
+        present: (P,) True for the people in the scene at ``t``; a recorded
+            pedestrian is absent before they enter and after they leave.
+            Absent people keep their last (or first) pose in the arrays and
+            count for nothing: no cost, no collision, no metric. None (the
+            default) = everyone present.
     """
 
     t: float
@@ -32,9 +37,16 @@ class PeopleState:
     velocities: np.ndarray
     radii: np.ndarray
     names: tuple[str, ...]
+    present: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         n = len(self.names)
+        present = np.ones(n, bool) if self.present is None else np.asarray(self.present, dtype=bool)
+        if present.shape != (n,):
+            raise ValueError(f"PeopleState.present has shape {present.shape}; {n} people need {(n,)}")
+        present = present.copy()
+        present.flags.writeable = False
+        object.__setattr__(self, "present", present)
         for field, shape in (("positions", (n, 2)), ("headings", (n,)), ("velocities", (n, 2)), ("radii", (n,))):
             value = np.asarray(getattr(self, field), dtype=float)
             if value.shape != shape:
@@ -47,6 +59,15 @@ class PeopleState:
     def count(self) -> int:
         """The number of people P."""
         return len(self.names)
+
+    def visible(self) -> "PeopleState":
+        """The people present at ``t`` only, in the same order (self when all are)."""
+        if self.present.all():
+            return self
+        keep = self.present
+        return PeopleState(t=self.t, positions=self.positions[keep], headings=self.headings[keep],
+                           velocities=self.velocities[keep], radii=self.radii[keep],
+                           names=tuple(n for n, k in zip(self.names, keep) if k))
 
     def poses(self) -> np.ndarray:
         """(P, 3) rows [x, y, theta]: the layout the social cost reads."""

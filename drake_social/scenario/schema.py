@@ -34,6 +34,8 @@ __all__ = [
     "SIM_MODES",
     "Bar",
     "Box",
+    "Crowd",
+    "CrowdPerson",
     "ExecutionOptions",
     "LShape",
     "Person",
@@ -87,17 +89,79 @@ class World:
 
 @dc.dataclass
 class Person:
-    """A static person: a body disc and a facing direction."""
+    """A person: a body disc and a facing direction, standing or walking a script."""
 
-    # Position of the body centre in the world frame, metres.
+    # Position of the body centre in the world frame, metres. With a
+    # trajectory, leave both at 0 or give the trajectory's first point.
     x: float = 0.0
     y: float = 0.0
-    # Facing direction, radians, counter-clockwise from world +x.
+    # Facing direction, radians, counter-clockwise from world +x; with a
+    # trajectory, the facing while standing before the first motion.
     theta: float = 0.0
     # Body radius, metres (> 0); the body is an obstacle too.
     radius: float = 0.25
     # Optional label used in figures and error messages.
     name: str = ""
+    # Timed waypoints [[t, x, y], ...] (seconds >= 0, strictly increasing;
+    # metres), walked in straight lines at constant speed between them; the
+    # person stands at the first point before its time and at the last after
+    # it. None = the person stands at (x, y) throughout.
+    trajectory: Optional[list[list[float]]] = None
+    # Repeat the trajectory every t_last - t_first seconds; its last point must
+    # be its first (a closed route).
+    loop: bool = False
+
+
+@dc.dataclass
+class CrowdPerson:
+    """A pedestrian of the simulated crowd: a start, goals and a body."""
+
+    # Start position of the body centre, metres.
+    x: float = 0.0
+    y: float = 0.0
+    # Goals [[x, y], ...] visited in order, metres (at least one).
+    goals: list[list[float]] = dc.field(default_factory=list)
+    # After the last goal, head for the first again (forever).
+    cycle: bool = False
+    # Body radius, metres (> 0).
+    radius: float = 0.25
+    # Preferred walking speed, m/s (> 0); None = drawn from the scenario's
+    # seed, normal with mean crowd.speed_mean and deviation crowd.speed_std.
+    desired_speed: Optional[float] = None
+    # Optional label used in figures and error messages.
+    name: str = ""
+
+
+@dc.dataclass
+class Crowd:
+    """People driven by the social force model (Helbing and Molnar 1995, with
+    the interaction term of Moussaid et al. 2009), walking to their goals and
+    reacting to each other, the walls and obstacles, and the robot."""
+
+    # The pedestrians.
+    people: list[CrowdPerson] = dc.field(default_factory=list)
+    # Time step of the model's explicit integration, seconds (> 0).
+    time_step: float = 0.05
+    # Mean and standard deviation of the drawn preferred speeds, m/s (> 0, >= 0).
+    speed_mean: float = 1.34
+    speed_std: float = 0.26
+    # Largest speed, as a multiple of each person's preferred speed (>= 1).
+    max_speed_factor: float = 1.3
+    # Relaxation time tau of the goal force, seconds (> 0).
+    relaxation_time: float = 0.5
+    # A goal counts as reached within this distance of the body centre, metres (> 0).
+    goal_radius: float = 0.3
+    # Moussaid et al. 2009 interaction: lambda (weight of the relative
+    # velocity), gamma, n and n' (dimensionless, > 0), and its strength A, m/s^2 (>= 0).
+    interaction_lambda: float = 2.0
+    interaction_gamma: float = 0.35
+    interaction_n: float = 2.0
+    interaction_n_prime: float = 3.0
+    interaction_strength: float = 4.5
+    # Helbing-Molnar obstacle force A exp(-d / B) of walls, obstacles and the
+    # robot (base, arm and object) at surface distance d: A m/s^2 (>= 0), B metres (> 0).
+    obstacle_strength: float = 10.0
+    obstacle_range: float = 0.2
 
 
 @dc.dataclass
@@ -213,6 +277,10 @@ class SocialCostOptions:
     # crossings are located inside steps, so 0.1 m keeps Msc within ~0.5% of
     # a 2000-step reference on nearly every edge.
     resolution: float = 0.1
+    # Kirby 2010's speed scaling: each person's sigma_h = max(2 v, 0.5) with v
+    # their speed, m/s (sigma_s and sigma_r keep their ratios to it); false =
+    # sigma_h for everyone, walking or not.
+    speed_scaling: bool = False
 
 
 @dc.dataclass
@@ -313,6 +381,11 @@ class ExecutionOptions:
     time_limit: float = 300.0
     # Frames per second of the Meshcat recording (> 0, <= MAX_REPLAY_FPS = 60).
     replay_fps: float = 30.0
+    # The safety monitor holds the robot (base stopped, base and arm reference
+    # held) while any part of it (base, arm, object) is within this distance
+    # of a person's body, surface to surface, and lets it go when clear,
+    # metres (>= 0).
+    safety_distance: float = 0.05
 
 
 @dc.dataclass
@@ -323,8 +396,16 @@ class Scenario:
     description: str = ""
     # The room and its obstacles.
     world: World = dc.field(default_factory=World)
-    # Static people.
+    # People standing or walking a script.
     people: list[Person] = dc.field(default_factory=list)
+    # People simulated by the social force model; None = no crowd.
+    crowd: Optional[Crowd] = None
+    # Recorded pedestrians: a CSV file with the header t,id,x,y (optional
+    # theta, radius and v columns), a row per person and time; a path relative
+    # to the scenario file. None = no recording.
+    people_file: Optional[str] = None
+    # Keep only these ids of people_file (each must occur in it); None = all.
+    people_file_ids: Optional[list[str]] = None
     # The mobile manipulator.
     robot: Robot = dc.field(default_factory=Robot)
     # The carried object, tagged in YAML as !Bar, !LShape or !Polyline.

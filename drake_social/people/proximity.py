@@ -1,0 +1,77 @@
+"""How close the robot's parts come to people: surface-to-surface distances.
+
+The one home of the robot-to-people distance read by the safety monitor
+(:class:`drake_social.control.SafetyMonitor`), the crowd's view of the robot
+and the metrics (:mod:`drake_social.experiments.metrics`). A person is a body
+disc (centre, radius); the robot is its base disc, its interest points (the
+elbow, the gripper and the object's points, as points) and its capsules (two
+links, the object's segments). Distances are exact for these shapes.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from drake_social.kinematics import ArmGeometry
+
+__all__ = ["part_distances", "part_names", "segment_point_distance"]
+
+
+def part_names(geometry: ArmGeometry) -> list[str]:
+    """The interest points (base first), then ``arm``, ``object`` and ``robot``."""
+    return geometry.interest_names + ["arm", "object", "robot"]
+
+
+def segment_point_distance(p: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Distance from points ``p`` (..., H, 2) to segments a-b (..., S, 2): (..., S, H), metres.
+
+    ``p`` has the same leading dimensions as the segments (or none)."""
+    p = np.asarray(p, float)
+    d = b - a
+    ap = p[..., None, :, :] - a[..., :, None, :]  # (..., S, H, 2)
+    denom = np.einsum("...i,...i->...", d, d)[..., None]
+    with np.errstate(invalid="ignore", divide="ignore"):
+        t = np.where(denom > 0, np.einsum("...hi,...i->...h", ap, d) / np.where(denom > 0, denom, 1.0), 0.0)
+    t = np.clip(t, 0.0, 1.0)
+    closest = a[..., :, None, :] + t[..., None] * d[..., :, None, :]
+    return np.linalg.norm(p[..., None, :, :] - closest, axis=-1)
+
+
+def part_distances(geometry: ArmGeometry, q: np.ndarray, centres: np.ndarray, radii: np.ndarray,
+                   present: np.ndarray | None = None) -> dict[str, np.ndarray]:
+    """Surface-to-surface distance (M,) of every part to the nearest present
+    person's body disc, metres; 0 is contact, negative is overlap, +inf when
+    nobody is present.
+
+    Args:
+        geometry: the robot and its object.
+        q: (M, 4) configurations.
+        centres: people's body centres, (P, 2) for people standing still, or
+            (M, P, 2), where they are at each configuration's time.
+        radii: (P,) body radii, metres.
+        present: (P,) or (M, P) booleans; None = everyone.
+
+    Returns:
+        ``{part: (M,) distances}`` for :func:`part_names`.
+    """
+    q = np.asarray(q, float).reshape(-1, 4)
+    m = len(q)
+    radii = np.asarray(radii, float).reshape(-1)
+    n = len(radii)
+    centres = np.broadcast_to(np.asarray(centres, float).reshape(-1, n, 2) if n else np.zeros((1, 0, 2)), (m, n, 2))
+    present = np.ones((m, n), bool) if present is None else np.broadcast_to(np.asarray(present, bool), (m, n))
+    names = part_names(geometry)
+    if n == 0:
+        return {name: np.full(m, np.inf) for name in names}
+    absent = np.where(present, 0.0, np.inf)[:, None, :]  # (M, 1, P)
+    pts = geometry.interest_points(q)  # (M, K, 2)
+    d_pts = np.linalg.norm(pts[:, :, None, :] - centres[:, None, :, :], axis=-1) - radii + absent  # (M, K, P)
+    d_pts[:, 0] -= geometry.base_radius
+    out = {name: d_pts[:, k].min(-1) for k, name in enumerate(geometry.interest_names)}
+    seg = geometry.segments(q)  # (M, S, 2, 2)
+    d_seg = segment_point_distance(centres, seg[..., 0, :], seg[..., 1, :]) - radii + absent  # (M, S, P)
+    d_seg -= geometry.segment_radii[:, None]
+    out["arm"] = d_seg[:, :2].min(axis=(1, 2))
+    out["object"] = d_seg[:, 2:].min(axis=(1, 2))
+    out["robot"] = np.minimum.reduce([out["base"], out["arm"], out["object"]])
+    return out
