@@ -4,14 +4,11 @@ from __future__ import annotations
 
 import dataclasses as dc
 import math
-from typing import Protocol, Sequence, TypeVar, runtime_checkable
+from typing import Protocol, Sequence, runtime_checkable
 
 import numpy as np
 
-__all__ = ["PeopleModel", "PeopleState", "StaticPeople", "people_model", "with_people"]
-
-_S = TypeVar("_S")
-
+__all__ = ["PeopleModel", "PeopleState", "StaticPeople"]
 
 @dc.dataclass(frozen=True)
 class PeopleState:
@@ -129,28 +126,3 @@ class StaticPeople:
         if not math.isfinite(t):
             raise ValueError(f"StaticPeople.state_at: t must be a finite time in seconds, got {t!r}")
         return dc.replace(self._state, t=float(t))
-
-
-def people_model(scenario) -> PeopleModel:
-    """The people model of a scenario (its ``people`` list)."""
-    people = scenario.people
-    return StaticPeople([[p.x, p.y, p.theta] for p in people], [p.radius for p in people],
-                        [p.name for p in people])
-
-
-def with_people(scenario: _S, extra: Sequence) -> _S:
-    """A deep copy of ``scenario`` whose people are its own followed by ``extra``.
-
-    Args:
-        scenario: a scenario (not modified).
-        extra: scenario ``Person`` records to append (the records themselves,
-            not copies).
-
-    Returns:
-        The new scenario; it is not validated again.
-    """
-    import copy
-
-    out = copy.deepcopy(scenario)
-    out.people = list(out.people) + list(extra)
-    return out

@@ -48,7 +48,7 @@ def test_the_detector_finds_reads_in_any_expression():
     assert attribute_reads(source, "people") == [(1, "scenario.people"), (2, "s.people")]
     assert attribute_reads(source, "obstacles") == [(3, "a.b.world.obstacles")]
     # It sees the scenario package's own reads (which it is allowed to make).
-    assert attribute_reads((ROOT / "people" / "model.py").read_text(), "people")
+    assert attribute_reads((ROOT / "people" / "compose.py").read_text(), "people")
 
 
 def test_only_the_people_model_reads_the_scenarios_people():
