@@ -19,6 +19,8 @@ from typing import Protocol, Sequence, TypeVar, runtime_checkable
 import numpy as np
 
 from drake_social.people.model import PeopleModel, PeopleState, StaticPeople
+from drake_social.people.recorded import recorded_model
+from drake_social.people.scripted import ScriptedPeople
 
 __all__ = ["CrowdModel", "ScenarioPeople", "concat_states", "people_model", "with_people"]
 
@@ -130,11 +132,25 @@ class ScenarioPeople:
 
 
 def people_model(scenario) -> PeopleModel:
-    """The people model of a scenario: a :class:`ScenarioPeople`
-    of its ``people`` list."""
+    """The people model of a (validated) scenario: a :class:`ScenarioPeople` of
+    its ``people`` list (a :class:`StaticPeople` when nobody has a trajectory,
+    else a :class:`~drake_social.people.scripted.ScriptedPeople`), then its
+    recorded ``people_file`` (:class:`~drake_social.people.recorded.RecordedPeople`),
+    then its simulated ``crowd``."""
     people = scenario.people
-    return ScenarioPeople([StaticPeople([[p.x, p.y, p.theta] for p in people], [p.radius for p in people],
-                                        [p.name for p in people])])
+    if all(p.trajectory is None for p in people):
+        listed = StaticPeople([[p.x, p.y, p.theta] for p in people], [p.radius for p in people],
+                              [p.name for p in people])
+    else:
+        listed = ScriptedPeople(people)
+    recorded = recorded_model(scenario)
+    open_loop = [listed] + ([] if recorded is None else [recorded])
+    if scenario.crowd is None:
+        crowd = None
+    else:
+        from drake_social.people.crowd import crowd_model
+        crowd = crowd_model(scenario)
+    return ScenarioPeople(open_loop, crowd)
 
 
 def with_people(scenario: _S, extra: Sequence) -> _S:

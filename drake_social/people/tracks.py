@@ -1,0 +1,252 @@
+"""Piecewise-linear tracks of people in time: positions, velocities, headings.
+
+The shared core of the scripted (:mod:`drake_social.people.scripted`) and the
+recorded (:mod:`drake_social.people.recorded`) people. Each person has timed
+knots ``t_0 < t_1 < ... < t_{n-1}`` with positions, walked in straight lines at
+constant speed between them; before ``t_0`` the person stands at the first
+knot, after ``t_{n-1}`` at the last, and a looping person repeats the knots
+with period ``t_{n-1} - t_0``. Velocities are the segments' exact velocities
+(0 while standing).
+
+Headings follow :func:`heading_knots`: the facing direction turns toward the
+direction of motion at a bounded rate (:data:`TURN_RATE`) from the moment a
+segment of motion starts, so it never flips at a corner or a stop.
+
+All people of a :class:`Tracks` are evaluated together (vectorised over
+people): :meth:`Tracks.evaluate` costs a few numpy operations whatever the
+number of knots.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Sequence
+
+import numpy as np
+
+__all__ = ["MAX_LOOP_PASSES", "TURN_RATE", "Tracks", "heading_knots"]
+
+#: Largest turning rate of a walking person's facing direction, rad/s: a
+#: half turn takes one second (people turn at about 100-200 degrees per
+#: second while walking).
+TURN_RATE = math.pi
+#: Periods of a looping route simulated to find where the heading repeats
+#: (it repeats after the first period as soon as one turn of the route
+#: completes within it).
+MAX_LOOP_PASSES = 8
+
+
+def _wrap(a: float) -> float:
+    """``a`` in (-pi, pi]."""
+    w = math.remainder(a, 2 * math.pi)
+    return math.pi if w == -math.pi else w
+
+
+class _Turner:
+    """The bounded-rate heading along the unrolled timeline: knots (t, h),
+    linear between them, constant after the last."""
+
+    def __init__(self, t: float, h: float, rate: float) -> None:
+        self.t = [t]
+        self.h = [h]
+        self.rate = rate
+
+    def at(self, s: float) -> float:
+        if s >= self.t[-1]:
+            return self.h[-1]
+        t0, t1, h0, h1 = self.t[-2], self.t[-1], self.h[-2], self.h[-1]
+        return h0 + (h1 - h0) * (s - t0) / (t1 - t0)
+
+    def turn(self, s: float, direction: float) -> None:
+        """Start turning at time ``s`` toward ``direction`` (the shortest way;
+        a half turn counter-clockwise), cutting short a turn still under way."""
+        h = self.at(s)
+        while len(self.t) > 1 and self.t[-1] > s:  # a turn under way stops at s
+            self.t.pop()
+            self.h.pop()
+        if self.t[-1] < s:
+            self.t.append(s)
+            self.h.append(h)
+        delta = _wrap(direction - h)
+        if delta != 0.0:
+            self.t.append(s + abs(delta) / self.rate)
+            self.h.append(h + delta)
+
+    def state(self, s: float) -> tuple[float, float, float]:
+        """(heading at s, remaining turn in radians, its end time minus s)."""
+        h = self.at(s)
+        if s >= self.t[-1]:
+            return h, 0.0, 0.0
+        return h, self.h[-1] - h, self.t[-1] - s
+
+
+def heading_knots(times: np.ndarray, points: np.ndarray, theta: float, loop: bool = False,
+                  rate: float = TURN_RATE) -> tuple[np.ndarray, np.ndarray, float]:
+    """The heading of a person walking ``points`` at ``times``, as knots of a
+    piecewise-linear function of time.
+
+    The rule: before the first motion the person faces ``theta``. When a
+    segment of motion starts (at its first knot's time), the heading turns
+    toward the segment's direction, the shortest way (a half turn
+    counter-clockwise), at ``rate`` rad/s, and then holds it; a turn not
+    finished when the next segment starts is cut short there and the new
+    turn starts from where it got to. While standing between motions and
+    after the last knot the heading keeps the last walking direction (a turn
+    under way completes). So the heading is continuous and never changes
+    faster than ``rate``.
+
+    Args:
+        times: (n,) knot times, seconds, strictly increasing (n >= 1).
+        points: (n, 2) knot positions, metres.
+        theta: the heading before the first motion, radians.
+        loop: the route repeats with period ``times[-1] - times[0]`` (its last
+            point is its first).
+        rate: the turning rate, rad/s (> 0).
+
+    Returns:
+        (knot times (K,), unwrapped headings (K,), ``steady``): for a loop,
+        the knots cover ``[times[0], steady + period]`` and from ``steady`` on
+        the heading repeats with the period (equal modulo 2 pi); without a
+        loop ``steady`` is +inf and the heading holds after the last knot.
+
+    Raises:
+        ValueError: a loop's heading does not repeat within
+            :data:`MAX_LOOP_PASSES` periods (every turn of the route is cut
+            short by the next: segments shorter than their turns).
+    """
+    times = np.asarray(times, float)
+    points = np.asarray(points, float).reshape(-1, 2)
+    d = np.diff(points, axis=0)
+    moving = [(float(times[k]), math.atan2(d[k, 1], d[k, 0])) for k in range(len(d)) if d[k].any()]
+    turner = _Turner(float(times[0]), float(theta), rate)
+    if not loop or not moving:
+        for s, direction in moving:
+            turner.turn(s, direction)
+        return np.array(turner.t), np.array(turner.h), math.inf
+    t0 = float(times[0])
+    period = float(times[-1]) - t0
+    starts = [turner.state(t0)]
+    for j in range(MAX_LOOP_PASSES):
+        for s, direction in moving:
+            turner.turn(s + j * period, direction)
+        start = turner.state(t0 + (j + 1) * period)
+        previous = starts[-1]
+        if (abs(_wrap(start[0] - previous[0])) <= 1e-9 and abs(start[1] - previous[1]) <= 1e-9
+                and abs(start[2] - previous[2]) <= 1e-9):  # pass j starts as pass j + 1 does: it repeats
+            steady = t0 + j * period
+            end = steady + period
+            kt, kh = np.array(turner.t), np.array(turner.h)
+            keep = kt < end
+            return np.append(kt[keep], end), np.append(kh[keep], np.interp(end, kt, kh)), steady
+        starts.append(start)
+    raise ValueError(f"the heading of the looping route does not repeat within {MAX_LOOP_PASSES} periods: every "
+                     f"turn (at {rate:.3g} rad/s) is cut short by the next segment; make the segments longer")
+
+
+class Tracks:
+    """People on piecewise-linear tracks, evaluated together.
+
+    Each person's breakpoints (the union of their position and heading knots)
+    cut time into intervals on which position and heading are linear; each
+    interval stores its start time, the values there and their rates (the
+    segment's exact velocity, 0 while standing). :meth:`evaluate` finds every
+    person's interval with one ``searchsorted`` over all people's
+    breakpoints (each person's offset by their index times a span longer
+    than all times), then evaluates ``value + (t - start) * rate``: exact at
+    the breakpoints and while standing.
+
+    Args:
+        times: one (n_i,) array of strictly increasing knot times per person, seconds (n_i >= 1).
+        points: one (n_i, 2) array of knot positions per person, metres.
+        headings: one (knot times, headings) pair per person (as
+            :func:`heading_knots` gives, or sampled headings; times strictly
+            increasing), radians.
+        loops: per person, the knots repeat with period ``t_{n-1} - t_0``.
+        steady: per person with a loop, the time (``t_0`` plus a whole number
+            of periods) from which the heading knots repeat with that period
+            (see :func:`heading_knots`); ignored without a loop.
+    """
+
+    def __init__(self, times: Sequence[np.ndarray], points: Sequence[np.ndarray],
+                 headings: Sequence[tuple[np.ndarray, np.ndarray]], loops: Sequence[bool],
+                 steady: Sequence[float]) -> None:
+        p = len(times)
+        self._count = p
+        loop = np.zeros(p, bool)
+        start = np.zeros(p)
+        period = np.ones(p)
+        tables = []
+        for i in range(p):
+            t = np.asarray(times[i], float).reshape(-1)
+            x = np.asarray(points[i], float).reshape(-1, 2)
+            ht, hv = (np.asarray(a, float).reshape(-1) for a in headings[i])
+            if loops[i] and len(t) > 1:
+                loop[i] = True
+                length = t[-1] - t[0]
+                start[i], period[i] = steady[i], length
+                passes = int(round((steady[i] - t[0]) / length)) + 1
+                # The route unrolled over the passes the heading's knots cover.
+                t = np.concatenate([t[:1]] + [t[1:] + k * length for k in range(passes)])
+                x = np.concatenate([x[:1]] + [x[1:]] * passes)
+            tables.append(self._intervals(t, x, ht, hv))
+        self._loop = loop
+        self._any_loop = bool(loop.any())
+        self._start, self._period = start, period
+        lo = min((b[0] for b, *_ in tables), default=0.0)
+        hi = max((b[-1] for b, *_ in tables), default=0.0)
+        # Person i's breakpoints are keyed i * span + (b - lo); queries are clipped to
+        # [lo - 0.5, hi + 0.5], so a person's keys and queries never reach the next person's.
+        self._lo, self._hi = lo, hi
+        span = (hi - lo) + 2.0
+        self._keys = np.concatenate([i * span + (b - lo) for i, (b, *_) in enumerate(tables)]) if p else np.zeros(0)
+        self._key_base = np.arange(p) * span
+        self._rows = np.arange(p)
+        self._base = np.concatenate([base for _, base, _, _ in tables]) if p else np.zeros(0)
+        self._value = np.concatenate([value for *_, value, _ in tables]).reshape(-1, 3) if p else np.zeros((0, 3))
+        self._rate = np.concatenate([rate for *_, rate in tables]).reshape(-1, 3) if p else np.zeros((0, 3))
+
+    @staticmethod
+    def _intervals(t: np.ndarray, x: np.ndarray, ht: np.ndarray, hv: np.ndarray):
+        """One person's breakpoints (m,) and, for the m + 1 intervals (before the
+        first, between, after the last), start times, values [x, y, h] and rates."""
+        b = np.union1d(t, ht)
+        m = len(b)
+        value = np.empty((m, 3))
+        value[:, 0] = np.interp(b, t, x[:, 0])
+        value[:, 1] = np.interp(b, t, x[:, 1])
+        value[:, 2] = np.interp(b, ht, hv)
+        rate = np.zeros((m + 1, 3))
+        if m > 1:
+            mid = 0.5 * (b[:-1] + b[1:])
+            if len(t) > 1:
+                k = np.clip(np.searchsorted(t, mid) - 1, 0, len(t) - 2)
+                inside = (mid > t[0]) & (mid < t[-1])
+                rate[1:m, :2] = np.where(inside[:, None], (x[k + 1] - x[k]) / (t[k + 1] - t[k])[:, None], 0.0)
+            if len(ht) > 1:
+                k = np.clip(np.searchsorted(ht, mid) - 1, 0, len(ht) - 2)
+                inside = (mid > ht[0]) & (mid < ht[-1])
+                rate[1:m, 2] = np.where(inside, (hv[k + 1] - hv[k]) / (ht[k + 1] - ht[k]), 0.0)
+        base = np.concatenate([b[:1], b])
+        value = np.concatenate([value[:1], value])
+        return b, base, value, rate
+
+    @property
+    def count(self) -> int:
+        """The number of people P."""
+        return self._count
+
+    def evaluate(self, t: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Positions (P, 2), velocities (P, 2) and headings (P,) at time ``t`` (seconds)."""
+        t = float(t)
+        if self._any_loop:
+            u = np.where(self._loop & (t > self._start),
+                         self._start + np.mod(t - self._start, self._period), t)
+            query = self._key_base + (np.minimum(np.maximum(u, self._lo - 0.5), self._hi + 0.5) - self._lo)
+        else:
+            u = t
+            query = self._key_base + (min(max(t, self._lo - 0.5), self._hi + 0.5) - self._lo)
+        # Interval j of person i (j breakpoints <= u) is row (i's first key index) + i + j.
+        idx = np.searchsorted(self._keys, query, side="right") + self._rows
+        rate = self._rate[idx]
+        out = self._value[idx] + (u - self._base[idx])[:, None] * rate
+        return out[:, :2], rate[:, :2], out[:, 2]
