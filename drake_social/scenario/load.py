@@ -63,17 +63,22 @@ def load_scenario(path: str | Path, overrides: str | Sequence[str] | None = None
     """
     text = read_yaml_file(path, "scenario")  # refuses "" before Path("") could make it the working directory
     return load_scenario_text(text, str(Path(path)), overrides,
-                              overrides_name=overrides_name)
+                              overrides_name=overrides_name, base_dir=Path(path).parent)
 
 
 def load_scenario_text(text: str, source: str, overrides: str | Sequence[str] | None = None, *,
-                       overrides_name: str = "overrides") -> Scenario:
+                       overrides_name: str = "overrides", base_dir: str | Path | None = None) -> Scenario:
     """Loads and validates a scenario from its YAML text, as :func:`load_scenario` does a file.
+
+    A relative ``people_file`` is resolved against ``base_dir`` and kept as
+    that absolute path, so the scenario reads the same file wherever it is used.
 
     Args:
         text: the scenario's YAML.
         source: how errors name it (the file it came from).
         overrides, overrides_name: as :func:`load_scenario`.
+        base_dir: the folder relative file names are resolved against (the
+            scenario file's); None = the working directory.
 
     Raises:
         ScenarioError: as :func:`load_scenario`, naming ``source``.
@@ -92,6 +97,7 @@ def load_scenario_text(text: str, source: str, overrides: str | Sequence[str] | 
                                                                         {"defaults": scenario}))
         except Exception as e:  # what check_yaml lets through; Drake's message has no file name: add it
             raise ScenarioError(f"{where}: {e}") from e
+        _resolve_people_file(scenario, base_dir)
         stages.append(scenario)
     # Blame the source after which the scenario stopped being valid: a bad
     # --set is named, not the file it was applied to.
@@ -103,6 +109,14 @@ def load_scenario_text(text: str, source: str, overrides: str | Sequence[str] | 
             culprit -= 1
         validate_scenario(stages[-1], source=sources[culprit][0])
     return scenario
+
+
+def _resolve_people_file(scenario: Scenario, base_dir: str | Path | None) -> None:
+    """Makes a relative ``people_file`` absolute, relative to ``base_dir`` (None: the working directory)."""
+    name = scenario.people_file
+    if name is None or not name.strip() or Path(name).is_absolute():
+        return  # an empty name is refused by the validation
+    scenario.people_file = str((Path.cwd() if base_dir is None else Path(base_dir)).absolute() / name)
 
 
 def _is_valid(scenario: Scenario) -> bool:

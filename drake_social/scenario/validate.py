@@ -5,7 +5,9 @@ Each rule raises :class:`~drake_social.errors.ScenarioError` as
 0``), lengths, finiteness, positions inside the room, joint limits, the
 choice fields' allowed names, and the rules that tie fields together (a
 dynamic run's plant step, a run's length in control periods and plant steps,
-the social cost's sampling of the longest motion in the room).
+the social cost's sampling of the longest motion in the room); the people's
+rules (trajectories, the recorded ``people_file``, where people start) are
+those of :mod:`drake_social.scenario.people_rules`.
 """
 
 import dataclasses as dc
@@ -20,6 +22,7 @@ from drake_social.limits import (ALGORITHMS, CONTACT_APPROXIMATIONS, INFORMED_AL
                                  MAX_CONTROL_STEPS, MAX_DYNAMIC_PLANT_TIME_STEP,
                                  MAX_ITERATIONS, MAX_MOTION_STEPS, MAX_OBJECT_POINTS, MAX_PLANT_STEPS, MAX_REPLAY_FPS,
                                  MAX_TIME_LIMIT, MIN_CONTROL_PERIODS, SERVO_BANDWIDTH)
+from drake_social.scenario.people_rules import check_people
 from drake_social.scenario.schema import (EXECUTIONS, INFORMED_MODES, NEAR_RADIUS_MODES, SIM_MODES, Bar,
                                           ExecutionOptions, LShape, Scenario, interest_point_count)
 
@@ -239,7 +242,8 @@ def validate_scenario(scenario: Scenario, source: str = "<scenario>") -> None:
     for i, p in enumerate(scenario.people):
         c.finite(f"people[{i}]", [p.x, p.y, p.theta])
         c.positive(f"people[{i}].radius", p.radius)
-        inside(f"people[{i}]", p.x, p.y)
+        if p.trajectory is None:  # a trajectory's every segment is checked in check_people
+            inside(f"people[{i}]", p.x, p.y)
 
     r = scenario.robot
     c.positive("robot.base_radius", r.base_radius)
@@ -296,6 +300,8 @@ def validate_scenario(scenario: Scenario, source: str = "<scenario>") -> None:
     if np.array_equal(np.asarray(scenario.start, float), np.asarray(scenario.goal, float)):
         c.fail("goal", f"must differ from start (both are {list(scenario.goal)}): a transport from a "
                        "configuration to itself has nothing to plan or execute")
+    # Trajectories, the recorded file and where people start (against the robot at start).
+    check_people(scenario, c.fail)
 
     s = scenario.social
     c.positive("social.sigma_h", s.sigma_h)
