@@ -174,7 +174,7 @@ def _read_cached(path: str, size: int, mtime_ns: int, inode: int) -> PeopleRecor
             k = int(np.argmax(radii != radii[0]))
             raise _fail(path, samples[k][1], f"radius: id {shorten(repr(ident))} has radius {radii[k]:g} here and "
                                              f"{radii[0]:g} at line {samples[0][1]}; one radius per id")
-        times, positions = data[:, 0].copy(), data[:, :2].copy()
+        times, positions = np.array([s[0] for s in samples], float), data[:, :2].copy()
         thetas = data[:, 2].copy() if "theta" in col else None
         for a in (times, positions) + (() if thetas is None else (thetas,)):
             a.flags.writeable = False
