@@ -51,13 +51,13 @@ def test_a_null_start(tmp_path):
 def test_null_people(tmp_path):
     dut = _bad(tmp_path, PEOPLE, "people: null")
     assert _message(dut) == (f"{dut}: line 7: people: must be a list of mappings "
-                             "(Person: x, y, theta, radius, name), got null")
+                             "(Person: x, y, theta, radius, name, trajectory, loop), got null")
 
 
 def test_people_as_a_mapping(tmp_path):
     dut = _bad(tmp_path, PEOPLE, "people: {x: 4.0, y: 3.8}")
     assert _message(dut) == (f"{dut}: line 7: people: must be a list of mappings "
-                             "(Person: x, y, theta, radius, name), got a mapping")
+                             "(Person: x, y, theta, radius, name, trajectory, loop), got a mapping")
 
 
 def test_a_word_for_the_iterations(tmp_path):
@@ -337,14 +337,14 @@ def test_a_sparse_file_of_nuls_at_the_size_limit_is_refused(tmp_path, capsys):
 
 
 @pytest.mark.parametrize("override, message", [
-    ("? [a]\n: 1", "line 1: a key must be a field name (description, world, people, robot, object, start, goal, "
-                   "social, planner, execution, random_seed), got a list"),
-    ("{a: 1}: 2", "line 1: a key must be a field name (description, world, people, robot, object, start, goal, "
-                  "social, planner, execution, random_seed), got a mapping"),
+    ("? [a]\n: 1", "line 1: a key must be a field name (description, world, people, crowd, people_file, "
+                   "people_file_ids, robot, object, start, goal, social, planner, execution, random_seed), got a list"),
+    ("{a: 1}: 2", "line 1: a key must be a field name (description, world, people, crowd, people_file, "
+                  "people_file_ids, robot, object, start, goal, social, planner, execution, random_seed), got a mapping"),
     ("world: {? [1]: 2}", "line 1: world: a key must be a field name (bounds, obstacles, wall_thickness), got a list"),
     ("social: {weights: {? [1]: 2}}", "line 1: social.weights: must be a list of numbers, got a mapping"),
-    ("!Foo 3: 1", "line 1: 3: unknown field at the top level; allowed: description, world, people, robot, object, "
-                  "start, goal, social, planner, execution, random_seed"),
+    ("!Foo 3: 1", "line 1: 3: unknown field at the top level; allowed: description, world, people, crowd, "
+                  "people_file, people_file_ids, robot, object, start, goal, social, planner, execution, random_seed"),
 ])
 def test_keys_that_are_not_field_names(override, message):
     assert _message(TINY, [override]) == f"{TINY} (--set {override!r}): {message}"
@@ -367,7 +367,7 @@ def test_keys_that_are_not_field_names(override, message):
                        "a mapping"),
     ("world: !!set {a}", "world: must be a mapping (World: bounds, obstacles, wall_thickness) without a tag, got "
                          "!!set a mapping"),
-    ("people: !!omap []", "people: must be a list of mappings (Person: x, y, theta, radius, name) without a tag, got "
+    ("people: !!omap []", "people: must be a list of mappings (Person: x, y, theta, radius, name, trajectory, loop) without a tag, got "
                           "!!omap a list"),
     ("start: !Bar [1, 1, 0, 0]", "start: must be a list of numbers without a tag, got !Bar a list"),
 ])
@@ -518,8 +518,9 @@ def test_an_unknown_key_with_a_control_character_is_shown_escaped():
 ])
 def test_a_field_name_under_a_tag_is_not_called_unknown(override, field, key):
     # It was "random_seed: unknown field ...; allowed: ..., random_seed".
-    fields = ("sigma_h, side_ratio, rear_ratio, threshold, weights, length_weight, resolution" if field else
-              "description, world, people, robot, object, start, goal, social, planner, execution, random_seed")
+    fields = ("sigma_h, side_ratio, rear_ratio, threshold, weights, length_weight, resolution, speed_scaling" if field
+              else "description, world, people, crowd, people_file, people_file_ids, robot, object, start, goal, social, "
+                   "planner, execution, random_seed")
     assert _message(TINY, [override]) == (
         f"{TINY} (--set {override!r}): line 1: {field}a key must be a field name ({fields}) as plain text, without "
         f"a tag, got {key}")
