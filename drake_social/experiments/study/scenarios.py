@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import collections
 import hashlib
+from pathlib import Path
 
 from drake_social.scenario import Scenario, load_scenario_text, validate_planner_choice
 
@@ -19,11 +20,14 @@ __all__ = ["check_run_settings", "load_cached"]
 def load_cached(source: str, text: str, overrides: tuple[str, ...], overrides_name: str = "overrides") -> Scenario:
     """The scenario of ``text`` with ``overrides``, loaded once per pair and
     process while it is among the last :data:`_LOADED_MOST` loaded (keyed by
-    their digest, whatever the groups are called); errors name ``source``."""
-    key = _load_key(text, overrides)
+    their digest and the file's folder, whatever the groups are called);
+    errors name ``source``, the scenario file, whose folder a relative
+    ``people_file`` is resolved against."""
+    key = _load_key(str(Path(source).parent.absolute()), text, overrides)
     scenario = _loaded.get(key)
     if scenario is None:
-        scenario = load_scenario_text(text, source, list(overrides), overrides_name=overrides_name)
+        scenario = load_scenario_text(text, source, list(overrides), overrides_name=overrides_name,
+                                      base_dir=Path(source).parent)
         _loaded[key] = scenario
         if len(_loaded) > _LOADED_MOST:
             _loaded.popitem(last=False)
@@ -36,9 +40,9 @@ _LOADED_MOST = 64
 _loaded: "collections.OrderedDict[bytes, Scenario]" = collections.OrderedDict()
 
 
-def _load_key(text: str, overrides: tuple[str, ...]) -> bytes:
+def _load_key(folder: str, text: str, overrides: tuple[str, ...]) -> bytes:
     digest = hashlib.sha256()
-    for part in (text, *overrides):
+    for part in (folder, text, *overrides):
         data = part.encode("utf-8", "surrogatepass")
         digest.update(len(data).to_bytes(8, "little") + data)
     return digest.digest()
