@@ -8,7 +8,7 @@ interpolated linearly and the velocity is the segment's (from the samples;
 a ``v`` column is ignored). The heading is the ``theta`` column
 interpolated linearly (the shorter way round between samples) when the file
 has one; otherwise the direction of motion, smoothed as the scripted people's
-(:func:`~drake_social.people.tracks.heading_knots`: turning at a bounded rate,
+(:func:`~drake_social.scenario.heading.heading_knots`: turning at a bounded rate,
 holding the last walking heading while standing), starting from the direction
 of the id's first motion (0 for an id that never moves).
 """

@@ -9,10 +9,10 @@ without a trajectory stands at ``(x, y)`` facing ``theta``, exactly as
 
 Velocities are exact: the segment's velocity while walking, 0 while standing.
 
-Heading (see :func:`~drake_social.people.tracks.heading_knots`): ``theta``
+Heading (see :func:`~drake_social.scenario.heading.heading_knots`): ``theta``
 while standing before the first motion. When a segment of motion starts, the
 heading turns toward its direction, the shortest way, at
-:data:`~drake_social.people.tracks.TURN_RATE` (pi rad/s: a half turn takes one
+:data:`~drake_social.scenario.heading.TURN_RATE` (pi rad/s: a half turn takes one
 second) and holds it; a turn cut short by the next segment continues from where
 it got to. While paused between motions and after the end the person keeps the
 last walking heading. So the heading is continuous (modulo 2 pi) and never
@@ -46,7 +46,7 @@ class ScriptedPeople:
     Raises:
         ValueError: a trajectory is not strictly increasing in time, or a
             looping route's heading never repeats (see
-            :func:`~drake_social.people.tracks.heading_knots`).
+            :func:`~drake_social.scenario.heading.heading_knots`).
     """
 
     def __init__(self, people: Sequence, turn_rate: float = TURN_RATE) -> None:

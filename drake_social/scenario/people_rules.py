@@ -7,7 +7,7 @@ the segment or the file's line, and what is allowed:
 * a trajectory has at least 2 points ``[t, x, y]``, finite, ``t >= 0`` and
   strictly increasing; ``x, y`` of a person with a trajectory are left at
   0 or equal its first point; ``loop`` needs a trajectory whose last point is
-  its first;
+  its first and whose heading repeats (:func:`~drake_social.scenario.heading.heading_knots`);
 * the body disc swept along each segment stays inside ``world.bounds`` (so out
   of the walls) and out of every obstacle box (exact segment-to-box distance
   against the radius);
@@ -35,6 +35,7 @@ import numpy as np
 from drake_social.errors import ScenarioError
 from drake_social.io.textfile import shorten
 from drake_social.kinematics import ArmGeometry
+from drake_social.scenario.heading import heading_knots
 from drake_social.scenario.people_file import read_people_file
 
 __all__ = ["check_people", "robot_clearance", "segment_box_distance"]
@@ -166,6 +167,11 @@ def check_people(scenario, fail: Fail) -> None:
         if p.loop and (route[-1][1], route[-1][2]) != first:
             fail(f"{field}.loop", f"needs a closed route: the trajectory's last point {_fmt(route[-1][1:])} must be "
                                   f"its first {_fmt(first)}")
+        if p.loop:
+            try:
+                heading_knots(np.asarray(route)[:, 0], np.asarray(route)[:, 1:], p.theta, True)
+            except ValueError as e:
+                fail(f"{field}.loop", str(e))
         r = p.radius
         for k in range(len(route) - 1):
             a, b = route[k][1:], route[k + 1][1:]

@@ -402,7 +402,8 @@ class Scenario:
     crowd: Optional[Crowd] = None
     # Recorded pedestrians: a CSV file with the header t,id,x,y (optional
     # theta, radius and v columns), a row per person and time; a path relative
-    # to the scenario file. None = no recording.
+    # to the scenario file (made absolute when the scenario is loaded). None =
+    # no recording.
     people_file: Optional[str] = None
     # Keep only these ids of people_file (each must occur in it); None = all.
     people_file_ids: Optional[list[str]] = None

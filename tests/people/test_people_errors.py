@@ -52,6 +52,10 @@ def _message(tmp_path: Path, person: str) -> str:
     ("{trajectory: [[0, 6, 4], [1, 6, 3]], loop: true}",
      "people[0].loop: needs a closed route: the trajectory's last point (6, 3) must be its first (6, 4)"),
     ("{x: 6, y: 4, loop: true}", "people[0].loop: needs a trajectory (a person without one stands still)"),
+    # A 1 m square at 3.3 m/s: each quarter turn needs 0.5 s, each side lasts 0.3 s.
+    ("{trajectory: [[0, 5, 3], [0.3, 6, 3], [0.6, 6, 4], [0.9, 5, 4], [1.2, 5, 3]], loop: true}",
+     "people[0].loop: the heading of the looping route does not repeat within 8 periods: every turn (at 3.14 "
+     "rad/s) is cut short by the next segment; make the segments longer"),
     ("{trajectory: [[0, 2.5, 1.5], [4, 6, 0.5]]}",
      "people[0].trajectory: " + SEG0.format(a="(0, 2.5, 1.5)", b="(4, 6, 0.5)") + " passes through "
      "world.obstacles[0] (the body's centre comes 0 m from it, closer than its radius 0.25 m)"),
