@@ -172,3 +172,17 @@ def test_a_bad_recording_fails_at_load_naming_the_field(tmp_path, extra, csv, me
     with pytest.raises(ScenarioError) as info:
         load_scenario(path)
     assert str(info.value) == f"{path}: " + message.format(folder=tmp_path / "room")
+
+
+def test_text_resolves_against_the_working_directory_and_overrides_against_the_file(tmp_path, monkeypatch):
+    from drake_social.scenario import load_scenario_text
+
+    _write(tmp_path, MOVING, "walkers.csv")
+    monkeypatch.chdir(tmp_path)
+    scenario = load_scenario_text(TINY.read_text() + "people_file: walkers.csv\n", "<text>")
+    assert scenario.people_file == str(tmp_path / "walkers.csv")
+    path = _scenario(tmp_path, "")  # room/s.yaml next to room/walkers.csv
+    monkeypatch.chdir(tmp_path.parent)
+    scenario = load_scenario(path, "people_file: walkers.csv")
+    assert scenario.people_file == str(tmp_path / "room" / "walkers.csv")
+    assert people_model(scenario).count == 3
