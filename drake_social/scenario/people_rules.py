@@ -43,77 +43,87 @@ __all__ = ["check_people", "robot_clearance", "segment_box_distance"]
 Fail = Callable[[str, str], None]
 
 
-def segment_box_distance(a, b, center, size, yaw: float) -> float:
-    """Distance from segment a-b to a rotated box (0 when they meet), metres.
+def segment_box_distance(a, b, centers, sizes, yaws) -> np.ndarray:
+    """Distances from segment a-b to rotated boxes (0 where they meet), metres.
 
     Args:
-        a, b: the segment's ends [x, y], metres.
-        center, size: the box's centre and side lengths [x, y], metres.
-        yaw: the box's rotation, radians.
+        a, b: the segment's ends [x, y], metres (equal: a point).
+        centers, sizes: (K, 2) the boxes' centres and side lengths, metres.
+        yaws: (K,) the boxes' rotations, radians.
+
+    Returns:
+        (K,) distances.
     """
-    c, s = math.cos(yaw), math.sin(yaw)
-    hx, hy = size[0] / 2, size[1] / 2
-
-    def local(p):
-        dx, dy = p[0] - center[0], p[1] - center[1]
-        return c * dx + s * dy, -s * dx + c * dy
-
-    (ax, ay), (bx, by) = local(a), local(b)
-    # Liang-Barsky: does the segment cross the box?
-    lo, hi = 0.0, 1.0
-    for p0, d, h in ((ax, bx - ax, hx), (ay, by - ay, hy)):
-        if d == 0.0:
-            if abs(p0) > h:
-                lo, hi = 1.0, 0.0
-                break
-            continue
-        t1, t2 = (-h - p0) / d, (h - p0) / d
-        lo, hi = max(lo, min(t1, t2)), min(hi, max(t1, t2))
-    if lo <= hi:
-        return 0.0
-
-    def point_box(x, y):
-        return math.hypot(max(abs(x) - hx, 0.0), max(abs(y) - hy, 0.0))
-
-    def point_segment(x, y):
-        dx, dy = bx - ax, by - ay
-        den = dx * dx + dy * dy
-        u = 0.0 if den == 0 else min(max(((x - ax) * dx + (y - ay) * dy) / den, 0.0), 1.0)
-        return math.hypot(x - ax - u * dx, y - ay - u * dy)
-
+    centers = np.asarray(centers, float).reshape(-1, 2)
+    half = np.asarray(sizes, float).reshape(-1, 2) / 2
+    yaws = np.asarray(yaws, float).reshape(-1)
+    c, s = np.cos(yaws)[:, None], np.sin(yaws)[:, None]
+    rel_a, rel_b = np.asarray(a, float) - centers, np.asarray(b, float) - centers
+    # The ends in each box's frame, (K, 2).
+    la = np.concatenate([c * rel_a[:, :1] + s * rel_a[:, 1:], -s * rel_a[:, :1] + c * rel_a[:, 1:]], 1)
+    lb = np.concatenate([c * rel_b[:, :1] + s * rel_b[:, 1:], -s * rel_b[:, :1] + c * rel_b[:, 1:]], 1)
+    d = lb - la
+    # Liang-Barsky: the parameter interval of the segment inside each slab.
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t1, t2 = (-half - la) / d, (half - la) / d
+    flat = d == 0
+    inside_slab = np.abs(la) <= half
+    lo = np.where(flat, np.where(inside_slab, -np.inf, np.inf), np.minimum(t1, t2))
+    hi = np.where(flat, np.where(inside_slab, np.inf, -np.inf), np.maximum(t1, t2))
+    meets = np.maximum(lo.max(1), 0.0) <= np.minimum(hi.min(1), 1.0)
     # Disjoint convex shapes: the closest pair has a vertex of one of them.
-    return min(point_box(ax, ay), point_box(bx, by),
-               *(point_segment(sx * hx, sy * hy) for sx, sy in ((-1, -1), (1, -1), (1, 1), (-1, 1))))
+    def point_box(p):
+        return np.hypot(*np.maximum(np.abs(p) - half, 0.0).T)
+
+    corners = half[:, None, :] * np.array([[-1.0, -1.0], [1.0, -1.0], [1.0, 1.0], [-1.0, 1.0]])  # (K, 4, 2)
+    den = np.einsum("ki,ki->k", d, d)[:, None]
+    u = np.clip(np.einsum("kji,ki->kj", corners - la[:, None], d) / np.where(den > 0, den, 1.0), 0.0, 1.0)
+    corner_gap = np.linalg.norm(corners - la[:, None] - u[..., None] * d[:, None], axis=-1).min(1)
+    return np.where(meets, 0.0, np.minimum(np.minimum(point_box(la), point_box(lb)), corner_gap))
 
 
-def robot_clearance(geometry: ArmGeometry, q, centre, radius: float) -> tuple[float, str]:
-    """Surface distance from a body disc to the robot at ``q`` and the nearest
-    part (``base``, ``arm`` or ``object``), metres (negative: overlap).
+def robot_clearance(geometry: ArmGeometry, q, centres, radii) -> tuple[np.ndarray, list[str]]:
+    """Surface distance from body discs to the robot at ``q`` and the nearest
+    part of each (``base``, ``arm`` or ``object``), metres (negative: overlap).
 
     The same distance as ``part_distances(...)["robot"]`` of
-    :mod:`drake_social.people.proximity`: the base disc and the link and
-    object capsules."""
+    :mod:`drake_social.people.proximity` for each person alone: the base disc
+    and the link and object capsules.
+
+    Args:
+        geometry: the robot and its object.
+        q: (4,) the configuration.
+        centres: (P, 2) body centres, metres.
+        radii: (P,) body radii, metres.
+
+    Returns:
+        ((P,) distances, P part names).
+    """
     q = np.asarray(q, float).reshape(1, 4)
-    p = np.asarray(centre, float)
-    base = float(np.hypot(*(q[0, :2] - p))) - radius - geometry.base_radius
+    p = np.asarray(centres, float).reshape(-1, 2)
+    radii = np.asarray(radii, float).reshape(-1)
+    base = np.hypot(*(p - q[0, :2]).T) - radii - geometry.base_radius
     seg = geometry.segments(q)[0]  # (S, 2, 2)
     a, d = seg[:, 0], seg[:, 1] - seg[:, 0]
     den = np.einsum("si,si->s", d, d)
-    u = np.clip(np.einsum("si,si->s", p - a, d) / np.where(den > 0, den, 1.0), 0.0, 1.0)
-    caps = np.hypot(*(p - a - u[:, None] * d).T) - radius - geometry.segment_radii
-    parts = [("base", base), ("arm", float(caps[:2].min())), ("object", float(caps[2:].min()))]
-    name, value = min(parts, key=lambda kv: kv[1])
-    return value, name
+    u = np.clip(np.einsum("psi,si->ps", p[:, None] - a, d) / np.where(den > 0, den, 1.0), 0.0, 1.0)  # (P, S)
+    caps = np.linalg.norm(p[:, None] - a - u[..., None] * d, axis=-1) - radii[:, None] - geometry.segment_radii
+    parts = np.stack([base, caps[:, :2].min(1), caps[:, 2:].min(1)], 1)  # (P, 3)
+    names = ("base", "arm", "object")
+    return parts.min(1), [names[k] for k in parts.argmin(1)]
 
 
-def _in_obstacle(world, centre, radius: float) -> tuple[int, float] | None:
-    """The first obstacle the body disc at ``centre`` overlaps (index, distance
-    from the centre to the box), or None."""
-    for j, box in enumerate(world.obstacles):
-        d = segment_box_distance(centre, centre, box.center, box.size, box.yaw)
-        if d < radius:
-            return j, d
-    return None
+def _boxes(world) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The obstacles' centres (K, 2), sizes (K, 2) and yaws (K,)."""
+    boxes = world.obstacles
+    return (np.array([b.center for b in boxes], float).reshape(-1, 2),
+            np.array([b.size for b in boxes], float).reshape(-1, 2), np.array([b.yaw for b in boxes], float))
+
+
+def _first_hit(gaps: np.ndarray, radius: float) -> tuple[int, float] | None:
+    """The first box closer than ``radius`` (index, distance), or None."""
+    hits = np.flatnonzero(gaps < radius)
+    return None if len(hits) == 0 else (int(hits[0]), float(gaps[hits[0]]))
 
 
 def _fmt(p) -> str:
@@ -127,18 +137,12 @@ def check_people(scenario, fail: Fail) -> None:
     x_min, y_min, x_max, y_max = w.bounds
     geometry = ArmGeometry.from_scenario(scenario)
     start = scenario.start
+    boxes = _boxes(w)
+
+    starts: list[tuple[str, str, tuple[float, float], float, bool]] = []  # (field, what, centre, radius, at t = 0)
 
     def start_clear(field: str, what: str, centre, radius: float, at_zero: bool) -> None:
-        hit = _in_obstacle(w, centre, radius)
-        if hit is not None:
-            fail(field, f"{what} {_fmt(centre)} puts the body (radius {radius:g} m) inside world.obstacles[{hit[0]}] "
-                        f"(its centre is {hit[1]:.3g} m from the box); a person must start clear of the obstacles")
-        if at_zero:
-            gap, part = robot_clearance(geometry, start, centre, radius)
-            if gap < 0:
-                fail(field, f"{what} {_fmt(centre)} puts the body (radius {radius:g} m) into the robot's {part} at "
-                            f"its start configuration {list(start)} (overlap {-gap:.3g} m); a person must start "
-                            f"clear of the robot")
+        starts.append((field, what, (float(centre[0]), float(centre[1])), float(radius), at_zero))
 
     for i, p in enumerate(scenario.people):
         field = f"people[{i}]"
@@ -180,14 +184,33 @@ def check_people(scenario, fail: Fail) -> None:
             if lo_x - r < x_min or hi_x + r > x_max or lo_y - r < y_min or hi_y + r > y_max:
                 fail(f"{field}.trajectory", f"{where} takes the body (radius {r:g} m) out of world.bounds "
                                             f"{list(w.bounds)} into the walls; the whole body must stay inside")
-            for j, box in enumerate(w.obstacles):
-                d = segment_box_distance(a, b, box.center, box.size, box.yaw)
-                if d < r:
-                    fail(f"{field}.trajectory", f"{where} passes through world.obstacles[{j}] (the body's centre "
-                                                f"comes {d:.3g} m from it, closer than its radius {r:g} m)")
+            hit = _first_hit(segment_box_distance(a, b, *boxes), r)
+            if hit is not None:
+                fail(f"{field}.trajectory", f"{where} passes through world.obstacles[{hit[0]}] (the body's centre "
+                                            f"comes {hit[1]:.3g} m from it, closer than its radius {r:g} m)")
         start_clear(f"{field}.trajectory[0]", "the first point", first, r, True)
 
     _check_recorded(scenario, fail, start_clear)
+    if not starts:
+        return
+    # Every start at once: the body against every obstacle, and at t = 0 against the robot.
+    centres = np.array([c for _, _, c, _, _ in starts])
+    radii = np.array([r for _, _, _, r, _ in starts])
+    centers, sizes, yaws = boxes
+    c, sn = np.cos(yaws), np.sin(yaws)
+    rel = centres[:, None, :] - centers  # (N, K, 2)
+    local = np.stack([c * rel[..., 0] + sn * rel[..., 1], -sn * rel[..., 0] + c * rel[..., 1]], -1)
+    gaps = np.hypot(*np.moveaxis(np.maximum(np.abs(local) - sizes / 2, 0.0), -1, 0))  # (N, K)
+    clearance, parts = robot_clearance(geometry, start, centres, radii)
+    for n, (field, what, centre, radius, at_zero) in enumerate(starts):
+        hit = _first_hit(gaps[n], radius)
+        if hit is not None:
+            fail(field, f"{what} {_fmt(centre)} puts the body (radius {radius:g} m) inside world.obstacles[{hit[0]}] "
+                        f"(its centre is {hit[1]:.3g} m from the box); a person must start clear of the obstacles")
+        if at_zero and clearance[n] < 0:
+            fail(field, f"{what} {_fmt(centre)} puts the body (radius {radius:g} m) into the robot's {parts[n]} at "
+                        f"its start configuration {list(start)} (overlap {-clearance[n]:.3g} m); a person must "
+                        f"start clear of the robot")
 
 
 def _check_recorded(scenario, fail: Fail, start_clear) -> None:

@@ -89,25 +89,35 @@ def test_good_walkers_load(tmp_path):
 
 def test_segment_box_distance_matches_dense_sampling():
     rng = np.random.default_rng(5)
-    for _ in range(300):
-        a, b = rng.uniform(-3, 3, 2), rng.uniform(-3, 3, 2)
-        centre, size, yaw = rng.uniform(-1, 1, 2), rng.uniform(0.2, 2, 2), rng.uniform(-math.pi, math.pi)
-        s = np.linspace(0, 1, 4001)[:, None]
-        pts = a + s * (b - a)
-        c, sn = math.cos(yaw), math.sin(yaw)
-        local = (pts - centre) @ np.array([[c, -sn], [sn, c]])  # rows R^T (p - c)
-        d = np.hypot(*np.maximum(np.abs(local) - size / 2, 0).T).min()
-        assert segment_box_distance(a, b, centre, size, yaw) == pytest.approx(d, abs=2e-3 * np.hypot(*(b - a)) + 1e-12)
+    for _ in range(100):
+        a = rng.uniform(-3, 3, 2)
+        b = a if rng.uniform() < 0.2 else rng.uniform(-3, 3, 2)  # a point, or a segment
+        centres, sizes, yaws = rng.uniform(-1, 1, (4, 2)), rng.uniform(0.2, 2, (4, 2)), rng.uniform(-4, 4, 4)
+        yaws[0] = 0.0
+        sizes[1, 0] = 1e-3  # a thin wall
+        dut = segment_box_distance(a, b, centres, sizes, yaws)
+        pts = a + np.linspace(0, 1, 4001)[:, None] * (b - a)
+        for k in range(4):
+            c, s = math.cos(yaws[k]), math.sin(yaws[k])
+            local = (pts - centres[k]) @ np.array([[c, -s], [s, c]])  # rows R^T (p - c)
+            d = np.hypot(*np.maximum(np.abs(local) - sizes[k] / 2, 0).T).min()
+            assert dut[k] == pytest.approx(d, abs=2e-3 * np.hypot(*(b - a)) + 1e-12)
+    # Crossing a box without an end inside it, and an axis-parallel segment beside one, by hand.
+    assert segment_box_distance([-2, 0], [2, 0.5], [[0, 0]], [[1, 1]], [0.0])[0] == 0.0
+    assert segment_box_distance([-2, 0.8], [2, 0.8], [[0, 0]], [[1, 1]], [0.0])[0] == pytest.approx(0.3)
+    assert segment_box_distance([0, 2], [0, 2], [[0, 0]], [[1, 1]], [math.pi / 4])[0] == \
+        pytest.approx(2 - math.sqrt(0.5))
 
 
 def test_robot_clearance_is_the_proximity_modules_robot_distance():
     from drake_social.scenario import Scenario
     geometry = ArmGeometry.from_scenario(Scenario())
     rng = np.random.default_rng(7)
-    for _ in range(200):
+    for _ in range(50):
         q = np.concatenate([rng.uniform(0, 3, 2), rng.uniform(-math.pi, math.pi, 2)])
-        centre, radius = rng.uniform(-1, 4, 2), rng.uniform(0.1, 0.4)
-        value, part = robot_clearance(geometry, q, centre, radius)
-        d = part_distances(geometry, q[None], centre[None], np.array([radius]))
-        assert value == pytest.approx(d["robot"][0], abs=1e-12)
-        assert d[part][0] == pytest.approx(value, abs=1e-12)
+        centres, radii = rng.uniform(-1, 4, (5, 2)), rng.uniform(0.1, 0.4, 5)
+        values, parts = robot_clearance(geometry, q, centres, radii)
+        for k in range(5):
+            d = part_distances(geometry, q[None], centres[k][None], radii[k:k + 1])
+            assert values[k] == pytest.approx(d["robot"][0], abs=1e-12)
+            assert d[parts[k]][0] == pytest.approx(values[k], abs=1e-12)
