@@ -87,9 +87,9 @@ class Tracks:
         self._keys = np.concatenate([i * span + (b - lo) for i, (b, *_) in enumerate(tables)]) if p else np.zeros(0)
         self._key_base = np.arange(p) * span
         self._rows = np.arange(p)
-        self._base = np.concatenate([base for _, base, _, _ in tables]) if p else np.zeros(0)
-        self._value = np.concatenate([value for *_, value, _ in tables]).reshape(-1, 3) if p else np.zeros((0, 3))
-        self._rate = np.concatenate([rate for *_, rate in tables]).reshape(-1, 3) if p else np.zeros((0, 3))
+        # One row per interval: value [x, y, h], rate [vx, vy, dh/dt], start time (one gather per call).
+        self._table = (np.concatenate([np.column_stack([value, rate, base]) for _, base, value, rate in tables])
+                       if p else np.zeros((0, 7)))
 
     @staticmethod
     def _intervals(t: np.ndarray, x: np.ndarray, ht: np.ndarray, hv: np.ndarray):
@@ -132,7 +132,6 @@ class Tracks:
             u = t
             query = self._key_base + (min(max(t, self._lo - 0.5), self._hi + 0.5) - self._lo)
         # Interval j of person i (j breakpoints <= u) is row (i's first key index) + i + j.
-        idx = np.searchsorted(self._keys, query, side="right") + self._rows
-        rate = self._rate[idx]
-        out = self._value[idx] + (u - self._base[idx])[:, None] * rate
-        return out[:, :2], rate[:, :2], out[:, 2]
+        rows = self._table[np.searchsorted(self._keys, query, side="right") + self._rows]
+        out = rows[:, :3] + (u - rows[:, 6])[:, None] * rows[:, 3:6]
+        return out[:, :2], rows[:, 3:5], out[:, 2]
