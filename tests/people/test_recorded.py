@@ -186,3 +186,16 @@ def test_text_resolves_against_the_working_directory_and_overrides_against_the_f
     scenario = load_scenario(path, "people_file: walkers.csv")
     assert scenario.people_file == str(tmp_path / "room" / "walkers.csv")
     assert people_model(scenario).count == 3
+
+
+def test_numeric_ids_sort_as_numbers_and_a_single_sample_is_present_only_then(tmp_path):
+    model = _model(tmp_path, "t,id,x,y\n2,10,1,1\n0,9,3,3\n4,9,3,1\n")
+    assert model.state_at(0.0).names == ("9", "10")  # numbers: 9 before 10
+    for t, present in ((1.999, False), (2.0, True), (2.001, False)):
+        s = model.state_at(t)
+        assert bool(s.present[1]) is present
+        np.testing.assert_allclose(s.positions[1], (1, 1), atol=0)
+        assert not s.velocities[1].any()
+    np.testing.assert_allclose(model.state_at(3.0).velocities[0], (0, -0.5), atol=1e-12)
+    assert model.state_at(3.0).headings[0] == pytest.approx(-math.pi / 2, abs=1e-12)  # its first motion, south
+    assert _model(tmp_path, "t,id,x,y\n0,b,0,0\n0,a10,0,0\n0,a9,0,0\n").state_at(0).names == ("a10", "a9", "b")
