@@ -105,7 +105,10 @@ class Person:
     # Timed waypoints [[t, x, y], ...] (seconds >= 0, strictly increasing;
     # metres), walked in straight lines at constant speed between them; the
     # person stands at the first point before its time and at the last after
-    # it. None = the person stands at (x, y) throughout.
+    # it. While walking they face the direction of motion, turning toward it
+    # at up to pi rad/s (drake_social.scenario.heading), and keep the last
+    # walking direction while standing. None = the person stands at (x, y)
+    # throughout.
     trajectory: Optional[list[list[float]]] = None
     # Repeat the trajectory every t_last - t_first seconds; its last point must
     # be its first (a closed route).
