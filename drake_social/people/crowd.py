@@ -22,6 +22,7 @@ from drake_social.kinematics import ArmGeometry
 from drake_social.people.model import PeopleState
 from drake_social.people.social_force import (cap_speed, capsule_force, desired_velocities, goal_force,
                                               obstacle_force, pedestrian_force)
+from drake_social.people.social_force_kernel import crowd_step
 from drake_social.scenario.crowd_rules import MIN_WALKING_SPEED, crowd_problems
 from drake_social.world import world_model
 
@@ -73,9 +74,14 @@ class SocialForceCrowd:
         boxes: (centers (K, 2), halves (K, 2), cos (K,), sin (K,)) of the
             obstacles and walls.
         geometry: the robot and its object (None: the robot is never seen).
+        compiled: step with the compiled kernel
+            (:func:`~drake_social.people.social_force_kernel.crowd_step`);
+            False steps with :meth:`step_reference` (numpy, the documented
+            terms; the same numbers to rounding).
     """
 
-    def __init__(self, starts, goals, cycle, radii, speeds, names, params, boxes, geometry: ArmGeometry | None):
+    def __init__(self, starts, goals, cycle, radii, speeds, names, params, boxes, geometry: ArmGeometry | None,
+                 compiled: bool = True):
         self._starts = np.asarray(starts, float).reshape(-1, 2)
         p = len(self._starts)
         self._goals = [np.asarray(g, float).reshape(-1, 2) for g in goals]
@@ -102,6 +108,21 @@ class SocialForceCrowd:
         if geometry is not None:
             self._robot_radii = np.concatenate([[geometry.base_radius], geometry.segment_radii])
         self._rows = np.arange(p)
+        self._compiled = bool(compiled)
+        # The kernel's packed inputs (see drake_social.people.social_force_kernel).
+        self._people_table = np.column_stack([self._radii, self._speeds, self._max_speeds, self._n_goals,
+                                              self._cycle]).astype(float)
+        self._box_table = np.column_stack([self._boxes[0], self._boxes[1], self._boxes[2],
+                                           self._boxes[3]]).reshape(-1, 6)
+        g = geometry
+        robot = [0.0] * 5 if g is None else [g.base_radius, *g.link_lengths, g.link_radius, g.object_radius]
+        self._object_points = np.zeros((0, 2)) if g is None else np.ascontiguousarray(g.object_points, float)
+        self._kernel_params = {
+            has: np.array([self._dt, self._tau, self._goal_radius, *self._interaction.values(), self._a, self._b,
+                           STANDING_SPEED, HEADING_SPEED, float(has), *robot], float)
+            for has in (False, True)}
+        self._no_others = np.zeros((0, 4))
+        self._no_q = np.zeros(4)
 
     # ---- the CrowdModel protocol ------------------------------------------
 
@@ -138,7 +159,22 @@ class SocialForceCrowd:
         return s[:2].T.copy(), s[2:4].T.copy(), s[4].copy(), s[5].astype(int)
 
     def step(self, state: np.ndarray, t: float, others: PeopleState, robot_q: np.ndarray | None) -> np.ndarray:
-        """The state ``time_step`` later.
+        """The state ``time_step`` later (as :meth:`step_reference` says), by the compiled kernel."""
+        if not self._compiled:
+            return self.step_reference(state, t, others, robot_q)
+        if others is not None and others.count:
+            seen = others.visible()
+            table = np.concatenate([seen.positions, seen.velocities], 1)
+        else:
+            table = self._no_others
+        has_robot = robot_q is not None and self._geometry is not None
+        q = np.asarray(robot_q, float).reshape(4) if has_robot else self._no_q
+        return crowd_step(np.asarray(state, float), self._goal_table, self._people_table, table, self._box_table,
+                          q, self._object_points, self._kernel_params[has_robot])
+
+    def step_reference(self, state: np.ndarray, t: float, others: PeopleState,
+                       robot_q: np.ndarray | None) -> np.ndarray:
+        """The state ``time_step`` later, in numpy from the terms of :mod:`~drake_social.people.social_force`.
 
         First each person whose centre is within ``goal_radius`` of their
         goal moves on to the next (or the first, with ``cycle``; after the
@@ -220,7 +256,7 @@ class SocialForceCrowd:
         return out
 
 
-def crowd_model(scenario) -> SocialForceCrowd | None:
+def crowd_model(scenario, *, compiled: bool = True) -> SocialForceCrowd | None:
     """The crowd of ``scenario`` (None when it has none).
 
     Preferred speeds: each person's ``desired_speed``, else drawn by
@@ -229,7 +265,8 @@ def crowd_model(scenario) -> SocialForceCrowd | None:
     for the people without one, in order. The obstacles and walls come from
     :func:`drake_social.world.world_model`, the robot from
     :class:`~drake_social.kinematics.ArmGeometry`. The scenario is assumed
-    valid (:func:`crowd_problems` lists what is not).
+    valid (:func:`crowd_problems` lists what is not). ``compiled``: as in
+    :class:`SocialForceCrowd`.
     """
     crowd = scenario.crowd
     if crowd is None:
@@ -246,4 +283,4 @@ def crowd_model(scenario) -> SocialForceCrowd | None:
     return SocialForceCrowd(
         starts=[[p.x, p.y] for p in people], goals=[p.goals for p in people], cycle=[p.cycle for p in people],
         radii=[p.radius for p in people], speeds=speeds, names=[p.name for p in people], params=crowd,
-        boxes=boxes, geometry=ArmGeometry.from_scenario(scenario))
+        boxes=boxes, geometry=ArmGeometry.from_scenario(scenario), compiled=compiled)
