@@ -159,7 +159,11 @@ class SocialForceCrowd:
         return s[:2].T.copy(), s[2:4].T.copy(), s[4].copy(), s[5].astype(int)
 
     def step(self, state: np.ndarray, t: float, others: PeopleState, robot_q: np.ndarray | None) -> np.ndarray:
-        """The state ``time_step`` later (as :meth:`step_reference` says), by the compiled kernel."""
+        """The state ``time_step`` later (as :meth:`step_reference` says), by the compiled kernel.
+
+        The kernel is compiled at its first call (tens of seconds) and
+        cached on disk by numba for the next runs.
+        """
         if not self._compiled:
             return self.step_reference(state, t, others, robot_q)
         if others is not None and others.count:
@@ -181,7 +185,13 @@ class SocialForceCrowd:
         last, they stop: speed set to 0, and from then on they stand). Then
         the forces at ``state`` (the crowd, the present ``others``, the
         boxes and the robot at ``robot_q``) give ``v' = cap(v + dt F)`` and
-        ``x' = x + dt v'`` (semi-implicit Euler).
+        ``x' = x + dt v'`` (semi-implicit Euler), ``cap`` scaling a speed
+        above ``max_speed_factor * v0`` down to it. A person who stands
+        (past their last goal) has no goal to walk to: their goal force is
+        ``-v / tau`` and a speed below :data:`STANDING_SPEED` is set to 0, so
+        they move only when pushed (by people, the walls or the robot). The
+        heading turns to the velocity's direction when the speed exceeds
+        :data:`HEADING_SPEED`, and is kept otherwise.
 
         Args:
             state: the crowd's state at time ``t``.

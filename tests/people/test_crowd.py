@@ -344,3 +344,17 @@ def test_the_compiled_step_is_the_numpy_reference():
     assert worst < 1e-12
     goals = state.reshape(6, -1)[5]
     assert len(set(goals.tolist())) > 1  # people at different stages
+
+
+def test_a_scenario_file_with_a_bad_goal_fails_to_load_naming_file_and_field(tmp_path):
+    from drake_social.scenario import load_scenario
+
+    path = tmp_path / "lobby.yaml"
+    path.write_text("crowd:\n  people:\n    - {x: 5, y: 5, goals: [[8, 8], [9.9, 2]]}\n")
+    with pytest.raises(ScenarioError) as error:
+        load_scenario(str(path))
+    assert str(error.value) == (f"{path}: crowd.people[0].goals[1]: goal (9.9, 2) must lie at least the radius "
+                                "0.25 m inside world.bounds [0.0, 0.0, 10.0, 10.0]")
+    path.write_text("crowd:\n  people:\n    - {x: 5, y: 5, goals: [[8, 8], [9.5, 2]]}\n")
+    m = crowd_model(load_scenario(str(path)))
+    assert m.count == 1 and 0.1 < m.speeds[0]
