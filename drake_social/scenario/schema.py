@@ -128,8 +128,9 @@ class CrowdPerson:
     cycle: bool = False
     # Body radius, metres (> 0).
     radius: float = 0.25
-    # Preferred walking speed, m/s (> 0); None = drawn from the scenario's
-    # seed, normal with mean crowd.speed_mean and deviation crowd.speed_std.
+    # Preferred walking speed, m/s (in (0.1, 3]); None = drawn from the scenario's
+    # seed, normal with mean crowd.speed_mean and deviation crowd.speed_std
+    # (a draw <= 0.1 m/s is drawn again).
     desired_speed: Optional[float] = None
     # Optional label used in figures and error messages.
     name: str = ""
@@ -143,9 +144,10 @@ class Crowd:
 
     # The pedestrians.
     people: list[CrowdPerson] = dc.field(default_factory=list)
-    # Time step of the model's explicit integration, seconds (> 0).
+    # Time step of the model's explicit integration, seconds (in (0, 0.1],
+    # and < relaxation_time).
     time_step: float = 0.05
-    # Mean and standard deviation of the drawn preferred speeds, m/s (> 0, >= 0).
+    # Mean and standard deviation of the drawn preferred speeds, m/s (in (0.1, 3], >= 0).
     speed_mean: float = 1.34
     speed_std: float = 0.26
     # Largest speed, as a multiple of each person's preferred speed (>= 1).

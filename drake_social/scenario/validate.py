@@ -22,6 +22,7 @@ from drake_social.limits import (ALGORITHMS, CONTACT_APPROXIMATIONS, INFORMED_AL
                                  MAX_CONTROL_STEPS, MAX_DYNAMIC_PLANT_TIME_STEP,
                                  MAX_ITERATIONS, MAX_MOTION_STEPS, MAX_OBJECT_POINTS, MAX_PLANT_STEPS, MAX_REPLAY_FPS,
                                  MAX_TIME_LIMIT, MIN_CONTROL_PERIODS, SERVO_BANDWIDTH)
+from drake_social.scenario.crowd_rules import crowd_problems
 from drake_social.scenario.people_rules import check_people
 from drake_social.scenario.schema import (EXECUTIONS, INFORMED_MODES, NEAR_RADIUS_MODES, SIM_MODES, Bar,
                                           ExecutionOptions, LShape, Scenario, interest_point_count)
@@ -382,3 +383,5 @@ def validate_scenario(scenario: Scenario, source: str = "<scenario>") -> None:
         c.fail("execution.replay_fps", f"must be <= {MAX_REPLAY_FPS:g} frames per second, got {e.replay_fps}")
     if scenario.random_seed < 0:
         c.fail("random_seed", f"must be >= 0, got {scenario.random_seed}")
+    for field, message in crowd_problems(scenario):
+        c.fail(field, message)
