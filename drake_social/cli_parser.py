@@ -260,7 +260,8 @@ def _add_people(subparsers) -> None:
                      help="the people CSV to write (replaced atomically)")
     imp.add_argument("--layout", choices=("xy", "xzy"), default="xy",
                      help="columns: xy = frame id x y [vx vy] (default), xzy = frame id x z y [vx vz vy]")
-    imp.add_argument("--fps", type=_positive_float, default=25.0, help="frames per second, t = frame / fps (default 25)")
+    imp.add_argument("--fps", type=_positive_float, default=25.0,
+                     help="frames per second, t = frame / fps (default 25)")
     imp.add_argument("--offset", type=_finite_float, nargs=2, default=(0.0, 0.0), metavar=("DX", "DY"),
                      help="added to every position after the rotation, metres (default 0 0)")
     imp.add_argument("--rotate", type=_finite_float, default=0.0, metavar="RAD",

@@ -144,7 +144,8 @@ def agf_xy(
     inverse = None
     if sigmas is not None:
         if np.shape(sigmas) != (len(people), 3):
-            raise ValueError(f"sigmas must be ({len(people)}, 3) rows [sigma_h, sigma_s, sigma_r], got {np.shape(sigmas)}")
+            raise ValueError(f"sigmas must be ({len(people)}, 3) rows [sigma_h, sigma_s, sigma_r], "
+                             f"got {np.shape(sigmas)}")
         inverse = inverse_variances(sigmas)
     value = gaussian(dx, dy, np.cos(people[:, 2]), np.sin(people[:, 2]), space, inverse)
     return apply_threshold(value, space) if thresholded else value

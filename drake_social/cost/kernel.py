@@ -200,8 +200,9 @@ def msc_sums(
     lever (c_shoulder, c_gripper); reaches (H,): each person's AGF's largest
     reach (inf for no culling); inv_front, inv_rear, inv_side (H,): each
     person's 1 / (2 sigma^2) (per person: Kirby's speed scaling gives walkers
-    wider Gaussians; equal values for a static scenario); point_reach: the largest distance of a weighted point from
-    the base centre; grid_*: :func:`people_grid` with cell side grid_cell.
+    wider Gaussians; equal values for a static scenario); point_reach: the
+    largest distance of a weighted point from the base centre; grid_*:
+    :func:`people_grid` with cell side grid_cell.
 
     People are culled in two exact steps before any sample is taken: the
     grid gives those standing within ``reach + point_reach`` (reach: the

@@ -5,7 +5,8 @@ from __future__ import annotations
 import numpy as np
 
 from drake_social.cost import kernel
-from drake_social.cost.agf import PersonalSpace, agf_xy, gaussian, inverse_variances, person_reaches, speed_scaled_sigmas
+from drake_social.cost.agf import (PersonalSpace, agf_xy, gaussian, inverse_variances, person_reaches,
+                                   speed_scaled_sigmas)
 from drake_social.kinematics import ArmGeometry, config_distance, displacement_bound
 from drake_social.limits import MAX_MOTION_STEPS
 from drake_social.people import PeopleModel, PeopleState, people_model
