@@ -246,3 +246,18 @@ def test_the_compiled_planner_takes_per_person_sigmas(tiny_scenario, rng):
 
 def test_people_model_protocol_fits_the_double():
     assert isinstance(LineWalkers([[0.0, 0.0]], [[1.0, 0.0]]), PeopleModel)
+
+
+def test_at_time_reads_a_people_log_between_its_samples(tiny_scenario, rng):
+    """A PeopleLog of the walker sampled every 0.4 s, read between samples
+    (linear interpolation), gives the walker's own cost at that time: its motion is linear."""
+    from drake_social.people import PeopleLog
+
+    walker = LineWalkers([[1.0, 2.0]], [[0.6, 0.25]])
+    log = PeopleLog.sample(walker, np.arange(0.0, 8.01, 0.4))
+    for t in (0.1, 1.3, 5.55, 7.9):
+        from_log = SocialCost.at_time(tiny_scenario, t, model=log)
+        direct = SocialCost.at_time(tiny_scenario, t, model=walker)
+        np.testing.assert_allclose(from_log.people, direct.people, rtol=0, atol=1e-12)
+        q = near(direct.people[:, :2], rng, 30)
+        np.testing.assert_allclose(from_log(q), direct(q), rtol=1e-10, atol=1e-12)
