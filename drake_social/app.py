@@ -48,6 +48,7 @@ if TYPE_CHECKING:
 __all__ = ["PLAN_OUTPUTS", "SIMULATE_OUTPUTS", "PlanRun", "Progress", "SimulateRun", "StudyRun", "check_scheduler",
            "load_with_overrides", "paper_experiment", "read_path_csv", "run_bench", "run_plan", "run_show",
            "run_simulate", "run_study"]
+__all__ += ["PeopleImport", "run_people_import"]
 
 #: The files ``plan`` writes into ``out`` (a folder of such a name is refused before planning).
 PLAN_OUTPUTS = ("path.csv", "result.json", "path.png", "cost_profile.png", "convergence.png")
@@ -546,3 +547,53 @@ def run_study(*, study: Study, out: str | Path, executor: str = "process", worke
     if done.interrupted:
         done.failure = None
     return done
+
+
+@dc.dataclass(frozen=True)
+class PeopleImport:
+    """What ``people import`` wrote."""
+
+    out: Path  #: the people CSV
+    rows: int  #: data rows written
+    id_count: int  #: distinct ids (people)
+    duration: float  #: time of the last row, seconds (the first is at t = 0)
+
+
+def run_people_import(*, file: str | Path, out: str | Path, layout: str = "xy", fps: float = 25.0,
+                      offset: Sequence[float] = (0.0, 0.0), rotate: float = 0.0, start: float | None = None,
+                      end: float | None = None, ids: Sequence[str] | None = None, theta: bool = True) -> PeopleImport:
+    """Converts an ETH/UCY recording into a people CSV (``people import``);
+    the conversion and its options: :mod:`drake_social.people.eth_ucy`.
+
+    The CSV is written atomically: into a temporary file beside ``out``,
+    then renamed over it (a reader sees the old file or the whole new one).
+
+    Raises:
+        ScenarioError: the recording or an option is invalid (the message
+            names the file and the line).
+        OSError: ``out`` could not be written.
+    """
+    import os
+    import secrets
+
+    from drake_social.io.textfile import read_text_file
+    from drake_social.people import eth_ucy
+
+    text = read_text_file(file, "recording", limit=eth_ucy.MAX_RECORDING_BYTES)
+    recording = eth_ucy.parse_eth_ucy(text, str(file), layout)
+    rows = eth_ucy.convert(recording, fps=fps, offset=offset, rotate=rotate, start=start, end=end, ids=ids)
+    data = eth_ucy.people_csv_text(rows, theta=theta).encode()
+    out = Path(out)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    tmp = out.parent / f".{out.name}.{secrets.token_hex(6)}.tmp"
+    fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666)  # the umask's permissions, as a plain file
+    try:
+        with os.fdopen(fd, "wb") as f:
+            f.write(data)
+            f.flush()
+            os.fsync(f.fileno())
+        os.replace(tmp, out)
+    except BaseException:
+        tmp.unlink(missing_ok=True)
+        raise
+    return PeopleImport(out, len(rows), len({r[1] for r in rows}), rows[-1][0])

@@ -13,6 +13,7 @@ Usage::
     drake-social plan scenarios/office_bar.yaml --algorithm social_rrt_star --out out/office_bar
     drake-social simulate scenarios/tiny.yaml --mode dynamic --execution paper --path out/tiny/path.csv
     drake-social bench --seeds 10 --out out/bench
+    drake-social people import biwi_eth.txt --out people.csv --rotate 1.5708 --offset 2 1 --start 0 --end 60
 
 Exit codes: 0 success; 1 an output could not be written (also when another
 run of the same command is writing into the same ``--out``: refused at once,
@@ -217,6 +218,17 @@ def _run_experiment(args: argparse.Namespace) -> int:
 
 _RUNS: dict[str, Callable[[argparse.Namespace], int]] = {
     "show": _run_show, "plan": _run_plan, "simulate": _run_simulate, "bench": _run_bench, "experiment": _run_experiment}
+
+
+def _run_people(args: argparse.Namespace) -> int:
+    done = app.run_people_import(file=args.file, out=args.csv_out, layout=args.layout, fps=args.fps,
+                                 offset=tuple(args.offset), rotate=args.rotate, start=args.start, end=args.end,
+                                 ids=args.ids, theta=not args.no_theta)
+    print(f"wrote {done.out}: {done.rows} rows, {done.id_count} people, {done.duration:g} s")
+    return 0
+
+
+_RUNS["people"] = _run_people
 
 
 def main(argv: Sequence[str] | None = None) -> int:

@@ -228,6 +228,50 @@ def _add_experiment(subparsers) -> None:
                        help="draw the progress bar on stderr even when it is not a terminal")
 
 
+def _finite_float(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"must be a number, got {shorten(repr(text))}") from None
+    if value != value or value in (float("inf"), float("-inf")):
+        raise argparse.ArgumentTypeError(f"must be a finite number, got {shorten(text)}")
+    return value
+
+
+def _positive_float(text: str) -> float:
+    value = _finite_float(text)
+    if not value > 0:
+        raise argparse.ArgumentTypeError(f"must be a number > 0, got {shorten(text)}")
+    return value
+
+
+def _add_people(subparsers) -> None:
+    p = subparsers.add_parser("people", help="people files: import a recorded pedestrian data set",
+                              description="Tools for the people of a scenario (people_file).")
+    actions = p.add_subparsers(dest="people_command", metavar="ACTION", required=True)
+    imp = actions.add_parser(
+        "import", help="convert an ETH/UCY recording (frame id x y [vx vy]) into a people CSV (t,id,x,y,theta)",
+        description="Reads rows 'frame id x y [vx vy]' (tabs or spaces; --layout xzy: 'frame id x z y [vx vz vy]'), "
+        "t = frame / fps; keeps --ids and the window --start .. --end (inclusive, seconds of the recording), "
+        "re-bases time so that the window starts at t = 0, rotates about the origin by --rotate, then adds "
+        "--offset; writes t,id,x,y,theta (theta: the direction of motion) sorted by time.")
+    imp.add_argument("file", type=Path, help="the recording, e.g. biwi_eth.txt or obsmat.txt")
+    imp.add_argument("--out", dest="csv_out", type=Path, required=True, metavar="CSV",
+                     help="the people CSV to write (replaced atomically)")
+    imp.add_argument("--layout", choices=("xy", "xzy"), default="xy",
+                     help="columns: xy = frame id x y [vx vy] (default), xzy = frame id x z y [vx vz vy]")
+    imp.add_argument("--fps", type=_positive_float, default=25.0,
+                     help="frames per second, t = frame / fps (default 25)")
+    imp.add_argument("--offset", type=_finite_float, nargs=2, default=(0.0, 0.0), metavar=("DX", "DY"),
+                     help="added to every position after the rotation, metres (default 0 0)")
+    imp.add_argument("--rotate", type=_finite_float, default=0.0, metavar="RAD",
+                     help="rotation about the origin, radians counter-clockwise, before the offset (default 0)")
+    imp.add_argument("--start", type=_finite_float, metavar="S", help="window start, seconds (default: the first row)")
+    imp.add_argument("--end", type=_finite_float, metavar="S", help="window end, seconds (default: the last row)")
+    imp.add_argument("--ids", nargs="+", metavar="ID", help="keep only these ids (each must be in the file)")
+    imp.add_argument("--no-theta", action="store_true", help="write t,id,x,y only (no heading column)")
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser with every subcommand; ``args.command`` names the one chosen."""
     parser = argparse.ArgumentParser(
@@ -237,6 +281,6 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--version", action="version", version=f"%(prog)s {__version__}")
     parser.add_argument("-v", "--verbose", action="store_true", help="log progress (INFO level)")
     subparsers = parser.add_subparsers(dest="command", metavar="COMMAND")
-    for add in (_add_show, _add_plan, _add_simulate, _add_bench, _add_experiment):
+    for add in (_add_show, _add_plan, _add_simulate, _add_bench, _add_experiment, _add_people):
         add(subparsers)
     return parser

@@ -189,7 +189,7 @@ def _trapezoids(g, w, count, tau):
 
 @njit(cache=True)
 def msc_sums(
-    q_a, q_b, people, l1, l2, obj, active, weights, lever, resolution, reach, inv_front, inv_rear, inv_side, tau,
+    q_a, q_b, people, l1, l2, obj, active, weights, lever, resolution, reaches, inv_front, inv_rear, inv_side, tau,
     point_reach, grid_cell, grid_x0, grid_y0, grid_nx, grid_ny, grid_start, grid_order,
 ):
     """Per motion (E,): the sum over steps of the weighted trapezoid areas
@@ -197,12 +197,16 @@ def msc_sums(
 
     Args mirror SocialCost: people (H, 3); obj (P, 2) object interest points
     in the gripper frame; active (K,) interest-point indices with weights (K,);
-    lever (c_shoulder, c_gripper); reach: the AGF's largest reach (inf for
-    no culling); point_reach: the largest distance of a weighted point from
-    the base centre; grid_*: :func:`people_grid` with cell side grid_cell.
+    lever (c_shoulder, c_gripper); reaches (H,): each person's AGF's largest
+    reach (inf for no culling); inv_front, inv_rear, inv_side (H,): each
+    person's 1 / (2 sigma^2) (per person: Kirby's speed scaling gives walkers
+    wider Gaussians; equal values for a static scenario); point_reach: the
+    largest distance of a weighted point from the base centre; grid_*:
+    :func:`people_grid` with cell side grid_cell.
 
     People are culled in two exact steps before any sample is taken: the
-    grid gives those standing within ``reach + point_reach`` of the base's
+    grid gives those standing within ``reach + point_reach`` (reach: the
+    largest of ``reaches``) of the base's
     segment's bounding box, and a person farther than that from the segment
     itself has every term <= threshold (every weighted point stays within
     point_reach of the base), so it adds exactly nothing. The interest
@@ -238,10 +242,10 @@ def msc_sums(
     # exp(-a) <= tau with margin beyond this exponent (tau > 0; 1e-9 relative
     # is far more than exp's and log's rounding).
     a_cut = -math.log(tau) * (1.0 + 1e-9) + 1e-12 if tau > 0.0 else math.inf
-    # sqrt of the exponent is a norm of the offset, Lipschitz with constant lip.
-    lip = math.sqrt(max(inv_front, inv_rear, inv_side))
     root_cut = math.sqrt(a_cut) * (1.0 + 1e-9) + 1e-12 if math.isfinite(a_cut) else math.inf
-    bounded = math.isfinite(root_cut) and lip > 0.0
+    reach = 0.0  # the largest reach: the grid's culling radius
+    for h in range(h_count):
+        reach = max(reach, reaches[h])
     vector_exp = tau >= VECTOR_EXP_MIN_THRESHOLD
     cand = np.empty(h_count, dtype=np.int64)
     k0s = np.empty((h_count, k_count), dtype=np.int64)
@@ -313,10 +317,14 @@ def msc_sums(
         for i in range(m):
             h = cand[i]
             px, py, c_t, s_t = people[h, 0], people[h, 1], cos_t[h], sin_t[h]
+            inv_f, inv_r, inv_s, reach_h = inv_front[h], inv_rear[h], inv_side[h], reaches[h]
+            # sqrt of the exponent is a norm of the offset, Lipschitz with constant lip.
+            lip = math.sqrt(max(inv_f, inv_r, inv_s))
+            bounded = math.isfinite(root_cut) and lip > 0.0
             for j in range(k_count):
                 ax_, ay_, bx_, by_ = xa[j] - px, ya[j] - py, xb[j] - px, yb[j] - py
-                da = math.sqrt(ax_ * ax_ + ay_ * ay_) - reach - 1e-9
-                db = math.sqrt(bx_ * bx_ + by_ * by_) - reach - 1e-9
+                da = math.sqrt(ax_ * ax_ + ay_ * ay_) - reach_h - 1e-9
+                db = math.sqrt(bx_ * bx_ + by_ * by_) - reach_h - 1e-9
                 if spans[j] > 0.0:
                     if da + db > spans[j]:
                         k0s[i, j], k1s[i, j] = 0, -1
@@ -327,8 +335,8 @@ def msc_sums(
                     if bounded and ls > 0.0:
                         # sqrt(a) moves at most lip * spans[j] along the motion
                         # (per unit of t): above root_cut outside [t0, t1].
-                        ra = math.sqrt(_exponent(ax_, ay_, c_t, s_t, inv_front, inv_rear, inv_side)) - root_cut
-                        rb = math.sqrt(_exponent(bx_, by_, c_t, s_t, inv_front, inv_rear, inv_side)) - root_cut
+                        ra = math.sqrt(_exponent(ax_, ay_, c_t, s_t, inv_f, inv_r, inv_s)) - root_cut
+                        rb = math.sqrt(_exponent(bx_, by_, c_t, s_t, inv_f, inv_r, inv_s)) - root_cut
                         if ra + rb > ls:
                             k0s[i, j], k1s[i, j] = 0, -1
                             continue
@@ -388,11 +396,12 @@ def msc_sums(
         for i in range(m):
             h = cand[i]
             px, py, c, s = people[h, 0], people[h, 1], cos_t[h], sin_t[h]
+            inv_f, inv_r, inv_s = inv_front[h], inv_rear[h], inv_side[h]
             for j in range(k_count):
                 k0, k1 = k0s[i, j], k1s[i, j]
                 w = weights[j]
                 for k in range(k0, k1 + 1):
-                    g_buf[t] = _exponent(xs[j, k] - px, ys[j, k] - py, c, s, inv_front, inv_rear, inv_side)
+                    g_buf[t] = _exponent(xs[j, k] - px, ys[j, k] - py, c, s, inv_f, inv_r, inv_s)
                     w_buf[t] = w
                     t += 1
                 if k1 >= k0:

@@ -5,10 +5,11 @@ from __future__ import annotations
 import numpy as np
 
 from drake_social.cost import kernel
-from drake_social.cost.agf import PersonalSpace, agf_xy, gaussian
+from drake_social.cost.agf import (PersonalSpace, agf_xy, gaussian, inverse_variances, person_reaches,
+                                   speed_scaled_sigmas)
 from drake_social.kinematics import ArmGeometry, config_distance, displacement_bound
 from drake_social.limits import MAX_MOTION_STEPS
-from drake_social.people import PeopleState, people_model
+from drake_social.people import PeopleModel, PeopleState, people_model
 
 __all__ = ["FIELD_CHUNK_ELEMENTS", "SocialCost", "interpolation_segments"]
 
@@ -55,6 +56,10 @@ class SocialCost:
             between two samples of the trapezoid rule, metres.
         distance_weights: per-coordinate scale of the configuration norm used
             as ``ds`` in the integral (None = the plain norm of the paper).
+        sigmas: (H, 3) per-person variances [sigma_h, sigma_s, sigma_r],
+            metres (Kirby's speed scaling: :func:`~drake_social.cost.agf.speed_scaled_sigmas`),
+            in place of ``space``'s; None = ``space``'s for everyone (the
+            threshold is always ``space``'s).
     """
 
     def __init__(
@@ -65,6 +70,7 @@ class SocialCost:
         weights: np.ndarray | None = None,
         resolution: float = 0.1,
         distance_weights: np.ndarray | None = None,
+        sigmas: np.ndarray | None = None,
     ):
         n = geometry.num_interest_points
         w = np.ones(n) if weights is None else np.asarray(weights, dtype=float)
@@ -76,6 +82,13 @@ class SocialCost:
             raise ValueError(f"resolution must be > 0, got {resolution}")
         self.geometry = geometry
         self.people = np.asarray(people, dtype=float).reshape(-1, 3)
+        if sigmas is not None:
+            sigmas = np.asarray(sigmas, dtype=float)
+            if sigmas.shape != (len(self.people), 3) or not (np.all(np.isfinite(sigmas)) and np.all(sigmas > 0)):
+                raise ValueError(f"sigmas must be ({len(self.people)}, 3) finite values > 0 (metres: sigma_h, "
+                                 f"sigma_s, sigma_r per person), got shape {sigmas.shape}")
+        #: (H, 3) per-person [sigma_h, sigma_s, sigma_r], or None (``space``'s for everyone).
+        self.sigmas = sigmas
         self.space = space
         self.weights = w
         self.resolution = float(resolution)
@@ -95,6 +108,11 @@ class SocialCost:
                       people: PeopleState | None = None) -> "SocialCost":
         """The scenario's cost; ``weights`` overrides ``scenario.social.weights``.
 
+        Only the people present in ``people`` count (:meth:`PeopleState.visible`);
+        with ``social.speed_scaling`` each one's variances follow their speed
+        (:func:`~drake_social.cost.agf.speed_scaled_sigmas`: a standing
+        person gets sigma_h = 0.5 m), otherwise everyone has ``social.sigma_h``.
+
         Args:
             people: the people the cost is about; None = the scenario's
                 people model at t = 0 (:func:`drake_social.people.people_model`).
@@ -105,6 +123,8 @@ class SocialCost:
         s = scenario.social
         if people is None:
             people = people_model(scenario).state_at(0.0)
+        people = people.visible()
+        sigmas = speed_scaled_sigmas(people.speeds(), s.side_ratio, s.rear_ratio) if s.speed_scaling else None
         return cls(
             ArmGeometry.from_scenario(scenario),
             people.poses(),
@@ -112,11 +132,56 @@ class SocialCost:
             weights=s.weights if weights is None else weights,
             resolution=s.resolution,
             distance_weights=scenario.planner.distance_weights,
+            sigmas=sigmas,
         )
+
+    @classmethod
+    def at_time(cls, scenario, t: float, model: PeopleModel | None = None,
+                weights: np.ndarray | None = None) -> "SocialCost":
+        """The scenario's cost with the people where they are at time ``t``.
+
+        Args:
+            t: seconds since the start of the run.
+            model: anything with ``state_at(t) -> PeopleState`` (a
+                :class:`~drake_social.people.PeopleModel`, a
+                :class:`~drake_social.people.PeopleLog` of a run); None = the
+                scenario's people model (its crowd open loop, without the robot).
+            weights: as in :meth:`from_scenario`.
+        """
+        model = people_model(scenario) if model is None else model
+        return cls.from_scenario(scenario, weights, people=model.state_at(t))
 
     def with_weights(self, weights: np.ndarray) -> "SocialCost":
         """The same cost with other interest-point weights."""
-        return SocialCost(self.geometry, self.people, self.space, weights, self.resolution, self.distance_weights)
+        return SocialCost(self.geometry, self.people, self.space, weights, self.resolution, self.distance_weights,
+                          self.sigmas)
+
+    def person_parameters(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """Per person (H,) each: the AGF's largest reach (metres) and the
+        front, rear and side ``1 / (2 sigma^2)`` (1 / m^2), as the compiled
+        kernel takes them (equal rows without per-person variances)."""
+        h = len(self.people)
+        key = (h, None if self.sigmas is None else self.sigmas.tobytes())
+        if getattr(self, "_person_key", None) != key:
+            if self.sigmas is None:
+                params = (np.full(h, self.space.max_reach), *(np.full(h, v) for v in self._inverse_variances))
+            else:
+                params = (person_reaches(self.sigmas, self.space.threshold), *inverse_variances(self.sigmas))
+            self._person_params, self._person_key = params, key
+        return self._person_params
+
+    def _reaches(self):
+        """The AGF's reach: a scalar (everyone's) or (H,) per person, metres."""
+        return self.space.max_reach if self.sigmas is None else self.person_parameters()[0]
+
+    def _max_reach(self) -> float:
+        """The largest reach of anyone's AGF, metres."""
+        reach = self._reaches()
+        return float(np.max(reach)) if np.ndim(reach) and len(reach) else float(self.space.max_reach)
+
+    def agf_values(self, x: np.ndarray, y: np.ndarray, thresholded: bool = True) -> np.ndarray:
+        """Every person's AGF (with their own variances) at world points x, y (...,) -> (..., H)."""
+        return agf_xy(x, y, self.people, self.space, thresholded, sigmas=self.sigmas)
 
     # ---- per configuration ----------------------------------------------------
 
@@ -163,10 +228,10 @@ class SocialCost:
     def _people_grid(self) -> tuple:
         """(point reach, cell side, *kernel.people_grid) for the compiled
         kernel's culling; rebuilt when ``people`` changes."""
-        key = self.people.tobytes()
+        key = self.people.tobytes() + (b"" if self.sigmas is None else self.sigmas.tobytes())
         if getattr(self, "_grid_key", None) != key:
             point_reach = float(self.geometry.reach(active=self._active)[2]) if len(self._active) else 0.0
-            reach = self.space.max_reach
+            reach = self._max_reach()
             cell = reach + point_reach if np.isfinite(reach) and reach + point_reach > 0 else 1.0
             people = np.ascontiguousarray(self.people)
             self._grid = (point_reach, cell, *kernel.people_grid(people, cell))
@@ -177,8 +242,8 @@ class SocialCost:
         """For every (motion, person): whether the person may matter, and the
         parameter interval [t0, t1] outside which every term is 0."""
         e, h = len(q_a), len(self.people)
-        reach = self.space.max_reach
-        if not np.isfinite(reach):
+        reach = self._reaches()  # scalar, or per person (H,)
+        if not np.all(np.isfinite(reach)):
             return np.ones((e, h), dtype=bool), np.zeros((e, h)), np.ones((e, h))
         x, y = self.geometry.interest_xy(np.concatenate([q_a, q_b]), self._active)  # (2E, K)
         dist = np.hypot(x[..., None] - self.people[:, 0], y[..., None] - self.people[:, 1]) - reach
@@ -251,7 +316,7 @@ class SocialCost:
         return kernel.msc_sums(
             np.ascontiguousarray(q_a), np.ascontiguousarray(q_b), self.people,
             *self.geometry.link_lengths, self.geometry.object_interest, self._active, self._active_weights,
-            self._lever, self.resolution, self.space.max_reach, *self._inverse_variances, self.space.threshold,
+            self._lever, self.resolution, *self.person_parameters(), self.space.threshold,
             *self._people_grid(),
         )  # fmt: skip
 
@@ -277,8 +342,12 @@ class SocialCost:
         t = (k0[pair] + local) / n[edge]
         x, y = self.geometry.interest_xy(q_a[edge] + t[:, None] * dq[edge], self._active)
         person = self.people[pair_person[pair]]
+        inverse = None
+        if self.sigmas is not None:
+            inverse = tuple(v[pair_person[pair]][:, None] for v in inverse_variances(self.sigmas))
         g = gaussian(
-            x - person[:, 0:1], y - person[:, 1:2], np.cos(person[:, 2:3]), np.sin(person[:, 2:3]), self.space
+            x - person[:, 0:1], y - person[:, 1:2], np.cos(person[:, 2:3]), np.sin(person[:, 2:3]), self.space,
+            inverse,
         )  # (samples of all pairs, K)
         step = np.flatnonzero(local[:-1] < count[pair[:-1]] - 1)  # consecutive samples of one pair
         g0, g1 = g[step], g[step + 1]
@@ -318,22 +387,23 @@ class SocialCost:
             return out.reshape(shape)
         # Beyond the reach every AGF is <= threshold, hence 0; the relative
         # margin keeps a person whose value rounds just above the threshold.
-        reach = self.space.max_reach * (1.0 + 1e-9) + 1e-9
+        reach = np.asarray(self._reaches()) * (1.0 + 1e-9) + 1e-9  # scalar, or per person
         chunk = max(1, FIELD_CHUNK_ELEMENTS // h)
         px, py = self.people[:, 0], self.people[:, 1]
         for start in range(0, x.size, chunk):
             cx, cy = x[start : start + chunk], y[start : start + chunk]
             near = np.ones(h, dtype=bool)
-            if np.isfinite(reach):
+            if np.all(np.isfinite(reach)):
                 # Distance from each person to the chunk's bounding box (NaN keeps the person).
                 gap_x = np.maximum(np.maximum(cx.min() - px, px - cx.max()), 0.0)
                 gap_y = np.maximum(np.maximum(cy.min() - py, py - cy.max()), 0.0)
-                near = ~(np.hypot(gap_x, gap_y) > reach)
+                near = ~(np.hypot(gap_x, gap_y) > reach)  # reach (H,) or scalar
             if near.any():
                 # The far people's exact zeros stay in their columns, so each
                 # point's sum runs over the same H values in the same order as
                 # one unchunked evaluation would: the same bits.
                 values = np.zeros((len(cx), h))
-                values[:, near] = agf_xy(cx, cy, self.people[near], self.space)
+                sigmas = None if self.sigmas is None else self.sigmas[near]
+                values[:, near] = agf_xy(cx, cy, self.people[near], self.space, sigmas=sigmas)
                 out[start : start + chunk] = values.sum(-1)
         return out.reshape(shape)

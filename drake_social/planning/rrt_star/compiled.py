@@ -94,13 +94,13 @@ def _social_params(objective: Objective) -> tuple[int, SocialParams, PeopleGrid]
         sc = objective.social
         social = SocialParams(f(sc.people), *map(float, sc.geometry.link_lengths), f(sc.geometry.object_interest, float),
                               f(sc._active, np.int64), f(sc._active_weights), f(sc._lever, float), sc.resolution,
-                              float(sc.space.max_reach), *sc._inverse_variances, float(sc.space.threshold))
+                              *(f(v, float) for v in sc.person_parameters()), float(sc.space.threshold))
         g = sc._people_grid()
         grid = PeopleGrid(float(g[0]), float(g[1]), float(g[2]), float(g[3]), int(g[4]), int(g[5]),
                           f(g[6], np.int64), f(g[7], np.int64))
         return 1, social, grid
     social = SocialParams(np.zeros((0, 3)), 0.0, 0.0, np.zeros((0, 2)), np.zeros(0, np.int64), np.zeros(0),
-                          np.zeros(2), 1.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+                          np.zeros(2), 1.0, np.zeros(0), np.zeros(0), np.zeros(0), np.zeros(0), 0.0)
     grid = PeopleGrid(0.0, 1.0, 0.0, 0.0, 1, 1, np.zeros(2, np.int64), np.zeros(0, np.int64))
     return 0, social, grid
 

@@ -47,10 +47,10 @@ class SocialParams(NamedTuple):
     weights: np.ndarray  #: (K,) float: their weights
     lever: np.ndarray  #: (2,) float: lever arms of the displacement bound, metres
     resolution: float  #: trapezoid step bound, metres
-    reach: float  #: the AGF's reach, metres
-    inv_front: float  #: 1 / (2 sigma^2) of the front, rear and side Gaussians, 1 / m^2
-    inv_rear: float
-    inv_side: float
+    reaches: np.ndarray  #: (P,) float: each person's AGF reach, metres
+    inv_front: np.ndarray  #: (P,) float: each person's 1 / (2 sigma^2) of the front, rear and side Gaussians, 1 / m^2
+    inv_rear: np.ndarray
+    inv_side: np.ndarray
     threshold: float  #: the AGF's threshold tau
 
 
@@ -144,11 +144,11 @@ def _costs(q_a, q_b, kind, lam, dw, soc, grid):
     for e in range(e_count):
         length[e] = math.sqrt(_d2(q_b[e], q_a[e], dw))
     if kind == 1:
-        (people, l1, l2, obj, active, weights, lever, resolution, reach, inv_f, inv_r, inv_s, tau) = soc
+        (people, l1, l2, obj, active, weights, lever, resolution, reaches, inv_f, inv_r, inv_s, tau) = soc
         if people.shape[0] > 0 and active.shape[0] > 0:
             point_reach, cell, gx0, gy0, gnx, gny, gstart, gorder = grid
             sums, n = cost_kernel.msc_sums(
-                q_a, q_b, people, l1, l2, obj, active, weights, lever, resolution, reach, inv_f, inv_r, inv_s, tau,
+                q_a, q_b, people, l1, l2, obj, active, weights, lever, resolution, reaches, inv_f, inv_r, inv_s, tau,
                 point_reach, cell, gx0, gy0, gnx, gny, gstart, gorder,
             )
             for e in range(e_count):
