@@ -141,11 +141,12 @@ def add_environment(plant: MultibodyPlant, scenario: Scenario, only: Sequence[in
     Returns:
         The registered shape names, in the order of :func:`environment_names`.
     """
+    with_people = bool(people)
     names = environment_names(scenario)
     world, people = world_model(scenario), people_model(scenario).state_at(0.0)
     n_obstacles, n_people = len(world.boxes), people.count
     wanted = set(range(len(names))) if only is None else {int(i) for i in only}
-    if not people:
+    if not with_people:
         wanted -= set(range(n_obstacles, n_obstacles + n_people))
     shapes = [(i, world.boxes, i, "obstacle") for i in range(n_obstacles)]
     shapes += [(n_obstacles + n_people + k, world.walls, k, "wall") for k in range(len(world.walls))]
@@ -159,7 +160,7 @@ def add_environment(plant: MultibodyPlant, scenario: Scenario, only: Sequence[in
         if n_obstacles + k in wanted:
             X_WG = RigidTransform([*people.positions[k], COLLISION_HEIGHT / 2])
             _register(plant, names[n_obstacles + k], X_WG, Cylinder(people.radii[k], COLLISION_HEIGHT), "person")
-    return [names[i] for i in sorted(wanted)] if only is not None or not people else names
+    return [names[i] for i in sorted(wanted)] if only is not None or not with_people else names
 
 
 def add_robot(plant: MultibodyPlant, scenario: Scenario, parser: Parser | None = None) -> ModelInstanceIndex:
