@@ -213,7 +213,8 @@ class SimulationResult:
             line += (f"; social cost planned {r.planned_social_cost:.4g}, executed {r.executed_social_cost:.4g}; "
                      f"max point deviation {r.max_point_deviation['max']:.3g} m; "
                      f"min clearance {r.min_clearance:.3g} m; "
-                     f"{'collision-free' if r.collision_free else 'COLLIDES'}; "
+                     f"{'collision-free' if r.collision_free else 'COLLIDES'}"
+                     f"{'' if 'people' in r.collision_checked else ' (obstacles and walls; the people move)'}; "
                      + ("within the joint limits and room bounds" if r.within_limits else
                         "BEYOND A LIMIT: " + "; ".join(str(v) for v in r.limit_violations)))
         if self.sim_time > 0 and math.isfinite(self.realtime_factor):  # nothing simulated: no factor to show

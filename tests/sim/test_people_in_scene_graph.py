@@ -84,3 +84,19 @@ def test_standing_people_stay_anchored(tiny_scenario):
     inspector = built.scene_graph.model_inspector()
     assert inspector.GetFrameId(person) == built.scene_graph.world_frame_id()
     np.testing.assert_allclose(inspector.GetPoseInFrame(person).translation(), [4.0, 3.8, COLLISION_HEIGHT / 2])
+
+
+def test_add_environment_can_leave_the_people_out(tiny_scenario):
+    from pydrake.multibody.plant import MultibodyPlant
+
+    from drake_social.model.plant import add_environment, environment_names
+
+    names = environment_names(tiny_scenario)
+    assert "person[0] 'standing'" in names
+    from pydrake.geometry import SceneGraph
+
+    plant, scene_graph = MultibodyPlant(0.0), SceneGraph()  # the plant keeps no reference to the scene graph
+    plant.RegisterAsSourceForSceneGraph(scene_graph)
+    registered = add_environment(plant, tiny_scenario, people=False)
+    assert registered == [n for n in names if not n.startswith("person")]
+    assert plant.num_collision_geometries() == len(registered)
