@@ -103,6 +103,7 @@ class PeopleSource(LeafSystem):
         if crowd is not None:
             self._n = len(np.asarray(crowd.initial_state(), float).reshape(-1))
             self._dt = float(crowd.time_step)
+            self._open_count = count - int(crowd.count)
             self._robot_q = self.DeclareVectorInputPort("robot_q", 4)
             self._xd = self.DeclareDiscreteState(self.initial_crowd_state())
             self.DeclarePeriodicDiscreteUpdateEvent(self._dt, 0.0, self._Step)
@@ -142,7 +143,10 @@ class PeopleSource(LeafSystem):
         row = np.asarray(crowd_state, float).reshape(-1)
         n = self._n
         x = row[1 + n:] if t >= row[0] + self._dt - _TIME_SLACK else row[1:1 + n]
-        return concat_states([self._model.open_loop_state(t), self._crowd.people_state(x, t)], t)
+        crowd = self._crowd.people_state(x, t)
+        if not self._open_count:  # a crowd alone: no open-loop state to build and join
+            return crowd
+        return concat_states([self._model.open_loop_state(t), crowd], t)
 
     def people_log(self, times: Sequence[float], crowd_states: np.ndarray | None = None) -> PeopleLog:
         """The people at ``times`` (T,), seconds, increasing, T >= 1; with a crowd,
