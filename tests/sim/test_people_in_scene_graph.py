@@ -100,3 +100,16 @@ def test_add_environment_can_leave_the_people_out(tiny_scenario):
     registered = add_environment(plant, tiny_scenario, people=False)
     assert registered == [n for n in names if not n.startswith("person")]
     assert plant.num_collision_geometries() == len(registered)
+
+
+def test_the_replay_draws_the_walking_people(tiny_scenario, walking):
+    from drake_social.sim.replay import make_meshcat
+
+    meshcat = make_meshcat()
+    built = build_diagram(tiny_scenario, mode="kinematic", planner=False, meshcat=meshcat)
+    context = built.diagram.CreateDefaultContext()
+    context.SetTime(2.0)
+    built.visualizer.ForcedPublish(built.visualizer.GetMyContextFromRoot(context))
+    # The visualizer draws each person's frame (its illustration geometry) under the prefix.
+    assert meshcat.HasPath("/drake/illustration/person[0] 'standing'")
+    assert meshcat.HasPath("/drake/illustration/person[1] 'late'")
