@@ -440,16 +440,16 @@ def build_checked(
     lower, upper = configuration_limits(scenario)
 
     builder = DiagramBuilder()
-    people = people_model(scenario)  # static people are anchored in the plant, moving ones move in SceneGraph
+    scenario_people = people_model(scenario)  # static people are anchored in the plant, moving ones move in SceneGraph
     if mode == "dynamic":
         plant, scene_graph = AddMultibodyPlant(config, builder)
-        robot = _populate(plant, scenario, people.static)
+        robot = _populate(plant, scenario, scenario_people.static)
         plant.SetDefaultPositions(robot, start)
     else:
         scene_graph = builder.AddNamedSystem("scene_graph", SceneGraph())
         plant = MultibodyPlant(time_step=0.0)
         plant.RegisterAsSourceForSceneGraph(scene_graph)
-        robot = _populate(plant, scenario, people.static)
+        robot = _populate(plant, scenario, scenario_people.static)
 
     # ---- which target ---------------------------------------------------------
     if waypoints is None:
@@ -594,12 +594,12 @@ def build_checked(
     builder.Connect(q_port, sequencer.GetInputPort("q"))
     if base_controller is not None:
         builder.Connect(q_split.get_output_port(0), base_controller.GetInputPort("base_position"))
-    people_source = builder.AddNamedSystem("people", PeopleSource(people))
-    if people_source.crowd is not None:
-        builder.Connect(q_port, people_source.GetInputPort("robot_q"))
-    if not people.static:
-        bodies = builder.AddNamedSystem("people_geometry", PeopleGeometry(scene_graph, people.state_at(0.0)))
-        builder.Connect(people_source.GetOutputPort("people_state"), bodies.get_input_port())
+    people = builder.AddNamedSystem("people", PeopleSource(scenario_people))
+    if people.crowd is not None:
+        builder.Connect(q_port, people.GetInputPort("robot_q"))
+    if not scenario_people.static:
+        bodies = builder.AddNamedSystem("people_geometry", PeopleGeometry(scene_graph, scenario_people.state_at(0.0)))
+        builder.Connect(people.GetOutputPort("people_state"), bodies.get_input_port())
         builder.Connect(bodies.GetOutputPort("geometry_pose"), scene_graph.get_source_pose_port(bodies.source_id))
         if mode == "dynamic":
             _filter_people(scene_graph, bodies.geometry_ids)
@@ -613,8 +613,8 @@ def build_checked(
         "index": sequencer.GetOutputPort("index"),
         "planned_path": path_port,
         "wheel_speeds": wheel_port,
-        "people_state": people_source.GetOutputPort("people_state"),
-        "people_vector": people_source.GetOutputPort("people_vector"),
+        "people_state": people.GetOutputPort("people_state"),
+        "people_vector": people.GetOutputPort("people_vector"),
         "query_object": scene_graph.get_query_output_port(),
     }
     if feedforward is not None:
@@ -632,8 +632,8 @@ def build_checked(
         "index": sequencer.GetOutputPort("index"),
         "done": sequencer.GetOutputPort("done"),
     }
-    if people_source.crowd is not None:  # the people are rebuilt from it after the run (PeopleSource.people_log)
-        ports["crowd_state"] = people_source.GetOutputPort("crowd_state")
+    if people.crowd is not None:  # the people are rebuilt from it after the run (PeopleSource.people_log)
+        ports["crowd_state"] = people.GetOutputPort("crowd_state")
     loggers = {}
     for name, port in ports.items():
         logger = LogVectorOutput(port, builder, publish_period=period)

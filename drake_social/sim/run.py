@@ -62,8 +62,8 @@ from drake_social.sim.diagram import (
 )
 from drake_social.waypoints import waypoint_array
 
-__all__ = ["CHECKED_ROOM", "CHECKED_ROOM_AND_PEOPLE", "ExecutionReport", "LimitViolation", "SimulationResult", "analyze_execution", "limit_violations",
-           "scenario_simulator_config", "simulate"]
+__all__ = ["CHECKED_ROOM", "CHECKED_ROOM_AND_PEOPLE", "ExecutionReport", "LimitViolation", "SimulationResult",
+           "analyze_execution", "limit_violations", "scenario_simulator_config", "simulate"]
 
 #: Simulated seconds per AdvanceTo call between checks for the goal.
 _CHUNK = 0.25
