@@ -53,7 +53,7 @@ __all__ += ["PeopleImport", "run_people_import"]
 #: The files ``plan`` writes into ``out`` (a folder of such a name is refused before planning).
 PLAN_OUTPUTS = ("path.csv", "result.json", "path.png", "cost_profile.png", "convergence.png")
 #: The files ``simulate`` may write into ``out`` (replay.html when Meshcat records).
-SIMULATE_OUTPUTS = ("replay.html", "executed.csv", "tracking.png", "sim.json")
+SIMULATE_OUTPUTS = ("replay.html", "executed.csv", "people.csv", "tracking.png", "sim.json")
 
 #: A progress callback: ``progress(done, total, status)`` (steps done of
 #: ``total``, and a short text such as ``"best 5.1"`` or ``"t = 3.2 s"``).
@@ -297,7 +297,8 @@ def run_simulate(*, scenario: Scenario | str | Path, out: str | Path, overrides:
                  checker: str = "planar", replay: bool = True, progress: Progress | None = None) -> SimulateRun:
     """Plans the scenario (or reads ``path``), executes the path in Drake's
     Simulator and writes ``out``: replay.html (with ``replay``),
-    executed.csv, tracking.png and sim.json.
+    executed.csv, people.csv (when the scenario has people: where they were
+    at the logged times), tracking.png and sim.json.
 
     Args:
         scenario: the scenario YAML file, or a :class:`~drake_social.scenario.Scenario`.
@@ -325,7 +326,7 @@ def run_simulate(*, scenario: Scenario | str | Path, out: str | Path, overrides:
 
     from drake_social.collision.drake_checker import make_checker
     from drake_social.io.outputs import OutputSet
-    from drake_social.io.paths import parse_path_csv, write_executed_csv
+    from drake_social.io.paths import parse_path_csv, write_executed_csv, write_people_csv
     from drake_social.io.records import json_lines
     from drake_social.planning.result import PlanningInputError
     from drake_social.scenario import plant_time_step_problem, validate_scenario
@@ -378,6 +379,10 @@ def run_simulate(*, scenario: Scenario | str | Path, out: str | Path, overrides:
             size = write_replay_html(meshcat, outputs.path("replay.html"), fit=fit)
             files.append("replay.html")
         write_executed_csv(outputs.path("executed.csv"), run.times, run.q, run.v)
+        files.append("executed.csv")
+        if run.people is not None:
+            write_people_csv(outputs.path("people.csv"), run.people)
+            files.append("people.csv")
         fig = tracking_figure(run, max_base_speed=opts.max_base_speed, max_wheel_speed=opts.max_wheel_speed,
                               title=f"{_title(loaded, file)}\n{run.mode} / {run.execution}: {run.message}")
         fig.savefig(outputs.path("tracking.png"), dpi=130)
@@ -385,7 +390,7 @@ def run_simulate(*, scenario: Scenario | str | Path, out: str | Path, overrides:
                   "path": None if path is None else str(path), "checker": checker,
                   **run.to_json_dict(), "waypoints": np.asarray(run.waypoints).tolist()}
         outputs.write_text("sim.json", json_lines(record))
-        files += ["executed.csv", "tracking.png", "sim.json"]
+        files += ["tracking.png", "sim.json"]
     return SimulateRun(record, run, files, size)
 
 

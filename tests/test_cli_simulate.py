@@ -44,7 +44,7 @@ def test_simulate_writes_its_files(simulated, planned):
     # The page to open is the folder's link, which stays valid after the next run.
     assert stdout.splitlines()[-1] == f"open {(out.resolve() / 'replay.html').as_uri()} in a browser to watch the replay"
     names = sorted(p.name for p in out.iterdir() if not p.name.startswith("."))
-    assert names == ["executed.csv", "replay.html", "sim.json", "tracking.png"]
+    assert names == ["executed.csv", "people.csv", "replay.html", "sim.json", "tracking.png"]
     record = json.loads((out / "sim.json").read_text())
     assert record["reached"] and record["collision_free"]
     assert record["mode"] == "kinematic" and record["execution"] == "synchronized"
@@ -156,7 +156,7 @@ def test_a_joint_limit_pass_exits_7_and_is_named_apart_from_collisions(tmp_path,
     assert "collides" not in captured.err
 
 
-@pytest.mark.parametrize("name", ["sim.json", "executed.csv", "tracking.png", "replay.html"])
+@pytest.mark.parametrize("name", ["sim.json", "executed.csv", "people.csv", "tracking.png", "replay.html"])
 def test_a_folder_named_like_an_output_is_refused_before_simulating(tmp_path, tiny_scenario_path, planned, capsys,
                                                                     name):
     out = tmp_path / "out"

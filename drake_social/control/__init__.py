@@ -6,7 +6,9 @@
   :class:`MecanumDrive` turns wheel speeds into the base velocity.
 * :class:`RuckigTrajectorySource` gives jerk-limited references (the arm's,
   or the synchronized whole-configuration reference).
-* :class:`PeopleSource` outputs where the people are at the context's time.
+* :class:`PeopleSource` outputs where the people are at the context's time
+  (and steps a crowd fed back the robot); :class:`PeopleGeometry` moves their
+  bodies in SceneGraph.
 """
 
 from drake_social.control.holonomic import (
@@ -18,6 +20,7 @@ from drake_social.control.holonomic import (
     wheel_limited_speed,
     wheel_speeds,
 )
+from drake_social.control.people_geometry import PARKED_DEPTH, PeopleGeometry
 from drake_social.control.people_source import PEOPLE_VECTOR_FIELDS, PeopleSource, people_vector
 from drake_social.control.planner_system import PlannerSystem, path_parameter, waypoint_trajectory
 from drake_social.control.ruckig_source import (
@@ -31,7 +34,9 @@ from drake_social.control.sequencer import WaypointSequencer
 __all__ = [
     "HolonomicPController",
     "MecanumDrive",
+    "PARKED_DEPTH",
     "PEOPLE_VECTOR_FIELDS",
+    "PeopleGeometry",
     "PeopleSource",
     "PlannerSystem",
     "RuckigSegment",

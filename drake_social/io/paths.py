@@ -17,6 +17,7 @@ Example::
 
 from __future__ import annotations
 
+import csv
 from pathlib import Path
 from typing import Any
 
@@ -26,12 +27,17 @@ from drake_social.errors import ScenarioError
 from drake_social.io.textfile import MAX_PATH_FILE_BYTES, read_text_file, shorten
 from drake_social.limits import MAX_WAYPOINTS
 
-__all__ = ["PATH_HEADER", "EXECUTED_HEADER", "parse_path_csv", "write_executed_csv", "write_path_csv"]
+__all__ = ["PATH_HEADER", "EXECUTED_HEADER", "parse_path_csv", "write_executed_csv", "write_path_csv",
+           "PEOPLE_HEADER", "write_people_csv"]
 
 #: The header of a path CSV: the four values of a configuration.
 PATH_HEADER = "x,y,psi1,psi2"
 #: The header of ``executed.csv``: time (s), configuration and its velocity (m/s, rad/s).
 EXECUTED_HEADER = "t,x,y,psi1,psi2,vx,vy,dpsi1,dpsi2"
+#: The header of ``people.csv``: time (s), the person's id, position (m),
+#: heading (rad), speed (m/s); the columns of
+#: :data:`drake_social.people.PEOPLE_CSV_FIELDS` (``io`` sits below ``people``).
+PEOPLE_HEADER = "t,id,x,y,theta,v"
 
 
 def write_path_csv(path: str | Path, waypoints: Any) -> None:
@@ -58,6 +64,24 @@ def write_executed_csv(path: str | Path, times: Any, q: Any, v: Any) -> None:
     table = (np.column_stack([times, np.asarray(q, float).reshape(-1, 4), np.asarray(v, float).reshape(-1, 4)])
              if len(times) else np.zeros((0, 9)))
     np.savetxt(path, table, delimiter=",", header=EXECUTED_HEADER, comments="", fmt="%.17g")
+
+
+def write_people_csv(path: str | Path, log: Any) -> None:
+    """Writes where the people were as ``people.csv``: header :data:`PEOPLE_HEADER`,
+    one row per present person
+    per logged time (:meth:`~drake_social.people.PeopleLog.csv_rows`: seconds,
+    the person's id, metres, radians, metres per second), numbers with 17
+    significant digits; an id with a comma or a quote is quoted as CSV quotes it.
+
+    Args:
+        path: the file to write.
+        log: the people over the run (a :class:`~drake_social.people.PeopleLog`).
+    """
+    with open(path, "w", newline="") as f:
+        writer = csv.writer(f, lineterminator="\n")
+        writer.writerow(PEOPLE_HEADER.split(","))
+        for t, pid, x, y, theta, v in log.csv_rows():
+            writer.writerow([f"{t:.17g}", pid, f"{x:.17g}", f"{y:.17g}", f"{theta:.17g}", f"{v:.17g}"])
 
 
 def parse_path_csv(path: str | Path, option: str = "--path") -> tuple[np.ndarray, list[int]]:

@@ -37,6 +37,8 @@ __all__ = [
     "add_environment",
     "add_robot",
     "ENVIRONMENT_PART",
+    "PERSON_RGBA",
+    "person_geometry_names",
     "build_robot_diagram",
     "environment_discs",
     "environment_names",
@@ -46,7 +48,10 @@ __all__ = [
 ]
 
 _FRICTION = CoulombFriction(static_friction=0.5, dynamic_friction=0.5)
-_ENV_COLOURS = {"obstacle": (0.55, 0.45, 0.35, 1.0), "person": (0.85, 0.2, 0.2, 1.0), "wall": (0.6, 0.6, 0.6, 1.0)}
+#: RGBA of a person's body (the anchored one here, the moving one of
+#: :class:`drake_social.control.people_geometry.PeopleGeometry`).
+PERSON_RGBA = (0.85, 0.2, 0.2, 1.0)
+_ENV_COLOURS = {"obstacle": (0.55, 0.45, 0.35, 1.0), "person": PERSON_RGBA, "wall": (0.6, 0.6, 0.6, 1.0)}
 
 
 def wall_boxes(scenario: Scenario) -> dict[str, Box]:
@@ -69,8 +74,12 @@ def environment_names(scenario: Scenario) -> list[str]:
     """
     names = [f"obstacle[{i}]" for i in range(len(world_model(scenario).boxes))]
     people = people_model(scenario).state_at(0.0)
-    names += [f"person[{i}] {name!r}" if name else f"person[{i}]" for i, name in enumerate(people.names)]
-    return names + list(WALL_NAMES)
+    return names + person_geometry_names(people.names) + list(WALL_NAMES)
+
+
+def person_geometry_names(names: Sequence[str]) -> list[str]:
+    """The shape name of each person: ``person[i]`` plus the name in quotes when it has one."""
+    return [f"person[{i}] {name!r}" if name else f"person[{i}]" for i, name in enumerate(names)]
 
 
 #: Most environment shapes in one diagram built for reading shapes or for a
@@ -115,7 +124,8 @@ def environment_discs(scenario: Scenario) -> np.ndarray:
     ]).reshape(-1, 3)
 
 
-def add_environment(plant: MultibodyPlant, scenario: Scenario, only: Sequence[int] | None = None) -> list[str]:
+def add_environment(plant: MultibodyPlant, scenario: Scenario, only: Sequence[int] | None = None, *,
+                    people: bool = True) -> list[str]:
     """Anchors the obstacles, people and walls of ``scenario`` to the world.
 
     Must be called before ``plant.Finalize()``.
@@ -123,14 +133,21 @@ def add_environment(plant: MultibodyPlant, scenario: Scenario, only: Sequence[in
     Args:
         only: indices into :func:`environment_names` of the shapes to add
             (each keeps its name); None = all.
+        people: anchor the people where they are at t = 0 (the default: the
+            planning checkers' room); False leaves them out (the simulation
+            diagram of walking people moves them in SceneGraph itself,
+            :class:`drake_social.control.people_geometry.PeopleGeometry`).
 
     Returns:
         The registered shape names, in the order of :func:`environment_names`.
     """
+    with_people = bool(people)
     names = environment_names(scenario)
     world, people = world_model(scenario), people_model(scenario).state_at(0.0)
     n_obstacles, n_people = len(world.boxes), people.count
     wanted = set(range(len(names))) if only is None else {int(i) for i in only}
+    if not with_people:
+        wanted -= set(range(n_obstacles, n_obstacles + n_people))
     shapes = [(i, world.boxes, i, "obstacle") for i in range(n_obstacles)]
     shapes += [(n_obstacles + n_people + k, world.walls, k, "wall") for k in range(len(world.walls))]
     for i, boxes, k, kind in shapes:
@@ -143,7 +160,7 @@ def add_environment(plant: MultibodyPlant, scenario: Scenario, only: Sequence[in
         if n_obstacles + k in wanted:
             X_WG = RigidTransform([*people.positions[k], COLLISION_HEIGHT / 2])
             _register(plant, names[n_obstacles + k], X_WG, Cylinder(people.radii[k], COLLISION_HEIGHT), "person")
-    return [names[i] for i in sorted(wanted)] if only is not None else names
+    return [names[i] for i in sorted(wanted)] if only is not None or not with_people else names
 
 
 def add_robot(plant: MultibodyPlant, scenario: Scenario, parser: Parser | None = None) -> ModelInstanceIndex:

@@ -8,8 +8,8 @@ behind the same protocol.
 """
 
 from drake_social.people.log import PEOPLE_CSV_FIELDS, PeopleLog, person_ids
-from drake_social.people.compose import CrowdModel, ScenarioPeople, people_model, with_people
+from drake_social.people.compose import CrowdModel, ScenarioPeople, people_model, with_people, without_people
 from drake_social.people.model import PeopleModel, PeopleState, StaticPeople
 
 __all__ = ["PEOPLE_CSV_FIELDS", "CrowdModel", "PeopleLog", "PeopleModel", "PeopleState", "ScenarioPeople", "StaticPeople", "people_model",
-           "person_ids", "with_people"]
+           "person_ids", "with_people", "without_people"]

@@ -22,7 +22,7 @@ from drake_social.people.model import PeopleModel, PeopleState, StaticPeople
 from drake_social.people.recorded import recorded_model
 from drake_social.people.scripted import ScriptedPeople
 
-__all__ = ["CrowdModel", "ScenarioPeople", "concat_states", "people_model", "with_people"]
+__all__ = ["CrowdModel", "ScenarioPeople", "concat_states", "people_model", "with_people", "without_people"]
 
 _S = TypeVar("_S")
 
@@ -169,3 +169,14 @@ def with_people(scenario: _S, extra: Sequence) -> _S:
     out = copy.deepcopy(scenario)
     out.people = list(out.people) + list(extra)
     return out
+
+
+def without_people(scenario: _S) -> _S:
+    """A deep copy of ``scenario`` with nobody in it (no people list, no
+    people file, no crowd): the room alone, e.g. to check a run against the
+    obstacles and walls while the people move. It is not validated again."""
+    import copy
+
+    out = copy.copy(scenario)  # the people's fields are replaced below, the rest deep-copied
+    out.people, out.people_file, out.people_file_ids, out.crowd = [], None, None, None
+    return copy.deepcopy(out)

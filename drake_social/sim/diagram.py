@@ -21,7 +21,23 @@ Blocks (all named; ``[p]`` only with ``execution="paper"``, ``[s]`` only with
     [d] drive velocity ─▶ hold (ZOH) ─▶ desired_state ◀─ arm reference state (position, velocity, acceleration)
         desired_state, plant state ─▶ servo_* (commanded acceleration) ─▶ servo (inverse dynamics) ─▶ plant
 
-    people (PeopleSource: the people model at the context's time) ─▶ people_state
+    people (PeopleSource: the people model at the context's time; a crowd stepped with q) ─▶ people_state
+    people_state ─▶ people_geometry (PeopleGeometry: moving bodies) ─▶ scene_graph   [only when people move]
+
+People who stand still (a static people model) are anchored in the plant
+where they stand, as in the planning checkers. People who move (scripted,
+recorded or a crowd) are not in the plant: ``people_geometry`` registers
+their bodies as its own SceneGraph source and moves them from
+``people_state``, so ``query_object`` sees them where they are at the
+context's time; an absent person is parked below the floor
+(:data:`~drake_social.control.PARKED_DEPTH`). A crowd's ``people`` reads the
+robot's configuration (its ``robot_q`` input) at its updates. In dynamic
+mode the moving bodies are filtered out of collisions with every shape and
+with each other: the plant must own every shape of a contact it is given
+(Drake raises on a contact with a shape it did not register, drake issue
+22164), and people are not obstacles the robot pushes; the pair query
+``QueryObject.ComputeSignedDistancePairClosestPoints`` ignores filters and
+still measures a person's distance in that mode.
 
 The planner is left out when ``waypoints`` are given, or with
 ``planner=False`` (the path then comes in through the input port ``path``);
@@ -80,6 +96,7 @@ script can wire another planner, controller or people model around it
              wheel_speeds    4: the wheel speeds applied (held in kinematic mode), rad/s
              people_state    PeopleState at the context's time, Value[object]
              people_vector   6 P: per person [x, y, theta, vx, vy, radius]
+                             (an absent person keeps a pose: see people_state's present)
              query_object    SceneGraph's QueryObject (distances, collisions)
 
 A base controller outside the diagram reads ``robot_state`` and
@@ -92,7 +109,9 @@ Loggers (``VectorLogSink``, period ``execution.control_period``), in
 :attr:`TransportDiagram.loggers`: ``q`` (configuration), ``v`` (its
 velocity), ``wheel_speeds``, ``target`` (the sequencer's), ``reference``
 (what is being tracked: the reference position, or the target's xy with the
-arm trajectory), ``index`` (the target index), ``done`` (the sequencer's flag).
+arm trajectory), ``index`` (the target index), ``done`` (the sequencer's flag),
+and with a crowd ``crowd_state`` (the people source's discrete state, from
+which :meth:`~drake_social.control.PeopleSource.people_log` rebuilds the people).
 """
 
 from __future__ import annotations
@@ -100,7 +119,7 @@ from __future__ import annotations
 import dataclasses as dc
 
 import numpy as np
-from pydrake.geometry import Meshcat, SceneGraph
+from pydrake.geometry import CollisionFilterDeclaration, GeometryId, GeometrySet, Meshcat, Role, SceneGraph
 from pydrake.common.value import AbstractValue
 from pydrake.multibody.plant import AddMultibodyPlant, MultibodyPlant, MultibodyPlantConfig
 from pydrake.multibody.tree import ModelInstanceIndex
@@ -125,6 +144,7 @@ from drake_social.arguments import require_checker, require_choice, require_inst
 from drake_social.control import (
     HolonomicPController,
     MecanumDrive,
+    PeopleGeometry,
     PeopleSource,
     PlannerSystem,
     WaypointSequencer,
@@ -210,9 +230,9 @@ def servo_gains(*, bandwidth: float = SERVO_BANDWIDTH,
     return np.array([0.0, 0.0, w * w, w * w]), np.array([1.0 / tau, 1.0 / tau, 2.0 * w, 2.0 * w])
 
 
-def _populate(plant: MultibodyPlant, scenario: Scenario) -> ModelInstanceIndex:
+def _populate(plant: MultibodyPlant, scenario: Scenario, people: bool = True) -> ModelInstanceIndex:
     robot = add_robot(plant, scenario)
-    add_environment(plant, scenario)
+    add_environment(plant, scenario, people=people)
     plant.Finalize()
     # The model's joints each have an actuator (Drake's SDFormat parser adds one
     # per joint of unlimited effort): the actuation input is [u_x, u_y, u_1, u_2].
@@ -370,6 +390,16 @@ def check_diagram_arguments(
     return DiagramArguments(mode, execution, waypoints)
 
 
+def _filter_people(scene_graph: SceneGraph, people: list[GeometryId]) -> None:
+    """Excludes the moving people's bodies from collisions with every other
+    shape and with each other (dynamic mode: see the module docstring)."""
+    inspector = scene_graph.model_inspector()
+    theirs = GeometrySet(people)
+    others = GeometrySet([g for g in inspector.GetAllGeometryIds(Role.kProximity) if g not in set(people)])
+    declaration = CollisionFilterDeclaration().ExcludeWithin(theirs).ExcludeBetween(theirs, others)
+    scene_graph.collision_filter_manager().Apply(declaration)
+
+
 def scenario_plant_config(scenario: Scenario) -> MultibodyPlantConfig:
     """The dynamic mode's ``MultibodyPlantConfig`` of a scenario.
 
@@ -410,15 +440,16 @@ def build_checked(
     lower, upper = configuration_limits(scenario)
 
     builder = DiagramBuilder()
+    scenario_people = people_model(scenario)  # static people are anchored in the plant, moving ones move in SceneGraph
     if mode == "dynamic":
         plant, scene_graph = AddMultibodyPlant(config, builder)
-        robot = _populate(plant, scenario)
+        robot = _populate(plant, scenario, scenario_people.static)
         plant.SetDefaultPositions(robot, start)
     else:
         scene_graph = builder.AddNamedSystem("scene_graph", SceneGraph())
         plant = MultibodyPlant(time_step=0.0)
         plant.RegisterAsSourceForSceneGraph(scene_graph)
-        robot = _populate(plant, scenario)
+        robot = _populate(plant, scenario, scenario_people.static)
 
     # ---- which target ---------------------------------------------------------
     if waypoints is None:
@@ -563,7 +594,15 @@ def build_checked(
     builder.Connect(q_port, sequencer.GetInputPort("q"))
     if base_controller is not None:
         builder.Connect(q_split.get_output_port(0), base_controller.GetInputPort("base_position"))
-    people = builder.AddNamedSystem("people", PeopleSource(people_model(scenario)))
+    people = builder.AddNamedSystem("people", PeopleSource(scenario_people))
+    if people.crowd is not None:
+        builder.Connect(q_port, people.GetInputPort("robot_q"))
+    if not scenario_people.static:
+        bodies = builder.AddNamedSystem("people_geometry", PeopleGeometry(scene_graph, scenario_people.state_at(0.0)))
+        builder.Connect(people.GetOutputPort("people_state"), bodies.get_input_port())
+        builder.Connect(bodies.GetOutputPort("geometry_pose"), scene_graph.get_source_pose_port(bodies.source_id))
+        if mode == "dynamic":
+            _filter_people(scene_graph, bodies.geometry_ids)
 
     # ---- the station's ports --------------------------------------------------
     exported = {
@@ -593,6 +632,8 @@ def build_checked(
         "index": sequencer.GetOutputPort("index"),
         "done": sequencer.GetOutputPort("done"),
     }
+    if people.crowd is not None:  # the people are rebuilt from it after the run (PeopleSource.people_log)
+        ports["crowd_state"] = people.GetOutputPort("crowd_state")
     loggers = {}
     for name, port in ports.items():
         logger = LogVectorOutput(port, builder, publish_period=period)

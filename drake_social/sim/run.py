@@ -9,7 +9,12 @@ checker's resolution (geometry only), checked against the limits of a valid
 configuration (a separate finding: which joint, when, by how much), its
 social cost integrated with the same cost code as the planner's, the
 deviation of every body point from the planned path, the minimum clearance
-and the time to goal.
+and the time to goal. The people are logged at the same times as the
+executed configurations (:attr:`SimulationResult.people`). When they move,
+the collision check covers the obstacles and walls only (the people at t = 0
+are not where the robot met them): the distances to people are measured over
+time from the people log (:mod:`drake_social.experiments.metrics`), and
+:attr:`ExecutionReport.collision_checked` names what was checked.
 
 Example::
 
@@ -46,6 +51,7 @@ from drake_social.kinematics import ArmGeometry, configuration_limits
 from drake_social.model.plant import ACTUATED_JOINTS
 from drake_social.planning.result import PlannerResult
 from drake_social.collision.validity import ValidityChecker
+from drake_social.people import PeopleLog, people_model, without_people
 from drake_social.scenario import Scenario, ScenarioError, time_limit_problem
 from drake_social.sim.analysis import config_deviation, densify, point_deviation
 from drake_social.sim.diagram import (
@@ -56,13 +62,19 @@ from drake_social.sim.diagram import (
 )
 from drake_social.waypoints import waypoint_array
 
-__all__ = ["ExecutionReport", "LimitViolation", "SimulationResult", "analyze_execution", "limit_violations",
-           "scenario_simulator_config", "simulate"]
+__all__ = ["CHECKED_ROOM", "CHECKED_ROOM_AND_PEOPLE", "ExecutionReport", "LimitViolation", "SimulationResult",
+           "analyze_execution", "limit_violations", "scenario_simulator_config", "simulate"]
 
 #: Simulated seconds per AdvanceTo call between checks for the goal.
 _CHUNK = 0.25
 
 _log = logging.getLogger(__name__)
+
+#: What the collision check of an executed trajectory covers
+#: (:attr:`ExecutionReport.collision_checked`): everything when the people
+#: stand still, the room alone when they move.
+CHECKED_ROOM_AND_PEOPLE = ("obstacles", "walls", "people")
+CHECKED_ROOM = ("obstacles", "walls")
 
 
 @dc.dataclass(frozen=True)
@@ -116,8 +128,9 @@ class ExecutionReport:
         min_clearance: smallest signed distance (metres) of the robot to the
             environment along the executed trajectory (checked configurations;
             exact planar distances).
-        collision_free: no checked configuration collides: a verdict on the
-            geometry alone (signed distance > 0), whatever the joint limits.
+        collision_free: no checked configuration collides with what
+            ``collision_checked`` names: a verdict on the geometry alone
+            (signed distance > 0), whatever the joint limits.
         first_collision_time: time (s) of the first colliding configuration, or None.
         within_limits: no executed configuration is beyond a limit of a valid
             configuration (see :class:`LimitViolation`).
@@ -127,6 +140,10 @@ class ExecutionReport:
             executed samples, densified to the collision resolution).
         collision_resolution: largest body-point motion between checked
             configurations, metres.
+        collision_checked: what the collision check and ``min_clearance``
+            cover: :data:`CHECKED_ROOM_AND_PEOPLE` (the people stand still) or
+            :data:`CHECKED_ROOM` (the people move; their distances over time
+            are the metrics' from the people log).
     """
 
     planned_social_cost: float
@@ -140,6 +157,7 @@ class ExecutionReport:
     collision_resolution: float
     within_limits: bool
     limit_violations: list[LimitViolation]
+    collision_checked: list[str] = dc.field(default_factory=lambda: list(CHECKED_ROOM_AND_PEOPLE))
 
 
 @dc.dataclass
@@ -162,6 +180,9 @@ class SimulationResult:
         target_index: (T,) the sequencer's index.
         planner: the PlannerResult when the diagram planned, else None.
         report: the :class:`ExecutionReport`, or None when not analysed or no path.
+        people: the people at ``times`` (a :class:`~drake_social.people.PeopleLog`;
+            the crowd as it reacted to the robot), or None when the scenario
+            has no people or nothing ran.
     """
 
     mode: str
@@ -182,6 +203,7 @@ class SimulationResult:
     target_index: np.ndarray
     planner: PlannerResult | None = None
     report: ExecutionReport | None = None
+    people: PeopleLog | None = None
 
     def summary(self) -> str:
         """One line for the terminal."""
@@ -191,7 +213,8 @@ class SimulationResult:
             line += (f"; social cost planned {r.planned_social_cost:.4g}, executed {r.executed_social_cost:.4g}; "
                      f"max point deviation {r.max_point_deviation['max']:.3g} m; "
                      f"min clearance {r.min_clearance:.3g} m; "
-                     f"{'collision-free' if r.collision_free else 'COLLIDES'}; "
+                     f"{'collision-free' if r.collision_free else 'COLLIDES'}"
+                     f"{'' if 'people' in r.collision_checked else ' (obstacles and walls; the people move)'}; "
                      + ("within the joint limits and room bounds" if r.within_limits else
                         "BEYOND A LIMIT: " + "; ".join(str(v) for v in r.limit_violations)))
         if self.sim_time > 0 and math.isfinite(self.realtime_factor):  # nothing simulated: no factor to show
@@ -334,6 +357,8 @@ def analyze_execution(
     times: np.ndarray,
     q: np.ndarray,
     checker: ValidityChecker | None = None,
+    *,
+    people_move: bool | None = None,
 ) -> ExecutionReport:
     """Checks and measures an executed trajectory against its planned path.
 
@@ -349,7 +374,11 @@ def analyze_execution(
             None = Drake's (:func:`~drake_social.collision.drake_checker.valid_configurations`:
             SceneGraphCollisionChecker answers from the shapes near the
             trajectory), independent of the planar checker that planned. The minimum
-            clearance is the exact planar checker's.
+            clearance is the exact planar checker's. A given checker is used
+            as given, people or not.
+        people_move: whether the scenario's people move (None = ask its
+            people model). When they do, the check and the clearance cover
+            the obstacles and walls only (:data:`CHECKED_ROOM`).
 
     Raises:
         TypeError: an argument of the wrong kind (named).
@@ -364,7 +393,10 @@ def analyze_execution(
     times, q = _trajectory(times, q, "analyze_execution")
     # Clearances from the exact planar checker: Drake's cylinder-box distance
     # can exceed the true one (see drake_social.collision.drake_checker).
-    planar = make_checker(scenario, "planar")
+    if people_move is None:
+        people_move = not people_model(scenario).static
+    room = without_people(scenario) if people_move else scenario  # what the collisions are checked against
+    planar = make_checker(room, "planar")
     geometry = ArmGeometry.from_scenario(scenario)
     social = SocialCost.from_scenario(scenario)
     wp = waypoints
@@ -376,7 +408,7 @@ def analyze_execution(
     dense, owner = densify(geometry, q, resolution, return_owner=True)
     lower, upper = configuration_limits(scenario)
     if checker is None:  # Drake's, from SceneGraphs of the shapes near the trajectory (bounded memory)
-        valid = _collision_free(lambda qs: valid_configurations(scenario, qs), planar.clearance, lower, upper, dense)
+        valid = _collision_free(lambda qs: valid_configurations(room, qs), planar.clearance, lower, upper, dense)
     else:
         valid = _collision_free(checker.are_valid, checker.clearance, lower, upper, dense)
     violations = limit_violations(scenario, times, q)
@@ -394,6 +426,7 @@ def analyze_execution(
         collision_resolution=resolution,
         within_limits=not violations,
         limit_violations=violations,
+        collision_checked=list(CHECKED_ROOM if people_move else CHECKED_ROOM_AND_PEOPLE),
     )
 
 
@@ -582,9 +615,13 @@ def run_checked(
         q=data["q"], v=data["v"], wheel_speeds=data["wheel_speeds"], target=data["target"],
         reference=data["reference"], target_index=data["index"][:, 0].astype(int), planner=planner_result,
     )
+    source = built.subsystem("people")
+    if source.model.count and len(times):  # the open-loop people sampled; a crowd from its logged state
+        result.people = source.people_log(times, data.get("crowd_state"))
     _log.info("%s", result.summary())
     if analyze:
-        result.report = analyze_execution(scenario, path, times, result.q, analysis_checker)
+        result.report = analyze_execution(scenario, path, times, result.q, analysis_checker,
+                                          people_move=not source.model.static)
     return result
 
 

@@ -21,6 +21,9 @@ COST_PEOPLE = {
     ("cost/social.py", "self.people"),
     ("experiments/metrics.py", "cost.people"),
     ("planning/rrt_star/compiled.py", "sc.people"),
+    # A SimulationResult's people log (a PeopleLog over the run), not a scenario's list.
+    ("sim/run.py", "result.people"),
+    ("app.py", "run.people"),
 }
 
 
