@@ -7,6 +7,7 @@
 * :class:`RuckigTrajectorySource` gives jerk-limited references (the arm's,
   or the synchronized whole-configuration reference).
 * :class:`PeopleSource` outputs where the people are at the context's time.
+* :class:`SafetyMonitor` stops the robot while a person is too close.
 """
 
 from drake_social.control.holonomic import (
@@ -26,6 +27,7 @@ from drake_social.control.ruckig_source import (
     arm_source_from_options,
     reference_source_from_options,
 )
+from drake_social.control.safety_monitor import SafetyMonitor, Stop, braking_travel
 from drake_social.control.sequencer import WaypointSequencer
 
 __all__ = [
@@ -36,9 +38,12 @@ __all__ = [
     "PlannerSystem",
     "RuckigSegment",
     "RuckigTrajectorySource",
+    "SafetyMonitor",
+    "Stop",
     "WaypointSequencer",
     "arm_source_from_options",
     "base_velocity",
+    "braking_travel",
     "mecanum_matrix",
     "path_parameter",
     "people_vector",
