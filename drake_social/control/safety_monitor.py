@@ -11,10 +11,12 @@ distance), and clears it when every part is farther: a safety field, as on
 real mobile robots. ``safety_distance = 0`` stops on contact (or overlap) only.
 
 The flag is state, so ``stop`` has no direct feedthrough from ``q``: the
-loop monitor -> controller -> robot -> monitor has no algebraic loop. A
-consumer's update at the same instant reads the flag of the previous update,
-so a stop takes hold one ``period`` after the sample that saw the person
-(see :func:`braking_travel` for what the robot may travel meanwhile).
+loop monitor -> controller -> robot -> monitor has no algebraic loop. The
+decision is an unrestricted update, which Drake's Simulator applies before
+the discrete updates of the same instant: the sampled base command (a
+zero-order hold) and the sequencer read the new flag at once, while another
+unrestricted update (a Ruckig reference) reads it one ``period`` later (see
+:func:`braking_travel` for what the robot may travel meanwhile).
 
 State (one abstract value, an immutable :class:`SafetyRecord`): the flag and
 every stop so far (:class:`Stop`: start, end, nearest person, part,
@@ -121,16 +123,21 @@ def robot_reach(geometry: ArmGeometry) -> float:
 
 
 def braking_travel(geometry: ArmGeometry, *, max_base_speed: float, arm_max_velocity, period: float) -> float:
-    """How far a point of the robot may move while a stop takes hold, metres.
+    """How far a point of the robot may move towards a person after the last clear sample, metres.
 
-    The monitor samples every ``period``; the stop it sets at sample t_k
-    reaches the base controller's sampled command and the references at
-    t_{k+1}. Between the last clear sample t_{k-1} and t_{k+1} a body point
-    moves at most ``2 period (v_base + w1 (l1 + l2 + e) + w2 (l2 + e))`` with
-    ``e`` the object's reach beyond the gripper (its farthest point plus the
-    capsule radius) and ``w1``, ``w2`` the joint speed limits: the robot never
-    brings a part closer than ``safety_distance`` minus this to a person who
-    stands still. In ``dynamic`` mode the servo's lag adds to it.
+    The monitor decides every ``period``: at the last clear sample t_{k-1}
+    every part is farther than the safety distance; the robot moves freely
+    until the next sample t_k, where the monitor sees it within. In the
+    diagram the base's sampled command reads the flag of t_k at t_k (zero
+    from then on), while the Ruckig references hold at t_{k+1}: the arm moves
+    one more period. A body point therefore moves at most ``period (v_base +
+    2 v_arm)`` with ``v_arm = w1 (l1 + l2 + e) + w2 (l2 + e)`` (``e`` the
+    object's reach beyond the gripper, its farthest point plus the capsule
+    radius, and ``w1``, ``w2`` the joint speed limits), so in ``kinematic``
+    mode the robot never brings a part closer than ``safety_distance`` minus
+    this (and minus what the person walks in a period) to a person; a person
+    who walks on into the held robot comes closer by their own motion. In
+    ``dynamic`` mode the servo's lag adds to it.
 
     Args:
         geometry: the robot and its object.
@@ -142,7 +149,7 @@ def braking_travel(geometry: ArmGeometry, *, max_base_speed: float, arm_max_velo
     e = max(geometry.link_radius,
             float(np.max(np.linalg.norm(geometry.object_points, axis=1))) + geometry.object_radius)
     w1, w2 = (float(w) for w in arm_max_velocity)
-    return 2.0 * period * (max_base_speed + w1 * (l1 + l2 + e) + w2 * (l2 + e))
+    return period * (max_base_speed + 2.0 * (w1 * (l1 + l2 + e) + w2 * (l2 + e)))
 
 
 class SafetyMonitor(LeafSystem):

@@ -163,9 +163,10 @@ class SimulationResult:
         target_index: (T,) the sequencer's index.
         planner: the PlannerResult when the diagram planned, else None.
         report: the :class:`ExecutionReport`, or None when not analysed or no path.
-        stopped: (T,) the safety monitor's stop flag at the sample times (all
-            False without people). A sample at t_k shows the decision of the
-            monitor's update at t_{k-1} (logs are published before the updates).
+        stopped: (T,) True at the sample times t_k the safety monitor holds
+            the robot from (its decision at t_k: ``start <= t_k < end`` of a
+            stop), all False without people. (The ``stop`` logger, published
+            before the updates, shows the decision of t_{k-1} at t_k.)
         stops: one dict per stop by the safety monitor, in order: ``start``
             and ``end`` (the times of the updates that stopped and released
             the robot, seconds; ``end`` None when still stopped at the end),
@@ -606,9 +607,9 @@ def run_checked(
         realtime_factor=sim_time / wall if wall > 0 else math.inf, waypoints=path, times=times,
         q=data["q"], v=data["v"], wheel_speeds=data["wheel_speeds"], target=data["target"],
         reference=data["reference"], target_index=data["index"][:, 0].astype(int), planner=planner_result,
-        stopped=data["stop"][:, 0] > 0.5 if "stop" in data else np.zeros(len(times), bool),
         stops=_stops(built, root, float(times[-1]) if len(times) else 0.0),
     )
+    result.stopped = _stopped(times, result.stops)
     _log.info("%s", result.summary())
     for stop in result.stops:
         _log.info("safety stop at t = %.3f s (%s of the robot %.3f m from %s) %s", stop["start"], stop["part"],
@@ -633,6 +634,14 @@ def _stops(built: TransportDiagram, root, end_time: float) -> list[dict]:
             stop = dc.replace(stop, end=None)
         out.append(stop.to_dict(end_time))
     return out
+
+
+def _stopped(times: np.ndarray, stops: list[dict]) -> np.ndarray:
+    """(T,) True where a stop holds the robot: start <= t < end (end None: to the end)."""
+    held = np.zeros(len(times), bool)
+    for stop in stops:
+        held |= (times >= stop["start"]) & (True if stop["end"] is None else times < stop["end"])
+    return held
 
 
 def _empty_result(built: TransportDiagram, path: np.ndarray, planner: PlannerResult, message: str) -> SimulationResult:
