@@ -185,3 +185,14 @@ def test_people_state_port_accepts_the_people_source_value(geometry):
     monitor = _monitor(geometry)
     context = monitor.CreateDefaultContext()
     assert _update(monitor, context, Q, state) == 0.0
+
+
+def test_scenario_validation_names_a_negative_safety_distance():
+    from drake_social.scenario import ScenarioError, validate_scenario
+
+    scenario = load_scenario("scenarios/tiny.yaml")
+    scenario.execution.safety_distance = -0.1
+    with pytest.raises(ScenarioError, match=r"execution\.safety_distance: must be >= 0"):
+        validate_scenario(scenario, source="tiny")
+    scenario.execution.safety_distance = 0.0  # stop on contact only: allowed
+    validate_scenario(scenario, source="tiny")
