@@ -84,7 +84,8 @@ def test_walker_crossing_stops_the_robot_which_goes_on_after(setting, execution,
     assert SAFETY - period * walker.speed - period * scenario.execution.max_base_speed < stop["distance"] <= SAFETY
     np.testing.assert_array_equal(run.stopped, (run.times >= stop["start"]) & (run.times < stop["end"]))
     # Held: the base does not move from the stop's start to its end (its sampled command is zero at once).
-    np.testing.assert_array_equal(run.q[k_start:k_end + 1], np.broadcast_to(run.q[k_start], (k_end + 1 - k_start, 4)))
+    held = run.q[k_start:k_end + 1]
+    np.testing.assert_array_equal(held, np.broadcast_to(run.q[k_start], held.shape))
     # Only the robot's own motion counts against the field: wherever the robot moved into a sample, it
     # was clear at the sample before, so it is within at most one period's travel of both.
     moved = np.r_[False, np.any(run.q[1:] != run.q[:-1], axis=1)]
