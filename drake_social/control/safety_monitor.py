@@ -39,7 +39,7 @@ Example::
     monitor = SafetyMonitor(ArmGeometry.from_scenario(scenario), safety_distance=0.05, period=0.01)
     context = monitor.CreateDefaultContext()
     monitor.GetInputPort("q").FixValue(context, [1.0, 2.5, 0.0, 1.5708])
-    people = StaticPeople([[1.0, 1.9, 0.0]], [0.2]).state_at(0.0)  # base surface 0.05 m away
+    people = StaticPeople([[1.0, 1.92, 0.0]], [0.2]).state_at(0.0)  # 0.03 m from the base disc
     monitor.GetInputPort("people_state").FixValue(context, people)
     scratch = context.Clone()
     monitor.CalcForcedUnrestrictedUpdate(context, scratch.get_mutable_state())

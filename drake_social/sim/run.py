@@ -213,6 +213,8 @@ class SimulationResult:
                      f"{'collision-free' if r.collision_free else 'COLLIDES'}; "
                      + ("within the joint limits and room bounds" if r.within_limits else
                         "BEYOND A LIMIT: " + "; ".join(str(v) for v in r.limit_violations)))
+        if self.stops:
+            line += f"; {len(self.stops)} safety stop{'s' if len(self.stops) > 1 else ''} ({self.stopped_time:.2f} s)"
         if self.sim_time > 0 and math.isfinite(self.realtime_factor):  # nothing simulated: no factor to show
             line += f"; {self.realtime_factor:.0f}x realtime"
         return line
