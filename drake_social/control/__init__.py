@@ -9,6 +9,7 @@
 * :class:`PeopleSource` outputs where the people are at the context's time
   (and steps a crowd fed back the robot); :class:`PeopleGeometry` moves their
   bodies in SceneGraph.
+* :class:`SafetyMonitor` stops the robot while a person is too close.
 """
 
 from drake_social.control.holonomic import (
@@ -29,6 +30,7 @@ from drake_social.control.ruckig_source import (
     arm_source_from_options,
     reference_source_from_options,
 )
+from drake_social.control.safety_monitor import SafetyMonitor, Stop, braking_travel
 from drake_social.control.sequencer import WaypointSequencer
 
 __all__ = [
@@ -41,9 +43,12 @@ __all__ = [
     "PlannerSystem",
     "RuckigSegment",
     "RuckigTrajectorySource",
+    "SafetyMonitor",
+    "Stop",
     "WaypointSequencer",
     "arm_source_from_options",
     "base_velocity",
+    "braking_travel",
     "mecanum_matrix",
     "path_parameter",
     "people_vector",

@@ -139,9 +139,12 @@ class HolonomicPController(LeafSystem):
     3. ``w = (1/r) M^T v``; if ``max |w_i| > max_wheel_speed``, ``w`` is
        scaled uniformly by ``max_wheel_speed / max |w_i|`` (direction kept).
 
+    While the optional input ``hold`` (1; unconnected = never held) is above
+    0.5, the output is zero wheel speeds (the safety monitor's stop).
+
     Stateless, with direct feedthrough. Input ports ``base_target`` (2, m),
     ``base_position`` (2, m), ``base_velocity_ff`` (2, m/s; only with
-    ``feedforward=True``). Output ports ``wheel_speeds`` (4, rad/s) and
+    ``feedforward=True``), ``hold`` (1). Output ports ``wheel_speeds`` (4, rad/s) and
     ``base_velocity`` (2, m/s) = ``(r/4) M w``, the velocity the limited
     wheel speeds produce.
 
@@ -167,10 +170,12 @@ class HolonomicPController(LeafSystem):
         self._target_port = self.DeclareVectorInputPort("base_target", 2)
         self._position_port = self.DeclareVectorInputPort("base_position", 2)
         self._ff_port = self.DeclareVectorInputPort("base_velocity_ff", 2) if feedforward else None
+        self._hold_port = self.DeclareVectorInputPort("hold", 1)
         # Outputs depend on the inputs only (not on time): Drake's cache then
         # keeps them across integrator stages while the inputs hold.
         inputs = {self.input_port_ticket(port.get_index())
-                  for port in (self._target_port, self._position_port, self._ff_port) if port is not None}
+                  for port in (self._target_port, self._position_port, self._ff_port, self._hold_port)
+                  if port is not None}
         self.DeclareVectorOutputPort("wheel_speeds", 4, self._CalcWheelSpeeds, prerequisites_of_calc=inputs)
         self.DeclareVectorOutputPort("base_velocity", 2, self._CalcBaseVelocity, prerequisites_of_calc=inputs)
 
@@ -190,6 +195,8 @@ class HolonomicPController(LeafSystem):
         # The same law as saturate_norm / wheel_speeds, in plain floats: this runs
         # once per control period of every simulation (numpy's per-call cost
         # on 2-vectors was most of it); tests compare the two.
+        if self._hold_port.HasValue(context) and self._hold_port.Eval(context)[0] > 0.5:
+            return [0.0, 0.0, 0.0, 0.0]
         target = self._target_port.Eval(context)
         position = self._position_port.Eval(context)
         vx = self._kp * (float(target[0]) - float(position[0]))

@@ -16,11 +16,21 @@ of one instant come from one cache entry of the context, so the system keeps
 nothing of a run on ``self`` (a cloned context, or a second context of the
 same system, runs on its own).
 
-Ports: input ``target`` (n; while it has no value, the reference stays
-where it is); outputs ``position``, ``velocity``,
+Ports: inputs ``target`` (n; while it has no value, the reference stays
+where it is) and ``hold`` (1, optional: unconnected = never held); outputs ``position``, ``velocity``,
 ``acceleration`` (n each), ``state`` (3n: the three in one evaluation, for
 a consumer that reads them at every step of a fast plant) and ``finished``
-(1: 1.0 once ``t - t0 >= duration``).
+(1: 1.0 once ``t - t0 >= duration``, never while held).
+
+The hold (a safety stop): an update that reads ``hold`` > 0.5 replaces the
+segment by a *held* rest segment at the reference's current position (the
+reference stops there: position continuous, velocity and acceleration to 0)
+and keeps it while ``hold`` stays on, whatever the target. The first update
+after the hold is released plans a new segment from rest at that position to
+the current target, as from any rest: with ``synchronization="phase"`` on the
+straight segment to the target, so the synchronized reference goes on along
+the straight segment it was on. With ``hold`` unconnected or 0 nothing of
+this runs and the reference is exactly the one without the port.
 
 Ruckig is only ever given a current and a target state, never intermediate
 positions: the community version would otherwise call a remote web service.
@@ -102,14 +112,16 @@ class RuckigSegment:
         rest: (n,) position held when ``trajectory`` is None.
         target: (n,) target this segment heads for, or None when no target
             has been seen yet (any target then starts a segment).
+        held: a rest segment of the hold (see the module docstring): the
+            next update without the hold starts a segment to the target.
         clip: (lower, upper) position limits (lists of floats) the segment's
             extrema respect up to rounding; positions are clipped to them, or None.
     """
 
-    __slots__ = ("t0", "trajectory", "rest", "target", "target_list", "clip")
+    __slots__ = ("t0", "trajectory", "rest", "target", "target_list", "clip", "held")
 
     def __init__(self, t0: float, trajectory, rest: np.ndarray, target: np.ndarray | None,
-                 clip: tuple[np.ndarray, np.ndarray] | None = None):
+                 clip: tuple[np.ndarray, np.ndarray] | None = None, held: bool = False):
         object.__setattr__(self, "t0", float(t0))
         object.__setattr__(self, "trajectory", trajectory)
         rest = np.array(rest, float)
@@ -121,6 +133,7 @@ class RuckigSegment:
         object.__setattr__(self, "target", target)
         object.__setattr__(self, "target_list", None if target is None else target.tolist())
         object.__setattr__(self, "clip", clip)
+        object.__setattr__(self, "held", bool(held))
 
     def __setattr__(self, name, value):
         raise AttributeError("RuckigSegment is immutable")
@@ -324,6 +337,7 @@ class RuckigTrajectorySource(LeafSystem):
             self._limit_lists = (lower.tolist(), upper.tolist())
 
         self._target_port = self.DeclareVectorInputPort("target", n)
+        self._hold_port = self.DeclareVectorInputPort("hold", 1)
         self._segment_index = self.DeclareAbstractState(AbstractValue.Make(self._RestSegment(0.0, initial)))
         self.DeclarePeriodicUnrestrictedUpdateEvent(period, 0.0, self._Retarget)
         # The same update on demand (CalcForcedUnrestrictedUpdate), for tests and scripts.
@@ -383,11 +397,13 @@ class RuckigTrajectorySource(LeafSystem):
         return vmax, amax, jmax
 
     def _Retarget(self, context: Context, state: State) -> None:
+        if self._hold_port.HasValue(context) and self._hold_port.Eval(context)[0] > 0.5:
+            return self._Hold(context, state)
         if not self._target_port.HasValue(context):
             return EventStatus.DidNothing()  # no target yet (unconnected, unfixed): stay as is
         segment = self._Segment(context)
         target = self._target_port.Eval(context)
-        if segment.target is not None and target.tolist() == segment.target_list:
+        if segment.target is not None and target.tolist() == segment.target_list and not segment.held:
             return EventStatus.DidNothing()  # the common case, every period: keep it cheap
         target = np.asarray(target, float)
         if not np.all(np.isfinite(target)):
@@ -414,6 +430,17 @@ class RuckigTrajectorySource(LeafSystem):
             return None
         state.get_mutable_abstract_state(self._segment_index).set_value(
             RuckigSegment(t, trajectory, p, target, clip=None if limits is None else self._limit_lists))
+
+    def _Hold(self, context: Context, state: State) -> None:
+        """Stops the reference where it is (once; then keeps it while held)."""
+        segment = self._Segment(context)
+        if segment.held:
+            return EventStatus.DidNothing()
+        t = context.get_time()
+        p = segment.at(t)[0]
+        state.get_mutable_abstract_state(self._segment_index).set_value(
+            RuckigSegment(t, None, p, segment.target, held=True))
+        return None
 
     def _Line(self, t: float, p: np.ndarray, target: np.ndarray) -> "_LineTrajectory | None":
         """The time-optimal rest-to-rest motion on the straight segment p -> target (None if p == target).
@@ -525,7 +552,8 @@ class RuckigTrajectorySource(LeafSystem):
 
     def _CalcFinished(self, context: Context, output: BasicVector) -> None:
         segment = self._Segment(context)
-        output.SetAtIndex(0, 1.0 if context.get_time() - segment.t0 >= segment.duration else 0.0)
+        finished = not segment.held and context.get_time() - segment.t0 >= segment.duration
+        output.SetAtIndex(0, 1.0 if finished else 0.0)
 
 
 def arm_source_from_options(

@@ -8,7 +8,8 @@ acceptance tolerances of the current target: the base position within
 ``joint_tolerance`` (radians), as in the paper's Section IV-C. Optionally it
 also waits for a trajectory source to report that its reference has arrived
 (``reference_done``). At the last waypoint the same condition latches
-``done = 1`` instead.
+``done = 1`` instead. While the optional input ``hold`` (the safety
+monitor's stop; unconnected = never held) is above 0.5 it does not advance.
 
 The decision is taken in a periodic discrete update (also declared as a
 forced update, so ``CalcForcedDiscreteVariableUpdate`` runs it); the outputs only read
@@ -21,7 +22,7 @@ Ports:
 * inputs ``waypoints`` (abstract ``Value[object]``, an (N, 4) array, e.g.
   :class:`~drake_social.control.PlannerSystem`'s ``waypoints``; only when no
   fixed array is given), ``q`` (4), ``reference_done`` (1; only with
-  ``wait_for_reference=True``);
+  ``wait_for_reference=True``), ``hold`` (1, optional);
 * outputs ``target`` (4), ``done`` (1, 0.0 or 1.0), ``index`` (1).
 
 Example::
@@ -117,6 +118,7 @@ class WaypointSequencer(LeafSystem):
         self._reference_done_port = (
             self.DeclareVectorInputPort("reference_done", 1) if wait_for_reference else None
         )
+        self._hold_port = self.DeclareVectorInputPort("hold", 1)
 
         self._state_index = self.DeclareDiscreteState(2)  # [index, done], both start at 0
         self.DeclarePeriodicDiscreteUpdateEvent(period, 0.0, self._Advance)
@@ -169,6 +171,8 @@ class WaypointSequencer(LeafSystem):
         xd = context.get_discrete_state(self._state_index).value()
         if xd[_DONE] > 0.5:
             return EventStatus.DidNothing()  # latched
+        if self._hold_port.HasValue(context) and self._hold_port.Eval(context)[0] > 0.5:
+            return EventStatus.DidNothing()  # held by the safety monitor
         waypoints = self._Waypoints(context)
         index = self._Index(context, len(waypoints))
         target = waypoints[index]

@@ -389,7 +389,7 @@ class ExecutionOptions:
     # The safety monitor holds the robot (base stopped, base and arm reference
     # held) while any part of it (base, arm, object) is within this distance
     # of a person's body, surface to surface, and lets it go when clear,
-    # metres (>= 0).
+    # metres (>= 0; 0 stops on contact only). Only in a scenario with people.
     safety_distance: float = 0.05
 
 

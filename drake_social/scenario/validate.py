@@ -359,6 +359,7 @@ def validate_scenario(scenario: Scenario, source: str = "<scenario>") -> None:
                  "max_wheel_speed", "base_tolerance", "joint_tolerance", "control_period",
                  "plant_time_step", "time_limit", "replay_fps"):
         c.positive(f"execution.{name}", getattr(e, name))
+    c.nonnegative("execution.safety_distance", e.safety_distance)  # 0 = stop on contact only
     for name in ("arm_max_velocity", "arm_max_acceleration", "arm_max_jerk"):
         c.length(f"execution.{name}", getattr(e, name), 2)
         c.positive(f"execution.{name}", getattr(e, name))

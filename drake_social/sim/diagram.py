@@ -39,6 +39,17 @@ with each other: the plant must own every shape of a contact it is given
 ``QueryObject.ComputeSignedDistancePairClosestPoints`` ignores filters and
 still measures a person's distance in that mode.
 
+    [h] safety (SafetyMonitor) ◀─ q, people_state; stop ─hold─▶ sequencer, controller, reference / arm
+
+``[h]``: only when there are people (``execution.safety_distance`` >= 0; 0
+stops on contact only). While its ``stop`` is 1 the sequencer does not
+advance, the base controller commands zero wheel speeds and the reference
+(or the arm's trajectory) is held where it is; when clear a new jerk-limited
+segment from rest heads for the same target (see
+:class:`~drake_social.control.SafetyMonitor` and the ``hold`` input of
+:class:`~drake_social.control.RuckigTrajectorySource`). A controller outside
+the diagram (``controller=False``) reads the exported ``stop`` itself.
+
 The planner is left out when ``waypoints`` are given, or with
 ``planner=False`` (the path then comes in through the input port ``path``);
 the base controller with ``controller=False`` (the wheel speeds then come in
@@ -97,6 +108,7 @@ script can wire another planner, controller or people model around it
              people_state    PeopleState at the context's time, Value[object]
              people_vector   6 P: per person [x, y, theta, vx, vy, radius]
                              (an absent person keeps a pose: see people_state's present)
+             stop            1: 1.0 while the safety monitor holds the robot (only with people)
              query_object    SceneGraph's QueryObject (distances, collisions)
 
 A base controller outside the diagram reads ``robot_state`` and
@@ -110,8 +122,9 @@ Loggers (``VectorLogSink``, period ``execution.control_period``), in
 velocity), ``wheel_speeds``, ``target`` (the sequencer's), ``reference``
 (what is being tracked: the reference position, or the target's xy with the
 arm trajectory), ``index`` (the target index), ``done`` (the sequencer's flag),
-and with a crowd ``crowd_state`` (the people source's discrete state, from
-which :meth:`~drake_social.control.PeopleSource.people_log` rebuilds the people).
+with a crowd ``crowd_state`` (the people source's discrete state, from
+which :meth:`~drake_social.control.PeopleSource.people_log` rebuilds the people),
+and ``stop`` (the safety monitor's flag; only with people).
 """
 
 from __future__ import annotations
@@ -147,13 +160,14 @@ from drake_social.control import (
     PeopleGeometry,
     PeopleSource,
     PlannerSystem,
+    SafetyMonitor,
     WaypointSequencer,
     arm_source_from_options,
     reference_source_from_options,
 )
-from drake_social.kinematics import configuration_limits
+from drake_social.kinematics import ArmGeometry, configuration_limits
 from drake_social.model.plant import add_environment, add_robot
-from drake_social.people import people_model
+from drake_social.people import PeopleModel, people_model
 from drake_social.collision.validity import ValidityChecker
 from drake_social.scenario import (EXECUTIONS, SIM_MODES, SERVO_BANDWIDTH, SERVO_BASE_TIME_CONSTANT, Scenario,
                                     ScenarioError, plant_time_step_problem, validate_scenario)
@@ -253,6 +267,7 @@ def build_diagram(
     planner: bool = True,
     controller: bool = True,
     plant_config: MultibodyPlantConfig | None = None,
+    people: PeopleModel | None = None,
 ) -> TransportDiagram:
     """Builds the diagram that plans (or takes) a path and executes it.
 
@@ -283,6 +298,8 @@ def build_diagram(
         plant_config: the dynamic mode's ``MultibodyPlantConfig``; None =
             :func:`scenario_plant_config` (unused in kinematic mode, whose
             plant only places the shapes).
+        people: the people model of the ``people`` source; None =
+            :func:`~drake_social.people.people_model` of the scenario.
 
     Returns:
         The :class:`TransportDiagram`.
@@ -301,8 +318,11 @@ def build_diagram(
     require_instance(controller, (bool, np.bool_), "build_diagram", "controller", "True or False")
     require_instance(plant_config, MultibodyPlantConfig, "build_diagram", "plant_config",
                      "a pydrake.multibody.plant.MultibodyPlantConfig", optional=True)
+    require_instance(people, PeopleModel, "build_diagram", "people",
+                     "a drake_social.people.PeopleModel", optional=True)
     return build_checked(scenario, checked.mode, checked.execution, checked.waypoints, checker, meshcat,
-                         planner=bool(planner), controller=bool(controller), plant_config=plant_config)
+                         planner=bool(planner), controller=bool(controller), plant_config=plant_config,
+                         people=people)
 
 
 @dc.dataclass(frozen=True)
@@ -423,7 +443,7 @@ def scenario_plant_config(scenario: Scenario) -> MultibodyPlantConfig:
 def build_checked(
     scenario: Scenario, mode: str, execution: str, waypoints: np.ndarray | None, checker: ValidityChecker | None,
     meshcat: Meshcat | None, *, planner: bool = True, controller: bool = True,
-    plant_config: MultibodyPlantConfig | None = None,
+    plant_config: MultibodyPlantConfig | None = None, people: PeopleModel | None = None,
 ) -> TransportDiagram:
     """:func:`build_diagram` with its arguments already checked
     (:func:`check_diagram_arguments`; ``mode`` and ``execution`` the ones in
@@ -440,7 +460,7 @@ def build_checked(
     lower, upper = configuration_limits(scenario)
 
     builder = DiagramBuilder()
-    scenario_people = people_model(scenario)  # static people are anchored in the plant, moving ones move in SceneGraph
+    scenario_people = people_model(scenario) if people is None else people  # static people are anchored in the plant, moving ones move in SceneGraph
     if mode == "dynamic":
         plant, scene_graph = AddMultibodyPlant(config, builder)
         robot = _populate(plant, scenario, scenario_people.static)
@@ -604,6 +624,18 @@ def build_checked(
         if mode == "dynamic":
             _filter_people(scene_graph, bodies.geometry_ids)
 
+    # ---- safety: hold the robot while a person is within the safety distance ----
+    stop_port: OutputPort | None = None
+    if people.model.count > 0:
+        monitor = builder.AddNamedSystem("safety", SafetyMonitor(
+            ArmGeometry.from_scenario(scenario), safety_distance=float(opts.safety_distance), period=period))
+        builder.Connect(q_port, monitor.GetInputPort("q"))
+        builder.Connect(people.GetOutputPort("people_state"), monitor.GetInputPort("people_state"))
+        stop_port = monitor.GetOutputPort("stop")
+        for held in (sequencer, base_controller, reference if synchronized else arm):
+            if held is not None:
+                builder.Connect(stop_port, held.GetInputPort("hold"))
+
     # ---- the station's ports --------------------------------------------------
     exported = {
         "robot_state": state_port,
@@ -619,6 +651,8 @@ def build_checked(
     }
     if feedforward is not None:
         exported["reference_feedforward"] = feedforward
+    if stop_port is not None:
+        exported["stop"] = stop_port
     for name, port in exported.items():
         builder.ExportOutput(port, name)
 
@@ -634,6 +668,8 @@ def build_checked(
     }
     if people.crowd is not None:  # the people are rebuilt from it after the run (PeopleSource.people_log)
         ports["crowd_state"] = people.GetOutputPort("crowd_state")
+    if stop_port is not None:
+        ports["stop"] = stop_port
     loggers = {}
     for name, port in ports.items():
         logger = LogVectorOutput(port, builder, publish_period=period)

@@ -51,7 +51,7 @@ from drake_social.kinematics import ArmGeometry, configuration_limits
 from drake_social.model.plant import ACTUATED_JOINTS
 from drake_social.planning.result import PlannerResult
 from drake_social.collision.validity import ValidityChecker
-from drake_social.people import PeopleLog, people_model, without_people
+from drake_social.people import PeopleLog, PeopleModel, people_model, without_people
 from drake_social.scenario import Scenario, ScenarioError, time_limit_problem
 from drake_social.sim.analysis import config_deviation, densify, point_deviation
 from drake_social.sim.diagram import (
@@ -183,6 +183,17 @@ class SimulationResult:
         people: the people at ``times`` (a :class:`~drake_social.people.PeopleLog`;
             the crowd as it reacted to the robot), or None when the scenario
             has no people or nothing ran.
+        stopped: (T,) True at the sample times t_k the safety monitor holds
+            the robot from (its decision at t_k: ``start <= t_k < end`` of a
+            stop), all False without people. (The ``stop`` logger, published
+            before the updates, shows the decision of t_{k-1} at t_k.)
+        stops: one dict per stop by the safety monitor, in order: ``start``
+            and ``end`` (the times of the updates that stopped and released
+            the robot, seconds; ``end`` None when still stopped at the end),
+            ``duration`` (seconds, until the end of the run when still
+            stopped), ``person`` (nearest person's name, or index), ``part``
+            (``base``, ``arm`` or ``object``) and ``distance`` (that part's
+            surface distance at the start, metres).
     """
 
     mode: str
@@ -204,6 +215,13 @@ class SimulationResult:
     planner: PlannerResult | None = None
     report: ExecutionReport | None = None
     people: PeopleLog | None = None
+    stopped: np.ndarray = dc.field(default_factory=lambda: np.zeros(0, bool))
+    stops: list[dict] = dc.field(default_factory=list)
+
+    @property
+    def stopped_time(self) -> float:
+        """Seconds the safety monitor held the robot (the stops' durations summed)."""
+        return float(sum(stop["duration"] or 0.0 for stop in self.stops))
 
     def summary(self) -> str:
         """One line for the terminal."""
@@ -217,6 +235,8 @@ class SimulationResult:
                      f"{'' if 'people' in r.collision_checked else ' (obstacles and walls; the people move)'}; "
                      + ("within the joint limits and room bounds" if r.within_limits else
                         "BEYOND A LIMIT: " + "; ".join(str(v) for v in r.limit_violations)))
+        if self.stops:
+            line += f"; {len(self.stops)} safety stop{'s' if len(self.stops) > 1 else ''} ({self.stopped_time:.2f} s)"
         if self.sim_time > 0 and math.isfinite(self.realtime_factor):  # nothing simulated: no factor to show
             line += f"; {self.realtime_factor:.0f}x realtime"
         return line
@@ -238,6 +258,8 @@ class SimulationResult:
             "realtime_factor": num(self.realtime_factor),
             "num_waypoints": int(len(self.waypoints)),
             "num_samples": int(len(self.times)),
+            "stops": [dict(stop) for stop in self.stops],
+            "stopped_time": self.stopped_time,
         }
         if self.report is not None:
             r = dc.asdict(self.report)
@@ -454,6 +476,7 @@ def simulate(
     analysis_checker: ValidityChecker | None = None,
     progress: Callable[[float], None] | None = None,
     simulator_config: SimulatorConfig | None = None,
+    people: PeopleModel | None = None,
 ) -> SimulationResult:
     """Plans (unless ``waypoints`` are given), executes and measures a transport.
 
@@ -475,6 +498,8 @@ def simulate(
         simulator_config: Drake's ``SimulatorConfig`` of the run (integration
             scheme, accuracy, maximum step, target realtime rate); None =
             :func:`scenario_simulator_config`.
+        people: the people model of the diagram (see
+            :func:`~drake_social.sim.diagram.build_diagram`); None = the scenario's.
 
     Returns:
         The :class:`SimulationResult`; ``reached`` is False when no path was
@@ -498,6 +523,7 @@ def simulate(
     require_callable(progress, "simulate", "progress")
     require_instance(simulator_config, SimulatorConfig, "simulate", "simulator_config",
                      "a pydrake.systems.analysis.SimulatorConfig", optional=True)
+    require_instance(people, PeopleModel, "simulate", "people", "a drake_social.people.PeopleModel", optional=True)
     mode, execution = check_diagram_options(scenario, mode=mode, execution=execution, checker=checker,
                                             meshcat=meshcat, who="simulate")
     if time_limit is not None:  # the scenario's own was checked with it (validate_scenario)
@@ -508,7 +534,7 @@ def simulate(
     if waypoints is not None:
         waypoints = check_diagram_waypoints(scenario, waypoints, checker, "simulate")
     return run_checked(scenario, mode, execution, waypoints, checker, meshcat, limit, bool(analyze),
-                       analysis_checker, progress, simulator_config=simulator_config)
+                       analysis_checker, progress, simulator_config=simulator_config, people=people)
 
 
 def run_checked(
@@ -524,6 +550,7 @@ def run_checked(
     progress: Callable[[float], None] | None,
     *,
     simulator_config: SimulatorConfig | None = None,
+    people: PeopleModel | None = None,
 ) -> SimulationResult:
     """:func:`simulate` with its arguments already checked (the scenario
     validated, ``waypoints`` checked with ``checker`` by
@@ -531,7 +558,7 @@ def run_checked(
     and ``time_limit`` the ones in force and allowed). For drake_social's own
     callers that checked them once (``drake-social simulate``)."""
     limit = time_limit
-    built = build_checked(scenario, mode, execution, waypoints, checker, meshcat)
+    built = build_checked(scenario, mode, execution, waypoints, checker, meshcat, people=people)
     root = built.diagram.CreateDefaultContext()
     if built.visualizer is not None:
         from drake_social.sim.replay import start_recording
@@ -614,15 +641,45 @@ def run_checked(
         realtime_factor=sim_time / wall if wall > 0 else math.inf, waypoints=path, times=times,
         q=data["q"], v=data["v"], wheel_speeds=data["wheel_speeds"], target=data["target"],
         reference=data["reference"], target_index=data["index"][:, 0].astype(int), planner=planner_result,
+        stops=_stops(built, root, float(times[-1]) if len(times) else 0.0),
     )
+    result.stopped = _stopped(times, result.stops)
     source = built.subsystem("people")
     if source.model.count and len(times):  # the open-loop people sampled; a crowd from its logged state
         result.people = source.people_log(times, data.get("crowd_state"))
     _log.info("%s", result.summary())
+    for stop in result.stops:
+        _log.info("safety stop at t = %.3f s (%s of the robot %.3f m from %s) %s", stop["start"], stop["part"],
+                  stop["distance"], stop["person"],
+                  "until the end" if stop["end"] is None else f"until t = {stop['end']:.3f} s")
     if analyze:
         result.report = analyze_execution(scenario, path, times, result.q, analysis_checker,
                                           people_move=not source.model.static)
     return result
+
+
+def _stops(built: TransportDiagram, root, end_time: float) -> list[dict]:
+    """The safety monitor's stops up to ``end_time`` (the last kept sample), as dicts
+    (:attr:`SimulationResult.stops`); a stop released after ``end_time`` is still on at the end."""
+    if "stop" not in built.loggers:
+        return []
+    monitor = built.subsystem("safety")
+    out = []
+    for stop in monitor.stops(monitor.GetMyContextFromRoot(root)):
+        if stop.start > end_time:
+            break
+        if stop.end is not None and stop.end > end_time:
+            stop = dc.replace(stop, end=None)
+        out.append(stop.to_dict(end_time))
+    return out
+
+
+def _stopped(times: np.ndarray, stops: list[dict]) -> np.ndarray:
+    """(T,) True where a stop holds the robot: start <= t < end (end None: to the end)."""
+    held = np.zeros(len(times), bool)
+    for stop in stops:
+        held |= (times >= stop["start"]) & (True if stop["end"] is None else times < stop["end"])
+    return held
 
 
 def _empty_result(built: TransportDiagram, path: np.ndarray, planner: PlannerResult, message: str) -> SimulationResult:

@@ -153,7 +153,7 @@ def test_feedforward_is_added_before_the_limits():
 def test_ports_and_feedthrough():
     dut = _controller()
     assert [dut.get_input_port(i).get_name() for i in range(dut.num_input_ports())] == [
-        "base_target", "base_position"]
+        "base_target", "base_position", "hold"]
     assert [dut.get_output_port(i).get_name() for i in range(dut.num_output_ports())] == [
         "wheel_speeds", "base_velocity"]
     assert dut.HasDirectFeedthrough(1, 0)

@@ -89,7 +89,7 @@ def _assert_within_limits(p, v, a, vmax, amax, jmax):
 
 def test_ports_default_context_and_no_feedthrough():
     dut = _source(initial=(0.3, -0.2))
-    assert [dut.get_input_port(i).get_name() for i in range(dut.num_input_ports())] == ["target"]
+    assert [dut.get_input_port(i).get_name() for i in range(dut.num_input_ports())] == ["target", "hold"]
     assert [dut.get_output_port(i).get_name() for i in range(dut.num_output_ports())] == [
         "position", "velocity", "acceleration", "state", "finished"]
     assert not dut.HasAnyDirectFeedthrough()

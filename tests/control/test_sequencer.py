@@ -48,7 +48,7 @@ def test_initial_outputs_are_the_first_waypoint():
     np.testing.assert_array_equal(dut.GetOutputPort("target").Eval(context), WAYPOINTS[0])
     assert dut.GetOutputPort("index").Eval(context)[0] == 0.0
     assert dut.GetOutputPort("done").Eval(context)[0] == 0.0
-    assert [dut.get_input_port(i).get_name() for i in range(dut.num_input_ports())] == ["q"]
+    assert [dut.get_input_port(i).get_name() for i in range(dut.num_input_ports())] == ["q", "hold"]
     assert [dut.get_output_port(i).get_name() for i in range(dut.num_output_ports())] == ["target", "done", "index"]
 
 
@@ -118,7 +118,7 @@ def test_reference_done_gates_the_advance():
 def test_abstract_waypoints_input_and_no_feedthrough_from_q():
     dut = WaypointSequencer(base_tolerance=BASE_TOL, joint_tolerance=JOINT_TOL, period=0.01)
     names = [dut.get_input_port(i).get_name() for i in range(dut.num_input_ports())]
-    assert names == ["waypoints", "q"]
+    assert names == ["waypoints", "q", "hold"]
     q_index = dut.GetInputPort("q").get_index()
     for k in range(dut.num_output_ports()):
         assert not dut.HasDirectFeedthrough(q_index, k)

@@ -1,0 +1,121 @@
+"""A walker crossing the robot's path: the safety monitor stops the robot, logs the stop, lets it go."""
+
+from __future__ import annotations
+
+import dataclasses as dc
+import logging
+
+import numpy as np
+import pytest
+
+from drake_social.control import braking_travel
+from drake_social.kinematics import ArmGeometry
+from drake_social.people import PeopleState
+from drake_social.people.proximity import part_distances
+from drake_social.scenario import load_scenario
+from drake_social.sim import simulate
+from drake_social.sim.diagram import build_diagram
+
+
+class Walker:
+    """A test double of an open-loop PeopleModel: one person walking from a to b between t0 and t1."""
+
+    count = 1
+    static = False
+
+    def __init__(self, a, b, t0: float, t1: float, radius: float = 0.25):
+        self.a, self.b = np.asarray(a, float), np.asarray(b, float)
+        self.t0, self.t1, self.radius = t0, t1, radius
+        self.speed = float(np.linalg.norm(self.b - self.a)) / (t1 - t0)
+
+    def position(self, t: float) -> np.ndarray:
+        s = min(max((t - self.t0) / (self.t1 - self.t0), 0.0), 1.0)
+        return self.a + s * (self.b - self.a)
+
+    def state_at(self, t: float) -> PeopleState:
+        walking = self.t0 < t < self.t1
+        v = (self.b - self.a) / (self.t1 - self.t0) if walking else np.zeros(2)
+        d = self.b - self.a
+        return PeopleState(t, self.position(t)[None], [np.arctan2(d[1], d[0])], v[None], [self.radius],
+                           ("walker",))
+
+
+SAFETY = 0.05
+
+
+@pytest.fixture(scope="module")
+def setting():
+    """tiny.yaml without its standing person; the robot drives straight east along y = 2.5 (its
+    1.5 m bar along x at y = 3 leads by 1.35 m) and a walker crosses its path southwards at x = 5.6
+    at 0.4 m/s, passing the bar's height y = 3 at t = 6.7 s, just when the bar's tip arrives."""
+    scenario = dc.replace(load_scenario("scenarios/tiny.yaml"), people=[])
+    waypoints = np.array([scenario.start, scenario.goal], float)
+    walker = Walker([5.6, 4.8], [5.6, 0.3], 2.2, 2.2 + 4.5 / 0.4)
+    return scenario, waypoints, walker
+
+
+def _distances(scenario, walker, run):
+    geometry = ArmGeometry.from_scenario(scenario)
+    return np.array([part_distances(geometry, q[None], walker.position(t)[None], [walker.radius])["robot"][0]
+                     for t, q in zip(run.times, run.q)])
+
+
+@pytest.mark.parametrize("execution", ["synchronized", "paper"])
+def test_walker_crossing_stops_the_robot_which_goes_on_after(setting, execution, caplog):
+    scenario, waypoints, walker = setting
+    with caplog.at_level(logging.INFO, logger="drake_social.sim.run"):
+        run = simulate(scenario, waypoints=waypoints, people=walker, analyze=False, mode="kinematic",
+                       execution=execution)
+    period = scenario.execution.control_period
+    d = _distances(scenario, walker, run)
+    assert run.reached
+    (stop,) = run.stops
+    assert (stop["person"], stop["part"]) == ("walker", "object")
+    # The monitor decides from q and the people at each sample: the stop starts at the first sample
+    # within the safety distance and ends at the first one clear again, with the distance of its start.
+    close = np.flatnonzero(d <= SAFETY)
+    k_start = close[0]
+    k_end = k_start + np.flatnonzero(d[k_start:] > SAFETY)[0]
+    assert stop["start"] == pytest.approx(run.times[k_start], abs=1e-9)
+    assert stop["end"] == pytest.approx(run.times[k_end], abs=1e-9)
+    assert stop["duration"] == pytest.approx(stop["end"] - stop["start"], abs=1e-12)
+    assert stop["duration"] > 0.5  # a real wait, many control periods
+    assert stop["distance"] == pytest.approx(d[k_start], abs=1e-12)
+    assert SAFETY - period * walker.speed - period * scenario.execution.max_base_speed < stop["distance"] <= SAFETY
+    np.testing.assert_array_equal(run.stopped, (run.times >= stop["start"]) & (run.times < stop["end"]))
+    # Held: the base does not move from the stop's start to its end (its sampled command is zero at once).
+    held = run.q[k_start:k_end + 1]
+    np.testing.assert_array_equal(held, np.broadcast_to(run.q[k_start], held.shape))
+    # Only the robot's own motion counts against the field: wherever the robot moved into a sample, it
+    # was clear at the sample before, so it is within at most one period's travel of both.
+    moved = np.r_[False, np.any(run.q[1:] != run.q[:-1], axis=1)]
+    opts = scenario.execution
+    bound = SAFETY - braking_travel(ArmGeometry.from_scenario(scenario), max_base_speed=opts.max_base_speed,
+                                    arm_max_velocity=opts.arm_max_velocity, period=period) - period * walker.speed
+    assert d[moved].min() >= bound
+    # ... the arm stands still here, so the tight bound is one period of the base and of the walker.
+    assert d[moved].min() >= SAFETY - period * (opts.max_base_speed + walker.speed) - 1e-12
+    # It goes on after the walker passed and reaches the goal.
+    assert run.time_to_goal > stop["end"] + 1.0
+    np.testing.assert_allclose(run.q[-1, :2], scenario.goal[:2], atol=opts.base_tolerance)
+    record = run.to_json_dict()
+    assert record["stops"] == [stop] and record["stopped_time"] == pytest.approx(stop["duration"])
+    lines = [r.getMessage() for r in caplog.records if r.getMessage().startswith("safety stop")]
+    assert len(lines) == 1 and "walker" in lines[0] and f"{stop['start']:.3f}" in lines[0]
+
+
+def test_stop_port_and_logger_only_with_people(setting):
+    scenario, waypoints, walker = setting
+    with_people = build_diagram(scenario, waypoints=waypoints, people=walker)
+    without = build_diagram(scenario, waypoints=waypoints)
+    assert "stop" in with_people.output_port_names() and "stop" in with_people.loggers
+    assert "stop" not in without.output_port_names() and "stop" not in without.loggers
+    context = with_people.diagram.CreateDefaultContext()
+    assert with_people.diagram.GetOutputPort("stop").Eval(context)[0] == 0.0
+
+
+def test_no_people_no_stops(setting):
+    scenario, waypoints, _ = setting
+    run = simulate(scenario, waypoints=waypoints, analyze=False, mode="kinematic", time_limit=2.0)
+    assert run.stops == [] and not run.stopped.any() and len(run.stopped) == len(run.times)
+    assert run.to_json_dict()["stopped_time"] == 0.0
