@@ -6,7 +6,8 @@ measures) and from a simulated execution (the metrics over time).
 :func:`run_record`, so that every quantity has one name in all of them: the
 schema, with the meaning and unit of each field, is
 :data:`drake_social.io.records.RUN_FIELDS`. ``simulate`` (``sim.json``) and
-the studies' executed runs add :func:`execution_metrics`, named as
+the studies' executed runs add
+:func:`drake_social.experiments.metrics.execution_metrics`, named as
 :data:`drake_social.io.records.NAV_FIELDS` names them.
 """
 
@@ -15,12 +16,12 @@ from __future__ import annotations
 import numpy as np
 
 from drake_social.cost.social import SocialCost
-from drake_social.io.records import NAV_PREFIX, PATH_FIELDS
+from drake_social.io.records import PATH_FIELDS
 from drake_social.kinematics import ArmGeometry, config_distance
 from drake_social.planning.algorithms import base_only_weights
 from drake_social.planning.objective import SocialObjective
 
-__all__ = ["execution_metrics", "path_costs", "run_record"]
+__all__ = ["path_costs", "run_record"]
 
 
 def path_costs(scenario, waypoints: np.ndarray, planner_weights: np.ndarray | None = None) -> dict[str, float]:
@@ -80,44 +81,3 @@ def run_record(scenario, result, objective=None, *, history: bool = False) -> di
     tail = {"cost_history": record.pop("cost_history")} if history else {}
     return {**record, **costs, "waypoints": waypoints, **tail}
 
-
-def execution_metrics(scenario, result) -> dict[str, float]:
-    """The social-navigation metrics of a simulated run, keys prefixed
-    :data:`~drake_social.io.records.NAV_PREFIX` (``nav_``; the fields of
-    :data:`~drake_social.io.records.NAV_FIELDS`).
-
-    The people are ``result.people`` (where they were, the crowd reacting to
-    the robot), sampled at the run's times by linear interpolation when
-    logged at others; a result without a ``people`` attribute (a simulator
-    that does not log people) is measured against the scenario's open-loop
-    people model sampled at the run's times. The stops are
-    ``result.stopped``; without it the stop metrics are NaN (null in JSON).
-
-    Args:
-        scenario: the executed scenario.
-        result: a :class:`~drake_social.sim.run.SimulationResult`.
-
-    Returns:
-        ``{"nav_<key>": value}`` for every key of
-        :func:`~drake_social.experiments.metrics.run_metrics`; empty when
-        nothing was executed (no samples).
-    """
-    # metrics imports this module (path_costs): imported here, when a run is measured.
-    from drake_social.experiments.metrics import run_metrics
-    from drake_social.people import people_model
-    from drake_social.people.log import PeopleLog
-
-    times = np.asarray(result.times, float).reshape(-1)
-    if not len(times):
-        return {}
-    if hasattr(result, "people"):
-        people = result.people
-        if people is not None and (len(people.times) != len(times) or not np.array_equal(people.times, times)):
-            people = PeopleLog.sample(people, times)
-    else:
-        people = PeopleLog.sample(people_model(scenario), times)
-    stopped = getattr(result, "stopped", None)
-    metrics = run_metrics(scenario, times, result.q, people, None if stopped is None else np.asarray(stopped, bool),
-                          bool(result.reached), float(scenario.execution.time_limit),
-                          time_to_goal=result.time_to_goal)
-    return {NAV_PREFIX + k: v for k, v in metrics.items()}

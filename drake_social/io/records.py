@@ -34,8 +34,8 @@ from typing import Any, Mapping
 
 from drake_social.io.json_numbers import finite_or_none
 
-__all__ = ["CONTEXT_FIELDS", "NAV_FIELDS", "NAV_PREFIX", "PATH_FIELDS", "PLANNER_FIELDS", "RUN_FIELDS", "SHARED_FIELDS", "json_lines",
-           "write_json"]
+__all__ = ["CONTEXT_FIELDS", "NAV_FIELDS", "NAV_PREFIX", "PATH_FIELDS", "PLANNER_FIELDS", "RUN_FIELDS", "SHARED_FIELDS",
+           "json_lines", "write_json"]
 
 #: The fields a planner's result gives (:meth:`PlannerResult.to_record`), in order, with their meaning and unit.
 PLANNER_FIELDS: dict[str, str] = {

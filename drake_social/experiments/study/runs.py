@@ -89,7 +89,7 @@ def run_task(task: dict) -> dict:
 
 
 def _execute(scenario, waypoints, checker, executed_metrics) -> dict:
-    from drake_social.experiments.records import execution_metrics
+    from drake_social.experiments.metrics import execution_metrics
     from drake_social.sim.run import simulate
 
     run = simulate(scenario, mode="kinematic", waypoints=np.asarray(waypoints, float), checker=checker, analyze=True,
