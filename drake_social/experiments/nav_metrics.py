@@ -100,12 +100,12 @@ _AGF_BLOCK = 2048
 
 def _part_points(geometry: ArmGeometry, q: np.ndarray) -> dict[str, np.ndarray]:
     """The points (M, n, 2) whose largest AGF is each part's: the base
-    centre, the arm's and the object's capsule axes (as
-    :func:`drake_social.experiments.metrics.part_agf`)."""
-    pts = {"base": geometry.interest_points(q)[:, :1], "arm": shape_points(geometry, q, slice(0, 2)),
-           "object": shape_points(geometry, q, slice(2, None))}
-    pts["robot"] = np.concatenate([geometry.interest_points(q), pts["arm"], pts["object"]], axis=1)
-    return pts
+    centre, the arm's and the object's capsule axes, and every interest
+    point (``points``; the whole robot's value is the largest of the four,
+    as in :func:`drake_social.experiments.metrics.part_agf`)."""
+    interest = geometry.interest_points(q)
+    return {"base": interest[:, :1], "points": interest, "arm": shape_points(geometry, q, slice(0, 2)),
+            "object": shape_points(geometry, q, slice(2, None))}
 
 
 def _agf_over_time(scenario, geometry: ArmGeometry, q: np.ndarray, people: PeopleLog) -> dict[str, np.ndarray]:
@@ -113,9 +113,9 @@ def _agf_over_time(scenario, geometry: ArmGeometry, q: np.ndarray, people: Peopl
     logged poses, sample by sample (Kirby's speed scaling when the scenario asks)."""
     options = scenario.social
     space = PersonalSpace.from_options(options)
-    out = {part: np.zeros(len(q)) for part in RUN_PARTS}
+    out = {part: np.zeros(len(q)) for part in ("base", "points", "arm", "object")}
     if people.count == 0:
-        return out
+        return {part: np.zeros(len(q)) for part in RUN_PARTS}
     for lo in range(0, len(q), _AGF_BLOCK):
         k = slice(lo, lo + _AGF_BLOCK)
         pos, heading = people.positions[k], people.headings[k]  # (B, P, 2), (B, P)
@@ -130,6 +130,7 @@ def _agf_over_time(scenario, geometry: ArmGeometry, q: np.ndarray, people: Peopl
             value = gaussian(pts[..., 0, None] - pos[:, None, :, 0], pts[..., 1, None] - pos[:, None, :, 1],
                              cos, sin, sp)  # (B, n, P)
             out[part][k] = np.where(present, apply_threshold(value, space), 0.0).sum(-1).max(-1)
+    out["robot"] = np.maximum.reduce([out.pop("points"), out["arm"], out["object"]])
     return out
 
 
