@@ -110,3 +110,24 @@ def test_the_report_tables_show_groups_with_walking_people_only():
     assert all("| 0.5|0.7|0.9 |" in row for row in rows[1:])
     assert not any("still" in line or "plan_only" in line for line in lines)
     assert people_tables(SimpleNamespace(records=records[:1], study=SimpleNamespace(groups=groups)), str) == []
+
+
+def test_report_markdown_has_the_walking_tables_when_people_moved():
+    from drake_social.experiments.study.report import report_markdown
+    from drake_social.experiments.study.results import StudyResult
+    from drake_social.experiments.study.spec import Group, Study
+
+    study = Study(name="walk_check", groups=(Group("walk", "scenarios/tiny.yaml", algorithms=("rrt_star",)),),
+                  runs=2, iterations=10, simulate=True)
+
+    def record(run, moving):
+        return {"group": "walk", "algorithm": "rrt_star", "run": run, "success": True, "cost": 1.0,
+                "planning_time": 0.1, "F_multi": 1.0, "nav_success": 1.0, "nav_people_moving": moving,
+                "nav_stop_count": 2.0, **{f"nav_time_intimate_{p}": 1.5 for p in RUN_PARTS}}
+
+    still = report_markdown(StudyResult(study, [record(0, 0.0), record(1, 0.0)], 1.0), figures=[])
+    assert "Among walking people" not in still
+    walking = report_markdown(StudyResult(study, [record(0, 1.0), record(1, 0.0)], 1.0), figures=[])
+    section = walking[walking.index("## Among walking people"):walking.index("## Figures")]
+    assert "| walk | rrt_star | 2/2 |" in section and "| walk | rrt_star | object |" in section
+    assert section.count("1.5 [1.5, 1.5]") == len(RUN_PARTS)  # the intimate seconds of each part: median [IQR]
