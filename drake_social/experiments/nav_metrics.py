@@ -70,7 +70,8 @@ key                                unit     definition
                                             their logged poses (the part's value as in
                                             ``metrics.part_agf``: the point, or the largest
                                             over a capsule's axis); with ``social.speed_scaling``
-                                            each person's sigma_h = max(2 |v|, 0.5) m
+                                            each person's sigma_h = max(2 |v|, 0.5) m at the
+                                            logged speed |v| (sigma_s, sigma_r keep their ratios)
 =================================  =======  ==================================================
 """
 
@@ -187,7 +188,7 @@ def run_metrics(scenario, times: np.ndarray, q: np.ndarray, people: PeopleLog | 
         "irregularity_base": base_irregularity(q[:, :2]),
     }
     out.update({f"{k}_base": v for k, v in motion_stats(times, q[:, :2]).items()})
-    object_points = g.interest_points(q)[:, 3:]
+    object_points = g.interest_points(q)[:, 3:]  # after the base, the elbow and the gripper
     out.update({f"{k}_object": v for k, v in motion_stats(times, object_points).items()})
     if stopped is None:
         out.update(stopped_time=float("nan"), stop_count=float("nan"), stopped_share=float("nan"))
