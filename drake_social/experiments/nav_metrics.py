@@ -60,10 +60,11 @@ key                                unit     definition
 ``collisions_<part>``              count    contact episodes: runs of consecutive samples with
                                             d_k <= 0, each counted where it starts
 ``collision_time_<part>``          s        held time with d_k <= 0
-``space_compliance_<part>``        0..1     share of the time outside every present
-                                            person's personal space, d_k >= 0.45 m (Francis
-                                            et al.'s personal-space compliance, with Hall's
-                                            intimate bound as the space, surface to surface);
+``space_compliance_<part>``        0..1     personal-space compliance (Francis et al.): the
+                                            share of the time outside every present person's
+                                            personal space. Papers differ on the space's size;
+                                            here it is Hall's intimate bound, d_k >= 0.45 m
+                                            surface to surface (= 1 - share_intimate);
                                             NaN when D = 0
 ``agf_time_<part>``                s        trapezoid integral over time of the part's
                                             thresholded AGF sum over the present people at
