@@ -325,6 +325,8 @@ def run_simulate(*, scenario: Scenario | str | Path, out: str | Path, overrides:
     import numpy as np
 
     from drake_social.collision.drake_checker import make_checker
+    from drake_social.experiments.metrics import execution_metrics
+    from drake_social.io.json_numbers import finite_or_none
     from drake_social.io.outputs import OutputSet
     from drake_social.io.paths import parse_path_csv, write_executed_csv, write_people_csv
     from drake_social.io.records import json_lines
@@ -388,7 +390,8 @@ def run_simulate(*, scenario: Scenario | str | Path, out: str | Path, overrides:
         fig.savefig(outputs.path("tracking.png"), dpi=130)
         record = {"scenario": file, "overrides": list(overrides or []),
                   "path": None if path is None else str(path), "checker": checker,
-                  **run.to_json_dict(), "waypoints": np.asarray(run.waypoints).tolist()}
+                  **run.to_json_dict(), **finite_or_none(execution_metrics(loaded, run)),
+                  "waypoints": np.asarray(run.waypoints).tolist()}
         outputs.write_text("sim.json", json_lines(record))
         files += ["tracking.png", "sim.json"]
     return SimulateRun(record, run, files, size)

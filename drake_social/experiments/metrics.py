@@ -44,67 +44,52 @@ Overall:
   ``irregularity``: the base track's total heading change per metre of it,
   rad/m (the track is resampled every :data:`HEADING_STEP` metres first, so
   that the jitter of an executed trajectory does not count).
+
+Over time, against where people actually were: :func:`run_metrics` and
+:func:`execution_metrics` (the ``nav_*`` fields of ``sim.json`` and the
+studies), defined in :mod:`drake_social.experiments.nav_metrics` and
+re-exported here; the zones and the track measures shared by both live in
+:mod:`drake_social.experiments.proxemics`.
 """
 
 from __future__ import annotations
-
-import dataclasses as dc
 
 import numpy as np
 
 from drake_social.cost.agf import agf_xy
 from drake_social.cost.social import SocialCost
+from drake_social.experiments.nav_metrics import RUN_PARTS, execution_metrics, run_metrics
+from drake_social.experiments.proxemics import (
+    HEADING_STEP,
+    SHAPE_SPACING,
+    ZONES,
+    HallZones,
+    base_irregularity,
+    shape_points,
+    zone_shares,
+)
+from drake_social.experiments.records import path_costs
 from drake_social.kinematics import ArmGeometry, config_distance
 from drake_social.people import people_model, proximity
 from drake_social.people.proximity import part_names
-from drake_social.experiments.records import path_costs
 
 __all__ = [
     "HEADING_STEP",
+    "RUN_PARTS",
     "SHAPE_SPACING",
     "ZONES",
     "HallZones",
     "base_irregularity",
     "executed_metrics",
+    "execution_metrics",
     "part_agf",
     "part_distances",
     "part_names",
     "path_metrics",
+    "run_metrics",
     "trajectory_metrics",
     "zone_shares",
 ]
-
-#: Spacing of the points sampled along a capsule's axis for its AGF, metres.
-SHAPE_SPACING = 0.05
-#: Resampling step of the base track before heading changes are summed, metres.
-HEADING_STEP = 0.05
-
-
-@dc.dataclass(frozen=True)
-class HallZones:
-    """Upper bounds of Hall's proxemic zones (surface-to-surface), metres.
-
-    Attributes:
-        intimate: below this, intimate (0.45 m).
-        personal: below this, personal (1.2 m).
-        social: below this, social (3.6 m); beyond, public.
-    """
-
-    intimate: float = 0.45
-    personal: float = 1.2
-    social: float = 3.6
-
-    @property
-    def names(self) -> tuple[str, ...]:
-        return ("intimate", "personal", "social", "public")
-
-    def classify(self, distance: np.ndarray) -> np.ndarray:
-        """Zone index (0 intimate .. 3 public) of each distance."""
-        return np.searchsorted([self.intimate, self.personal, self.social], np.asarray(distance, float), side="right")
-
-
-#: The zones used by the studies.
-ZONES = HallZones()
 
 
 def part_distances(geometry: ArmGeometry, people: np.ndarray, radii: np.ndarray, q: np.ndarray) -> dict[str, np.ndarray]:
@@ -113,17 +98,6 @@ def part_distances(geometry: ArmGeometry, people: np.ndarray, radii: np.ndarray,
     ``people`` (P, 3) rows [x, y, theta]; +inf in an empty room."""
     people = np.asarray(people, float).reshape(-1, 3)
     return proximity.part_distances(geometry, q, people[:, :2], radii)
-
-
-def _shape_points(geometry: ArmGeometry, q: np.ndarray, which: slice) -> np.ndarray:
-    """Points (M, n, 2) every <= SHAPE_SPACING metres along the capsule axes ``which``."""
-    seg = geometry.segments(q)[:, which]  # (M, S', 2, 2)
-    lengths = np.linalg.norm(seg[0, :, 1] - seg[0, :, 0], axis=-1)  # rigid: the same at every q
-    pieces = []
-    for s, length in enumerate(lengths):
-        t = np.linspace(0.0, 1.0, max(2, int(np.ceil(length / SHAPE_SPACING)) + 1))
-        pieces.append(seg[:, s, 0, None, :] + t[None, :, None] * (seg[:, s, 1, None, :] - seg[:, s, 0, None, :]))
-    return np.concatenate(pieces, axis=1)
 
 
 def part_agf(cost: SocialCost, q: np.ndarray) -> dict[str, np.ndarray]:
@@ -137,52 +111,10 @@ def part_agf(cost: SocialCost, q: np.ndarray) -> dict[str, np.ndarray]:
     values = cost.point_costs(q)  # (M, K)
     out = {n: values[:, k] for k, n in enumerate(g.interest_names)}
     for name, which in (("arm", slice(0, 2)), ("object", slice(2, None))):
-        pts = _shape_points(g, q, which)
+        pts = shape_points(g, q, which)
         out[name] = agf_xy(pts[..., 0], pts[..., 1], cost.people, cost.space).sum(-1).max(-1)
     out["robot"] = np.max([out[n] for n in g.interest_names + ["arm", "object"]], axis=0)
     return out
-
-
-def zone_shares(distance: np.ndarray, weights: np.ndarray, zones: HallZones = ZONES) -> dict[str, float]:
-    """Share of the total weight spent in each zone.
-
-    Args:
-        distance: (M,) distances at the samples, metres.
-        weights: (M - 1,) weight of each step between samples (arc length, time).
-
-    Returns:
-        zone name -> share in [0, 1] (NaN each when the weights sum to 0).
-    """
-    distance = np.asarray(distance, float)
-    w = np.asarray(weights, float)
-    total = float(w.sum())
-    if len(distance) < 2 or not total > 0:
-        return {z: float("nan") for z in zones.names}
-    zone = zones.classify(0.5 * (distance[:-1] + distance[1:]))
-    share = np.bincount(zone, weights=w, minlength=4) / total
-    return {z: float(share[k]) for k, z in enumerate(zones.names)}
-
-
-def base_irregularity(xy: np.ndarray, step: float = HEADING_STEP) -> float:
-    """Total absolute heading change of a base track per metre of it, rad/m.
-
-    The track (M, 2) is resampled every ``step`` metres of arc length (its
-    end kept) so that steps far below the resolution do not count; 0 for a
-    straight or motionless track.
-    """
-    xy = np.asarray(xy, float).reshape(-1, 2)
-    s = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(xy, axis=0).T))]) if len(xy) else np.zeros(0)
-    if len(xy) < 2 or s[-1] <= step:
-        return 0.0
-    keep = np.concatenate([[True], np.diff(s) > 0])
-    xy, s = xy[keep], s[keep]
-    targets = np.append(np.arange(0.0, s[-1], step), s[-1])
-    r = np.stack([np.interp(targets, s, xy[:, 0]), np.interp(targets, s, xy[:, 1])], -1)
-    d = np.diff(r, axis=0)
-    d = d[np.hypot(d[:, 0], d[:, 1]) > 1e-12]
-    heading = np.arctan2(d[:, 1], d[:, 0])
-    turn = np.abs(np.angle(np.exp(1j * np.diff(heading))))
-    return float(turn.sum() / s[-1])
 
 
 def trajectory_metrics(
@@ -283,3 +215,4 @@ def executed_metrics(scenario, times: np.ndarray, q: np.ndarray) -> dict[str, fl
     }
     out.update(trajectory_metrics(scenario, q, None, np.asarray(times, float)))
     return {f"exec_{k}": v for k, v in out.items()}
+

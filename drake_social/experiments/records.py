@@ -1,10 +1,14 @@
-"""Run records from a planner's result: the planner's fields and the path's measures.
+"""Run records from a planner's result (the planner's fields and the path's
+measures) and from a simulated execution (the metrics over time).
 
 ``plan`` (``result.json``), ``bench`` (``bench.json``) and the studies
 (``results.json``, ``results.csv``) build their records with
 :func:`run_record`, so that every quantity has one name in all of them: the
 schema, with the meaning and unit of each field, is
-:data:`drake_social.io.records.RUN_FIELDS`.
+:data:`drake_social.io.records.RUN_FIELDS`. ``simulate`` (``sim.json``) and
+the studies' executed runs add
+:func:`drake_social.experiments.metrics.execution_metrics`, named as
+:data:`drake_social.io.records.NAV_FIELDS` names them.
 """
 
 from __future__ import annotations
@@ -76,3 +80,4 @@ def run_record(scenario, result, objective=None, *, history: bool = False) -> di
     waypoints = record.pop("waypoints")
     tail = {"cost_history": record.pop("cost_history")} if history else {}
     return {**record, **costs, "waypoints": waypoints, **tail}
+

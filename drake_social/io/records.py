@@ -9,6 +9,11 @@ measures from :func:`drake_social.experiments.records.path_costs`, and each
 producer adds the fields of its context (:data:`CONTEXT_FIELDS`). A producer
 may leave a field out (``bench`` keeps no ``cost_history``), never rename it.
 
+A simulated run (``simulate``'s ``sim.json``, a study's executed runs) also
+carries the social-navigation metrics over time of
+:func:`drake_social.experiments.records.execution_metrics`, flat keys named
+by :data:`NAV_FIELDS` (prefix :data:`NAV_PREFIX`).
+
 JSON is written strict (:func:`~drake_social.io.json_numbers.finite_or_none`): NaN and infinities become ``null``,
 as does every value of a failed run that has no meaning (its cost, its
 lengths).
@@ -29,8 +34,8 @@ from typing import Any, Mapping
 
 from drake_social.io.json_numbers import finite_or_none
 
-__all__ = ["CONTEXT_FIELDS", "PATH_FIELDS", "PLANNER_FIELDS", "RUN_FIELDS", "SHARED_FIELDS", "json_lines",
-           "write_json"]
+__all__ = ["CONTEXT_FIELDS", "NAV_FIELDS", "NAV_PREFIX", "PATH_FIELDS", "PLANNER_FIELDS", "RUN_FIELDS", "SHARED_FIELDS",
+           "json_lines", "write_json"]
 
 #: The fields a planner's result gives (:meth:`PlannerResult.to_record`), in order, with their meaning and unit.
 PLANNER_FIELDS: dict[str, str] = {
@@ -85,6 +90,49 @@ CONTEXT_FIELDS: dict[str, str] = {
 
 #: Every field of a run record: one name per quantity.
 RUN_FIELDS: dict[str, str] = {**CONTEXT_FIELDS, **PLANNER_FIELDS, **PATH_FIELDS}
+
+#: The prefix of the metrics over time in a record (``nav_min_dist_base``).
+NAV_PREFIX = "nav_"
+
+#: The metrics over time of an executed run against where people were
+#: (:func:`drake_social.experiments.metrics.run_metrics`; its docstring's table
+#: gives the definitions and the conventions: sample-and-hold for times spent,
+#: trapezoid rule for means and integrals), with ``<part>`` one of base, arm,
+#: object, robot (the whole robot) and ``<zone>`` one of Hall's intimate
+#: (< 0.45 m), personal (< 1.2 m), social (< 3.6 m), public; distances are
+#: surface to surface, metres. Null in JSON where the value is NaN or infinite.
+NAV_FIELDS: dict[str, str] = {
+    "nav_success": "1 when the goal was reached, else 0",
+    "nav_time_to_goal": "seconds until the goal was reached; null when not reached",
+    "nav_timeout": "1 when the goal was not reached within execution.time_limit, else 0",
+    "nav_duration": "seconds from the first to the last logged sample",
+    "nav_path_length_base": "length of the executed base XY track, metres",
+    "nav_irregularity_base": "the executed base track's total heading change per metre, rad/m",
+    "nav_speed_mean_<body>": "mean |v| of the base (body base) or of the object's interest points (body object) "
+                             "over first divided differences of the samples, m/s",
+    "nav_speed_max_<body>": "max |v| likewise, m/s",
+    "nav_accel_mean_<body>": "mean |a| (2 x second divided differences), m/s^2",
+    "nav_accel_max_<body>": "max |a|, m/s^2",
+    "nav_jerk_mean_<body>": "mean |j| (6 x third divided differences), m/s^3",
+    "nav_jerk_max_<body>": "max |j|, m/s^3",
+    "nav_stopped_time": "seconds the safety monitor held the robot; null when the run recorded no stop flag",
+    "nav_stop_count": "safety stops (runs of consecutive stopped samples); null likewise",
+    "nav_stopped_share": "nav_stopped_time / nav_duration; null likewise or when no time passed",
+    "nav_people_count": "people in the run's log (present or not)",
+    "nav_people_moving": "1 when anyone moved, turned, entered or left during the run, else 0",
+    "nav_min_dist_<part>": "smallest distance of the part to any present person over the run, metres (null: "
+                           "nobody present)",
+    "nav_mean_dist_<part>": "time average of the part's distance to the nearest present person, metres (null: "
+                            "nobody present)",
+    "nav_time_<zone>_<part>": "seconds the part's distance to the nearest present person was in the zone "
+                              "(nobody present: public)",
+    "nav_share_<zone>_<part>": "nav_time_<zone>_<part> / nav_duration, 0..1 (the four zones sum to 1)",
+    "nav_collisions_<part>": "contact episodes with people (distance <= 0), counted where they start",
+    "nav_collision_time_<part>": "seconds in contact with a person",
+    "nav_space_compliance_<part>": "share of the time the part kept >= 0.45 m from every present person, 0..1",
+    "nav_agf_time_<part>": "time integral of the part's thresholded AGF sum over the present people at their "
+                           "logged poses, seconds (AGF dimensionless)",
+}
 
 #: The fields every producer's record has (plan's result.json, bench's runs, a study's runs).
 SHARED_FIELDS: tuple[str, ...] = (

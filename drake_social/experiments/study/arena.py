@@ -10,8 +10,8 @@ anytime curve: ``time`` since the start of solve, ``best_cost``,
 run properties: ``time`` (planning, s), ``solved``, ``best_cost`` (the
 planner's own objective), ``seed``, F, lengths, irregularity and every
 per-part metric (``min_dist_<part>``, ``zone_<zone>_<part>``,
-``agf_max_<part>``, ``agf_mean_<part>``, REAL), and the ``exec_*`` ones when
-executed. The runs are planned for K iterations, not against a clock: the
+``agf_max_<part>``, ``agf_mean_<part>``, REAL), and the ``exec_*`` and
+``nav_*`` ones when executed. The runs are planned for K iterations, not against a clock: the
 time limit is written as 0.
 
 :func:`build_database` runs OMPL's own script on the logs, giving the SQLite

@@ -23,6 +23,7 @@ from typing import Sequence
 
 import numpy as np
 
+from drake_social.experiments.study.people_tables import people_tables
 from drake_social.experiments.study.results import best_runs
 
 __all__ = ["ALPHA", "OFF_SCALE_FACTOR", "Claim", "Comparison", "axis_stretch", "boxplot_values", "paired",
@@ -423,6 +424,8 @@ def report_markdown(result, figures: Sequence[str], arena_files: Sequence[str] =
     if paper:
         lines += ["", "Per-part tables of every group are in `results.csv` (`min_dist_<part>`, `zone_<zone>_<part>`, "
                   "`agf_max_<part>`, `agf_mean_<part>`)."]
+    walking = people_tables(result, _stat)
+    lines += ["", *walking] if walking else []
     lines += ["", "## Figures", ""] + [f"![{n}]({n})" for n in figures]
     if arena_files:
         lines += ["", "## Planner Arena", "",

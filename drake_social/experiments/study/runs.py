@@ -47,7 +47,8 @@ def run_task(task: dict) -> dict:
     ``waypoints``, the anytime curve ``progress`` ([iteration, best cost]
     at :data:`PROGRESS_POINTS` iterations) and ``progress_time`` (seconds
     since the start of solve at those iterations); with ``simulate``, the
-    ``exec_*`` metrics.
+    ``exec_*`` metrics and the metrics over time against where people were
+    (``nav_*``, :data:`drake_social.io.records.NAV_FIELDS`).
     """
     # Imported when a task runs, not with the package: defining and checking a study needs neither.
     from drake_social.experiments.metrics import executed_metrics, path_metrics
@@ -88,6 +89,7 @@ def run_task(task: dict) -> dict:
 
 
 def _execute(scenario, waypoints, checker, executed_metrics) -> dict:
+    from drake_social.experiments.metrics import execution_metrics
     from drake_social.sim.run import simulate
 
     run = simulate(scenario, mode="kinematic", waypoints=np.asarray(waypoints, float), checker=checker, analyze=True,
@@ -107,6 +109,7 @@ def _execute(scenario, waypoints, checker, executed_metrics) -> dict:
     }
     if len(run.times) > 1:
         out.update(executed_metrics(scenario, run.times, run.q))
+        out.update(execution_metrics(scenario, run))
     return out
 
 
