@@ -12,7 +12,11 @@ visualizer deletes at initialization):
   its MTL and a PNG, all in memory), emissive so that lights do not darken it;
 * ``<prefix>/people/<i>``: an arrow along each person's facing ``theta``;
 * ``<prefix>/path``: the planned base path as a flat ribbon (``SetLine``
-  ignores its width in WebGL).
+  ignores its width in WebGL);
+* ``<prefix>/walkers/<i>``: when people walk (``draw_overlays(...,
+  people=log)``), each walker's arrow and personal-space quad, animated in
+  the recording (:mod:`drake_social.sim.replay_people`); the field and the
+  arrows above then show the people who stand all along.
 
 A run is recorded with :func:`start_recording` before
 ``Simulator.Initialize()`` and :func:`finish_recording` after the last
@@ -49,7 +53,7 @@ from pydrake.systems.framework import DiagramBuilder
 
 from drake_social.cost import SocialCost
 from drake_social.model.robot_model import COLLISION_HEIGHT
-from drake_social.people import people_model
+from drake_social.people import PeopleLog, PeopleState, people_model
 from drake_social.scenario import Scenario
 from drake_social.viz.world import (  # noqa: F401  (FIELD_MAX_CELLS, field_resolution: re-exported)
     FIELD_CMAP,
@@ -65,13 +69,16 @@ __all__ = [
     "OVERLAY_PREFIX",
     "VISUALIZER_PREFIX",
     "add_visualizer",
+    "animate_people",
     "draw_overlays",
     "field_resolution",
     "finish_recording",
     "make_meshcat",
     "ribbon_mesh",
+    "set_texture_properties",
     "set_top_view",
     "start_recording",
+    "textured_quad",
     "top_view_frame",
     "write_replay_html",
 ]
@@ -139,13 +146,11 @@ def finish_recording(meshcat: Meshcat) -> None:
     meshcat.PublishRecording()
 
 
-def _field_png(scenario: Scenario) -> bytes:
-    """The heat map as PNG bytes, row 0 at the top = north (y_max), coloured
-    as :func:`drake_social.viz.world.draw_social_field` colours it."""
-    bounds = scenario.world.bounds
-    xs, ys = field_grid(bounds, field_resolution(bounds))
-    values = SocialCost.from_scenario(scenario).field(xs[None, :], ys[:, None])
-    top = float(values.max())
+def _png(values: np.ndarray, vmax: float | None = None) -> bytes:
+    """``values`` (ny, nx), row 0 = south, as PNG bytes (row 0 at the top =
+    north) in :data:`FIELD_CMAP` from 0 to ``vmax`` (None: the values'
+    maximum, 1 when that is not > 0), as the figures colour the heat map."""
+    top = float(values.max()) if vmax is None else float(vmax)
     if not top > 0:  # an empty room: all white, as in the figure
         top = 1.0
     buffer = io.BytesIO()
@@ -153,32 +158,65 @@ def _field_png(scenario: Scenario) -> bytes:
     return buffer.getvalue()
 
 
-def _field_mesh(scenario: Scenario) -> Mesh:
-    """One quad over ``world.bounds`` at z = 0 textured with the heat map.
+def _field_values(scenario: Scenario, people: PeopleState | None = None) -> np.ndarray:
+    """The heat map ``G`` (ny, nx) of ``people`` (None: the scenario's at
+    t = 0) on :func:`field_grid` of the world's bounds, row 0 = south."""
+    bounds = scenario.world.bounds
+    xs, ys = field_grid(bounds, field_resolution(bounds))
+    return SocialCost.from_scenario(scenario, people=people).field(xs[None, :], ys[:, None])
+
+
+def _field_png(scenario: Scenario) -> bytes:
+    """The heat map as PNG bytes, row 0 at the top = north (y_max), coloured
+    as :func:`drake_social.viz.world.draw_social_field` colours it."""
+    return _png(_field_values(scenario))
+
+
+def textured_quad(corners: tuple[float, float, float, float], png: bytes, *, alpha_png: bytes | None = None,
+                  name: str = "field") -> Mesh:
+    """A quad ``x0, y0, x1, y1`` (metres, in its frame) at z = 0 showing ``png``.
 
     The material's diffuse and specular colours are black and its emissive
-    map is the heat map, so the pixels show the colour map whatever the
-    lights are.
+    map is the image, so the pixels show their colours whatever the lights
+    are. With ``alpha_png`` (grey levels: white opaque, black transparent;
+    three.js reads its green channel) the material is transparent where the
+    alpha image is black.
     """
-    x0, y0, x1, y1 = (float(v) for v in scenario.world.bounds)
+    x0, y0, x1, y1 = (float(v) for v in corners)
     obj = "\n".join([
-        "mtllib field.mtl",
+        f"mtllib {name}.mtl",
         f"v {x0!r} {y0!r} 0", f"v {x1!r} {y0!r} 0", f"v {x1!r} {y1!r} 0", f"v {x0!r} {y1!r} 0",
         "vt 0 0", "vt 1 0", "vt 1 1", "vt 0 1",
         "vn 0 0 1",
-        "usemtl field",
+        f"usemtl {name}",
         "f 1/1/1 2/2/1 3/3/1", "f 1/1/1 3/3/1 4/4/1",
         "",
     ])
-    mtl = "newmtl field\nKa 0 0 0\nKd 0 0 0\nKs 0 0 0\nKe 1 1 1\nmap_Ke field.png\n"
-    data = InMemoryMesh(
-        mesh_file=MemoryFile(obj, ".obj", "social_field.obj"),
-        supporting_files={
-            "field.mtl": MemoryFile(mtl, ".mtl", "field.mtl"),
-            "field.png": MemoryFile(_field_png(scenario), ".png", "field.png"),
-        },
-    )
-    return Mesh(data)
+    mtl = f"newmtl {name}\nKa 0 0 0\nKd 0 0 0\nKs 0 0 0\nKe 1 1 1\nmap_Ke {name}.png\n"
+    if alpha_png is not None:
+        mtl += f"map_d {name}_alpha.png\n"
+    files = {f"{name}.mtl": MemoryFile(mtl, ".mtl", f"{name}.mtl"), f"{name}.png": MemoryFile(png, ".png", f"{name}.png")}
+    if alpha_png is not None:
+        files[f"{name}_alpha.png"] = MemoryFile(alpha_png, ".png", f"{name}_alpha.png")
+    return Mesh(InMemoryMesh(mesh_file=MemoryFile(obj, ".obj", f"social_{name}.obj"), supporting_files=files))
+
+
+def _field_mesh(scenario: Scenario, png: bytes | None = None) -> Mesh:
+    """One quad over ``world.bounds`` at z = 0 textured with the heat map
+    ``png`` (None: :func:`_field_png` of the scenario's people)."""
+    return textured_quad(tuple(scenario.world.bounds), _field_png(scenario) if png is None else png)
+
+
+def set_texture_properties(meshcat: Meshcat, path: str, *, alpha: bool = False) -> None:
+    """Shows a :func:`textured_quad` at ``path`` in the colour map's own
+    colours: Meshcat tone-maps every material (ACES), which turns white into
+    grey; three.js' MTL loader repeats textures, and clamped, the linear
+    filter at one edge does not pick up the opposite edge's colours."""
+    meshcat.SetProperty(f"{path}/<object>", "material.toneMapped", False)
+    for texture in ("emissiveMap", "alphaMap") if alpha else ("emissiveMap",):
+        for wrap in ("wrapS", "wrapT"):
+            meshcat.SetProperty(f"{path}/<object>", f"material.{texture}.{wrap}", _THREE_CLAMP_TO_EDGE)
+    meshcat.SetProperty(f"{path}/<object>", "material.needsUpdate", True)
 
 
 def ribbon_mesh(points: np.ndarray, width: float, z: float) -> tuple[np.ndarray, np.ndarray]:
@@ -242,12 +280,13 @@ def draw_overlays(
     waypoints: np.ndarray | None = None,
     *,
     prefix: str = OVERLAY_PREFIX,
+    people: PeopleLog | None = None,
 ) -> None:
     """Draws the heat map, the people's facing arrows and the planned path.
 
     The people's bodies are the plant's illustration geometry already; this
-    adds what the plant does not know. Everything is static (not animated),
-    so it costs the same in a replay of any length.
+    adds what the plant does not know. Without walking people everything is
+    static (not animated), so it costs the same in a replay of any length.
 
     Args:
         meshcat: the run's Meshcat.
@@ -256,22 +295,36 @@ def draw_overlays(
             None or fewer than 2 distinct points: no path.
         prefix: absolute Meshcat path of the overlays; must not be the
             visualizer's (it is cleared at initialization).
+        people: where the people were over the run (call after
+            :func:`finish_recording`). When someone moves (``not
+            people.static``) the static heat map and arrows show only the
+            people who stand all along, and the walkers get an animated
+            arrow and heat-map quad each (:func:`animate_people`, at
+            ``scenario.execution.replay_fps``, the recording's rate); None or
+            a static log: the scenario's people at t = 0, as always.
     """
     if not prefix.startswith("/"):
         raise ValueError(f"prefix must be an absolute Meshcat path (start with '/'), got {prefix!r}")
     meshcat.Delete(prefix)
-    meshcat.SetObject(f"{prefix}/field", _field_mesh(scenario), Rgba(1, 1, 1, 1))
+    walking = people is not None and not people.static
+    if walking:
+        from drake_social.sim.replay_people import standing_mask, standing_people
+
+        standing, labels = standing_people(people), np.flatnonzero(standing_mask(people))
+        values = _field_values(scenario, standing)
+        # One colour scale for the standing field and the walkers' quads
+        # (whose AGF peaks at 1): the field's top, at least 1.
+        vmax = max(float(values.max()), 1.0)
+        field = _field_mesh(scenario, _png(values, vmax))
+    else:
+        standing = people_model(scenario).state_at(0.0)
+        labels = np.arange(standing.count)
+        field = _field_mesh(scenario)
+    meshcat.SetObject(f"{prefix}/field", field, Rgba(1, 1, 1, 1))
     meshcat.SetTransform(f"{prefix}/field", RigidTransform([0.0, 0.0, _FIELD_Z]))
-    # Meshcat tone-maps every material (ACES), which turns white into grey;
-    # the heat map shows the colour map's own colours.
-    meshcat.SetProperty(f"{prefix}/field/<object>", "material.toneMapped", False)
-    # Three.js' MTL loader repeats textures; clamped, the linear filter at
-    # the south edge does not pick up the north edge's colours.
-    for wrap in ("wrapS", "wrapT"):
-        meshcat.SetProperty(f"{prefix}/field/<object>", f"material.emissiveMap.{wrap}", _THREE_CLAMP_TO_EDGE)
-    meshcat.SetProperty(f"{prefix}/field/<object>", "material.needsUpdate", True)
-    people = people_model(scenario).state_at(0.0)
-    for i, ((x, y), theta, radius) in enumerate(zip(people.positions, people.headings, people.radii)):
+    set_texture_properties(meshcat, f"{prefix}/field")
+    # Arrows are labelled by the person's index among all the people.
+    for i, (x, y), theta, radius in zip(labels, standing.positions, standing.headings, standing.radii):
         vertices, faces = _arrow_mesh(float(x), float(y), float(theta), float(radius))
         meshcat.SetTriangleMesh(f"{prefix}/people/{i}", vertices, faces, _ARROW_RGBA)
     if waypoints is not None:
@@ -283,6 +336,8 @@ def draw_overlays(
             meshcat.SetTriangleMesh(f"{prefix}/path", vertices, faces, _PATH_RGBA)
         else:
             _log.warning("path of %d waypoint(s) has fewer than 2 distinct points: not drawn", len(xy))
+    if walking:
+        animate_people(meshcat, scenario, people, float(scenario.execution.replay_fps), prefix=prefix, vmax=vmax)
 
 
 def top_view_frame(scenario: Scenario, *, aspect: float | None = 16 / 9,
@@ -419,3 +474,12 @@ def write_replay_html(meshcat: Meshcat, path: str | os.PathLike, *, fit: tuple[f
         raise
     _log.info("wrote %s (%.1f kB)", path, len(data) / 1e3)
     return len(data)
+
+
+def animate_people(meshcat: Meshcat, scenario: Scenario, people: PeopleLog, fps: float, **options) -> int:
+    """The walkers' animated arrows and heat-map quads in the recording:
+    :func:`drake_social.sim.replay_people.animate_people` (which imports this
+    module's helpers, hence the indirection); returns the number animated."""
+    from drake_social.sim.replay_people import animate_people as animate
+
+    return animate(meshcat, scenario, people, fps, **options)
