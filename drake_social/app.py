@@ -372,7 +372,9 @@ def run_simulate(*, scenario: Scenario | str | Path, out: str | Path, overrides:
         if meshcat is not None:
             from drake_social.sim.replay import draw_overlays, set_top_view, write_replay_html
 
-            draw_overlays(meshcat, loaded, run.waypoints if len(run.waypoints) else None)
+            # Walking people (SimulationResult.people, a PeopleLog) get animated arrows and heat-map quads.
+            draw_overlays(meshcat, loaded, run.waypoints if len(run.waypoints) else None,
+                          people=getattr(run, "people", None))
             fit = set_top_view(meshcat, loaded)
             size = write_replay_html(meshcat, outputs.path("replay.html"), fit=fit)
             files.append("replay.html")

@@ -27,7 +27,6 @@ from disk and loads nothing from the network.
 
 from __future__ import annotations
 
-import io
 import logging
 import math
 import os
@@ -35,10 +34,7 @@ import tempfile
 from pathlib import Path
 
 import numpy as np
-from matplotlib.image import imsave
-from pydrake.common import MemoryFile
 from pydrake.geometry import (
-    InMemoryMesh,
     Mesh,
     Meshcat,
     MeshcatParams,
@@ -52,11 +48,24 @@ from pydrake.math import RigidTransform
 from pydrake.systems.framework import DiagramBuilder
 
 from drake_social.cost import SocialCost
-from drake_social.model.robot_model import COLLISION_HEIGHT
 from drake_social.people import PeopleLog, PeopleState, people_model
 from drake_social.scenario import Scenario
+from drake_social.sim.replay_meshes import (  # noqa: F401  (textured_quad, set_texture_properties: re-exported)
+    ARROW_RGBA,
+    FIELD_Z,
+    OVERLAY_PREFIX,
+    PATH_RGBA,
+    PATH_WIDTH,
+    PATH_Z,
+    VISUALIZER_PREFIX,
+    arrow_mesh,
+    field_png,
+    set_texture_properties,
+    textured_quad,
+)
+from drake_social.sim.replay_pack import compact_page
+from drake_social.sim.replay_people import animate_people, standing_mask, standing_people
 from drake_social.viz.world import (  # noqa: F401  (FIELD_MAX_CELLS, field_resolution: re-exported)
-    FIELD_CMAP,
     FIELD_MAX_CELLS,
     FIELD_MIN_RESOLUTION,
     VIEW_MARGIN,
@@ -84,25 +93,6 @@ __all__ = [
 ]
 
 _log = logging.getLogger(__name__)
-
-#: Meshcat path of the overlays drawn by :func:`draw_overlays`.
-OVERLAY_PREFIX = "/drake_social"
-#: Prefix of the MeshcatVisualizer (relative, so under ``/drake``): a body B of
-#: model M is drawn at ``/drake/illustration/M/B``.
-VISUALIZER_PREFIX = "illustration"
-
-# Heights above the floor, metres: the heat map just above z = 0 (the floor
-# grid is hidden), the path above it, the facing arrows on top of the people's
-# cylinders (which are COLLISION_HEIGHT tall).
-_FIELD_Z = 0.002
-_PATH_Z = 0.02
-_ARROW_Z = COLLISION_HEIGHT + 0.01
-_PATH_WIDTH = 0.08
-# three.js' ClampToEdgeWrapping constant.
-_THREE_CLAMP_TO_EDGE = 1001.0
-_PATH_RGBA = Rgba(0.05, 0.45, 0.85, 1.0)
-_ARROW_RGBA = Rgba(0.05, 0.05, 0.05, 1.0)
-
 
 def make_meshcat() -> Meshcat:
     """One Meshcat for one run, listening on localhost only (port chosen
@@ -146,18 +136,6 @@ def finish_recording(meshcat: Meshcat) -> None:
     meshcat.PublishRecording()
 
 
-def _png(values: np.ndarray, vmax: float | None = None) -> bytes:
-    """``values`` (ny, nx), row 0 = south, as PNG bytes (row 0 at the top =
-    north) in :data:`FIELD_CMAP` from 0 to ``vmax`` (None: the values'
-    maximum, 1 when that is not > 0), as the figures colour the heat map."""
-    top = float(values.max()) if vmax is None else float(vmax)
-    if not top > 0:  # an empty room: all white, as in the figure
-        top = 1.0
-    buffer = io.BytesIO()
-    imsave(buffer, values, cmap=FIELD_CMAP, vmin=0.0, vmax=top, origin="lower", format="png")
-    return buffer.getvalue()
-
-
 def _field_values(scenario: Scenario, people: PeopleState | None = None) -> np.ndarray:
     """The heat map ``G`` (ny, nx) of ``people`` (None: the scenario's at
     t = 0) on :func:`field_grid` of the world's bounds, row 0 = south."""
@@ -169,54 +147,13 @@ def _field_values(scenario: Scenario, people: PeopleState | None = None) -> np.n
 def _field_png(scenario: Scenario) -> bytes:
     """The heat map as PNG bytes, row 0 at the top = north (y_max), coloured
     as :func:`drake_social.viz.world.draw_social_field` colours it."""
-    return _png(_field_values(scenario))
-
-
-def textured_quad(corners: tuple[float, float, float, float], png: bytes, *, alpha_png: bytes | None = None,
-                  name: str = "field") -> Mesh:
-    """A quad ``x0, y0, x1, y1`` (metres, in its frame) at z = 0 showing ``png``.
-
-    The material's diffuse and specular colours are black and its emissive
-    map is the image, so the pixels show their colours whatever the lights
-    are. With ``alpha_png`` (grey levels: white opaque, black transparent;
-    three.js reads its green channel) the material is transparent where the
-    alpha image is black.
-    """
-    x0, y0, x1, y1 = (float(v) for v in corners)
-    obj = "\n".join([
-        f"mtllib {name}.mtl",
-        f"v {x0!r} {y0!r} 0", f"v {x1!r} {y0!r} 0", f"v {x1!r} {y1!r} 0", f"v {x0!r} {y1!r} 0",
-        "vt 0 0", "vt 1 0", "vt 1 1", "vt 0 1",
-        "vn 0 0 1",
-        f"usemtl {name}",
-        "f 1/1/1 2/2/1 3/3/1", "f 1/1/1 3/3/1 4/4/1",
-        "",
-    ])
-    mtl = f"newmtl {name}\nKa 0 0 0\nKd 0 0 0\nKs 0 0 0\nKe 1 1 1\nmap_Ke {name}.png\n"
-    if alpha_png is not None:
-        mtl += f"map_d {name}_alpha.png\n"
-    files = {f"{name}.mtl": MemoryFile(mtl, ".mtl", f"{name}.mtl"), f"{name}.png": MemoryFile(png, ".png", f"{name}.png")}
-    if alpha_png is not None:
-        files[f"{name}_alpha.png"] = MemoryFile(alpha_png, ".png", f"{name}_alpha.png")
-    return Mesh(InMemoryMesh(mesh_file=MemoryFile(obj, ".obj", f"social_{name}.obj"), supporting_files=files))
+    return field_png(_field_values(scenario))
 
 
 def _field_mesh(scenario: Scenario, png: bytes | None = None) -> Mesh:
     """One quad over ``world.bounds`` at z = 0 textured with the heat map
     ``png`` (None: :func:`_field_png` of the scenario's people)."""
     return textured_quad(tuple(scenario.world.bounds), _field_png(scenario) if png is None else png)
-
-
-def set_texture_properties(meshcat: Meshcat, path: str, *, alpha: bool = False) -> None:
-    """Shows a :func:`textured_quad` at ``path`` in the colour map's own
-    colours: Meshcat tone-maps every material (ACES), which turns white into
-    grey; three.js' MTL loader repeats textures, and clamped, the linear
-    filter at one edge does not pick up the opposite edge's colours."""
-    meshcat.SetProperty(f"{path}/<object>", "material.toneMapped", False)
-    for texture in ("emissiveMap", "alphaMap") if alpha else ("emissiveMap",):
-        for wrap in ("wrapS", "wrapT"):
-            meshcat.SetProperty(f"{path}/<object>", f"material.{texture}.{wrap}", _THREE_CLAMP_TO_EDGE)
-    meshcat.SetProperty(f"{path}/<object>", "material.needsUpdate", True)
 
 
 def ribbon_mesh(points: np.ndarray, width: float, z: float) -> tuple[np.ndarray, np.ndarray]:
@@ -258,22 +195,6 @@ def ribbon_mesh(points: np.ndarray, width: float, z: float) -> tuple[np.ndarray,
     return np.asfortranarray(vertices), np.asfortranarray(faces.astype(np.int32))
 
 
-def _arrow_mesh(x: float, y: float, theta: float, radius: float) -> tuple[np.ndarray, np.ndarray]:
-    """A flat arrow from a person's centre along ``theta``, its head beyond
-    the body's edge (as in the matplotlib scene figure)."""
-    length = radius + max(0.45, 1.6 * radius)
-    shaft, head_w, head_l = 0.06, 0.26, 0.22
-    local = np.array([
-        [0.0, -shaft / 2], [length - head_l, -shaft / 2], [length - head_l, shaft / 2], [0.0, shaft / 2],
-        [length - head_l, -head_w / 2], [length, 0.0], [length - head_l, head_w / 2],
-    ])
-    c, s = math.cos(theta), math.sin(theta)
-    xy = local @ np.array([[c, s], [-s, c]]) + [x, y]
-    vertices = np.vstack([xy.T, np.full(len(xy), _ARROW_Z)])
-    faces = np.array([[0, 1, 2], [0, 2, 3], [4, 5, 6]], dtype=np.int32).T
-    return np.asfortranarray(vertices), np.asfortranarray(faces)
-
-
 def draw_overlays(
     meshcat: Meshcat,
     scenario: Scenario,
@@ -308,32 +229,30 @@ def draw_overlays(
     meshcat.Delete(prefix)
     walking = people is not None and not people.static
     if walking:
-        from drake_social.sim.replay_people import standing_mask, standing_people
-
         standing, labels = standing_people(people), np.flatnonzero(standing_mask(people))
         values = _field_values(scenario, standing)
         # One colour scale for the standing field and the walkers' quads
         # (whose AGF peaks at 1): the field's top, at least 1.
         vmax = max(float(values.max()), 1.0)
-        field = _field_mesh(scenario, _png(values, vmax))
+        field = _field_mesh(scenario, field_png(values, vmax))
     else:
         standing = people_model(scenario).state_at(0.0)
         labels = np.arange(standing.count)
         field = _field_mesh(scenario)
     meshcat.SetObject(f"{prefix}/field", field, Rgba(1, 1, 1, 1))
-    meshcat.SetTransform(f"{prefix}/field", RigidTransform([0.0, 0.0, _FIELD_Z]))
+    meshcat.SetTransform(f"{prefix}/field", RigidTransform([0.0, 0.0, FIELD_Z]))
     set_texture_properties(meshcat, f"{prefix}/field")
     # Arrows are labelled by the person's index among all the people.
     for i, (x, y), theta, radius in zip(labels, standing.positions, standing.headings, standing.radii):
-        vertices, faces = _arrow_mesh(float(x), float(y), float(theta), float(radius))
-        meshcat.SetTriangleMesh(f"{prefix}/people/{i}", vertices, faces, _ARROW_RGBA)
+        vertices, faces = arrow_mesh(float(x), float(y), float(theta), float(radius))
+        meshcat.SetTriangleMesh(f"{prefix}/people/{i}", vertices, faces, ARROW_RGBA)
     if waypoints is not None:
         xy = np.asarray(waypoints, float).reshape(len(waypoints), -1)[:, :2]
         if len(np.unique(xy, axis=0)) >= 2:
             x0, y0, x1, y1 = (float(v) for v in scenario.world.bounds)
-            width = max(_PATH_WIDTH, max(x1 - x0, y1 - y0) / 250)  # a few pixels wide in the top view
-            vertices, faces = ribbon_mesh(xy, width, _PATH_Z)
-            meshcat.SetTriangleMesh(f"{prefix}/path", vertices, faces, _PATH_RGBA)
+            width = max(PATH_WIDTH, max(x1 - x0, y1 - y0) / 250)  # a few pixels wide in the top view
+            vertices, faces = ribbon_mesh(xy, width, PATH_Z)
+            meshcat.SetTriangleMesh(f"{prefix}/path", vertices, faces, PATH_RGBA)
         else:
             _log.warning("path of %d waypoint(s) has fewer than 2 distinct points: not drawn", len(xy))
     if walking:
@@ -437,14 +356,18 @@ _FIT_SCRIPT = """
 """
 
 
-def write_replay_html(meshcat: Meshcat, path: str | os.PathLike, *, fit: tuple[float, float] | None = None) -> int:
+def write_replay_html(meshcat: Meshcat, path: str | os.PathLike, *, fit: tuple[float, float] | None = None,
+                      compact: bool = True) -> int:
     """Writes the standalone replay page ``meshcat.StaticHtml()`` to ``path``.
 
     With ``fit`` (half width, half height in metres, as
     :func:`set_top_view` returns them) the page keeps that region, centred,
     in view at any window size (:data:`_FIT_SCRIPT`, appended to the page;
     it acts on orthographic cameras only, so a perspective camera loaded
-    into the viewer is left alone). The file is written to a temporary file in the
+    into the viewer is left alone). With ``compact`` the recording's numbers
+    are written as float32, as the page holds them anyway
+    (:func:`drake_social.sim.replay_pack.compact_page`): the same replay in
+    about 40 % fewer animation bytes. The file is written to a temporary file in the
     same folder and renamed into place, so a reader never sees half a page.
 
     Returns:
@@ -452,6 +375,8 @@ def write_replay_html(meshcat: Meshcat, path: str | os.PathLike, *, fit: tuple[f
     """
     path = Path(path)
     text = meshcat.StaticHtml()
+    if compact:
+        text = compact_page(text)
     if fit is not None:
         half_w, half_h = (float(v) for v in fit)
         if not (math.isfinite(half_w) and math.isfinite(half_h) and half_w > 0 and half_h > 0):
@@ -475,11 +400,3 @@ def write_replay_html(meshcat: Meshcat, path: str | os.PathLike, *, fit: tuple[f
     _log.info("wrote %s (%.1f kB)", path, len(data) / 1e3)
     return len(data)
 
-
-def animate_people(meshcat: Meshcat, scenario: Scenario, people: PeopleLog, fps: float, **options) -> int:
-    """The walkers' animated arrows and heat-map quads in the recording:
-    :func:`drake_social.sim.replay_people.animate_people` (which imports this
-    module's helpers, hence the indirection); returns the number animated."""
-    from drake_social.sim.replay_people import animate_people as animate
-
-    return animate(meshcat, scenario, people, fps, **options)

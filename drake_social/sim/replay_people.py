@@ -38,13 +38,13 @@ from pydrake.math import RigidTransform, RotationMatrix
 from drake_social.cost.agf import PersonalSpace, gaussian
 from drake_social.people import PeopleLog, PeopleState
 from drake_social.scenario import Scenario
-from drake_social.sim.replay import (
-    _ARROW_RGBA,
-    _FIELD_Z,
-    _PATH_Z,
+from drake_social.sim.replay_meshes import (
+    ARROW_RGBA,
+    FIELD_Z,
     OVERLAY_PREFIX,
-    _arrow_mesh,
-    _png,
+    PATH_Z,
+    arrow_mesh,
+    field_png,
     set_texture_properties,
     textured_quad,
 )
@@ -128,7 +128,7 @@ def personal_space_texture(space: PersonalSpace, vmax: float) -> tuple[tuple[flo
     values = np.where(above, raw, 0.0)
     alpha = io.BytesIO()
     imsave(alpha, above.astype(float), cmap="gray", vmin=0.0, vmax=1.0, origin="lower", format="png")
-    return corners, values, _png(values, vmax), alpha.getvalue()
+    return corners, values, field_png(values, vmax), alpha.getvalue()
 
 
 def _frame_samples(people: PeopleLog, fps: float, step: int) -> tuple[np.ndarray, np.ndarray]:
@@ -189,12 +189,12 @@ def animate_people(meshcat: Meshcat, scenario: Scenario, people: PeopleLog, fps:
     scaled = bool(scenario.social.speed_scaling)
     for n, i in enumerate(walkers):
         node = f"{prefix}/{WALKERS}/{i}"
-        vertices, faces = _arrow_mesh(0.0, 0.0, 0.0, float(people.radii[i]))
-        meshcat.SetTriangleMesh(f"{node}/arrow", vertices, faces, _ARROW_RGBA)
+        vertices, faces = arrow_mesh(0.0, 0.0, 0.0, float(people.radii[i]))
+        meshcat.SetTriangleMesh(f"{node}/arrow", vertices, faces, ARROW_RGBA)
         meshcat.SetObject(f"{node}/agf", textured_quad(corners, png, alpha_png=alpha, name="agf"), Rgba(1, 1, 1, 1))
         # Above the static heat map, below the path; one level per walker
         # keeps overlapping quads from flickering.
-        z = _FIELD_Z + (_PATH_Z - _FIELD_Z) * (1 + n % 16) / 18
+        z = FIELD_Z + (PATH_Z - FIELD_Z) * (1 + n % 16) / 18
         meshcat.SetTransform(f"{node}/agf", RigidTransform([0.0, 0.0, z]))
         set_texture_properties(meshcat, f"{node}/agf", alpha=True)
         shown = None
