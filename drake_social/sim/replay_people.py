@@ -48,9 +48,10 @@ from drake_social.sim.replay_meshes import (
     set_texture_properties,
     textured_quad,
 )
+from drake_social.viz.tracks import moving_people
 from drake_social.viz.world import FIELD_MIN_RESOLUTION
 
-__all__ = ["PEOPLE_REPLAY_FPS", "WALKERS", "animate_people", "moving_people", "personal_space_texture",
+__all__ = ["PEOPLE_REPLAY_FPS", "WALKERS", "animate_people", "personal_space_texture",
            "standing_mask", "standing_people", "walker_sigma_h"]
 
 _log = logging.getLogger(__name__)
@@ -65,14 +66,6 @@ WALKERS = "walkers"
 _MAX_TEXTURE_CELLS = 256
 #: Sigma_h floor of Kirby's speed scaling, metres (sigma_h = max(2 v, 0.5)).
 _SPEED_SCALING_FLOOR = 0.5
-
-
-def moving_people(people: PeopleLog) -> np.ndarray:
-    """(P,) True for each person who moves, turns, appears or leaves, or has
-    a non-zero velocity in some sample of ``people``."""
-    positions, headings, present = people.positions, people.headings, people.present
-    return ((positions != positions[:1]).any(axis=(0, 2)) | (headings != headings[:1]).any(axis=0)
-            | (present != present[:1]).any(axis=0) | (people.velocities != 0).any(axis=(0, 2)))
 
 
 def standing_mask(people: PeopleLog) -> np.ndarray:
@@ -156,7 +149,7 @@ def animate_people(meshcat: Meshcat, scenario: Scenario, people: PeopleLog, fps:
         meshcat: the run's Meshcat.
         scenario: gives the AGF's variances, threshold and speed scaling.
         people: where the people were over the run; only the movers
-            (:func:`moving_people`) are animated.
+            (:func:`drake_social.viz.tracks.moving_people`) are animated.
         fps: frames per second of the recording (its frame k is at k / fps s).
         prefix: the overlays' absolute Meshcat path.
         vmax: top of the colour scale, that of the static heat map.

@@ -24,6 +24,7 @@ from drake_social.cost.agf import PersonalSpace, agf_algorithm1
 from drake_social.people import PeopleLog, people_model
 from drake_social.scenario import load_scenario
 from drake_social.sim import replay, replay_people
+from drake_social.viz.tracks import moving_people
 
 ROOT = Path(__file__).parents[2]
 
@@ -83,13 +84,13 @@ def walked(tmp_path_factory, tiny_scenario_path) -> Walked:
 
 def test_moving_and_standing_people():
     people = walkers_log([0, 0, 8, 6], 2, 4.0, stander=True)
-    np.testing.assert_array_equal(replay_people.moving_people(people), [True, True, False])
+    np.testing.assert_array_equal(moving_people(people), [True, True, False])
     standing = replay_people.standing_people(people)
     assert standing.names == ("stander",)
     np.testing.assert_allclose(standing.positions, [[4.0, 3.0]])
     # A person who only appears moves too; one always absent does not stand.
     entering = walkers_log([0, 0, 8, 6], 1, 4.0, enter=(1.0, 5.0), speed=0.0)
-    assert entering.velocities.max() == 0 and replay_people.moving_people(entering).tolist() == [True]
+    assert entering.velocities.max() == 0 and moving_people(entering).tolist() == [True]
     gone = dc.replace(people, present=np.c_[people.present[:, :2], np.zeros(len(people.times), bool)])
     assert replay_people.standing_people(gone).count == 0
 
