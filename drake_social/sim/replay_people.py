@@ -64,6 +64,9 @@ PEOPLE_REPLAY_FPS = 10.0
 WALKERS = "walkers"
 #: Most texture cells along either side of a personal-space quad.
 _MAX_TEXTURE_CELLS = 256
+# three.js' MultiplyBlending and NearestFilter constants.
+_THREE_MULTIPLY_BLENDING = 4.0
+_THREE_NEAREST_FILTER = 1003.0
 #: Sigma_h floor of Kirby's speed scaling, metres (sigma_h = max(2 v, 0.5)).
 _SPEED_SCALING_FLOOR = 0.5
 
@@ -122,6 +125,22 @@ def personal_space_texture(space: PersonalSpace, vmax: float) -> tuple[tuple[flo
     alpha = io.BytesIO()
     imsave(alpha, above.astype(float), cmap="gray", vmin=0.0, vmax=1.0, origin="lower", format="png")
     return corners, values, field_png(values, vmax), alpha.getvalue()
+
+
+def _multiply(meshcat: Meshcat, path: str) -> None:
+    """Blends the quad at ``path`` by multiplying what is under it: over the
+    white of zero cost it shows the colour map's own colours; where it
+    overlaps the static field or another walker both stay visible, darker
+    (more cost). The cut-out (alpha test on the alpha map, sampled nearest
+    so that every kept texel is fully opaque) drops the transparent texels,
+    which would otherwise multiply to black or leave the canvas partly
+    transparent; no depth writes, so every overlapping quad blends whatever
+    the drawing order."""
+    for name, value in (("blending", _THREE_MULTIPLY_BLENDING), ("premultipliedAlpha", True), ("alphaTest", 0.5),
+                        ("depthWrite", False), ("alphaMap.magFilter", _THREE_NEAREST_FILTER),
+                        ("alphaMap.minFilter", _THREE_NEAREST_FILTER), ("alphaMap.needsUpdate", True),
+                        ("needsUpdate", True)):
+        meshcat.SetProperty(f"{path}/<object>", f"material.{name}", value)
 
 
 def _frame_samples(people: PeopleLog, fps: float, step: int) -> tuple[np.ndarray, np.ndarray]:
@@ -190,6 +209,7 @@ def animate_people(meshcat: Meshcat, scenario: Scenario, people: PeopleLog, fps:
         z = FIELD_Z + (PATH_Z - FIELD_Z) * (1 + n % 16) / 18
         meshcat.SetTransform(f"{node}/agf", RigidTransform([0.0, 0.0, z]))
         set_texture_properties(meshcat, f"{node}/agf", alpha=True)
+        _multiply(meshcat, f"{node}/agf")
         shown = None
         for k in frames:
             state = states[k]
