@@ -329,6 +329,7 @@ def run_simulate(*, scenario: Scenario | str | Path, out: str | Path, overrides:
     from drake_social.planning.result import PlanningInputError
     from drake_social.scenario import plant_time_step_problem, validate_scenario
     from drake_social.sim.run import run_checked
+    from drake_social.kinematics import ArmGeometry
     from drake_social.viz.tracking import tracking_figure
 
     out = Path(out)
@@ -380,6 +381,7 @@ def run_simulate(*, scenario: Scenario | str | Path, out: str | Path, overrides:
             files.append("replay.html")
         write_executed_csv(outputs.path("executed.csv"), run.times, run.q, run.v)
         fig = tracking_figure(run, max_base_speed=opts.max_base_speed, max_wheel_speed=opts.max_wheel_speed,
+                              geometry=ArmGeometry.from_scenario(loaded), safety_distance=opts.safety_distance,
                               title=f"{_title(loaded, file)}\n{run.mode} / {run.execution}: {run.message}")
         fig.savefig(outputs.path("tracking.png"), dpi=130)
         record = {"scenario": file, "overrides": list(overrides or []),
