@@ -105,10 +105,10 @@ def draw_people_tracks(ax: Axes, people: PeopleLog, *, marks: Sequence[float] | 
                 continue
             px, py = state.positions[i]
             (dot,) = ax.plot([px], [py], marker="o", markersize=9, color=color, markeredgecolor="white",
-                             markeredgewidth=0.6, linestyle="none", zorder=5.5)
+                             markeredgewidth=0.6, linestyle="none", zorder=7.0)
             out["marks"].append(dot)
             out["marks"].append(ax.text(px, py, str(m), ha="center", va="center", fontsize=5.5, color="white",
-                                        fontweight="bold", zorder=5.6))
+                                        fontweight="bold", zorder=7.1))
     if robot is not None:
         times, q = np.asarray(robot[0], float).reshape(-1), np.asarray(robot[1], float)
         if len(times) and q.shape[0] == len(times):
@@ -118,10 +118,10 @@ def draw_people_tracks(ax: Axes, people: PeopleLog, *, marks: Sequence[float] | 
             for m, t in enumerate(mark_list, start=1):
                 bx, by = np.interp(t, times, q[:, 0]), np.interp(t, times, q[:, 1])
                 (sq,) = ax.plot([bx], [by], marker="s", markersize=9, color=ROBOT_MARK_COLOR,
-                                markeredgecolor="white", markeredgewidth=0.6, linestyle="none", zorder=5.5)
+                                markeredgecolor="white", markeredgewidth=0.6, linestyle="none", zorder=7.0)
                 out["robot_marks"].append(sq)
                 out["robot_marks"].append(ax.text(bx, by, str(m), ha="center", va="center", fontsize=5.5,
-                                                  color="white", fontweight="bold", zorder=5.6))
+                                                  color="white", fontweight="bold", zorder=7.1))
     if labels and mark_list and (out["marks"] or out["robot_marks"]):
         text = ", ".join(f"{m}: {_seconds(t)}" for m, t in enumerate(mark_list, start=1))
         proxy = Line2D([], [], marker="o", markersize=7, color="#555555", linestyle="none",
