@@ -333,6 +333,7 @@ def run_simulate(*, scenario: Scenario | str | Path, out: str | Path, overrides:
     from drake_social.planning.result import PlanningInputError
     from drake_social.scenario import plant_time_step_problem, validate_scenario
     from drake_social.sim.run import run_checked
+    from drake_social.kinematics import ArmGeometry
     from drake_social.viz.tracking import tracking_figure
 
     out = Path(out)
@@ -376,7 +377,9 @@ def run_simulate(*, scenario: Scenario | str | Path, out: str | Path, overrides:
         if meshcat is not None:
             from drake_social.sim.replay import draw_overlays, set_top_view, write_replay_html
 
-            draw_overlays(meshcat, loaded, run.waypoints if len(run.waypoints) else None)
+            # Walking people (SimulationResult.people, a PeopleLog) get animated arrows and heat-map quads.
+            draw_overlays(meshcat, loaded, run.waypoints if len(run.waypoints) else None,
+                          people=getattr(run, "people", None))
             fit = set_top_view(meshcat, loaded)
             size = write_replay_html(meshcat, outputs.path("replay.html"), fit=fit)
             files.append("replay.html")
@@ -386,6 +389,7 @@ def run_simulate(*, scenario: Scenario | str | Path, out: str | Path, overrides:
             write_people_csv(outputs.path("people.csv"), run.people)
             files.append("people.csv")
         fig = tracking_figure(run, max_base_speed=opts.max_base_speed, max_wheel_speed=opts.max_wheel_speed,
+                              geometry=ArmGeometry.from_scenario(loaded), safety_distance=opts.safety_distance,
                               title=f"{_title(loaded, file)}\n{run.mode} / {run.execution}: {run.message}")
         fig.savefig(outputs.path("tracking.png"), dpi=130)
         record = {"scenario": file, "overrides": list(overrides or []),

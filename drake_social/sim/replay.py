@@ -12,7 +12,11 @@ visualizer deletes at initialization):
   its MTL and a PNG, all in memory), emissive so that lights do not darken it;
 * ``<prefix>/people/<i>``: an arrow along each person's facing ``theta``;
 * ``<prefix>/path``: the planned base path as a flat ribbon (``SetLine``
-  ignores its width in WebGL).
+  ignores its width in WebGL);
+* ``<prefix>/walkers/<i>``: when people walk (``draw_overlays(...,
+  people=log)``), each walker's arrow and personal-space quad, animated in
+  the recording (:mod:`drake_social.sim.replay_people`); the field and the
+  arrows above then show the people who stand all along.
 
 A run is recorded with :func:`start_recording` before
 ``Simulator.Initialize()`` and :func:`finish_recording` after the last
@@ -23,7 +27,6 @@ from disk and loads nothing from the network.
 
 from __future__ import annotations
 
-import io
 import logging
 import math
 import os
@@ -31,10 +34,7 @@ import tempfile
 from pathlib import Path
 
 import numpy as np
-from matplotlib.image import imsave
-from pydrake.common import MemoryFile
 from pydrake.geometry import (
-    InMemoryMesh,
     Mesh,
     Meshcat,
     MeshcatParams,
@@ -48,11 +48,24 @@ from pydrake.math import RigidTransform
 from pydrake.systems.framework import DiagramBuilder
 
 from drake_social.cost import SocialCost
-from drake_social.model.robot_model import COLLISION_HEIGHT
-from drake_social.people import people_model
+from drake_social.people import PeopleLog, PeopleState, people_model
 from drake_social.scenario import Scenario
+from drake_social.sim.replay_meshes import (  # noqa: F401  (textured_quad, set_texture_properties: re-exported)
+    ARROW_RGBA,
+    FIELD_Z,
+    OVERLAY_PREFIX,
+    PATH_RGBA,
+    PATH_WIDTH,
+    PATH_Z,
+    VISUALIZER_PREFIX,
+    arrow_mesh,
+    field_png,
+    set_texture_properties,
+    textured_quad,
+)
+from drake_social.sim.replay_pack import compact_page
+from drake_social.sim.replay_people import animate_people, standing_mask, standing_people
 from drake_social.viz.world import (  # noqa: F401  (FIELD_MAX_CELLS, field_resolution: re-exported)
-    FIELD_CMAP,
     FIELD_MAX_CELLS,
     FIELD_MIN_RESOLUTION,
     VIEW_MARGIN,
@@ -65,37 +78,21 @@ __all__ = [
     "OVERLAY_PREFIX",
     "VISUALIZER_PREFIX",
     "add_visualizer",
+    "animate_people",
     "draw_overlays",
     "field_resolution",
     "finish_recording",
     "make_meshcat",
     "ribbon_mesh",
+    "set_texture_properties",
     "set_top_view",
     "start_recording",
+    "textured_quad",
     "top_view_frame",
     "write_replay_html",
 ]
 
 _log = logging.getLogger(__name__)
-
-#: Meshcat path of the overlays drawn by :func:`draw_overlays`.
-OVERLAY_PREFIX = "/drake_social"
-#: Prefix of the MeshcatVisualizer (relative, so under ``/drake``): a body B of
-#: model M is drawn at ``/drake/illustration/M/B``.
-VISUALIZER_PREFIX = "illustration"
-
-# Heights above the floor, metres: the heat map just above z = 0 (the floor
-# grid is hidden), the path above it, the facing arrows on top of the people's
-# cylinders (which are COLLISION_HEIGHT tall).
-_FIELD_Z = 0.002
-_PATH_Z = 0.02
-_ARROW_Z = COLLISION_HEIGHT + 0.01
-_PATH_WIDTH = 0.08
-# three.js' ClampToEdgeWrapping constant.
-_THREE_CLAMP_TO_EDGE = 1001.0
-_PATH_RGBA = Rgba(0.05, 0.45, 0.85, 1.0)
-_ARROW_RGBA = Rgba(0.05, 0.05, 0.05, 1.0)
-
 
 def make_meshcat() -> Meshcat:
     """One Meshcat for one run, listening on localhost only (port chosen
@@ -139,46 +136,24 @@ def finish_recording(meshcat: Meshcat) -> None:
     meshcat.PublishRecording()
 
 
+def _field_values(scenario: Scenario, people: PeopleState | None = None) -> np.ndarray:
+    """The heat map ``G`` (ny, nx) of ``people`` (None: the scenario's at
+    t = 0) on :func:`field_grid` of the world's bounds, row 0 = south."""
+    bounds = scenario.world.bounds
+    xs, ys = field_grid(bounds, field_resolution(bounds))
+    return SocialCost.from_scenario(scenario, people=people).field(xs[None, :], ys[:, None])
+
+
 def _field_png(scenario: Scenario) -> bytes:
     """The heat map as PNG bytes, row 0 at the top = north (y_max), coloured
     as :func:`drake_social.viz.world.draw_social_field` colours it."""
-    bounds = scenario.world.bounds
-    xs, ys = field_grid(bounds, field_resolution(bounds))
-    values = SocialCost.from_scenario(scenario).field(xs[None, :], ys[:, None])
-    top = float(values.max())
-    if not top > 0:  # an empty room: all white, as in the figure
-        top = 1.0
-    buffer = io.BytesIO()
-    imsave(buffer, values, cmap=FIELD_CMAP, vmin=0.0, vmax=top, origin="lower", format="png")
-    return buffer.getvalue()
+    return field_png(_field_values(scenario))
 
 
-def _field_mesh(scenario: Scenario) -> Mesh:
-    """One quad over ``world.bounds`` at z = 0 textured with the heat map.
-
-    The material's diffuse and specular colours are black and its emissive
-    map is the heat map, so the pixels show the colour map whatever the
-    lights are.
-    """
-    x0, y0, x1, y1 = (float(v) for v in scenario.world.bounds)
-    obj = "\n".join([
-        "mtllib field.mtl",
-        f"v {x0!r} {y0!r} 0", f"v {x1!r} {y0!r} 0", f"v {x1!r} {y1!r} 0", f"v {x0!r} {y1!r} 0",
-        "vt 0 0", "vt 1 0", "vt 1 1", "vt 0 1",
-        "vn 0 0 1",
-        "usemtl field",
-        "f 1/1/1 2/2/1 3/3/1", "f 1/1/1 3/3/1 4/4/1",
-        "",
-    ])
-    mtl = "newmtl field\nKa 0 0 0\nKd 0 0 0\nKs 0 0 0\nKe 1 1 1\nmap_Ke field.png\n"
-    data = InMemoryMesh(
-        mesh_file=MemoryFile(obj, ".obj", "social_field.obj"),
-        supporting_files={
-            "field.mtl": MemoryFile(mtl, ".mtl", "field.mtl"),
-            "field.png": MemoryFile(_field_png(scenario), ".png", "field.png"),
-        },
-    )
-    return Mesh(data)
+def _field_mesh(scenario: Scenario, png: bytes | None = None) -> Mesh:
+    """One quad over ``world.bounds`` at z = 0 textured with the heat map
+    ``png`` (None: :func:`_field_png` of the scenario's people)."""
+    return textured_quad(tuple(scenario.world.bounds), _field_png(scenario) if png is None else png)
 
 
 def ribbon_mesh(points: np.ndarray, width: float, z: float) -> tuple[np.ndarray, np.ndarray]:
@@ -220,34 +195,19 @@ def ribbon_mesh(points: np.ndarray, width: float, z: float) -> tuple[np.ndarray,
     return np.asfortranarray(vertices), np.asfortranarray(faces.astype(np.int32))
 
 
-def _arrow_mesh(x: float, y: float, theta: float, radius: float) -> tuple[np.ndarray, np.ndarray]:
-    """A flat arrow from a person's centre along ``theta``, its head beyond
-    the body's edge (as in the matplotlib scene figure)."""
-    length = radius + max(0.45, 1.6 * radius)
-    shaft, head_w, head_l = 0.06, 0.26, 0.22
-    local = np.array([
-        [0.0, -shaft / 2], [length - head_l, -shaft / 2], [length - head_l, shaft / 2], [0.0, shaft / 2],
-        [length - head_l, -head_w / 2], [length, 0.0], [length - head_l, head_w / 2],
-    ])
-    c, s = math.cos(theta), math.sin(theta)
-    xy = local @ np.array([[c, s], [-s, c]]) + [x, y]
-    vertices = np.vstack([xy.T, np.full(len(xy), _ARROW_Z)])
-    faces = np.array([[0, 1, 2], [0, 2, 3], [4, 5, 6]], dtype=np.int32).T
-    return np.asfortranarray(vertices), np.asfortranarray(faces)
-
-
 def draw_overlays(
     meshcat: Meshcat,
     scenario: Scenario,
     waypoints: np.ndarray | None = None,
     *,
     prefix: str = OVERLAY_PREFIX,
+    people: PeopleLog | None = None,
 ) -> None:
     """Draws the heat map, the people's facing arrows and the planned path.
 
     The people's bodies are the plant's illustration geometry already; this
-    adds what the plant does not know. Everything is static (not animated),
-    so it costs the same in a replay of any length.
+    adds what the plant does not know. Without walking people everything is
+    static (not animated), so it costs the same in a replay of any length.
 
     Args:
         meshcat: the run's Meshcat.
@@ -256,33 +216,47 @@ def draw_overlays(
             None or fewer than 2 distinct points: no path.
         prefix: absolute Meshcat path of the overlays; must not be the
             visualizer's (it is cleared at initialization).
+        people: where the people were over the run (call after
+            :func:`finish_recording`). When someone moves (``not
+            people.static``) the static heat map and arrows show only the
+            people who stand all along, and the walkers get an animated
+            arrow and heat-map quad each (:func:`animate_people`, at
+            ``scenario.execution.replay_fps``, the recording's rate); None or
+            a static log: the scenario's people at t = 0, as always.
     """
     if not prefix.startswith("/"):
         raise ValueError(f"prefix must be an absolute Meshcat path (start with '/'), got {prefix!r}")
     meshcat.Delete(prefix)
-    meshcat.SetObject(f"{prefix}/field", _field_mesh(scenario), Rgba(1, 1, 1, 1))
-    meshcat.SetTransform(f"{prefix}/field", RigidTransform([0.0, 0.0, _FIELD_Z]))
-    # Meshcat tone-maps every material (ACES), which turns white into grey;
-    # the heat map shows the colour map's own colours.
-    meshcat.SetProperty(f"{prefix}/field/<object>", "material.toneMapped", False)
-    # Three.js' MTL loader repeats textures; clamped, the linear filter at
-    # the south edge does not pick up the north edge's colours.
-    for wrap in ("wrapS", "wrapT"):
-        meshcat.SetProperty(f"{prefix}/field/<object>", f"material.emissiveMap.{wrap}", _THREE_CLAMP_TO_EDGE)
-    meshcat.SetProperty(f"{prefix}/field/<object>", "material.needsUpdate", True)
-    people = people_model(scenario).state_at(0.0)
-    for i, ((x, y), theta, radius) in enumerate(zip(people.positions, people.headings, people.radii)):
-        vertices, faces = _arrow_mesh(float(x), float(y), float(theta), float(radius))
-        meshcat.SetTriangleMesh(f"{prefix}/people/{i}", vertices, faces, _ARROW_RGBA)
+    walking = people is not None and not people.static
+    if walking:
+        standing, labels = standing_people(people), np.flatnonzero(standing_mask(people))
+        values = _field_values(scenario, standing)
+        # One colour scale for the standing field and the walkers' quads
+        # (whose AGF peaks at 1): the field's top, at least 1.
+        vmax = max(float(values.max()), 1.0)
+        field = _field_mesh(scenario, field_png(values, vmax))
+    else:
+        standing = people_model(scenario).state_at(0.0)
+        labels = np.arange(standing.count)
+        field = _field_mesh(scenario)
+    meshcat.SetObject(f"{prefix}/field", field, Rgba(1, 1, 1, 1))
+    meshcat.SetTransform(f"{prefix}/field", RigidTransform([0.0, 0.0, FIELD_Z]))
+    set_texture_properties(meshcat, f"{prefix}/field")
+    # Arrows are labelled by the person's index among all the people.
+    for i, (x, y), theta, radius in zip(labels, standing.positions, standing.headings, standing.radii):
+        vertices, faces = arrow_mesh(float(x), float(y), float(theta), float(radius))
+        meshcat.SetTriangleMesh(f"{prefix}/people/{i}", vertices, faces, ARROW_RGBA)
     if waypoints is not None:
         xy = np.asarray(waypoints, float).reshape(len(waypoints), -1)[:, :2]
         if len(np.unique(xy, axis=0)) >= 2:
             x0, y0, x1, y1 = (float(v) for v in scenario.world.bounds)
-            width = max(_PATH_WIDTH, max(x1 - x0, y1 - y0) / 250)  # a few pixels wide in the top view
-            vertices, faces = ribbon_mesh(xy, width, _PATH_Z)
-            meshcat.SetTriangleMesh(f"{prefix}/path", vertices, faces, _PATH_RGBA)
+            width = max(PATH_WIDTH, max(x1 - x0, y1 - y0) / 250)  # a few pixels wide in the top view
+            vertices, faces = ribbon_mesh(xy, width, PATH_Z)
+            meshcat.SetTriangleMesh(f"{prefix}/path", vertices, faces, PATH_RGBA)
         else:
             _log.warning("path of %d waypoint(s) has fewer than 2 distinct points: not drawn", len(xy))
+    if walking:
+        animate_people(meshcat, scenario, people, float(scenario.execution.replay_fps), prefix=prefix, vmax=vmax)
 
 
 def top_view_frame(scenario: Scenario, *, aspect: float | None = 16 / 9,
@@ -382,14 +356,18 @@ _FIT_SCRIPT = """
 """
 
 
-def write_replay_html(meshcat: Meshcat, path: str | os.PathLike, *, fit: tuple[float, float] | None = None) -> int:
+def write_replay_html(meshcat: Meshcat, path: str | os.PathLike, *, fit: tuple[float, float] | None = None,
+                      compact: bool = True) -> int:
     """Writes the standalone replay page ``meshcat.StaticHtml()`` to ``path``.
 
     With ``fit`` (half width, half height in metres, as
     :func:`set_top_view` returns them) the page keeps that region, centred,
     in view at any window size (:data:`_FIT_SCRIPT`, appended to the page;
     it acts on orthographic cameras only, so a perspective camera loaded
-    into the viewer is left alone). The file is written to a temporary file in the
+    into the viewer is left alone). With ``compact`` the recording's numbers
+    are written as float32, as the page holds them anyway
+    (:func:`drake_social.sim.replay_pack.compact_page`): the same replay in
+    about 40 % fewer animation bytes. The file is written to a temporary file in the
     same folder and renamed into place, so a reader never sees half a page.
 
     Returns:
@@ -397,6 +375,8 @@ def write_replay_html(meshcat: Meshcat, path: str | os.PathLike, *, fit: tuple[f
     """
     path = Path(path)
     text = meshcat.StaticHtml()
+    if compact:
+        text = compact_page(text)
     if fit is not None:
         half_w, half_h = (float(v) for v in fit)
         if not (math.isfinite(half_w) and math.isfinite(half_h) and half_w > 0 and half_h > 0):
@@ -419,3 +399,4 @@ def write_replay_html(meshcat: Meshcat, path: str | os.PathLike, *, fit: tuple[f
         raise
     _log.info("wrote %s (%.1f kB)", path, len(data) / 1e3)
     return len(data)
+

@@ -27,11 +27,13 @@ from matplotlib.lines import Line2D
 
 from drake_social.cost import SocialCost
 from drake_social.kinematics import ArmGeometry, config_distance, cumulative_distance
+from drake_social.people import PeopleLog
 from drake_social.planning.result import PlannerResult
 from drake_social.scenario import Scenario
 from drake_social.viz.labels import fit_width
 from drake_social.viz.robot import RobotStyle, draw_robot
 from drake_social.viz.show import MAP_DPI, map_titles, scene_with_field
+from drake_social.viz.tracks import draw_people_tracks, mark_times
 
 __all__ = [
     "PATH_COLOR",
@@ -226,6 +228,9 @@ def path_figure(
     poses: int | None = None,
     tree: bool | None = None,
     resolution: float | None = None,
+    people: PeopleLog | None = None,
+    executed: tuple[np.ndarray, np.ndarray] | None = None,
+    marks: int = 5,
 ) -> Figure:
     """The path over the social heat map with the robot drawn along it (Fig. 5/7).
 
@@ -239,8 +244,19 @@ def path_figure(
         tree: draw the tree's base edges; None = only when there is no path.
         resolution: heat-map cell size, metres; None = picked from the
             world's size (a bounded number of cells).
+        people: where the people were (a run's log): the walkers' tracks and
+            start poses are drawn (:func:`~drake_social.viz.tracks.draw_people_tracks`);
+            None = today's figure.
+        executed: the executed run ``(times (T,) s, q (T, 4))``, with
+            ``people``: its base track, and ``marks`` numbered markers at
+            common times (:func:`~drake_social.viz.tracks.mark_times` over the
+            run) on the robot's base and on each walker present then.
+        marks: the number of common times marked (>= 2).
     """
     fig, ax, full, geometry = scene_with_field(scenario, resolution)
+    if people is not None:
+        times = None if executed is None else mark_times(float(np.asarray(executed[0], float)[-1]), marks)
+        draw_people_tracks(ax, people, marks=times, robot=executed)
     if tree if tree is not None else not result.success:
         draw_tree(ax, result.tree_nodes, result.tree_parents)
     name = title if title is not None else scenario.description or "scenario"

@@ -13,10 +13,11 @@ from matplotlib.patches import Circle
 
 from drake_social.cost import SocialCost
 from drake_social.kinematics import ArmGeometry
-from drake_social.people import people_model
+from drake_social.people import PeopleLog, people_model
 from drake_social.scenario import Scenario
 from drake_social.viz.labels import fit_width
 from drake_social.viz.robot import draw_robot
+from drake_social.viz.tracks import draw_people_tracks
 from drake_social.viz.world import VIEW_MARGIN, draw_social_field, draw_world
 
 __all__ = ["MAP_DPI", "START_COLOR", "GOAL_COLOR", "draw_start_goal", "scene_figure", "show_figure", "write_show"]
@@ -99,7 +100,8 @@ def scene_with_field(scenario: Scenario, resolution: float | None = None) -> tup
     return fig, ax, cost, ArmGeometry.from_scenario(scenario)
 
 
-def show_figure(scenario: Scenario, *, title: str | None = None, resolution: float | None = None) -> Figure:
+def show_figure(scenario: Scenario, *, title: str | None = None, resolution: float | None = None,
+                people: PeopleLog | None = None) -> Figure:
     """The scene picture of a scenario.
 
     The social-cost heat map ``G(x, y)`` with its colour bar, walls and
@@ -112,11 +114,17 @@ def show_figure(scenario: Scenario, *, title: str | None = None, resolution: flo
             fitted to one line by :func:`map_titles`).
         resolution: heat-map cell size, metres; None = picked from the
             world's size (a bounded number of cells).
+        people: where the people walk (e.g. ``PeopleLog.sample`` of the
+            scenario's model): their tracks and start poses are drawn
+            (:func:`~drake_social.viz.tracks.draw_people_tracks`); None =
+            today's picture.
 
     Returns:
         A matplotlib figure (not attached to pyplot; save it with ``savefig``).
     """
     fig, ax, cost, geometry = scene_with_field(scenario, resolution)
+    if people is not None:
+        draw_people_tracks(ax, people)
     draw_robot(ax, geometry, np.asarray(scenario.start, float), labels=True)
     draw_robot(ax, geometry, np.asarray(scenario.goal, float))
     s_start, s_goal = cost(np.array([scenario.start, scenario.goal], float))

@@ -76,7 +76,7 @@ _PROBE = r"""
     try {
       const animator = viewer.animator;
       animator.pause();
-      const result = {duration: animator.duration, positions: [], overlays: []};
+      const result = {duration: animator.duration, positions: [], frames: [], overlays: []};
       let node = null;
       if (path !== null) {
         node = viewer.scene_tree;
@@ -92,6 +92,11 @@ _PROBE = r"""
           const M = node.object.matrixWorld.constructor;
           const X = new M().copy(viewer.scene.matrixWorld).invert().multiply(node.object.matrixWorld);
           result.positions.push([t, X.elements[12], X.elements[13], X.elements[14]]);
+          // The node's yaw (about z) in the world, whether it and its parents
+          // are visible, and its own x scale.
+          let shown = true;
+          for (let o = node.object; o; o = o.parent) shown = shown && o.visible;
+          result.frames.push([t, Math.atan2(X.elements[1], X.elements[0]), shown, node.object.scale.x]);
         }
       }
       if ("drake_social" in viewer.scene_tree.children) {
@@ -179,9 +184,11 @@ def probe(html_path: str | os.PathLike, times: Sequence[float], path: str | None
     """Runs the probe on a copy of the page and returns its JSON result.
 
     Returns:
-        ``{"duration": s, "positions": [[t, x, y, z], ...], "overlays": [...]}``
-        (positions of ``path`` in Drake's world frame, metres; overlays: the
-        children of ``/drake_social``).
+        ``{"duration": s, "positions": [[t, x, y, z], ...], "frames": [[t,
+        yaw, visible, scale_x], ...], "overlays": [...]}`` (positions of
+        ``path`` in Drake's world frame, metres; its yaw about z, radians;
+        whether it and all its parents are visible; its own x scale;
+        overlays: the children of ``/drake_social``).
 
     Raises:
         RuntimeError: Chromium failed, or the page's script reported an error.

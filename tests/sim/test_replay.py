@@ -54,8 +54,14 @@ class Recorded:
     scenario: object
 
 
-def record(scenario, trajectory: PiecewisePolynomial, html: Path, waypoints: np.ndarray | None) -> int:
-    """Records ``trajectory`` posing the scenario's robot; returns the page size."""
+def record(scenario, trajectory: PiecewisePolynomial, html: Path, waypoints: np.ndarray | None, *,
+           people=None, before_overlays=None) -> int:
+    """Records ``trajectory`` posing the scenario's robot; returns the page size.
+
+    With ``people`` (a PeopleLog) the overlays are drawn after the recording,
+    as ``simulate`` draws them, with the walkers animated;
+    ``before_overlays(meshcat)`` runs after the recording, before them.
+    """
     builder = DiagramBuilder()
     scene_graph = builder.AddSystem(SceneGraph())
     plant = MultibodyPlant(0.0)  # not in the diagram: only its geometry is posed
@@ -71,12 +77,17 @@ def record(scenario, trajectory: PiecewisePolynomial, html: Path, waypoints: np.
     fps = scenario.execution.replay_fps
     replay.add_visualizer(builder, scene_graph, meshcat, fps=fps)
     simulator = Simulator(builder.Build())
-    replay.draw_overlays(meshcat, scenario, waypoints)
+    if people is None:
+        replay.draw_overlays(meshcat, scenario, waypoints)
     fit = replay.set_top_view(meshcat, scenario)
     replay.start_recording(meshcat, fps)
     simulator.Initialize()
     simulator.AdvanceTo(trajectory.end_time())
     replay.finish_recording(meshcat)
+    if before_overlays is not None:
+        before_overlays(meshcat)
+    if people is not None:
+        replay.draw_overlays(meshcat, scenario, waypoints, people=people)
     return replay.write_replay_html(meshcat, html, fit=fit)
 
 
