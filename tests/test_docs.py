@@ -149,7 +149,7 @@ def test_site_builds_strictly(tmp_path, extra):
     assert out.returncode == 0, out.stderr[-5000:]
     index = (site / "index.html").read_text(encoding="utf-8")
     assert "Two commands" in index and 'src="office_bar.png"' in index
-    for page in ("scenario", "cli", "architecture", "performance", "testing", "limits", "memory"):
+    for page in ("scenario", "people", "cli", "architecture", "performance", "testing", "limits", "memory"):
         assert (site / page / "index.html").is_file(), page
     # The API pages carry the docstrings: load_scenario's summary line is on the scenario page.
     api = (site / "api" / "scenario" / "index.html").read_text(encoding="utf-8")

@@ -228,3 +228,113 @@ def test_readme_object_kinds_load(tag):
     """The three object tags listed in the README comment are accepted."""
     dut = load_scenario(SCENARIO_DIR / "tiny.yaml", f"object: {tag}")
     assert type(dut.object).__name__ == tag.split()[0][1:]
+
+
+# ---- walking people (issue 20) ----------------------------------------------------
+# Routes checked by sampling them every 2 cm against the obstacles (the box
+# distance above), the room bounds, the robot at its start and goal and each
+# other: independent of drake_social.people's models and validation.
+
+_ROUTE_STEP = 0.02  # metres between checked points of a route
+_CLEAR = 0.1  # least room between a body and an obstacle or wall, metres
+
+
+def _route_points(points) -> np.ndarray:
+    """Points every _ROUTE_STEP along the polyline through ``points`` (N, 2)."""
+    points = np.asarray(points, float)
+    parts = [points[:1]]
+    for a, b in zip(points[:-1], points[1:]):
+        n = max(1, int(math.ceil(np.linalg.norm(b - a) / _ROUTE_STEP)))
+        parts.append(a + np.linspace(0.0, 1.0, n + 1)[1:, None] * (b - a))
+    return np.concatenate(parts)
+
+
+def _obstacle_clearance(scenario, points: np.ndarray) -> float:
+    """Smallest distance of ``points`` (N, 2) to the obstacles and the room's walls."""
+    x0, y0, x1, y1 = scenario.world.bounds
+    walls = min((points[:, 0] - x0).min(), (x1 - points[:, 0]).min(), (points[:, 1] - y0).min(),
+                (y1 - points[:, 1]).min())
+    return min([walls] + [_box_signed_distance(points, box).min() for box in scenario.world.obstacles])
+
+
+def _scripted_xy(person, t: np.ndarray) -> np.ndarray:
+    """Where a scripted person is at times ``t``: linear between waypoints, standing before and after, looping."""
+    tr = np.asarray(person.trajectory, float)
+    if person.loop:
+        t = np.where(t > tr[-1, 0], tr[0, 0] + np.mod(t - tr[0, 0], tr[-1, 0] - tr[0, 0]), t)
+    return np.stack([np.interp(t, tr[:, 0], tr[:, 1]), np.interp(t, tr[:, 0], tr[:, 2])], -1)
+
+
+def _robot_gap(scenario, q, centres: np.ndarray, radius: float) -> float:
+    """Smallest surface distance between the robot at configurations ``q`` (M, 4) and body discs at ``centres``."""
+    from drake_social.people.proximity import part_distances
+
+    geometry = ArmGeometry.from_scenario(scenario)
+    q = np.asarray(q, float).reshape(-1, 4)
+    return float(part_distances(geometry, q, centres, np.full(len(centres), radius))["robot"].min())
+
+
+def test_the_walking_scenarios_are_shipped():
+    office, walkers = (load_scenario(SCENARIO_DIR / name) for name in ("office_bar.yaml", "office_walkers.yaml"))
+    # The office of office_bar: only the people and the description differ.
+    for field in ("world", "robot", "object", "start", "goal", "social", "planner", "execution", "random_seed"):
+        assert getattr(walkers, field) == getattr(office, field), field
+    scripted = [p for p in walkers.people if p.trajectory is not None]
+    assert len(walkers.people) == 10 and len(scripted) >= 6 and sum(p.loop for p in scripted) >= 2
+    lobby = load_scenario(SCENARIO_DIR / "lobby_crowd.yaml")
+    assert 10 <= len(lobby.crowd.people) <= 15 and 1 <= len(lobby.people) <= 2
+    assert isinstance(lobby.object, LShape) and any(p.cycle for p in lobby.crowd.people)
+
+
+@pytest.mark.parametrize("path", SCENARIO_FILES, ids=lambda p: p.stem)
+def test_scripted_routes_keep_clear(path):
+    """Each scripted body stays _CLEAR from obstacles and walls along its whole
+    route, starts where x, y say, is clear of the robot at start and goal when
+    it stands there, and no two people come within 0.3 m of each other over
+    the first 300 s (sampled every 0.02 s)."""
+    scenario = load_scenario(path)
+    t = np.arange(0.0, 300.0, 0.02)
+    tracks = []
+    for i, p in enumerate(scenario.people):
+        if p.trajectory is None:
+            tracks.append(np.broadcast_to([p.x, p.y], (len(t), 2)))
+            continue
+        tr = np.asarray(p.trajectory, float)
+        assert tr[0, 1:] == pytest.approx([p.x, p.y]), f"person {i}: x, y are not the first point"
+        assert not p.loop or tr[-1, 1:] == pytest.approx(tr[0, 1:]), f"person {i}: a loop must be closed"
+        speeds = np.hypot(*np.diff(tr[:, 1:], axis=0).T) / np.diff(tr[:, 0])
+        assert np.all(speeds <= 1.6), f"person {i}: walks at {speeds.max():.2f} m/s"
+        assert _obstacle_clearance(scenario, _route_points(tr[:, 1:])) > p.radius + _CLEAR, f"person {i}"
+        assert _robot_gap(scenario, [scenario.start, scenario.goal], tr[[0, -1], 1:], p.radius) > 0.3, f"person {i} stands in the robot's way"
+        tracks.append(_scripted_xy(p, t))
+    radii = [p.radius for p in scenario.people]
+    for i in range(len(tracks)):
+        for j in range(i):
+            gap = np.linalg.norm(tracks[i] - tracks[j], axis=-1).min() - radii[i] - radii[j]
+            assert gap > 0.3, f"people {j} and {i} come within {gap:.2f} m"
+
+
+@pytest.mark.parametrize("path", SCENARIO_FILES, ids=lambda p: p.stem)
+def test_crowd_goals_are_reachable_in_straight_lines(path):
+    """Every leg of a crowd person (start, goals, back to the first goal when
+    cycling) keeps _CLEAR from obstacles and walls, and 0.5 m from the standing
+    people; nobody starts within 1 m of the robot's start."""
+    scenario = load_scenario(path)
+    if scenario.crowd is None:
+        pytest.skip("no crowd")
+    standing = np.array([[p.x, p.y] for p in scenario.people], float).reshape(-1, 2)
+    standing_radii = np.array([p.radius for p in scenario.people])
+    starts = []
+    for i, p in enumerate(scenario.crowd.people):
+        stops = [[p.x, p.y]] + [list(g) for g in p.goals] + ([list(p.goals[0])] if p.cycle else [])
+        route = _route_points(stops)
+        assert _obstacle_clearance(scenario, route) > p.radius + _CLEAR, f"crowd person {i}"
+        if len(standing):
+            gaps = np.linalg.norm(route[:, None] - standing[None], axis=-1) - standing_radii - p.radius
+            assert gaps.min() > 0.5, f"crowd person {i} walks through a standing person"
+        assert _robot_gap(scenario, scenario.start, np.array([[p.x, p.y]]), p.radius) > 1.0, f"crowd person {i}"
+        starts.append((p.x, p.y, p.radius))
+    bodies = starts + [(p.x, p.y, p.radius) for p in scenario.people]
+    for k, a in enumerate(bodies):
+        for b in bodies[:k]:
+            assert math.hypot(a[0] - b[0], a[1] - b[1]) > a[2] + b[2] + 0.3
