@@ -200,7 +200,8 @@ def test_an_override_error_names_the_sweep_and_the_variant(tmp_path):
                            f"must be > 0, got -1.0")
     dut = _sweep(tmp_path, "variants: {wrong: {social: {sigma: 1}}}\n")
     assert _error(dut) == (f"{dut}: line 4: variants.wrong.social.sigma: unknown field in variants.wrong.social; "
-                           f"allowed: sigma_h, side_ratio, rear_ratio, threshold, weights, length_weight, resolution")
+                           f"allowed: sigma_h, side_ratio, rear_ratio, threshold, weights, length_weight, resolution, "
+                           f"speed_scaling")
 
 
 def test_paper_scenario_dir_errors_name_the_folder(tmp_path, capsys):
@@ -246,7 +247,8 @@ def test_a_nul_or_control_character_in_a_sweep_file_is_refused(tmp_path):
                      "algorithms, variants), got a list"),
     ("variants: {? [a]: {}}\n", "line 4: variants: names must be non-empty strings, got a list"),
     ("variants: !!set {a}\n", "line 4: variants: must be a mapping of names to mappings (Scenario: description, "
-                              "world, people, robot, object, start, goal, social, planner, execution, random_seed) "
+                              "world, people, crowd, people_file, people_file_ids, robot, object, start, goal, social, planner, "
+                                  "execution, random_seed) "
                               "or nulls without a tag, got !!set a mapping"),
     ("variants: {a: {world: !Bar {}}}\n", "line 4: variants.a.world: must be a mapping (World: bounds, obstacles, "
                                           "wall_thickness) without a tag, got !Bar a mapping"),
@@ -436,7 +438,7 @@ def test_a_long_variant_name_is_named_whole_in_its_fields(tmp_path):
     path = _sweep(tmp_path, f"variants: {{{name}: {{social: {{sigma_hh: 1}}}}}}\n")
     assert _error(path) == (f"{path}: line 4: variants.{name}.social.sigma_hh: unknown field in "
                             f"variants.{name}.social; allowed: sigma_h, side_ratio, rear_ratio, threshold, weights, "
-                            "length_weight, resolution")
+                            "length_weight, resolution, speed_scaling")
 
 
 def test_a_variant_name_with_a_control_character_is_refused_escaped(tmp_path):

@@ -57,7 +57,8 @@ def test_a_static_scenario_logs_its_standing_people_and_checks_them(tiny_scenari
 
 
 def test_a_dynamic_run_with_a_walker_through_the_robot_runs(tiny_scenario, monkeypatch):
-    # A walker crossing the robot's start: the plant must neither crash nor push on them.
+    # A walker crossing the robot's start: the plant must neither crash nor push on them. The
+    # safety monitor holds the robot while the walker walks through it, then lets it go.
     start = np.asarray(tiny_scenario.start, float)
 
     class Crossing:
@@ -70,8 +71,9 @@ def test_a_dynamic_run_with_a_walker_through_the_robot_runs(tiny_scenario, monke
     monkeypatch.setattr(diagram_module, "people_model", lambda scenario: ScenarioPeople([Crossing()]))
     waypoints = np.array([start, start + [0.5, 0.0, 0.0, 0.0]])
     near = dc.replace(tiny_scenario, goal=waypoints[1].tolist())
-    run = simulate(near, mode="dynamic", waypoints=waypoints, time_limit=2.0)
+    run = simulate(near, mode="dynamic", waypoints=waypoints, time_limit=5.0)
     assert run.reached and np.isfinite(run.q).all()
+    assert len(run.stops) == 1 and run.stops[0]["end"] is not None
     np.testing.assert_allclose(run.people.positions[:, 0, 1], start[1] - 1.0 + run.times, atol=1e-12)
     # The robot went where the servo took it, through the person (no contact force from them).
     assert run.q[-1, 0] == pytest.approx(start[0] + 0.5, abs=0.06)
