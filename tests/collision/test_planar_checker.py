@@ -18,6 +18,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from drake_social.people import people_model
 from drake_social.collision.drake_checker import CHECKERS, SceneGraphChecker, make_checker, verify_path
 from drake_social.collision.planar_checker import PlanarChecker
 from drake_social.model.plant import wall_boxes
@@ -89,9 +90,9 @@ def exact_clearances(scenario: Scenario, geometry, qs: np.ndarray) -> np.ndarray
             return np.hypot(np.maximum(ux, 0), np.maximum(uy, 0)) + np.minimum(np.maximum(ux, uy), 0)
 
         best = np.minimum(best, (_golden_min(sdf) - radii[:, None]).min((1, 2)))
-    if scenario.people:
-        p = np.array([[x.x, x.y] for x in scenario.people])
-        r = np.array([x.radius for x in scenario.people])
+    people = people_model(scenario).state_at(0.0).visible()  # standing, scripted and crowd people at t = 0
+    if people.count:
+        p, r = people.positions, people.radii
 
         def dist(t):
             return np.hypot(a[..., 0] + t * d[..., 0] - p[:, 0], a[..., 1] + t * d[..., 1] - p[:, 1]) - r
