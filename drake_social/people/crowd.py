@@ -91,7 +91,10 @@ class SocialForceCrowd:
         for i, g in enumerate(self._goals):
             self._goal_table[i, :len(g)] = g
         self._cycle = np.asarray(cycle, bool).reshape(p)
-        self._radii = np.asarray(radii, float).reshape(p)
+        self._radii = np.array(radii, float).reshape(p)  # its own, read-only: every people_state shares it
+        self._radii.flags.writeable = False
+        self._present = np.ones(p, bool)
+        self._present.flags.writeable = False
         self._speeds = np.asarray(speeds, float).reshape(p)
         self._names = tuple(names)
         self._dt = float(params.time_step)
@@ -236,9 +239,8 @@ class SocialForceCrowd:
 
     def people_state(self, state: np.ndarray, t: float) -> PeopleState:
         """The crowd's people in ``state``, reported at time ``t`` (seconds)."""
-        pos, vel, heading, _ = self.unpack(state)
-        return PeopleState(t=float(t), positions=pos, headings=heading, velocities=vel, radii=self._radii,
-                           names=self._names)
+        pos, vel, heading, _ = self.unpack(state)  # fresh copies: no need for the constructor's
+        return PeopleState._trusted(float(t), pos, heading, vel, self._radii, self._names, self._present)
 
     # ---- helpers ---------------------------------------------------------
 
