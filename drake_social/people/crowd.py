@@ -95,6 +95,7 @@ class SocialForceCrowd:
         self._radii.flags.writeable = False
         self._present = np.ones(p, bool)
         self._present.flags.writeable = False
+        self._last_people: tuple[bytes, PeopleState] | None = None  # see people_state
         self._speeds = np.asarray(speeds, float).reshape(p)
         self._names = tuple(names)
         self._dt = float(params.time_step)
@@ -239,8 +240,14 @@ class SocialForceCrowd:
 
     def people_state(self, state: np.ndarray, t: float) -> PeopleState:
         """The crowd's people in ``state``, reported at time ``t`` (seconds)."""
-        pos, vel, heading, _ = self.unpack(state)  # fresh copies: no need for the constructor's
-        return PeopleState._trusted(float(t), pos, heading, vel, self._radii, self._names, self._present)
+        # The state holds over a time step while the time moves on: the arrays
+        # of the last state asked for are kept (read-only) and shared.
+        key = np.asarray(state, float).tobytes()
+        if self._last_people is None or self._last_people[0] != key:
+            pos, vel, heading, _ = self.unpack(state)  # fresh copies: no need for the constructor's
+            self._last_people = (key, PeopleState._trusted(0.0, pos, heading, vel, self._radii, self._names,
+                                                           self._present))
+        return self._last_people[1].at_time(t)
 
     # ---- helpers ---------------------------------------------------------
 

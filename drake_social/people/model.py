@@ -60,9 +60,14 @@ class PeopleState:
         never written again. They are made read-only and kept, not copied or
         checked (the checks and copies of the constructor cost tens of
         microseconds). ``present`` is required (bool, (P,))."""
-        state = object.__new__(cls)
         for value in (positions, headings, velocities, radii, present):
             value.flags.writeable = False
+        return cls._shared(t, positions, headings, velocities, radii, names, present)
+
+    @classmethod
+    def _shared(cls, t, positions, headings, velocities, radii, names, present) -> "PeopleState":
+        """:meth:`_trusted` of arrays already read-only (another state's)."""
+        state = object.__new__(cls)
         setattr_ = object.__setattr__
         setattr_(state, "t", t)
         setattr_(state, "positions", positions)
@@ -75,8 +80,8 @@ class PeopleState:
 
     def at_time(self, t: float) -> "PeopleState":
         """The same people reported at time ``t`` (seconds): the arrays are shared (read-only)."""
-        return PeopleState._trusted(float(t), self.positions, self.headings, self.velocities, self.radii,
-                                    self.names, self.present)
+        return PeopleState._shared(float(t), self.positions, self.headings, self.velocities, self.radii,
+                                   self.names, self.present)
 
     @property
     def count(self) -> int:

@@ -107,3 +107,23 @@ def test_concat_and_static_states_are_checked_states():
     assert a.state_at(3.0).t == 3.0
     joined = ScenarioPeople([a, b])
     assert joined.open_loop_state(1.0).t == 1.0 and joined.open_loop_state(2.0).t == 2.0
+
+
+def test_joined_crowd_states_reused_only_while_their_parts_stay():
+    from drake_social.control import PeopleSource
+
+    model = people_model(load_scenario("scenarios/lobby_crowd.yaml"))
+    source, crowd = PeopleSource(model), model.crowd
+    row = source.initial_crowd_state()
+    for k in range(12):
+        t = 0.01 * k
+        if k % 5 == 0 and k:  # a crowd step: new numbers
+            n = (len(row) - 1) // 2
+            row = np.concatenate([[t], row[1 + n:], crowd.step(row[1 + n:], t, model.open_loop_state(t), None)])
+        got = source.people_at(t, row)
+        n = (len(row) - 1) // 2
+        x = row[1 + n:] if t >= row[0] + crowd.time_step - 1e-9 else row[1:1 + n]
+        pos, vel, heading, _ = crowd.unpack(x)
+        fresh = PeopleState(t=t, positions=pos, headings=heading, velocities=vel, radii=crowd.people_state(x, t).radii,
+                            names=crowd.people_state(x, t).names)
+        _same(got, _constructed(concat_states([model.open_loop_state(t), fresh], t)))
