@@ -61,7 +61,8 @@ class PeopleState:
         checked (the checks and copies of the constructor cost tens of
         microseconds). ``present`` is required (bool, (P,))."""
         for value in (positions, headings, velocities, radii, present):
-            value.flags.writeable = False
+            if value.flags.writeable:  # the model's own constants are read-only already (a cheaper test)
+                value.flags.writeable = False
         return cls._shared(t, positions, headings, velocities, radii, names, present)
 
     @classmethod
