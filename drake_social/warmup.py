@@ -75,6 +75,7 @@ def warm_up() -> dict[str, float | int]:
     checker.is_motion_valid(q_a, q_b), checker.are_motions_valid(qs[:1], qs[1:])
     checker.contacts(q_a), checker.body_poses(q_a), checker.capsules(q_a)
     _warm_up_analysis()
+    _warm_up_people(scenario)
     return {"seconds": time.perf_counter() - t0, "compiled": cache_misses(),
             "functions": sum(len(d.signatures) for d in kernel_dispatchers().values())}
 
@@ -91,6 +92,39 @@ def _warm_up_analysis() -> None:
     dense = np.ascontiguousarray([[0.0, 0.0, 0.0, 0.0], [1.0, 0.0, 0.0, 0.0], [2.0, 0.0, 0.0, 0.0]])
     newton_steps = 8  # an int, as the analysis's own count
     analysis_kernel.step_distances(dense, points, steps, 2, 0.6, 0.5, 0.1, 0.0, newton_steps)
+
+
+#: What the warm-up scenario lacks for the people's kernels: a walker (the
+#: tracks' evaluation) and a crowd of one (the social-force step).
+_WARMUP_PEOPLE = """
+people:
+  - {x: 4.0, y: 3.8, theta: -1.5708, radius: 0.25, name: "standing"}
+  - {x: 1.0, y: 4.2, theta: 0.0, radius: 0.25, name: "walking", trajectory: [[0.0, 1.0, 4.2], [4.0, 7.0, 4.2]]}
+crowd:
+  people:
+    - {x: 7.0, y: 1.0, goals: [[1.0, 1.0]], name: "crowd"}
+"""
+
+
+def _warm_up_people(scenario) -> None:
+    """The per-step kernels of a simulation with people, with the argument types
+    the diagram gives them: the tracks' evaluation
+    (:mod:`drake_social.people.tracks_kernel`), the crowd's step with and
+    without the robot (:mod:`drake_social.people.social_force_kernel`) and the
+    safety monitor's distance (:mod:`drake_social.people.proximity_kernel`)."""
+    from drake_social.control import SafetyMonitor
+    from drake_social.kinematics import ArmGeometry
+    from drake_social.people.compose import people_model
+    from drake_social.scenario import load_scenario_text
+
+    block = WARMUP_SCENARIO[WARMUP_SCENARIO.index("people:"):WARMUP_SCENARIO.index("robot:")]
+    people = load_scenario_text(WARMUP_SCENARIO.replace(block, _WARMUP_PEOPLE.lstrip("\n")),
+                                "<drake_social.warmup people>")
+    model = people_model(people)
+    state = model.state_at(0.5)  # the walker, the crowd stepped open loop (no robot)
+    q = np.array(scenario.start, float)
+    model.crowd.step(np.array(model.crowd.initial_state(), float), 0.0, model.open_loop_state(0.0), q.copy())
+    SafetyMonitor(ArmGeometry.from_scenario(people), safety_distance=0.05, period=0.01).too_close(q, state)
 
 
 def main(argv: list[str] | None = None) -> int:

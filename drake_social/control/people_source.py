@@ -62,6 +62,9 @@ __all__ = ["PEOPLE_VECTOR_FIELDS", "PeopleSource", "people_vector"]
 #: The layout of one person in the ``people_vector`` output.
 PEOPLE_VECTOR_FIELDS = ("x", "y", "theta", "vx", "vy", "radius")
 
+#: The fields of a PeopleState that a join concatenates (see PeopleSource.people_at).
+_JOINED = ("positions", "headings", "velocities", "radii", "present", "names")
+
 #: Slack (seconds) when comparing the context's time with the next update's:
 #: Drake computes periodic event times as offset + k * period.
 _TIME_SLACK = 1e-9
@@ -98,6 +101,7 @@ class PeopleSource(LeafSystem):
                             f"got {type(crowd).__name__}")
         self._model = model
         self._crowd: CrowdModel | None = crowd
+        self._last_join: tuple[tuple, PeopleState] | None = None  # see people_at
         count = int(model.count)
         prereqs = {self.time_ticket()}
         if crowd is not None:
@@ -146,7 +150,17 @@ class PeopleSource(LeafSystem):
         crowd = self._crowd.people_state(x, t)
         if not self._open_count:  # a crowd alone: no open-loop state to build and join
             return crowd
-        return concat_states([self._model.open_loop_state(t), crowd], t)
+        parts = [self._model.open_loop_state(t), crowd]
+        # Standing people and a crowd between its steps keep their arrays while
+        # the time moves on: the last join is reused when its parts' arrays are
+        # the very same (read-only) objects.
+        arrays = tuple(getattr(s, f) for s in parts for f in _JOINED)  # held: their ids stay theirs
+        last = self._last_join
+        if last is not None and all(a is b for a, b in zip(arrays, last[0])):
+            return last[1].at_time(t)
+        joined = concat_states(parts, t)
+        self._last_join = (arrays, joined)
+        return joined
 
     def people_log(self, times: Sequence[float], crowd_states: np.ndarray | None = None) -> PeopleLog:
         """The people at ``times`` (T,), seconds, increasing, T >= 1; with a crowd,

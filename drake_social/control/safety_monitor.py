@@ -7,7 +7,8 @@ update every ``period`` seconds, sets its ``stop`` flag when any part of the
 robot (the base disc, the two link capsules, the object's capsules) is within
 ``safety_distance`` of a present person's body disc, surface to surface
 (:func:`drake_social.people.proximity.part_distances`, the one home of that
-distance), and clears it when every part is farther: a safety field, as on
+distance; every period its compiled single-configuration form
+:func:`~drake_social.people.proximity.robot_distance`, the same numbers), and clears it when every part is farther: a safety field, as on
 real mobile robots. ``safety_distance = 0`` stops on contact (or overlap) only.
 
 The flag is state, so ``stop`` has no direct feedthrough from ``q``: the
@@ -58,7 +59,8 @@ from pydrake.systems.framework import BasicVector, Context, EventStatus, LeafSys
 
 from drake_social.kinematics import ArmGeometry
 from drake_social.people import PeopleState
-from drake_social.people.proximity import part_distances
+from drake_social.people import proximity_kernel
+from drake_social.people.proximity import part_distances, robot_distance_args
 
 __all__ = ["SAFETY_PARTS", "SafetyMonitor", "SafetyRecord", "Stop", "braking_travel", "robot_reach"]
 
@@ -178,7 +180,7 @@ class SafetyMonitor(LeafSystem):
             raise ValueError(f"SafetyMonitor: period must be a finite number of seconds > 0, got {period!r}")
         self._geometry = geometry
         self._safety = float(safety_distance)
-        self._reach = robot_reach(geometry)
+        self._robot_args = robot_distance_args(geometry)
         self._q_port = self.DeclareVectorInputPort("q", 4)
         self._people_port = self.DeclareAbstractInputPort(
             "people_state", AbstractValue.Make(PeopleState(0.0, np.zeros((0, 2)), np.zeros(0), np.zeros((0, 2)),
@@ -217,17 +219,13 @@ class SafetyMonitor(LeafSystem):
 
     def too_close(self, q, people: PeopleState) -> bool:
         """Whether a watched part is within the safety distance of a present person."""
-        # Every point of the robot lies within reach of the base centre: people
-        # farther than reach + safety from it are clear without the full
-        # distance (plain floats: this runs every control period).
-        x, y = float(q[0]), float(q[1])
-        limit = self._reach + self._safety
-        if not any(here and math.hypot(px - x, py - y) - r <= limit for (px, py), r, here
-                   in zip(people.positions.tolist(), people.radii.tolist(), people.present.tolist())):
-            return False
-        d = part_distances(self._geometry, np.asarray(q, float).reshape(1, 4), people.positions, people.radii,
-                           people.present)
-        return bool(d["robot"][0] <= self._safety)
+        # The compiled robot_distance (this runs every control period), its
+        # arguments packed once; numpy's cosines, as the reference's kinematics;
+        # q a fresh array (one compiled signature whatever the caller passes).
+        q = np.array(q, float).reshape(4)
+        d = proximity_kernel.robot_distance(q, np.cos(q[2:]), np.sin(q[2:]), *self._robot_args, people.positions,
+                                            people.radii, people.present)
+        return bool(d <= self._safety)
 
     def _Decide(self, context: Context, state: State) -> None:
         record = self.record(context)

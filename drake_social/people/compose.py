@@ -57,14 +57,15 @@ def concat_states(states: Sequence[PeopleState], t: float) -> PeopleState:
     """One state of the people of ``states`` in turn, at time ``t``."""
     if len(states) == 1:
         return states[0]
-    return PeopleState(
-        t=float(t),
-        positions=np.concatenate([s.positions for s in states]).reshape(-1, 2),
-        headings=np.concatenate([s.headings for s in states]),
-        velocities=np.concatenate([s.velocities for s in states]).reshape(-1, 2),
-        radii=np.concatenate([s.radii for s in states]),
-        names=tuple(n for s in states for n in s.names),
-        present=np.concatenate([s.present for s in states]),
+    # Fresh arrays of states already checked: no copies, no checks again.
+    return PeopleState._trusted(
+        float(t),
+        np.concatenate([s.positions for s in states]).reshape(-1, 2),
+        np.concatenate([s.headings for s in states]),
+        np.concatenate([s.velocities for s in states]).reshape(-1, 2),
+        np.concatenate([s.radii for s in states]),
+        tuple(n for s in states for n in s.names),
+        np.concatenate([s.present for s in states]),
     )
 
 
@@ -80,6 +81,10 @@ class ScenarioPeople:
         self._open = tuple(open_loop)
         self._crowd = crowd
         self._crowd_states: list[np.ndarray] = [] if crowd is None else [np.asarray(crowd.initial_state(), float)]
+        # The last open-loop state asked for: the simulation asks twice per
+        # time (the crowd's step and the people output). The models answer
+        # the same for the same time, and a state is immutable.
+        self._last_open: PeopleState | None = None
 
     @property
     def open_loop(self) -> tuple[PeopleModel, ...]:
@@ -101,11 +106,17 @@ class ScenarioPeople:
 
     def open_loop_state(self, t: float) -> PeopleState:
         """The open-loop people at time ``t`` (all of them when there is no crowd)."""
+        last = self._last_open
+        if last is not None and last.t == t:
+            return last
         states = [m.state_at(t) for m in self._open]
         if not states:
-            return PeopleState(t=float(t), positions=np.zeros((0, 2)), headings=np.zeros(0),
-                               velocities=np.zeros((0, 2)), radii=np.zeros(0), names=())
-        return concat_states(states, t)
+            state = PeopleState(t=float(t), positions=np.zeros((0, 2)), headings=np.zeros(0),
+                                velocities=np.zeros((0, 2)), radii=np.zeros(0), names=())
+        else:
+            state = concat_states(states, t)
+        self._last_open = state
+        return state
 
     def crowd_state_open_loop(self, t: float) -> np.ndarray:
         """The crowd's state vector at time ``t`` simulated without the robot:

@@ -91,7 +91,11 @@ class SocialForceCrowd:
         for i, g in enumerate(self._goals):
             self._goal_table[i, :len(g)] = g
         self._cycle = np.asarray(cycle, bool).reshape(p)
-        self._radii = np.asarray(radii, float).reshape(p)
+        self._radii = np.array(radii, float).reshape(p)  # its own, read-only: every people_state shares it
+        self._radii.flags.writeable = False
+        self._present = np.ones(p, bool)
+        self._present.flags.writeable = False
+        self._last_people: tuple[bytes, PeopleState] | None = None  # see people_state
         self._speeds = np.asarray(speeds, float).reshape(p)
         self._names = tuple(names)
         self._dt = float(params.time_step)
@@ -236,9 +240,14 @@ class SocialForceCrowd:
 
     def people_state(self, state: np.ndarray, t: float) -> PeopleState:
         """The crowd's people in ``state``, reported at time ``t`` (seconds)."""
-        pos, vel, heading, _ = self.unpack(state)
-        return PeopleState(t=float(t), positions=pos, headings=heading, velocities=vel, radii=self._radii,
-                           names=self._names)
+        # The state holds over a time step while the time moves on: the arrays
+        # of the last state asked for are kept (read-only) and shared.
+        key = np.asarray(state, float).tobytes()
+        if self._last_people is None or self._last_people[0] != key:
+            pos, vel, heading, _ = self.unpack(state)  # fresh copies: no need for the constructor's
+            self._last_people = (key, PeopleState._trusted(0.0, pos, heading, vel, self._radii, self._names,
+                                                           self._present))
+        return self._last_people[1].at_time(t)
 
     # ---- helpers ---------------------------------------------------------
 

@@ -52,6 +52,38 @@ class PeopleState:
             value.flags.writeable = False
             object.__setattr__(self, field, value)
 
+    @classmethod
+    def _trusted(cls, t: float, positions: np.ndarray, headings: np.ndarray, velocities: np.ndarray,
+                 radii: np.ndarray, names: tuple[str, ...], present: np.ndarray) -> "PeopleState":
+        """A state of arrays the caller owns and vouches for (the models' own
+        path, every time step): C-contiguous, of the right dtypes and shapes,
+        never written again. They are made read-only and kept, not copied or
+        checked (the checks and copies of the constructor cost tens of
+        microseconds). ``present`` is required (bool, (P,))."""
+        for value in (positions, headings, velocities, radii, present):
+            if value.flags.writeable:  # the model's own constants are read-only already (a cheaper test)
+                value.flags.writeable = False
+        return cls._shared(t, positions, headings, velocities, radii, names, present)
+
+    @classmethod
+    def _shared(cls, t, positions, headings, velocities, radii, names, present) -> "PeopleState":
+        """:meth:`_trusted` of arrays already read-only (another state's)."""
+        state = object.__new__(cls)
+        setattr_ = object.__setattr__
+        setattr_(state, "t", t)
+        setattr_(state, "positions", positions)
+        setattr_(state, "headings", headings)
+        setattr_(state, "velocities", velocities)
+        setattr_(state, "radii", radii)
+        setattr_(state, "names", names)
+        setattr_(state, "present", present)
+        return state
+
+    def at_time(self, t: float) -> "PeopleState":
+        """The same people reported at time ``t`` (seconds): the arrays are shared (read-only)."""
+        return PeopleState._shared(float(t), self.positions, self.headings, self.velocities, self.radii,
+                                   self.names, self.present)
+
     @property
     def count(self) -> int:
         """The number of people P."""
@@ -125,4 +157,4 @@ class StaticPeople:
         """The people at time ``t`` (seconds, finite): where they stand."""
         if not math.isfinite(t):
             raise ValueError(f"StaticPeople.state_at: t must be a finite time in seconds, got {t!r}")
-        return dc.replace(self._state, t=float(t))
+        return self._state.at_time(t)

@@ -13,8 +13,9 @@ from __future__ import annotations
 import numpy as np
 
 from drake_social.kinematics import ArmGeometry
+from drake_social.people import proximity_kernel
 
-__all__ = ["part_distances", "part_names", "segment_point_distance"]
+__all__ = ["part_distances", "part_names", "robot_distance", "robot_distance_args", "segment_point_distance"]
 
 
 def part_names(geometry: ArmGeometry) -> list[str]:
@@ -75,3 +76,36 @@ def part_distances(geometry: ArmGeometry, q: np.ndarray, centres: np.ndarray, ra
     out["object"] = d_seg[:, 2:].min(axis=(1, 2))
     out["robot"] = np.minimum.reduce([out["base"], out["arm"], out["object"]])
     return out
+
+
+def robot_distance_args(geometry: ArmGeometry) -> tuple:
+    """The robot's arguments of :func:`drake_social.people.proximity_kernel.robot_distance`
+    (link lengths, link radius, base radius, object polyline, object radius),
+    packed once for a caller that asks many times (the safety monitor)."""
+    return (np.asarray(geometry.link_lengths, float).reshape(2), float(geometry.link_radius),
+            float(geometry.base_radius), np.ascontiguousarray(geometry.object_points, float).reshape(-1, 2),
+            float(geometry.object_radius))
+
+
+def robot_distance(geometry: ArmGeometry | tuple, q: np.ndarray, centres: np.ndarray, radii: np.ndarray,
+                   present: np.ndarray | None = None) -> float:
+    """Surface-to-surface distance of the robot (base disc, links, object) at one
+    configuration to the nearest present person, metres: the ``robot`` entry of
+    :func:`part_distances` for ``q`` (4,), computed without its arrays (a
+    compiled loop, the same operations; +inf when nobody is present).
+
+    Args:
+        geometry: the robot and its object, or :func:`robot_distance_args` of them.
+        q: (4,) configuration.
+        centres: (P, 2) body centres, metres; radii: (P,) body radii, metres.
+        present: (P,) booleans; None = everyone.
+    """
+    args = robot_distance_args(geometry) if isinstance(geometry, ArmGeometry) else geometry
+    q = np.asarray(q, float).reshape(4)
+    centres = np.asarray(centres, float).reshape(-1, 2)
+    radii = np.asarray(radii, float).reshape(-1)
+    present = np.ones(len(radii), bool) if present is None else np.asarray(present, bool).reshape(-1)
+    if not (len(centres) == len(radii) == len(present)):
+        raise ValueError(f"robot_distance: {len(centres)} centres, {len(radii)} radii and {len(present)} "
+                         "presence flags; one of each per person")
+    return float(proximity_kernel.robot_distance(q, np.cos(q[2:]), np.sin(q[2:]), *args, centres, radii, present))

@@ -61,7 +61,8 @@ class RecordedPeople:
                               [False] * n, [math.inf] * n)
         self._first = np.array([tr.times[0] for tr in tracks]).reshape(n)
         self._last = np.array([tr.times[-1] for tr in tracks]).reshape(n)
-        self._radii = np.array([tr.radius for tr in tracks]).reshape(n)
+        self._radii = np.array([tr.radius for tr in tracks], float).reshape(n)
+        self._radii.flags.writeable = False  # shared by every state
         self._names = tuple(ids)
 
     @property
@@ -79,8 +80,9 @@ class RecordedPeople:
         if not math.isfinite(t):
             raise ValueError(f"RecordedPeople.state_at: t must be a finite time in seconds, got {t!r}")
         positions, velocities, headings = self._tracks.evaluate(t)
-        return PeopleState(t=float(t), positions=positions, headings=headings, velocities=velocities,
-                           radii=self._radii, names=self._names, present=(self._first <= t) & (t <= self._last))
+        # Fresh arrays of the tracks and this model's own read-only ones: no copies.
+        return PeopleState._trusted(float(t), positions, headings, velocities, self._radii, self._names,
+                                    (self._first <= t) & (t <= self._last))
 
 
 def recorded_model(scenario) -> RecordedPeople | None:

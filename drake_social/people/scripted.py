@@ -73,6 +73,9 @@ class ScriptedPeople:
             steady.append(knots[2])
         self._tracks = Tracks(times, points, headings, loops, steady)
         self._radii = np.array([float(p.radius) for p in people]).reshape(-1)
+        self._radii.flags.writeable = False
+        self._present = np.ones(len(self._radii), bool)
+        self._present.flags.writeable = False
         self._names = tuple(p.name for p in people)
         self._static = all(p.trajectory is None for p in people)
 
@@ -90,5 +93,6 @@ class ScriptedPeople:
         if not math.isfinite(t):
             raise ValueError(f"ScriptedPeople.state_at: t must be a finite time in seconds, got {t!r}")
         positions, velocities, headings = self._tracks.evaluate(t)
-        return PeopleState(t=float(t), positions=positions, headings=headings, velocities=velocities,
-                           radii=self._radii, names=self._names)
+        # Fresh arrays of the tracks and this model's own read-only ones: no copies.
+        return PeopleState._trusted(float(t), positions, headings, velocities, self._radii, self._names,
+                                    self._present)

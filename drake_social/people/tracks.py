@@ -24,6 +24,7 @@ from typing import Sequence
 
 import numpy as np
 
+from drake_social.people import tracks_kernel
 from drake_social.scenario.heading import MAX_LOOP_PASSES, TURN_RATE, heading_knots
 
 __all__ = ["MAX_LOOP_PASSES", "TURN_RATE", "Tracks", "heading_knots"]
@@ -122,7 +123,14 @@ class Tracks:
         return self._count
 
     def evaluate(self, t: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Positions (P, 2), velocities (P, 2) and headings (P,) at time ``t`` (seconds)."""
+        """Positions (P, 2), velocities (P, 2) and headings (P,) at time ``t``
+        (seconds), fresh C-contiguous arrays: :meth:`evaluate_reference`'s
+        numbers by the compiled loop of :mod:`drake_social.people.tracks_kernel`."""
+        return tracks_kernel.evaluate(float(t), self._loop, self._start, self._period, self._lo, self._hi,
+                                      self._key_base, self._keys, self._table)
+
+    def evaluate_reference(self, t: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """:meth:`evaluate` in numpy, vectorised over people (the reference)."""
         t = float(t)
         if self._any_loop:
             u = np.where(self._loop & (t > self._start),
@@ -134,4 +142,5 @@ class Tracks:
         # Interval j of person i (j breakpoints <= u) is row (i's first key index) + i + j.
         rows = self._table[np.searchsorted(self._keys, query, side="right") + self._rows]
         out = rows[:, :3] + (u - rows[:, 6])[:, None] * rows[:, 3:6]
-        return out[:, :2], rows[:, 3:5], out[:, 2]
+        # Fresh C-contiguous arrays (a caller may keep them without copying).
+        return out[:, :2].copy(), rows[:, 3:5].copy(), out[:, 2].copy()
