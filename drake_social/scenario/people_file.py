@@ -63,6 +63,7 @@ class RecordedTrack:
         thetas: (n,) facing directions, radians, or None (no ``theta`` column).
         radius: body radius, metres.
         first_line: the file's line of the id's earliest sample (1-based).
+        lines: (n,) the file's line of each sample (1-based; ``lines[0] == first_line``).
     """
 
     id: str
@@ -71,6 +72,7 @@ class RecordedTrack:
     thetas: np.ndarray | None
     radius: float
     first_line: int
+    lines: np.ndarray | None = None
 
 
 @dc.dataclass(frozen=True)
@@ -181,8 +183,10 @@ def _read_cached(path: str, size: int, mtime_ns: int, inode: int) -> PeopleRecor
         thetas = data[:, 2].copy() if "theta" in col else None
         for a in (times, positions) + (() if thetas is None else (thetas,)):
             a.flags.writeable = False
+        lines = np.array([s[1] for s in samples], dtype=np.int64)
+        lines.flags.writeable = False
         tracks[ident] = RecordedTrack(id=ident, times=times, positions=positions, thetas=thetas,
-                                      radius=float(radii[0]), first_line=samples[0][1])
+                                      radius=float(radii[0]), first_line=samples[0][1], lines=lines)
     return PeopleRecording(path=path, tracks=tracks)
 
 
