@@ -568,7 +568,9 @@ class PeopleImport:
     out: Path  #: the people CSV
     rows: int  #: data rows written
     id_count: int  #: distinct ids (people)
-    duration: float  #: time of the last row, seconds (the first is at t = 0)
+    duration: float  #: the time the rows span, seconds: last row's t minus first row's t
+    first: float  #: t of the first row, seconds (0 unless --start is before the first kept row)
+    last: float  #: t of the last row, seconds
 
 
 def run_people_import(*, file: str | Path, out: str | Path, layout: str = "xy", fps: float = 25.0,
@@ -608,4 +610,5 @@ def run_people_import(*, file: str | Path, out: str | Path, layout: str = "xy", 
     except BaseException:
         tmp.unlink(missing_ok=True)
         raise
-    return PeopleImport(out, len(rows), len({r[1] for r in rows}), rows[-1][0])
+    first, last = rows[0][0], rows[-1][0]  # the rows are sorted by time
+    return PeopleImport(out, len(rows), len({r[1] for r in rows}), last - first, first, last)

@@ -224,7 +224,8 @@ def _run_people(args: argparse.Namespace) -> int:
     done = app.run_people_import(file=args.file, out=args.csv_out, layout=args.layout, fps=args.fps,
                                  offset=tuple(args.offset), rotate=args.rotate, start=args.start, end=args.end,
                                  ids=args.ids, theta=not args.no_theta)
-    print(f"wrote {done.out}: {done.rows} rows, {done.id_count} people, {done.duration:g} s")
+    print(f"wrote {done.out}: {done.rows} rows, {done.id_count} people, {done.duration:g} s "
+          f"(t = {done.first:g} .. {done.last:g} s)")
     return 0
 
 

@@ -152,7 +152,8 @@ class GeometricChecker(CheckerBase):
         boxes = world.boxes
         self._box_center, self._box_half = boxes.centers, boxes.halves
         self._box_cos, self._box_sin = boxes.cos, boxes.sin
-        people = people_model(scenario).state_at(0.0)
+        # The people present at t = 0 (a recorded id entering later is no obstacle).
+        people = people_model(scenario).state_at(0.0).visible()
         self._people, self._people_r = people.positions, people.radii
         g = self.geometry
         self._radii = g.segment_radii

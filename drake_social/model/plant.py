@@ -27,7 +27,7 @@ from pydrake.multibody.tree import ModelInstanceIndex
 from pydrake.planning import RobotDiagram, RobotDiagramBuilder
 
 from drake_social.model.robot_model import COLLISION_HEIGHT, robot_sdf
-from drake_social.people import people_model
+from drake_social.people import PeopleState, people_model
 from drake_social.scenario import Box, Scenario
 from drake_social.world import WALL_NAMES, world_model
 
@@ -38,6 +38,7 @@ __all__ = [
     "add_robot",
     "ENVIRONMENT_PART",
     "PERSON_RGBA",
+    "people_at_start",
     "person_geometry_names",
     "build_robot_diagram",
     "environment_discs",
@@ -70,16 +71,33 @@ def environment_names(scenario: Scenario) -> list[str]:
     """Names of the environment's collision shapes, as used in error messages.
 
     ``obstacle[i]`` for ``world.obstacles[i]``, ``person[i]`` (plus its name
-    in quotes, when it has one) for ``people[i]``, and ``wall_<side>``.
+    in quotes, when it has one) for each person present at t = 0
+    (:func:`people_at_start`; i is the person's index among all the scenario's
+    people, so a recorded id entering later leaves a gap), and ``wall_<side>``.
     """
     names = [f"obstacle[{i}]" for i in range(len(world_model(scenario).boxes))]
-    people = people_model(scenario).state_at(0.0)
-    return names + person_geometry_names(people.names) + list(WALL_NAMES)
+    indices, people = people_at_start(scenario)
+    return names + person_geometry_names(people.names, indices) + list(WALL_NAMES)
 
 
-def person_geometry_names(names: Sequence[str]) -> list[str]:
-    """The shape name of each person: ``person[i]`` plus the name in quotes when it has one."""
-    return [f"person[{i}] {name!r}" if name else f"person[{i}]" for i, name in enumerate(names)]
+def people_at_start(scenario: Scenario) -> tuple[np.ndarray, PeopleState]:
+    """The people present at t = 0 (the room planning sees): their indices
+    (K,) in the scenario's full people order
+    (:func:`drake_social.people.people_model`) and their state (K people).
+    A recorded id entering later, or one gone before, is no obstacle."""
+    state = people_model(scenario).state_at(0.0)
+    return np.flatnonzero(state.present), state.visible()
+
+
+def person_geometry_names(names: Sequence[str], indices: Sequence[int] | None = None) -> list[str]:
+    """The shape name of each person: ``person[i]`` plus the name in quotes when it has one.
+
+    Args:
+        names: the people's names ("" where unnamed).
+        indices: each person's index i in the full people order; None = 0, 1, ...
+    """
+    indices = range(len(names)) if indices is None else [int(i) for i in indices]
+    return [f"person[{i}] {name!r}" if name else f"person[{i}]" for i, name in zip(indices, names)]
 
 
 #: Most environment shapes in one diagram built for reading shapes or for a
@@ -91,7 +109,7 @@ ENVIRONMENT_PART = 256
 def registration_order(scenario: Scenario) -> list[int]:
     """Indices into :func:`environment_names` in the order :func:`add_environment`
     registers the shapes: obstacles, walls, then people."""
-    n_obstacles, n_people = len(world_model(scenario).boxes), people_model(scenario).count
+    n_obstacles, n_people = len(world_model(scenario).boxes), len(people_at_start(scenario)[0])
     n = n_obstacles + n_people + len(WALL_NAMES)
     return [*range(n_obstacles), *range(n_obstacles + n_people, n), *range(n_obstacles, n_obstacles + n_people)]
 
@@ -116,7 +134,7 @@ def environment_discs(scenario: Scenario) -> np.ndarray:
     """(N, 3) ``[x, y, rho]`` of the environment's shapes in the order of
     :func:`environment_names`: each shape lies within ``rho`` metres of
     ``(x, y)`` (a box's half diagonal, a person's radius)."""
-    world, people = world_model(scenario), people_model(scenario).state_at(0.0)
+    world, people = world_model(scenario), people_at_start(scenario)[1]
     return np.concatenate([
         np.column_stack([world.boxes.centers, world.boxes.radii]),
         np.column_stack([people.positions, people.radii]),
@@ -133,8 +151,8 @@ def add_environment(plant: MultibodyPlant, scenario: Scenario, only: Sequence[in
     Args:
         only: indices into :func:`environment_names` of the shapes to add
             (each keeps its name); None = all.
-        people: anchor the people where they are at t = 0 (the default: the
-            planning checkers' room); False leaves them out (the simulation
+        people: anchor the people present at t = 0 where they are then (the
+            default: the planning checkers' room); False leaves them out (the simulation
             diagram of walking people moves them in SceneGraph itself,
             :class:`drake_social.control.people_geometry.PeopleGeometry`).
 
@@ -143,7 +161,7 @@ def add_environment(plant: MultibodyPlant, scenario: Scenario, only: Sequence[in
     """
     with_people = bool(people)
     names = environment_names(scenario)
-    world, people = world_model(scenario), people_model(scenario).state_at(0.0)
+    world, people = world_model(scenario), people_at_start(scenario)[1]
     n_obstacles, n_people = len(world.boxes), people.count
     wanted = set(range(len(names))) if only is None else {int(i) for i in only}
     if not with_people:

@@ -25,11 +25,33 @@ PEOPLE_CSV_FIELDS = ("t", "id", "x", "y", "theta", "v")
 
 
 def person_ids(names: Sequence[str]) -> list[str]:
-    """One id per person for files: the name when it is set and unique, else the index."""
+    """One distinct id per person for files (``people.csv``).
+
+    Person i's id is its name when the name is set, no other person has it,
+    and it is not the id of another person; otherwise it is ``str(i)``, the
+    person's index. "The id of another person" is applied until nothing
+    changes: a name equal to the index of a person who gets their index
+    (``["", "0"]`` gives ``["0", "1"]``) gives way, which can make another
+    name give way in turn. The ids are then distinct: the kept names are
+    distinct, the indices are, and no kept name is another person's index id.
+
+    Args:
+        names: the people's names ("" where unnamed), in their order.
+
+    Returns:
+        The ids, in the same order.
+    """
     counts: dict[str, int] = {}
     for n in names:
         counts[n] = counts.get(n, 0) + 1
-    return [n if n and counts[n] == 1 else str(i) for i, n in enumerate(names)]
+    keep = [bool(n) and counts[n] == 1 for n in names]
+    while True:
+        index_ids = {str(i) for i, k in enumerate(keep) if not k}
+        clash = [i for i, (n, k) in enumerate(zip(names, keep)) if k and n in index_ids]
+        if not clash:
+            return [n if k else str(i) for i, (n, k) in enumerate(zip(names, keep))]
+        for i in clash:
+            keep[i] = False
 
 
 @dc.dataclass(frozen=True)

@@ -1,9 +1,11 @@
 """Reading a scenario's recorded pedestrians (``people_file``), with every error named.
 
-The file is CSV text: a header line naming the columns, then one row per person
+The file is CSV text (quoted fields as :mod:`csv` reads them; errors give the
+line where the row starts): a header line naming the columns, then one row per person
 and time, in any order. Columns (the header may give them in any order):
 
-* ``t`` (seconds), ``id`` (any text without commas), ``x``, ``y`` (metres): required;
+* ``t`` (seconds), ``id`` (any text; in double quotes when it holds a comma or a
+  quote, as :mod:`csv` writes it), ``x``, ``y`` (metres): required;
 * ``theta`` (radians): the facing direction; without it the heading follows the
   direction of motion (:mod:`drake_social.people.recorded`);
 * ``radius`` (metres, > 0, the same on every row of an id; default
@@ -25,8 +27,10 @@ file is read and checked when the scenario is loaded, before anything runs;
 
 from __future__ import annotations
 
+import csv
 import dataclasses as dc
 import functools
+import io
 import math
 from pathlib import Path
 
@@ -59,6 +63,7 @@ class RecordedTrack:
         thetas: (n,) facing directions, radians, or None (no ``theta`` column).
         radius: body radius, metres.
         first_line: the file's line of the id's earliest sample (1-based).
+        lines: (n,) the file's line of each sample (1-based; ``lines[0] == first_line``).
     """
 
     id: str
@@ -67,6 +72,7 @@ class RecordedTrack:
     thetas: np.ndarray | None
     radius: float
     first_line: int
+    lines: np.ndarray | None = None
 
 
 @dc.dataclass(frozen=True)
@@ -115,13 +121,12 @@ def read_people_file(path: str | Path) -> PeopleRecording:
 def _read_cached(path: str, size: int, mtime_ns: int, inode: int) -> PeopleRecording:
     del size, mtime_ns, inode  # the cache's key only
     text = read_text_file(path, "people", limit=MAX_PEOPLE_FILE_BYTES)
-    lines = text.splitlines()
-    numbered = [(n + 1, line) for n, line in enumerate(lines) if line.strip()]
+    numbered = _csv_rows(path, text)
     if not numbered:
         raise _fail(path, None, f"empty; a people file needs a header ({_header_text()}) and a row per person and "
                                 "time")
     header_line, header = numbered[0]
-    names = [c.strip() for c in header.split(",")]
+    names = [c.strip() for c in header]
     if all(_is_number(c) for c in names):
         raise _fail(path, header_line, f"no header; the first line must name the columns: {_header_text()}")
     seen: set[str] = set()
@@ -139,8 +144,8 @@ def _read_cached(path: str, size: int, mtime_ns: int, inode: int) -> PeopleRecor
     col = {c: k for k, c in enumerate(names)}
     numeric = [c for c in names if c not in ("id", "v")]
     rows: dict[str, list[tuple[float, int, tuple[float, ...]]]] = {}
-    for line_no, line in numbered[1:]:
-        fields = [f.strip() for f in line.split(",")]
+    for line_no, row in numbered[1:]:
+        fields = [f.strip() for f in row]
         if len(fields) != len(names):
             raise _fail(path, line_no, f"{len(fields)} fields; every row needs {len(names)}, one per column of the "
                                        f"header ({','.join(names)})")
@@ -178,9 +183,29 @@ def _read_cached(path: str, size: int, mtime_ns: int, inode: int) -> PeopleRecor
         thetas = data[:, 2].copy() if "theta" in col else None
         for a in (times, positions) + (() if thetas is None else (thetas,)):
             a.flags.writeable = False
+        lines = np.array([s[1] for s in samples], dtype=np.int64)
+        lines.flags.writeable = False
         tracks[ident] = RecordedTrack(id=ident, times=times, positions=positions, thetas=thetas,
-                                      radius=float(radii[0]), first_line=samples[0][1])
+                                      radius=float(radii[0]), first_line=samples[0][1], lines=lines)
     return PeopleRecording(path=path, tracks=tracks)
+
+
+def _csv_rows(path, text: str) -> list[tuple[int, list[str]]]:
+    """The non-blank rows of ``text`` as CSV fields (double quotes around a
+    field with commas or quotes, doubled quotes inside, as :mod:`csv` writes),
+    each with the file's line number (1-based) where the row starts."""
+    out = []
+    reader = csv.reader(io.StringIO(text, newline=""), strict=True)
+    line = 1
+    try:
+        for row in reader:
+            if any(f.strip() for f in row):
+                out.append((line, row))
+            line = reader.line_num + 1
+    except csv.Error as e:
+        raise _fail(path, line, f"not CSV ({e}); a field with a comma or a quote must be in double quotes, "
+                                'with its quotes doubled ("a ""b"", c")') from None
+    return out
 
 
 def _is_number(text: str) -> bool:

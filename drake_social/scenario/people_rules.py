@@ -10,7 +10,10 @@ the segment or the file's line, and what is allowed:
   its first and whose heading repeats (:func:`~drake_social.scenario.heading.heading_knots`);
 * the body disc swept along each segment stays inside ``world.bounds`` (so out
   of the walls) and out of every obstacle box (exact segment-to-box distance
-  against the radius);
+  against the radius): each segment of a trajectory, and each segment between
+  consecutive samples of a kept id of the people file (an id's lone sample:
+  its point), the latter named by the file and the line of the segment's end
+  row, checked in numpy batches;
 * a person (standing, a trajectory's first point, a recorded id at its first
   time) does not start with the body in an obstacle, nor (at t = 0: the
   robot is at its start only then) overlapping the robot at ``start``;
@@ -38,7 +41,7 @@ from drake_social.kinematics import ArmGeometry
 from drake_social.scenario.heading import heading_knots
 from drake_social.scenario.people_file import read_people_file
 
-__all__ = ["check_people", "robot_clearance", "segment_box_distance"]
+__all__ = ["check_people", "robot_clearance", "segment_box_distance", "segments_box_distances"]
 
 Fail = Callable[[str, str], None]
 
@@ -54,14 +57,39 @@ def segment_box_distance(a, b, centers, sizes, yaws) -> np.ndarray:
     Returns:
         (K,) distances.
     """
+    return segments_box_distances(np.reshape(np.asarray(a, float), (1, 2)), np.reshape(np.asarray(b, float), (1, 2)),
+                                  centers, sizes, yaws)[0]
+
+
+def segments_box_distances(a, b, centers, sizes, yaws) -> np.ndarray:
+    """Distances from N segments ``a[n]-b[n]`` to K rotated boxes (0 where
+    they meet), metres: :func:`segment_box_distance` for many segments at once.
+
+    Args:
+        a, b: (N, 2) the segments' ends [x, y], metres (equal: a point).
+        centers, sizes: (K, 2) the boxes' centres and side lengths, metres.
+        yaws: (K,) the boxes' rotations, radians.
+
+    Returns:
+        (N, K) distances.
+    """
+    a, b = np.asarray(a, float).reshape(-1, 2), np.asarray(b, float).reshape(-1, 2)
     centers = np.asarray(centers, float).reshape(-1, 2)
     half = np.asarray(sizes, float).reshape(-1, 2) / 2
     yaws = np.asarray(yaws, float).reshape(-1)
-    c, s = np.cos(yaws)[:, None], np.sin(yaws)[:, None]
-    rel_a, rel_b = np.asarray(a, float) - centers, np.asarray(b, float) - centers
-    # The ends in each box's frame, (K, 2).
-    la = np.concatenate([c * rel_a[:, :1] + s * rel_a[:, 1:], -s * rel_a[:, :1] + c * rel_a[:, 1:]], 1)
-    lb = np.concatenate([c * rel_b[:, :1] + s * rel_b[:, 1:], -s * rel_b[:, :1] + c * rel_b[:, 1:]], 1)
+    return _segment_box(a[:, None], b[:, None], centers[None], half[None], np.cos(yaws)[None], np.sin(yaws)[None])
+
+
+def _segment_box(a, b, centers, half, c, s) -> np.ndarray:
+    """Segment-to-box distances, broadcast: ``a``, ``b``, ``centers`` and
+    ``half`` (half sides) of shape (..., 2), ``c``, ``s`` (the cosine and sine
+    of the yaw) of shape (...); returns (...) metres, 0 where they meet."""
+
+    def local(p):  # in each box's frame
+        rx, ry = p[..., 0] - centers[..., 0], p[..., 1] - centers[..., 1]
+        return np.stack([c * rx + s * ry, -s * rx + c * ry], -1)
+
+    la, lb = local(a), local(b)
     d = lb - la
     # Liang-Barsky: the parameter interval of the segment inside each slab.
     with np.errstate(divide="ignore", invalid="ignore"):
@@ -70,15 +98,19 @@ def segment_box_distance(a, b, centers, sizes, yaws) -> np.ndarray:
     inside_slab = np.abs(la) <= half
     lo = np.where(flat, np.where(inside_slab, -np.inf, np.inf), np.minimum(t1, t2))
     hi = np.where(flat, np.where(inside_slab, np.inf, -np.inf), np.maximum(t1, t2))
-    meets = np.maximum(lo.max(1), 0.0) <= np.minimum(hi.min(1), 1.0)
+    meets = np.maximum(lo.max(-1), 0.0) <= np.minimum(hi.min(-1), 1.0)
+
     # Disjoint convex shapes: the closest pair has a vertex of one of them.
     def point_box(p):
-        return np.hypot(*np.maximum(np.abs(p) - half, 0.0).T)
+        g = np.maximum(np.abs(p) - half, 0.0)
+        return np.hypot(g[..., 0], g[..., 1])
 
-    corners = half[:, None, :] * np.array([[-1.0, -1.0], [1.0, -1.0], [1.0, 1.0], [-1.0, 1.0]])  # (K, 4, 2)
-    den = np.einsum("ki,ki->k", d, d)[:, None]
-    u = np.clip(np.einsum("kji,ki->kj", corners - la[:, None], d) / np.where(den > 0, den, 1.0), 0.0, 1.0)
-    corner_gap = np.linalg.norm(corners - la[:, None] - u[..., None] * d[:, None], axis=-1).min(1)
+    corners = half[..., None, :] * np.array([[-1.0, -1.0], [1.0, -1.0], [1.0, 1.0], [-1.0, 1.0]])  # (..., 4, 2)
+    rel = corners - la[..., None, :]
+    den = (d * d).sum(-1)[..., None]
+    u = np.clip((rel * d[..., None, :]).sum(-1) / np.where(den > 0, den, 1.0), 0.0, 1.0)  # (..., 4)
+    gap = rel - u[..., None] * d[..., None, :]
+    corner_gap = np.hypot(gap[..., 0], gap[..., 1]).min(-1)
     return np.where(meets, 0.0, np.minimum(np.minimum(point_box(la), point_box(lb)), corner_gap))
 
 
@@ -136,7 +168,6 @@ def check_people(scenario, fail: Fail) -> None:
     w = scenario.world
     x_min, y_min, x_max, y_max = w.bounds
     geometry = ArmGeometry.from_scenario(scenario)
-    start = scenario.start
     boxes = _boxes(w)
 
     starts: list[tuple[str, str, tuple[float, float], float, bool]] = []  # (field, what, centre, radius, at t = 0)
@@ -190,9 +221,15 @@ def check_people(scenario, fail: Fail) -> None:
                                             f"comes {hit[1]:.3g} m from it, closer than its radius {r:g} m)")
         start_clear(f"{field}.trajectory[0]", "the first point", first, r, True)
 
-    _check_recorded(scenario, fail, start_clear)
-    if not starts:
-        return
+    recorded = _check_recorded(scenario, fail, start_clear)
+    if starts:
+        _check_starts(scenario, geometry, boxes, starts, fail)
+    if recorded is not None:
+        _check_recorded_segments(scenario, *recorded, boxes, fail)
+
+
+def _check_starts(scenario, geometry: ArmGeometry, boxes, starts, fail: Fail) -> None:
+    start = scenario.start
     # Every start at once: the body against every obstacle, and at t = 0 against the robot.
     centres = np.array([c for _, _, c, _, _ in starts])
     radii = np.array([r for _, _, _, r, _ in starts])
@@ -213,12 +250,17 @@ def check_people(scenario, fail: Fail) -> None:
                         f"start clear of the robot")
 
 
-def _check_recorded(scenario, fail: Fail, start_clear) -> None:
+def _check_recorded(scenario, fail: Fail, start_clear):
+    """Reads and checks the people file and its ids; queues each id's start.
+
+    Returns:
+        (the recording, the ids kept), or None without a people file.
+    """
     ids = scenario.people_file_ids
     if scenario.people_file is None:
         if ids is not None:
             fail("people_file_ids", "needs a people_file to choose from")
-        return
+        return None
     if not str(scenario.people_file).strip():
         fail("people_file", "must name a CSV file (relative to the scenario file), got ''")
     try:
@@ -242,3 +284,67 @@ def _check_recorded(scenario, fail: Fail, start_clear) -> None:
         if tr.times[0] <= 0.0 <= tr.times[-1]:
             at_zero = [float(np.interp(0.0, tr.times, tr.positions[:, c])) for c in range(2)]
             start_clear(where, "the position at t = 0", at_zero, tr.radius, True)
+    return recording, list(recording.tracks if ids is None else ids)
+
+
+#: Segments of a people file checked per numpy batch against the boxes, times
+#: the number of boxes (bounds the temporary arrays to a few MB).
+_SEGMENT_BATCH = 1 << 15
+
+
+def _check_recorded_segments(scenario, recording, ids, boxes, fail: Fail) -> None:
+    """The scripted rule on each kept id of the people file: the body disc
+    swept along each segment between consecutive samples (a lone sample: its
+    point) stays inside ``world.bounds`` and out of every obstacle box. A
+    failure names the file, the line of the segment's end row and the id."""
+    w = scenario.world
+    x_min, y_min, x_max, y_max = w.bounds
+    tracks = [recording.tracks[i] for i in ids]
+    # Every segment of every id: (start, end) rows, the track, the sample index of the end.
+    a = np.concatenate([tr.positions[:-1] if len(tr.times) > 1 else tr.positions for tr in tracks])
+    b = np.concatenate([tr.positions[1:] if len(tr.times) > 1 else tr.positions for tr in tracks])
+    which = np.concatenate([np.full(max(len(tr.times) - 1, 1), n) for n, tr in enumerate(tracks)])
+    end = np.concatenate([np.arange(1, len(tr.times)) if len(tr.times) > 1 else np.zeros(1, int) for tr in tracks])
+    r = np.array([tr.radius for tr in tracks])[which]
+    out = ((np.minimum(a[:, 0], b[:, 0]) - r < x_min) | (np.maximum(a[:, 0], b[:, 0]) + r > x_max)
+           | (np.minimum(a[:, 1], b[:, 1]) - r < y_min) | (np.maximum(a[:, 1], b[:, 1]) + r > y_max))
+    first_out = int(np.argmax(out)) if out.any() else len(a)
+    first_box, box, gap = len(a), -1, 0.0
+    centers, sizes, yaws = boxes
+    if len(yaws):
+        half, c, sn = sizes / 2, np.cos(yaws), np.sin(yaws)
+        reach = np.hypot(half[:, 0], half[:, 1])  # a box lies within this of its centre
+        step = max(1, _SEGMENT_BATCH // len(yaws))
+        for n0 in range(0, min(len(a), first_out), step):
+            sa, sb, sr = a[n0:n0 + step], b[n0:n0 + step], r[n0:n0 + step]
+            # Broad phase: the box's centre within its half diagonal plus the radius of the segment.
+            d = sb - sa
+            rel = centers[None] - sa[:, None]  # (m, K, 2)
+            den = (d * d).sum(-1)[:, None]
+            u = np.clip((rel * d[:, None]).sum(-1) / np.where(den > 0, den, 1.0), 0.0, 1.0)
+            off = rel - u[..., None] * d[:, None]
+            seg, k = np.nonzero(np.hypot(off[..., 0], off[..., 1]) < reach + sr[:, None])
+            if not len(seg):
+                continue
+            # Exact distances of the pairs left (in segment order, then box order).
+            gaps = _segment_box(sa[seg], sb[seg], centers[k], half[k], c[k], sn[k])
+            hit = np.flatnonzero(gaps < sr[seg])
+            if len(hit):
+                first_box, box, gap = n0 + int(seg[hit[0]]), int(k[hit[0]]), float(gaps[hit[0]])
+                break
+    n = min(first_out, first_box)
+    if n == len(a):
+        return
+    tr, k = tracks[which[n]], int(end[n])
+    line = lambda j: tr.first_line if tr.lines is None else int(tr.lines[j])  # noqa: E731
+    field = f"people_file ({recording.path}, line {line(k)}, id {shorten(repr(tr.id))})"
+    if len(tr.times) > 1:
+        where = (f"the segment from t = {tr.times[k - 1]:g} s at {_fmt(tr.positions[k - 1])} (line {line(k - 1)}) "
+                 f"to t = {tr.times[k]:g} s at {_fmt(tr.positions[k])}")
+    else:
+        where = f"the sample at t = {tr.times[0]:g} s at {_fmt(tr.positions[0])}"
+    if n == first_out:
+        fail(field, f"{where} takes the body (radius {tr.radius:g} m) out of world.bounds {list(w.bounds)} into "
+                    "the walls; the whole body must stay inside")
+    fail(field, f"{where} passes through world.obstacles[{box}] (the body's centre comes {gap:.3g} m from it, "
+                f"closer than its radius {tr.radius:g} m)")

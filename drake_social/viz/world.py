@@ -71,8 +71,10 @@ def draw_world(ax: Axes, scenario: Scenario, *, names: bool = True, margin: floa
             line, cut to :data:`~drake_social.viz.labels.MAX_LABEL_CHARS`
             characters).
         margin: free space around the outer walls in the view, metres.
-        people: the people to draw; None = the scenario's people model at
-            t = 0 (:func:`drake_social.people.people_model`).
+        people: the people to draw (those present only,
+            :meth:`~drake_social.people.PeopleState.visible`); None = the
+            scenario's people model at t = 0
+            (:func:`drake_social.people.people_model`).
 
     Returns:
         Artists by kind: "walls", "obstacles", "people", "arrows", "names".
@@ -84,6 +86,7 @@ def draw_world(ax: Axes, scenario: Scenario, *, names: bool = True, margin: floa
     t = w.wall_thickness
     if people is None:
         people = people_model(scenario).state_at(0.0)
+    people = people.visible()  # an absent person (not entered yet, or gone) is not drawn
     out: dict[str, list] = {"walls": [], "obstacles": [], "people": [], "arrows": [], "names": []}
     # Boundary walls stand outside the bounds (see World.wall_thickness).
     for x, y, dx, dy in (

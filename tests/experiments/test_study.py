@@ -151,3 +151,29 @@ def test_sweep_file(tmp_path, tiny_scenario_path, repo_root):
     bad.write_text(f"scenarios: [{tiny_scenario_path}]\nrun: 3\n")
     with pytest.raises(ScenarioError, match="line 2: run: unknown field at the top level; allowed: name, runs"):
         load_sweep(bad)
+
+
+def test_the_scenario_cache_reloads_when_the_people_file_changes(tmp_path, monkeypatch):
+    """A study's scenario cache is keyed by the people_file's bytes too: a
+    recording changed on disk is read and checked again (here it now puts
+    someone inside the desk, an error) instead of reusing the old load."""
+    import collections
+    from pathlib import Path
+
+    from drake_social.experiments.study import scenarios as study_scenarios
+    from drake_social.scenario import ScenarioError
+
+    monkeypatch.setattr(study_scenarios, "_loaded", collections.OrderedDict())
+    tiny = Path(__file__).resolve().parents[2] / "scenarios" / "tiny.yaml"
+    text = tiny.read_text() + "people_file: walkers.csv\n"
+    source = str(tmp_path / "s.yaml")
+    walkers = tmp_path / "walkers.csv"
+    walkers.write_text("t,id,x,y\n0,1,6.0,4.0\n8,1,6.0,4.0\n")
+    first = study_scenarios.load_cached(source, text, ())
+    assert study_scenarios.load_cached(source, text, ()) is first  # unchanged file: cached
+    walkers.write_text("t,id,x,y\n0,1,4.0,0.6\n8,1,4.0,0.6\n")  # the desk's centre
+    with pytest.raises(ScenarioError, match=r"inside world\.obstacles\[0\]"):
+        study_scenarios.load_cached(source, text, ())
+    walkers.write_text("t,id,x,y\n0,1,6.0,4.5\n8,1,6.0,4.5\n")
+    again = study_scenarios.load_cached(source, text, ())
+    assert again is not first and again.people_file == str(walkers)

@@ -146,3 +146,20 @@ def test_cli_end_to_end(tmp_path, capsys):
     assert main(["people", "import", str(src), "--out", str(out), "--ids", "42"]) == 2
     assert "id 42 is not in the recording" in capsys.readouterr().err
     assert main(["people", "import", str(src), "--out", str(out), "--fps", "nan"]) == 2
+
+
+def test_import_reports_the_span_of_the_rows_when_start_is_before_the_first_row(tmp_path, capsys):
+    """--start 30 s is 1.2 s before the first kept row (frame 780: 31.2 s), so
+    the rows run from t = 1.2 to t = 2.4 s (frame 810: 32.4 s): 1.2 s."""
+    from drake_social.app import run_people_import
+    from drake_social.cli import main
+
+    src = tmp_path / "biwi.txt"
+    src.write_text(ETH)
+    done = run_people_import(file=src, out=tmp_path / "p.csv", start=30.0, end=32.4)
+    assert (done.rows, done.id_count) == (7, 2)
+    np.testing.assert_allclose([done.first, done.last, done.duration], [1.2, 2.4, 1.2], atol=1e-12)
+    assert main(["people", "import", str(src), "--out", str(tmp_path / "q.csv"), "--start", "30", "--end", "32.4"]) == 0
+    assert capsys.readouterr().out.strip().endswith("7 rows, 2 people, 1.2 s (t = 1.2 .. 2.4 s)")
+    done = run_people_import(file=src, out=tmp_path / "r.csv")  # no --start: the first row at t = 0
+    np.testing.assert_allclose([done.first, done.last, done.duration], [0.0, 1.6, 1.6], atol=1e-12)

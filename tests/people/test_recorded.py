@@ -27,6 +27,17 @@ MOVING = """t,id,x,y,v
 """
 
 
+# MOVING 1 m further north, for tiny's room: MOVING's leg (2, 1) -> (4, 1) of id 7
+# passes through tiny's desk (x 3.2..4.8, y 0.2..1.0), which a scenario refuses.
+IN_ROOM = """t,id,x,y,v
+3,7,4,2,9
+0,3,6,4,9
+1,7,2,2,9
+5,7,4,4,9
+2,3,6,4,9
+"""
+
+
 def _write(tmp_path: Path, text: str, name: str = "people.csv") -> Path:
     path = tmp_path / name
     path.write_text(text)
@@ -130,7 +141,7 @@ def test_a_missing_or_oversized_file_is_refused(tmp_path):
         read_people_file(big)
 
 
-def _scenario(tmp_path: Path, extra: str, csv: str | None = MOVING) -> Path:
+def _scenario(tmp_path: Path, extra: str, csv: str | None = IN_ROOM) -> Path:
     folder = tmp_path / "room"
     folder.mkdir(exist_ok=True)
     if csv is not None:
@@ -147,7 +158,7 @@ def test_the_file_is_resolved_against_the_scenarios_folder_and_read_by_people_mo
     s = people_model(scenario).state_at(4.0)
     # The tiny scenario's standing person, then id 7.
     assert s.names == ("standing", "7") and tuple(s.present) == (True, True)
-    np.testing.assert_allclose(s.positions, [[4.0, 3.8], [4, 2]], atol=1e-12)
+    np.testing.assert_allclose(s.positions, [[4.0, 3.8], [4, 3]], atol=1e-12)
 
 
 @pytest.mark.parametrize("extra, csv, message", [
@@ -177,7 +188,7 @@ def test_a_bad_recording_fails_at_load_naming_the_field(tmp_path, extra, csv, me
 def test_text_resolves_against_the_working_directory_and_overrides_against_the_file(tmp_path, monkeypatch):
     from drake_social.scenario import load_scenario_text
 
-    _write(tmp_path, MOVING, "walkers.csv")
+    _write(tmp_path, IN_ROOM, "walkers.csv")
     monkeypatch.chdir(tmp_path)
     scenario = load_scenario_text(TINY.read_text() + "people_file: walkers.csv\n", "<text>")
     assert scenario.people_file == str(tmp_path / "walkers.csv")

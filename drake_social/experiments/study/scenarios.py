@@ -20,24 +20,31 @@ __all__ = ["check_run_settings", "load_cached"]
 def load_cached(source: str, text: str, overrides: tuple[str, ...], overrides_name: str = "overrides") -> Scenario:
     """The scenario of ``text`` with ``overrides``, loaded once per pair and
     process while it is among the last :data:`_LOADED_MOST` loaded (keyed by
-    their digest and the file's folder, whatever the groups are called);
-    errors name ``source``, the scenario file, whose folder a relative
-    ``people_file`` is resolved against."""
+    their digest and the file's folder, whatever the groups are called, and
+    by the SHA-256 of the bytes of its ``people_file``: a recording changed on
+    disk is loaded and checked again); errors name ``source``, the scenario
+    file, whose folder a relative ``people_file`` is resolved against."""
     key = _load_key(str(Path(source).parent.absolute()), text, overrides)
-    scenario = _loaded.get(key)
-    if scenario is None:
+    entry = _loaded.get(key)
+    if entry is not None and entry[1] != _file_digest(entry[0].people_file):
+        entry = None
+    if entry is None:
         scenario = load_scenario_text(text, source, list(overrides), overrides_name=overrides_name,
                                       base_dir=Path(source).parent)
-        _loaded[key] = scenario
+        # The digest read after the load (which read and checked the file); a
+        # file changed in between is caught at the next call.
+        entry = (scenario, _file_digest(scenario.people_file))
+        _loaded[key] = entry
         if len(_loaded) > _LOADED_MOST:
             _loaded.popitem(last=False)
     _loaded.move_to_end(key)
-    return scenario
+    return entry[0]
 
 
 #: The most scenarios :func:`load_cached` keeps (the least recently used go first).
 _LOADED_MOST = 64
-_loaded: "collections.OrderedDict[bytes, Scenario]" = collections.OrderedDict()
+#: (folder, text, overrides) digest -> (scenario, its people file's digest).
+_loaded: "collections.OrderedDict[bytes, tuple[Scenario, bytes | None]]" = collections.OrderedDict()
 
 
 def _load_key(folder: str, text: str, overrides: tuple[str, ...]) -> bytes:
@@ -47,6 +54,18 @@ def _load_key(folder: str, text: str, overrides: tuple[str, ...]) -> bytes:
         digest.update(len(data).to_bytes(8, "little") + data)
     return digest.digest()
 
+
+def _file_digest(path: str | None) -> bytes | None:
+    """SHA-256 of the bytes of the file at ``path`` (a loaded scenario's
+    absolute ``people_file``); b"" without a file, None when it cannot be
+    read (then the scenario is loaded again, which names the problem)."""
+    if path is None:
+        return b""
+    try:
+        with open(path, "rb") as f:
+            return hashlib.file_digest(f, "sha256").digest()
+    except OSError:
+        return None
 
 
 def check_run_settings(scenario: Scenario, algorithm: str, iterations: int, source: str) -> None:
