@@ -56,7 +56,6 @@ from __future__ import annotations
 
 import numpy as np
 
-from drake_social.cost.agf import agf_xy
 from drake_social.cost.social import SocialCost
 from drake_social.experiments.nav_metrics import RUN_PARTS, execution_metrics, run_metrics
 from drake_social.experiments.proxemics import (
@@ -104,7 +103,8 @@ def part_agf(cost: SocialCost, q: np.ndarray) -> dict[str, np.ndarray]:
     """Thresholded AGF sum over people (M,) met by every part at configurations q (M, 4).
 
     Interest points: their value; ``arm`` and ``object``: the largest over
-    their axis; ``robot``: the largest over every part.
+    their axis; ``robot``: the largest over every part. Every part with the
+    same per-person variances (:meth:`SocialCost.agf_values`).
     """
     q = np.asarray(q, float).reshape(-1, 4)
     g = cost.geometry
@@ -112,7 +112,8 @@ def part_agf(cost: SocialCost, q: np.ndarray) -> dict[str, np.ndarray]:
     out = {n: values[:, k] for k, n in enumerate(g.interest_names)}
     for name, which in (("arm", slice(0, 2)), ("object", slice(2, None))):
         pts = shape_points(g, q, which)
-        out[name] = agf_xy(pts[..., 0], pts[..., 1], cost.people, cost.space).sum(-1).max(-1)
+        # Each person's own variances (speed-scaled under social.speed_scaling), as the points'.
+        out[name] = cost.agf_values(pts[..., 0], pts[..., 1]).sum(-1).max(-1)
     out["robot"] = np.max([out[n] for n in g.interest_names + ["arm", "object"]], axis=0)
     return out
 
