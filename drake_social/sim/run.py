@@ -120,7 +120,10 @@ class ExecutionReport:
     Attributes:
         planned_social_cost: Msc summed along the planned waypoints (the
             scenario's full multi-point weights).
-        executed_social_cost: the same integral along the executed trajectory.
+        executed_social_cost: the same integral along the executed trajectory,
+            with the same cost function as the planner's: against the people
+            at t = 0, even when they walk (the planned cost's counterpart;
+            the cost among the people where they were is ``nav_agf_time_*``).
         max_point_deviation: body point name -> largest distance (metres) of
             its executed position from its planned curve, and ``"max"``.
         max_config_deviation: largest configuration-space distance of an

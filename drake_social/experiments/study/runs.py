@@ -108,7 +108,7 @@ def _execute(scenario, waypoints, checker, executed_metrics) -> dict:
         "exec_within_limits": bool(r.within_limits) if r else None,
     }
     if len(run.times) > 1:
-        out.update(executed_metrics(scenario, run.times, run.q))
+        out.update(executed_metrics(scenario, run.times, run.q, run.people))
         out.update(execution_metrics(scenario, run))
     return out
 
