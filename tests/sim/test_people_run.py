@@ -79,10 +79,23 @@ def test_a_dynamic_run_with_a_walker_through_the_robot_runs(tiny_scenario, monke
     assert run.q[-1, 0] == pytest.approx(start[0] + 0.5, abs=0.06)
 
 
-def test_simulate_writes_people_csv(tiny_scenario_path, walking, tmp_path):
+def test_simulate_writes_people_csv(tiny_scenario_path, walking, tmp_path, monkeypatch):
+    from drake_social.viz import path as viz_path
+
+    drawn = []
+    original = viz_path.draw_people_tracks
+    monkeypatch.setattr(viz_path, "draw_people_tracks",
+                        lambda ax, people, **kw: drawn.append((people, kw)) or original(ax, people, **kw))
     dut = app.run_simulate(scenario=tiny_scenario_path, out=tmp_path, mode="kinematic", checker="numpy",
                            replay=False)
-    assert dut.files == ["executed.csv", "people.csv", "tracking.png", "sim.json"]
+    assert dut.files == ["executed.csv", "people.csv", "path.png", "tracking.png", "sim.json"]
+    # path.png: the run's own log and executed trajectory, marked at 5 common times over the run.
+    from matplotlib.image import imread
+
+    assert imread(tmp_path / "path.png").shape[0] > 500
+    ((people, kw),) = drawn
+    assert people is dut.run.people and kw["robot"][0] is dut.run.times and kw["robot"][1] is dut.run.q
+    np.testing.assert_allclose(kw["marks"], np.linspace(0.0, dut.run.times[-1], 5), rtol=0, atol=1e-12)
     executed = np.loadtxt(tmp_path / "executed.csv", delimiter=",", skiprows=1)
     with open(tmp_path / "people.csv", newline="") as f:
         rows = list(csv.reader(f))
