@@ -53,7 +53,7 @@ __all__ += ["PeopleImport", "run_people_import"]
 #: The files ``plan`` writes into ``out`` (a folder of such a name is refused before planning).
 PLAN_OUTPUTS = ("path.csv", "result.json", "path.png", "cost_profile.png", "convergence.png")
 #: The files ``simulate`` may write into ``out`` (replay.html when Meshcat records).
-SIMULATE_OUTPUTS = ("replay.html", "executed.csv", "people.csv", "tracking.png", "sim.json")
+SIMULATE_OUTPUTS = ("replay.html", "executed.csv", "people.csv", "path.png", "tracking.png", "sim.json")
 
 #: A progress callback: ``progress(done, total, status)`` (steps done of
 #: ``total``, and a short text such as ``"best 5.1"`` or ``"t = 3.2 s"``).
@@ -238,7 +238,7 @@ def run_plan(*, scenario: Scenario | str | Path, out: str | Path, overrides: Seq
     from drake_social.planning.algorithms import make_objective, plan
     from drake_social.planning.result import PlanningInputError
     from drake_social.scenario import validate_planner_choice
-    from drake_social.viz.path import write_plan_figures  # matplotlib figures: only when drawing
+    from drake_social.viz.path import planned_people, write_plan_figures  # matplotlib figures: only when drawing
 
     loaded, path, file = _scenario(scenario, overrides, "run_plan")
     out = Path(out)
@@ -266,7 +266,9 @@ def run_plan(*, scenario: Scenario | str | Path, out: str | Path, overrides: Seq
             **run_record(loaded, result, make_objective(loaded, result.algorithm), history=True),
         }
         outputs.write_text("result.json", json_lines(record))
-        figures = write_plan_figures(loaded, result, outputs.folder, title=_title(loaded, file))
+        # Walkers' tracks over the plan's nominal duration (the path at the execution's speed limits).
+        figures = write_plan_figures(loaded, result, outputs.folder, title=_title(loaded, file),
+                                     people=planned_people(loaded, result.waypoints))
     return PlanRun(record, result, ["path.csv", "result.json"] + [p.name for p in figures.values()], bad)
 
 
@@ -388,6 +390,9 @@ def run_simulate(*, scenario: Scenario | str | Path, out: str | Path, overrides:
         if run.people is not None:
             write_people_csv(outputs.path("people.csv"), run.people)
             files.append("people.csv")
+            if not run.people.static:  # the walkers' tracks with the executed base track
+                _write_path_figure(outputs.path("path.png"), loaded, run, _title(loaded, file))
+                files.append("path.png")
         fig = tracking_figure(run, max_base_speed=opts.max_base_speed, max_wheel_speed=opts.max_wheel_speed,
                               geometry=ArmGeometry.from_scenario(loaded), safety_distance=opts.safety_distance,
                               title=f"{_title(loaded, file)}\n{run.mode} / {run.execution}: {run.message}")
@@ -399,6 +404,30 @@ def run_simulate(*, scenario: Scenario | str | Path, out: str | Path, overrides:
         outputs.write_text("sim.json", json_lines(record))
         files += ["tracking.png", "sim.json"]
     return SimulateRun(record, run, files, size)
+
+
+def _write_path_figure(path: Path, scenario: Scenario, run: SimulationResult, title: str) -> None:
+    """Writes ``path.png`` of a run among walking people: the path followed (the
+    planner's result, or the given path's measures), the people's tracks and
+    the executed base track, with common time marks."""
+    import numpy as np
+
+    from drake_social.cost import SocialCost
+    from drake_social.kinematics import config_distance
+    from drake_social.planning.result import PlannerResult
+    from drake_social.viz.path import path_figure
+    from drake_social.viz.show import MAP_DPI
+
+    result = run.planner
+    if result is None:  # the path given with --path
+        wp = np.asarray(run.waypoints, float).reshape(-1, 4)
+        cost = float(SocialCost.from_scenario(scenario).motion_cost(wp[:-1], wp[1:]).sum()) if len(wp) > 1 else 0.0
+        result = PlannerResult(algorithm="given path", success=len(wp) >= 2, message="the path given with --path",
+                               waypoints=wp, cost=cost, social_cost_full=cost, social_cost_planner=cost,
+                               path_length=float(config_distance(wp[:-1], wp[1:]).sum()),
+                               base_length=float(np.hypot(*np.diff(wp[:, :2], axis=0).T).sum()))
+    fig = path_figure(scenario, result, title=title, people=run.people, executed=(run.times, run.q))
+    fig.savefig(path, dpi=MAP_DPI)
 
 
 # ---- bench -------------------------------------------------------------------

@@ -121,7 +121,8 @@ def _add_simulate(subparsers) -> None:
         "the executed trajectory for collisions, integrates its social cost and measures its deviation from "
         "the plan. Writes DIR/replay.html (a standalone Meshcat replay: open it in a browser, no server), "
         "DIR/executed.csv (t,x,y,psi1,psi2 and velocities), DIR/people.csv (t,id,x,y,theta,v: where the "
-        "people were, when the scenario has people), DIR/tracking.png (references against actual "
+        "people were, when the scenario has people), DIR/path.png (when people move: their tracks and the "
+        "executed base track), DIR/tracking.png (references against actual "
         "over time) and DIR/sim.json. Exit code 3 no path, 5 goal not reached "
         "within execution.time_limit, 6 the executed trajectory collides, 7 it "
         "passes a joint limit or a room bound (files are written in every case; stderr names each finding).",

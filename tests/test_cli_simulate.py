@@ -156,7 +156,8 @@ def test_a_joint_limit_pass_exits_7_and_is_named_apart_from_collisions(tmp_path,
     assert "collides" not in captured.err
 
 
-@pytest.mark.parametrize("name", ["sim.json", "executed.csv", "people.csv", "tracking.png", "replay.html"])
+@pytest.mark.parametrize("name", ["sim.json", "executed.csv", "people.csv", "path.png", "tracking.png",
+                                  "replay.html"])
 def test_a_folder_named_like_an_output_is_refused_before_simulating(tmp_path, tiny_scenario_path, planned, capsys,
                                                                     name):
     out = tmp_path / "out"

@@ -56,7 +56,6 @@ from __future__ import annotations
 
 import numpy as np
 
-from drake_social.cost.agf import agf_xy
 from drake_social.cost.social import SocialCost
 from drake_social.experiments.nav_metrics import RUN_PARTS, execution_metrics, run_metrics
 from drake_social.experiments.proxemics import (
@@ -70,7 +69,7 @@ from drake_social.experiments.proxemics import (
 )
 from drake_social.experiments.records import path_costs
 from drake_social.kinematics import ArmGeometry, config_distance
-from drake_social.people import people_model, proximity
+from drake_social.people import PeopleLog, people_model, proximity
 from drake_social.people.proximity import part_names
 
 __all__ = [
@@ -92,19 +91,22 @@ __all__ = [
 ]
 
 
-def part_distances(geometry: ArmGeometry, people: np.ndarray, radii: np.ndarray, q: np.ndarray) -> dict[str, np.ndarray]:
+def part_distances(geometry: ArmGeometry, people: np.ndarray, radii: np.ndarray, q: np.ndarray,
+                   present: np.ndarray | None = None) -> dict[str, np.ndarray]:
     """Surface-to-surface distance (M,) of every part to the nearest person's
     body disc at configurations q (M, 4), metres, people standing at
-    ``people`` (P, 3) rows [x, y, theta]; +inf in an empty room."""
+    ``people`` (P, 3) rows [x, y, theta]; only the people whose ``present``
+    (P,) flag is set count (None = everyone); +inf when nobody counts."""
     people = np.asarray(people, float).reshape(-1, 3)
-    return proximity.part_distances(geometry, q, people[:, :2], radii)
+    return proximity.part_distances(geometry, q, people[:, :2], radii, present)
 
 
 def part_agf(cost: SocialCost, q: np.ndarray) -> dict[str, np.ndarray]:
     """Thresholded AGF sum over people (M,) met by every part at configurations q (M, 4).
 
     Interest points: their value; ``arm`` and ``object``: the largest over
-    their axis; ``robot``: the largest over every part.
+    their axis; ``robot``: the largest over every part. Every part with the
+    same per-person variances (:meth:`SocialCost.agf_values`).
     """
     q = np.asarray(q, float).reshape(-1, 4)
     g = cost.geometry
@@ -112,13 +114,15 @@ def part_agf(cost: SocialCost, q: np.ndarray) -> dict[str, np.ndarray]:
     out = {n: values[:, k] for k, n in enumerate(g.interest_names)}
     for name, which in (("arm", slice(0, 2)), ("object", slice(2, None))):
         pts = shape_points(g, q, which)
-        out[name] = agf_xy(pts[..., 0], pts[..., 1], cost.people, cost.space).sum(-1).max(-1)
+        # Each person's own variances (speed-scaled under social.speed_scaling), as the points'.
+        out[name] = cost.agf_values(pts[..., 0], pts[..., 1]).sum(-1).max(-1)
     out["robot"] = np.max([out[n] for n in g.interest_names + ["arm", "object"]], axis=0)
     return out
 
 
 def trajectory_metrics(
-    scenario, q: np.ndarray, s: np.ndarray | None = None, times: np.ndarray | None = None, zones: HallZones = ZONES
+    scenario, q: np.ndarray, s: np.ndarray | None = None, times: np.ndarray | None = None, zones: HallZones = ZONES,
+    people: PeopleLog | None = None,
 ) -> dict[str, float]:
     """Per-part distances, zone shares and AGF of dense samples of a trajectory.
 
@@ -131,6 +135,11 @@ def trajectory_metrics(
             each sample is measured against the people at its time (None:
             against the people at t = 0).
         zones: the zone bounds.
+        people: where the people were during an executed run (the run's
+            :class:`~drake_social.people.PeopleLog`, a crowd that met the
+            robot included); None = the scenario's people model (a crowd
+            stepped without the robot). Read at ``times`` when the people
+            move; people not present at a sample do not count there.
 
     Returns:
         ``min_dist_<part>``, ``zone_<zone>_<part>``, (``zone_time_<zone>_<part>``),
@@ -150,10 +159,16 @@ def trajectory_metrics(
         values = part_agf(SocialCost.from_scenario(scenario, ones, people=state), q)
     else:
         # Moving people: each sample against the people at its own time.
+        times = np.asarray(times, float)
+        if people is None:
+            states = [model.state_at(float(t)) for t in times]
+        elif len(people.times) == len(times) and np.array_equal(people.times, times):
+            states = [people.state(k) for k in range(len(times))]  # the log's own samples
+        else:
+            states = [people.state_at(float(t)) for t in times]
         per_sample = []
-        for qi, ti in zip(q, np.asarray(times, float)):
-            state = model.state_at(float(ti))
-            per_sample.append((part_distances(g, state.poses(), state.radii, qi),
+        for qi, state in zip(q, states):
+            per_sample.append((part_distances(g, state.poses(), state.radii, qi, state.present),
                                part_agf(SocialCost.from_scenario(scenario, ones, people=state), qi)))
         parts = part_names(g)
         dist = {n: np.array([d[n][0] for d, _ in per_sample], float).reshape(-1) for n in parts}
@@ -201,9 +216,14 @@ def path_metrics(scenario, waypoints: np.ndarray, planner_weights: np.ndarray | 
     return out
 
 
-def executed_metrics(scenario, times: np.ndarray, q: np.ndarray) -> dict[str, float]:
+def executed_metrics(scenario, times: np.ndarray, q: np.ndarray, people: PeopleLog | None = None) -> dict[str, float]:
     """Per-part metrics of an executed trajectory (times (T,), q (T, 4)),
-    with zone shares by time too, and its F and lengths; keys prefixed ``exec_``."""
+    with zone shares by time too, and its F and lengths; keys prefixed ``exec_``.
+
+    ``people``: the run's :class:`~drake_social.people.PeopleLog`
+    (``SimulationResult.people``), where the people actually were; None =
+    the scenario's people model (see :func:`trajectory_metrics`). ``F_multi``
+    is the planner's cost function: against the people at t = 0."""
     q = np.asarray(q, float).reshape(-1, 4)
     n = ArmGeometry.from_scenario(scenario).num_interest_points
     multi = SocialCost.from_scenario(scenario, np.ones(n))
@@ -213,6 +233,6 @@ def executed_metrics(scenario, times: np.ndarray, q: np.ndarray) -> dict[str, fl
         "base_length": float(np.hypot(*np.diff(q[:, :2], axis=0).T).sum()) if len(q) > 1 else 0.0,
         "irregularity": base_irregularity(q[:, :2]),
     }
-    out.update(trajectory_metrics(scenario, q, None, np.asarray(times, float)))
+    out.update(trajectory_metrics(scenario, q, None, np.asarray(times, float), people=people))
     return {f"exec_{k}": v for k, v in out.items()}
 

@@ -12,7 +12,8 @@ may leave a field out (``bench`` keeps no ``cost_history``), never rename it.
 A simulated run (``simulate``'s ``sim.json``, a study's executed runs) also
 carries the social-navigation metrics over time of
 :func:`drake_social.experiments.records.execution_metrics`, flat keys named
-by :data:`NAV_FIELDS` (prefix :data:`NAV_PREFIX`).
+by :data:`NAV_FIELDS` (prefix :data:`NAV_PREFIX`); a study's executed runs
+also carry :data:`EXECUTION_FIELDS`.
 
 JSON is written strict (:func:`~drake_social.io.json_numbers.finite_or_none`): NaN and infinities become ``null``,
 as does every value of a failed run that has no meaning (its cost, its
@@ -34,7 +35,7 @@ from typing import Any, Mapping
 
 from drake_social.io.json_numbers import finite_or_none
 
-__all__ = ["CONTEXT_FIELDS", "NAV_FIELDS", "NAV_PREFIX", "PATH_FIELDS", "PLANNER_FIELDS", "RUN_FIELDS", "SHARED_FIELDS",
+__all__ = ["CONTEXT_FIELDS", "EXECUTION_FIELDS", "NAV_FIELDS", "NAV_PREFIX", "PATH_FIELDS", "PLANNER_FIELDS", "RUN_FIELDS", "SHARED_FIELDS",
            "json_lines", "write_json"]
 
 #: The fields a planner's result gives (:meth:`PlannerResult.to_record`), in order, with their meaning and unit.
@@ -132,6 +133,26 @@ NAV_FIELDS: dict[str, str] = {
     "nav_space_compliance_<part>": "share of the time the part kept >= 0.45 m from every present person, 0..1",
     "nav_agf_time_<part>": "time integral of the part's thresholded AGF sum over the present people at their "
                            "logged poses, seconds (AGF dimensionless)",
+}
+
+#: The fields of a study's executed run (``--simulate``) beside its
+#: ``exec_``-prefixed :func:`~drake_social.experiments.metrics.executed_metrics`
+#: and its ``nav_*`` fields; ``sim.json`` holds the report's fields under
+#: their :class:`~drake_social.sim.run.ExecutionReport` names.
+EXECUTION_FIELDS: dict[str, str] = {
+    "exec_reached": "whether the run reached the goal within execution.time_limit",
+    "exec_time_to_goal": "seconds until the goal was reached; null when not reached",
+    "exec_wall_time": "seconds of wall-clock time the simulation took",
+    "exec_planned_cost": "the social cost Msc along the planned waypoints (sim.json: planned_social_cost)",
+    "exec_cost": "the same cost function along the executed trajectory (sim.json: executed_social_cost): "
+                 "against the people at t = 0, as the planner saw them, even when they walk; the cost among "
+                 "the people where they were is nav_agf_time_<part>",
+    "exec_cost_ratio": "exec_cost / exec_planned_cost; null when the planned cost is 0",
+    "exec_max_deviation": "largest distance of a body point from its planned curve, metres",
+    "exec_collision_free": "no executed configuration collides with what sim.json's collision_checked names: "
+                           "obstacles, walls and people when the people stand still; obstacles and walls only "
+                           "when they move (contact with walkers: nav_collisions_<part>)",
+    "exec_within_limits": "no joint limit or room bound passed",
 }
 
 #: The fields every producer's record has (plan's result.json, bench's runs, a study's runs).

@@ -41,8 +41,10 @@ still measures a person's distance in that mode.
 
     [h] safety (SafetyMonitor) ◀─ q, people_state; stop ─hold─▶ sequencer, controller, reference / arm
 
-``[h]``: only when there are people (``execution.safety_distance`` >= 0; 0
-stops on contact only). While its ``stop`` is 1 the sequencer does not
+``[h]``: only when the people move (``execution.safety_distance`` >= 0; 0
+stops on contact only). People who stand still are obstacles the planner
+already kept clear of; a plan may pass them closer than the safety distance,
+and a monitor would then hold the robot there for ever. While its ``stop`` is 1 the sequencer does not
 advance, the base controller commands zero wheel speeds and the reference
 (or the arm's trajectory) is held where it is; when clear a new jerk-limited
 segment from rest heads for the same target (see
@@ -108,7 +110,7 @@ script can wire another planner, controller or people model around it
              people_state    PeopleState at the context's time, Value[object]
              people_vector   6 P: per person [x, y, theta, vx, vy, radius]
                              (an absent person keeps a pose: see people_state's present)
-             stop            1: 1.0 while the safety monitor holds the robot (only with people)
+             stop            1: 1.0 while the safety monitor holds the robot (only when people move)
              query_object    SceneGraph's QueryObject (distances, collisions)
 
 A base controller outside the diagram reads ``robot_state`` and
@@ -124,7 +126,7 @@ velocity), ``wheel_speeds``, ``target`` (the sequencer's), ``reference``
 arm trajectory), ``index`` (the target index), ``done`` (the sequencer's flag),
 with a crowd ``crowd_state`` (the people source's discrete state, from
 which :meth:`~drake_social.control.PeopleSource.people_log` rebuilds the people),
-and ``stop`` (the safety monitor's flag; only with people).
+and ``stop`` (the safety monitor's flag; only when people move).
 """
 
 from __future__ import annotations
@@ -624,9 +626,11 @@ def build_checked(
         if mode == "dynamic":
             _filter_people(scene_graph, bodies.geometry_ids)
 
-    # ---- safety: hold the robot while a person is within the safety distance ----
+    # ---- safety: hold the robot while a walking person is within the safety distance ----
+    # Only when people move: a standing person is an obstacle of the plan, which may pass them
+    # within the safety distance; a monitor would hold the robot there for ever.
     stop_port: OutputPort | None = None
-    if people.model.count > 0:
+    if not scenario_people.static:
         monitor = builder.AddNamedSystem("safety", SafetyMonitor(
             ArmGeometry.from_scenario(scenario), safety_distance=float(opts.safety_distance), period=period))
         builder.Connect(q_port, monitor.GetInputPort("q"))

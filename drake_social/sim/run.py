@@ -120,7 +120,10 @@ class ExecutionReport:
     Attributes:
         planned_social_cost: Msc summed along the planned waypoints (the
             scenario's full multi-point weights).
-        executed_social_cost: the same integral along the executed trajectory.
+        executed_social_cost: the same integral along the executed trajectory,
+            with the same cost function as the planner's: against the people
+            at t = 0, even when they walk (the planned cost's counterpart;
+            the cost among the people where they were is ``nav_agf_time_*``).
         max_point_deviation: body point name -> largest distance (metres) of
             its executed position from its planned curve, and ``"max"``.
         max_config_deviation: largest configuration-space distance of an
@@ -397,7 +400,10 @@ def analyze_execution(
             SceneGraphCollisionChecker answers from the shapes near the
             trajectory), independent of the planar checker that planned. The minimum
             clearance is the exact planar checker's. A given checker is used
-            as given, people or not.
+            as given when the people stand still; when they move, a checker
+            of the same kind is built for the room alone (a checker built
+            with the people at t = 0 would judge the run against where they
+            no longer are), and an unknown kind gives way to Drake's.
         people_move: whether the scenario's people move (None = ask its
             people model). When they do, the check and the clearance cover
             the obstacles and walls only (:data:`CHECKED_ROOM`).
@@ -429,6 +435,8 @@ def analyze_execution(
     # Which executed sample each densified configuration follows (for the collision time).
     dense, owner = densify(geometry, q, resolution, return_owner=True)
     lower, upper = configuration_limits(scenario)
+    if people_move and checker is not None:
+        checker = _room_checker(checker, room)
     if checker is None:  # Drake's, from SceneGraphs of the shapes near the trajectory (bounded memory)
         valid = _collision_free(lambda qs: valid_configurations(room, qs), planar.clearance, lower, upper, dense)
     else:
@@ -450,6 +458,19 @@ def analyze_execution(
         limit_violations=violations,
         collision_checked=list(CHECKED_ROOM if people_move else CHECKED_ROOM_AND_PEOPLE),
     )
+
+
+def _room_checker(checker: ValidityChecker, room: Scenario) -> ValidityChecker | None:
+    """A checker of ``checker``'s kind for ``room`` (the scenario without its
+    people), or None (Drake's) for a kind this module does not know."""
+    from drake_social.collision.drake_checker import GeometricChecker, PlanarChecker, SceneGraphChecker, make_checker
+
+    for cls, kind in ((PlanarChecker, "planar"), (GeometricChecker, "numpy"), (SceneGraphChecker, "drake")):
+        if isinstance(checker, cls):
+            return make_checker(room, kind, parallelism=1) if kind == "drake" else make_checker(room, kind)
+    _log.info("analyze_execution: a %s checker of the people at t = 0 replaced by Drake's of the room alone",
+              type(checker).__name__)
+    return None
 
 
 def _trajectory(times, q, who: str) -> tuple[np.ndarray, np.ndarray]:

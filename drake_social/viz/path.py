@@ -6,7 +6,9 @@
 * :func:`cost_profile_figure`: the social cost S(q) against the cumulative
   configuration-space distance s along one or several paths; Fig. 6/8.
 * :func:`convergence_figure`: the anytime curve, best cost after each iteration.
-* :func:`write_plan_figures`: the three pictures of ``drake-social plan``.
+* :func:`write_plan_figures`: the three pictures of ``drake-social plan``;
+  with walking people, ``path.png`` draws their tracks over the plan's
+  nominal duration (:func:`nominal_times`, :func:`planned_people`).
 
 The numbers behind the drawings are plain functions (:func:`sample_path`,
 :func:`cost_profile`, :func:`poses_along`), so tests and scripts can use them
@@ -27,7 +29,7 @@ from matplotlib.lines import Line2D
 
 from drake_social.cost import SocialCost
 from drake_social.kinematics import ArmGeometry, config_distance, cumulative_distance
-from drake_social.people import PeopleLog
+from drake_social.people import PeopleLog, people_model
 from drake_social.planning.result import PlannerResult
 from drake_social.scenario import Scenario
 from drake_social.viz.labels import fit_width
@@ -44,11 +46,16 @@ __all__ = [
     "draw_cost_profile",
     "draw_path",
     "draw_tree",
+    "nominal_times",
     "path_figure",
+    "planned_people",
     "poses_along",
     "sample_path",
     "write_plan_figures",
 ]
+
+#: Samples per second of the people's tracks drawn over a plan (:func:`planned_people`).
+PLAN_TRACK_RATE = 10.0
 
 _log = logging.getLogger(__name__)
 
@@ -376,9 +383,47 @@ def convergence_figure(histories: Mapping[str, np.ndarray], *, title: str | None
 # ---- the files of ``drake-social plan`` -------------------------------------------------
 
 
+def nominal_times(scenario: Scenario, waypoints: np.ndarray) -> np.ndarray:
+    """The time (N,) seconds at which each waypoint is reached when the path is
+    driven at the execution limits: a straight motion takes the longest of its
+    base distance / ``execution.max_base_speed`` and each joint's
+    ``|delta psi_j| / execution.arm_max_velocity[j]`` (no acceleration phases,
+    no stops: a lower bound on an executed run's time)."""
+    wp = np.asarray(waypoints, float).reshape(-1, 4)
+    if len(wp) < 2:
+        return np.zeros(len(wp))
+    opts = scenario.execution
+    d = np.diff(wp, axis=0)
+    base = np.hypot(d[:, 0], d[:, 1]) / float(opts.max_base_speed)
+    arm = np.abs(d[:, 2:]) / np.asarray(opts.arm_max_velocity, float)
+    return np.concatenate([[0.0], np.cumsum(np.maximum(base, arm.max(axis=1)))])
+
+
+def planned_people(scenario: Scenario, waypoints: np.ndarray, rate: float = PLAN_TRACK_RATE) -> PeopleLog | None:
+    """Where the scenario's people walk while the path is driven: its people
+    model (a crowd stepped without the robot) sampled ``rate`` times a second
+    from 0 to the path's last :func:`nominal_times` (the start to goal
+    straight line when ``waypoints`` has fewer than 2 rows); None when nobody
+    moves."""
+    model = people_model(scenario)
+    if model.static or model.count == 0:
+        return None
+    wp = np.asarray(waypoints, float).reshape(-1, 4)
+    if len(wp) < 2:
+        wp = np.array([scenario.start, scenario.goal], float)
+    duration = float(nominal_times(scenario, wp)[-1])
+    times = np.linspace(0.0, duration, max(2, int(math.ceil(duration * rate)) + 1))
+    return PeopleLog.sample(model, times)
+
+
 def write_plan_figures(scenario: Scenario, result: PlannerResult, out_dir: str | Path, *,
-                       title: str | None = None, dpi: int = MAP_DPI) -> dict[str, Path]:
+                       title: str | None = None, dpi: int = MAP_DPI,
+                       people: PeopleLog | None = None) -> dict[str, Path]:
     """Writes ``path.png``, ``cost_profile.png`` and ``convergence.png`` into ``out_dir``.
+
+    Args:
+        people: the walkers' tracks drawn on ``path.png`` (e.g.
+            :func:`planned_people`); None = none.
 
     Returns:
         The written files by name ("path", "cost_profile", "convergence").
@@ -386,7 +431,7 @@ def write_plan_figures(scenario: Scenario, result: PlannerResult, out_dir: str |
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     figures = {
-        "path": path_figure(scenario, result, title=title),
+        "path": path_figure(scenario, result, title=title, people=people),
         "cost_profile": cost_profile_figure(scenario, {result.algorithm: result.waypoints}),
         "convergence": convergence_figure({result.algorithm: result.cost_history}),
     }

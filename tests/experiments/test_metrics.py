@@ -133,3 +133,39 @@ def test_zone_shares_without_motion_are_nan_and_irregularity_of_a_right_angle():
     dut = base_irregularity(np.array([[0.0, 0.0], [2.0, 0.0], [2.0, 2.0]]))
     assert dut == pytest.approx((math.pi / 2) / 4.0, rel=1e-6)
     assert base_irregularity(np.array([[0.0, 0.0], [1.0, 0.0], [3.0, 0.0]])) == 0.0
+
+
+def _front_agf(u: float, sigma_h: float, threshold: float = 0.2) -> float:
+    """Kirby's AGF on the facing axis, u metres in front, thresholded (by hand)."""
+    value = math.exp(-u * u / (2.0 * sigma_h * sigma_h))
+    return value if value > threshold else 0.0
+
+
+@pytest.mark.parametrize("speed", [None, 0.0, 0.4])
+def test_arm_and_object_agf_use_the_speed_scaled_sigmas_of_the_points(speed):
+    # tiny: the person at (4, 3.8) faces south; at q = (3, 2.2, 0, pi/2) the bar lies along
+    # y = 2.7 from x = 2.85 to 4.35, its nearest point (4, 2.7) 1.1 m in front of the person.
+    from drake_social.cost.social import SocialCost
+    from drake_social.experiments.metrics import part_agf
+    from drake_social.people import PeopleState
+
+    scenario = load_scenario("scenarios/tiny.yaml")
+    scenario.social.speed_scaling = speed is not None
+    v = speed or 0.0
+    person = scenario.people[0]
+    state = PeopleState(t=0.0, positions=[[person.x, person.y]], headings=[person.theta],
+                        velocities=[[0.0, -v]], radii=[person.radius], names=(person.name,))
+    n = ArmGeometry.from_scenario(scenario).num_interest_points
+    dut = part_agf(SocialCost.from_scenario(scenario, np.ones(n), people=state), np.array([3.0, 2.2, 0.0, 1.5708]))
+    # sigma_h: the scenario's 2 m without scaling, max(2 v, 0.5) with it.
+    sigma_h = 2.0 if speed is None else max(2.0 * v, 0.5)
+    # The bar's axis is sampled every 5 cm: its best sample is within 2.5 cm of x = 4 (v <= 2.5 cm to the side).
+    assert dut["object"][0] == pytest.approx(_front_agf(1.1, sigma_h), abs=2e-3)
+    # The arm's nearest point to the person is its tip (3.6, 2.7): u = 1.1, 0.4 m to the side.
+    sigma_s = 2.0 / 3.0 * sigma_h
+    arm = _front_agf(1.1, sigma_h, 0.0) * math.exp(-0.16 / (2.0 * sigma_s ** 2))
+    assert dut["arm"][0] == pytest.approx(arm if arm > 0.2 else 0.0, abs=2e-3)
+    assert dut["arm"][0] >= max(dut["link1_tip"][0], dut["link2_tip"][0])
+    assert dut["object"][0] >= max(dut["object_1"][0], dut["object_2"][0])
+    assert dut["robot"][0] == max(dut[p][0] for p in ("base", "link1_tip", "link2_tip", "object_1", "object_2",
+                                                      "arm", "object"))

@@ -19,11 +19,11 @@ ROOT = Path(drake_social.__file__).resolve().parent
 #: not a scenario's list: (module path under the package, expression).
 COST_PEOPLE = {
     ("cost/social.py", "self.people"),
-    ("experiments/metrics.py", "cost.people"),
     ("planning/rrt_star/compiled.py", "sc.people"),
     # A SimulationResult's people log (a PeopleLog over the run), not a scenario's list.
     ("sim/run.py", "result.people"),
     ("app.py", "run.people"),
+    ("experiments/study/runs.py", "run.people"),
 }
 
 

@@ -103,3 +103,26 @@ def test_the_cost_and_the_figure_take_a_state_at_any_time(walk):
     drawn = draw_world(ax, walk, people=state)
     assert drawn["people"][0].center == (10.0, 3.8) and drawn["people"][0].radius == 0.25
     assert draw_world(Figure().add_subplot(), walk)["people"][0].center == (5.0, 3.8)
+
+
+def test_executed_metrics_read_the_run_people_log_and_its_presence(walk):
+    # The run's log, not the crowd without the robot: the person stood at (10, 3.3), facing +x,
+    # and was in the room only from t = 5 s; the model's walker (passing 1.3 m away) is not used.
+    from drake_social.people import PeopleLog
+
+    times = np.linspace(0.0, 10.0, 51)
+    q = np.tile(walk.start, (len(times), 1))  # the robot stands at (10, 2.5)
+    states = [PeopleState(t=t, positions=[[10.0, 3.3]], headings=[0.0], velocities=[[0.0, 0.0]], radii=[0.25],
+                          names=("p",), present=[t >= 5.0]) for t in times]
+    log = PeopleLog.from_states(states)
+    dut = metrics.executed_metrics(walk, times, q, log)
+    assert dut["exec_min_dist_base"] == pytest.approx(0.8 - 0.35 - 0.25, abs=1e-12)
+    # 0.2 m from t = 5 on: intimate for the last 5 s of 10; before, nobody is there (public; the
+    # step into t = 5 has an end at +inf, so it is public too).
+    assert dut["exec_zone_time_intimate_base"] == pytest.approx(0.5, abs=1e-12)
+    assert dut["exec_zone_time_public_base"] == pytest.approx(0.5, abs=1e-12)
+    space = PersonalSpace.from_options(walk.social)
+    assert dut["exec_agf_max_base"] == pytest.approx(agf_algorithm1(10.0, 2.5, (10.0, 3.3, 0.0), space), rel=1e-12)
+    # A log sampled at other times is read at the run's times (linear; presence from the sample before).
+    coarse = PeopleLog.from_states(states[::5])
+    assert metrics.executed_metrics(walk, times, q, coarse)["exec_zone_time_intimate_base"] == pytest.approx(0.5)

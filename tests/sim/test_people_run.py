@@ -79,10 +79,23 @@ def test_a_dynamic_run_with_a_walker_through_the_robot_runs(tiny_scenario, monke
     assert run.q[-1, 0] == pytest.approx(start[0] + 0.5, abs=0.06)
 
 
-def test_simulate_writes_people_csv(tiny_scenario_path, walking, tmp_path):
+def test_simulate_writes_people_csv(tiny_scenario_path, walking, tmp_path, monkeypatch):
+    from drake_social.viz import path as viz_path
+
+    drawn = []
+    original = viz_path.draw_people_tracks
+    monkeypatch.setattr(viz_path, "draw_people_tracks",
+                        lambda ax, people, **kw: drawn.append((people, kw)) or original(ax, people, **kw))
     dut = app.run_simulate(scenario=tiny_scenario_path, out=tmp_path, mode="kinematic", checker="numpy",
                            replay=False)
-    assert dut.files == ["executed.csv", "people.csv", "tracking.png", "sim.json"]
+    assert dut.files == ["executed.csv", "people.csv", "path.png", "tracking.png", "sim.json"]
+    # path.png: the run's own log and executed trajectory, marked at 5 common times over the run.
+    from matplotlib.image import imread
+
+    assert imread(tmp_path / "path.png").shape[0] > 500
+    ((people, kw),) = drawn
+    assert people is dut.run.people and kw["robot"][0] is dut.run.times and kw["robot"][1] is dut.run.q
+    np.testing.assert_allclose(kw["marks"], np.linspace(0.0, dut.run.times[-1], 5), rtol=0, atol=1e-12)
     executed = np.loadtxt(tmp_path / "executed.csv", delimiter=",", skiprows=1)
     with open(tmp_path / "people.csv", newline="") as f:
         rows = list(csv.reader(f))
@@ -119,3 +132,23 @@ def test_people_model_of_a_scenario_without_people_gives_no_log(tiny_scenario):
     assert people_model(empty).count == 0
     run = simulate(empty, mode="kinematic", time_limit=1.0)
     assert run.people is None
+
+
+@pytest.mark.parametrize("kind", ["numpy", "planar"])
+def test_a_given_checker_of_the_people_at_t0_is_replaced_by_the_room_alone_when_people_move(tiny_scenario, kind):
+    # The base drives through where tiny's person stood at t = 0; the planning checker
+    # (people at t = 0) rejects it, the room alone (the person has walked off) accepts it.
+    from drake_social.collision.drake_checker import make_checker
+    from drake_social.people import without_people
+    from drake_social.sim.run import analyze_execution
+
+    q = np.array([[x, 3.4, 0.0, 1.5708] for x in np.linspace(3.0, 5.0, 41)])
+    times = np.linspace(0.0, 4.0, len(q))
+    planning = make_checker(tiny_scenario, kind)
+    assert not planning.are_valid(q).all()
+    assert make_checker(without_people(tiny_scenario), kind).are_valid(q).all()
+    moving = analyze_execution(tiny_scenario, q[[0, -1]], times, q, planning, people_move=True)
+    assert moving.collision_free and moving.first_collision_time is None
+    assert moving.collision_checked == list(CHECKED_ROOM)
+    standing = analyze_execution(tiny_scenario, q[[0, -1]], times, q, planning, people_move=False)
+    assert not standing.collision_free and standing.collision_checked == list(CHECKED_ROOM_AND_PEOPLE)

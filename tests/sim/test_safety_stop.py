@@ -119,3 +119,22 @@ def test_no_people_no_stops(setting):
     run = simulate(scenario, waypoints=waypoints, analyze=False, mode="kinematic", time_limit=2.0)
     assert run.stops == [] and not run.stopped.any() and len(run.stopped) == len(run.times)
     assert run.to_json_dict()["stopped_time"] == 0.0
+
+
+def test_a_standing_person_closer_than_the_safety_distance_does_not_hold_the_robot():
+    # A static scenario whose straight path passes a standing person 1 cm away (< SAFETY: link 2's
+    # capsule, radius 4 cm, ends at the gripper, 0.5 m above the base's y = 2.5): no
+    # monitor (the people do not move), so the robot goes by instead of waiting for ever.
+    base = load_scenario("scenarios/tiny.yaml")
+    person = dc.replace(base.people[0], x=4.0, y=3.3)
+    scenario = dc.replace(base, people=[person])
+    waypoints = np.array([scenario.start, scenario.goal], float)
+    s = np.linspace(0.0, 1.0, 2001)[:, None]
+    q = waypoints[0] + s * (waypoints[1] - waypoints[0])
+    d = part_distances(ArmGeometry.from_scenario(scenario), q, np.array([[4.0, 3.3]]), [person.radius])["robot"]
+    assert 0.0 < d.min() < SAFETY and d.min() == pytest.approx(3.3 - 0.25 - 3.0 - 0.04, abs=1e-5)
+    built = build_diagram(scenario, waypoints=waypoints)
+    assert "stop" not in built.output_port_names() and "stop" not in built.loggers
+    run = simulate(scenario, waypoints=waypoints, analyze=False, mode="kinematic", time_limit=40.0)
+    assert run.reached and run.stops == [] and not run.stopped.any()
+    np.testing.assert_allclose(run.q[-1], scenario.goal, atol=1e-6)

@@ -38,8 +38,9 @@ def tiny_path(tiny_scenario):
 @pytest.mark.parametrize("execution", ["synchronized", "paper"])
 def test_the_station_exports_its_ports(tiny_scenario, tiny_path, mode, execution):
     built = build_diagram(tiny_scenario, mode=mode, execution=execution, waypoints=tiny_path)
-    # tiny has a person: the safety monitor's stop is exported.
-    expected = OUTPUTS | {"stop"} | ({"reference_feedforward"} if execution == "synchronized" else set())
+    # tiny's person stands still: no safety monitor, no stop port (a walker's run exports it:
+    # tests/sim/test_safety_stop.py).
+    expected = OUTPUTS | ({"reference_feedforward"} if execution == "synchronized" else set())
     assert set(built.output_port_names()) == expected
     assert built.input_port_names() == []
     context = built.diagram.CreateDefaultContext()

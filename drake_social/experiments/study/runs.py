@@ -92,6 +92,8 @@ def _execute(scenario, waypoints, checker, executed_metrics) -> dict:
     from drake_social.experiments.metrics import execution_metrics
     from drake_social.sim.run import simulate
 
+    # With walking people the analysis swaps the planning checker (people at t = 0) for one of
+    # the same kind of the room alone (sim.run.analyze_execution); the metrics read the run's log.
     run = simulate(scenario, mode="kinematic", waypoints=np.asarray(waypoints, float), checker=checker, analyze=True,
                    analysis_checker=checker)
     r = run.report
@@ -108,7 +110,7 @@ def _execute(scenario, waypoints, checker, executed_metrics) -> dict:
         "exec_within_limits": bool(r.within_limits) if r else None,
     }
     if len(run.times) > 1:
-        out.update(executed_metrics(scenario, run.times, run.q))
+        out.update(executed_metrics(scenario, run.times, run.q, run.people))
         out.update(execution_metrics(scenario, run))
     return out
 
