@@ -233,8 +233,6 @@ def summary_table(result) -> list[str]:
 
 def parts_table(result, groups: Sequence[str] | None = None) -> list[str]:
     """Per-part medians: min distance, intimate + personal share, AGF max and mean."""
-    from drake_social.experiments.metrics import part_names
-    from drake_social.kinematics import ArmGeometry
 
     lines = ["| group | algorithm | part | min distance m | intimate+personal share | social share | AGF max | "
              "AGF mean |", "|---|---|---|---:|---:|---:|---:|---:|"]
