@@ -263,7 +263,7 @@ def path_figure(
     fig, ax, full, geometry = scene_with_field(scenario, resolution)
     if people is not None:
         times = None if executed is None else mark_times(float(np.asarray(executed[0], float)[-1]), marks)
-        draw_people_tracks(ax, people, marks=times, robot=executed)
+        draw_people_tracks(ax, people, marks=times, robot=executed, names=False)  # the scene labels them
     if tree if tree is not None else not result.success:
         draw_tree(ax, result.tree_nodes, result.tree_parents)
     name = title if title is not None else scenario.description or "scenario"

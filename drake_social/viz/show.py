@@ -124,7 +124,7 @@ def show_figure(scenario: Scenario, *, title: str | None = None, resolution: flo
     """
     fig, ax, cost, geometry = scene_with_field(scenario, resolution)
     if people is not None:
-        draw_people_tracks(ax, people)
+        draw_people_tracks(ax, people, names=False)  # the scene labels them
     draw_robot(ax, geometry, np.asarray(scenario.start, float), labels=True)
     draw_robot(ax, geometry, np.asarray(scenario.goal, float))
     s_start, s_goal = cost(np.array([scenario.start, scenario.goal], float))
