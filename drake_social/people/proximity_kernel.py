@@ -7,8 +7,7 @@ batched over configurations) would build a dozen small arrays. The kernel does
 the same floating-point operations in the same order as the reference (the
 forward kinematics of :class:`~drake_social.kinematics.ArmGeometry`, then the
 point and segment distances), so its value is the reference's ``robot``
-distance; the tests compare the two on random cases. Without numba the
-function runs as plain Python (slow, the same numbers).
+distance; the tests compare the two on random cases.
 
 The kernel calls no other module's compiled function, so numba's own cache
 check (this file's source) keeps its on-disk cache fresh.
@@ -19,12 +18,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
-
-try:  # numba is a dependency; the fallback keeps the module importable without it
-    from numba import njit
-except ImportError:  # pragma: no cover
-    def njit(*args, **kwargs):
-        return (lambda f: f) if not args or not callable(args[0]) else args[0]
+from numba import njit
 
 __all__ = ["robot_distance"]
 

@@ -5,8 +5,7 @@ its numpy path (:meth:`~drake_social.people.crowd.SocialForceCrowd.step_referenc
 built from the documented terms) is the reference the tests compare it with.
 The same equations, term by term, written as loops over people, boxes and
 capsules: a step of 10 people then costs microseconds instead of the numpy
-path's hundreds (many small arrays). Without numba the function runs as
-plain Python (slow, but the same numbers).
+path's hundreds (many small arrays).
 
 The kernel calls no other module's compiled function, so numba's own cache
 check (this file's source) keeps its on-disk cache fresh.
@@ -17,12 +16,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
-
-try:  # numba is a dependency; the fallback keeps the module importable without it
-    from numba import njit
-except ImportError:  # pragma: no cover
-    def njit(*args, **kwargs):
-        return (lambda f: f) if not args or not callable(args[0]) else args[0]
+from numba import njit
 
 __all__ = ["PARAMS", "PEOPLE_COLUMNS", "crowd_step"]
 

@@ -6,8 +6,7 @@ time step of a simulation with walking people; its numpy form
 small-array operations. This loop does the same floating-point operations per
 person (the wrap of a looping route is an exact ``fmod`` of positive numbers,
 the interval a binary search with the same "keys <= query" rule), so the
-numbers are the reference's; the tests compare the two. Without numba the
-function runs as plain Python (slow, the same numbers).
+numbers are the reference's; the tests compare the two.
 
 The kernel calls no other module's compiled function, so numba's own cache
 check (this file's source) keeps its on-disk cache fresh.
@@ -16,12 +15,7 @@ check (this file's source) keeps its on-disk cache fresh.
 from __future__ import annotations
 
 import numpy as np
-
-try:  # numba is a dependency; the fallback keeps the module importable without it
-    from numba import njit
-except ImportError:  # pragma: no cover
-    def njit(*args, **kwargs):
-        return (lambda f: f) if not args or not callable(args[0]) else args[0]
+from numba import njit
 
 __all__ = ["evaluate"]
 
