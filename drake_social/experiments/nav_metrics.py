@@ -82,7 +82,7 @@ import dataclasses as dc
 
 import numpy as np
 
-from drake_social.cost.agf import PersonalSpace, apply_threshold, gaussian
+from drake_social.cost.agf import PersonalSpace, apply_threshold, gaussian, speed_scaled_sigmas
 from drake_social.experiments.proxemics import ZONES, HallZones, base_irregularity, shape_points
 from drake_social.experiments.time_series import episodes, held_time, motion_stats, trapezoid_mean
 from drake_social.io.records import NAV_PREFIX
@@ -115,17 +115,18 @@ def _agf_over_time(scenario, geometry: ArmGeometry, q: np.ndarray, people: Peopl
     logged poses, sample by sample (Kirby's speed scaling when the scenario asks)."""
     options = scenario.social
     space = PersonalSpace.from_options(options)
-    out = {part: np.zeros(len(q)) for part in ("base", "points", "arm", "object")}
     if people.count == 0:
         return {part: np.zeros(len(q)) for part in RUN_PARTS}
+    out = {part: np.zeros(len(q)) for part in ("base", "points", "arm", "object")}
     for lo in range(0, len(q), _AGF_BLOCK):
         k = slice(lo, lo + _AGF_BLOCK)
         pos, heading = people.positions[k], people.headings[k]  # (B, P, 2), (B, P)
         sp = space
         if options.speed_scaling:
-            sigma_h = np.maximum(2.0 * np.hypot(*np.moveaxis(people.velocities[k], -1, 0)), 0.5)[:, None, :]
-            sp = dc.replace(space, sigma_h=sigma_h, sigma_s=sigma_h * options.side_ratio,
-                            sigma_r=sigma_h * options.rear_ratio)
+            speeds = np.hypot(*np.moveaxis(people.velocities[k], -1, 0))  # (B, P)
+            sigmas = speed_scaled_sigmas(speeds, options.side_ratio, options.rear_ratio).reshape(*speeds.shape, 3)
+            sp = dc.replace(space, sigma_h=sigmas[:, None, :, 0], sigma_s=sigmas[:, None, :, 1],
+                            sigma_r=sigmas[:, None, :, 2])
         cos, sin = np.cos(heading)[:, None, :], np.sin(heading)[:, None, :]
         present = people.present[k][:, None, :]
         for part, pts in _part_points(geometry, q[k]).items():

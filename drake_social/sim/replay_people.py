@@ -35,7 +35,7 @@ from matplotlib.image import imsave
 from pydrake.geometry import Meshcat, Rgba
 from pydrake.math import RigidTransform, RotationMatrix
 
-from drake_social.cost.agf import PersonalSpace, gaussian
+from drake_social.cost.agf import PersonalSpace, gaussian, speed_scaled_sigmas
 from drake_social.people import PeopleLog, PeopleState
 from drake_social.scenario import Scenario
 from drake_social.sim.replay_meshes import (
@@ -67,8 +67,6 @@ _MAX_TEXTURE_CELLS = 256
 # three.js' MultiplyBlending and NearestFilter constants.
 _THREE_MULTIPLY_BLENDING = 4.0
 _THREE_NEAREST_FILTER = 1003.0
-#: Sigma_h floor of Kirby's speed scaling, metres (sigma_h = max(2 v, 0.5)).
-_SPEED_SCALING_FLOOR = 0.5
 
 
 def standing_mask(people: PeopleLog) -> np.ndarray:
@@ -91,7 +89,7 @@ def walker_sigma_h(scenario: Scenario, speeds: np.ndarray) -> np.ndarray:
     ``max(2 v, 0.5)`` with ``social.speed_scaling``, else ``social.sigma_h``."""
     speeds = np.asarray(speeds, float)
     if scenario.social.speed_scaling:
-        return np.maximum(2.0 * speeds, _SPEED_SCALING_FLOOR)
+        return speed_scaled_sigmas(speeds, 1.0, 1.0)[:, 0].reshape(speeds.shape)
     return np.full(speeds.shape, float(scenario.social.sigma_h))
 
 
