@@ -30,6 +30,8 @@ __all__ = [
     "config_distance",
     "cumulative_distance",
     "displacement_bound",
+    "nominal_durations",
+    "nominal_path_times",
     "object_polyline",
     "object_interest_points",
 ]
@@ -303,3 +305,30 @@ def cumulative_distance(waypoints: np.ndarray, weights: np.ndarray | None = None
     if len(wp) == 0:
         return np.zeros(0)
     return np.concatenate([[0.0], np.cumsum(config_distance(wp[:-1], wp[1:], weights))])
+
+
+def nominal_durations(q_a: np.ndarray, q_b: np.ndarray, max_base_speed: float,
+                      arm_max_velocity) -> np.ndarray:
+    """The time (E,) seconds of each straight motion q_a[e] -> q_b[e] driven
+    at the execution limits: the longest of its base distance /
+    ``max_base_speed`` and each joint's ``|delta psi_j| / arm_max_velocity[j]``
+    (no acceleration phases: a lower bound on an executed motion's time).
+    The planner's time along a path (time-indexed cost and safety) and the
+    plan figures' walker tracks both use it."""
+    a = np.asarray(q_a, float).reshape(-1, 4)
+    b = np.asarray(q_b, float).reshape(-1, 4)
+    d = b - a
+    base = np.hypot(d[:, 0], d[:, 1]) / float(max_base_speed)
+    arm = np.abs(d[:, 2:]) / np.asarray(arm_max_velocity, float).reshape(2)
+    return np.maximum(base, arm.max(axis=1))
+
+
+def nominal_path_times(waypoints: np.ndarray, max_base_speed: float, arm_max_velocity,
+                       t0: float = 0.0) -> np.ndarray:
+    """The time (N,) at which each waypoint is reached when the path is driven
+    from ``t0`` at the execution limits (:func:`nominal_durations` summed)."""
+    wp = np.asarray(waypoints, float).reshape(-1, 4)
+    if len(wp) < 2:
+        return np.full(len(wp), float(t0))
+    return float(t0) + np.concatenate([[0.0], np.cumsum(nominal_durations(wp[:-1], wp[1:], max_base_speed,
+                                                                          arm_max_velocity))])

@@ -10,6 +10,7 @@ behind the same protocol.
 from drake_social.people.log import PEOPLE_CSV_FIELDS, PeopleLog, person_ids
 from drake_social.people.compose import CrowdModel, ScenarioPeople, people_model, with_people, without_people
 from drake_social.people.model import PeopleModel, PeopleState, StaticPeople
+from drake_social.people.prediction import Prediction, constant_velocity, perfect_prediction, predict
 
-__all__ = ["PEOPLE_CSV_FIELDS", "CrowdModel", "PeopleLog", "PeopleModel", "PeopleState", "ScenarioPeople", "StaticPeople", "people_model",
-           "person_ids", "with_people", "without_people"]
+__all__ = ["PEOPLE_CSV_FIELDS", "CrowdModel", "PeopleLog", "PeopleModel", "PeopleState", "Prediction", "ScenarioPeople", "StaticPeople", "constant_velocity",
+           "people_model", "perfect_prediction", "person_ids", "predict", "with_people", "without_people"]

@@ -30,6 +30,7 @@ __all__ = [
     "CHECKERS",
     "EXECUTIONS",
     "INFORMED_MODES",
+    "PREDICTIONS",
     "NEAR_RADIUS_MODES",
     "SIM_MODES",
     "Bar",
@@ -51,6 +52,8 @@ __all__ = [
 
 #: Modes of the informed sampler (see ``drake_social.planning.sampling``).
 INFORMED_MODES = ("paper", "admissible")
+#: How the replanner predicts people (``planner.prediction``).
+PREDICTIONS = ("constant_velocity", "perfect")
 
 #: Simulation modes (see ``drake_social.sim``): the base integrates its
 #: commanded velocity and the arm follows its reference exactly, or the
@@ -327,6 +330,26 @@ class PlannerOptions:
     # the raw 6.0). false returns the raw RRT* path of the paper
     # (`experiment paper` pins it).
     optimize: bool = True
+    # Replan while executing (``simulate --replan``): a periodic event plans
+    # from the robot's configuration against the people predicted over
+    # ``replan_horizon`` (drake_social.control.ReplanningPlannerSystem).
+    replan: bool = False
+    # Replans per second of simulated time, Hz (> 0).
+    replan_rate: float = 10.0
+    # Wall-clock budget of one replan, seconds (> 0): the search stops there
+    # with the best path found so far.
+    replan_budget: float = 0.08
+    # Samples drawn per replan at most (1 .. MAX_ITERATIONS); the budget may stop it earlier.
+    replan_iterations: int = 500
+    # How far ahead people are predicted, seconds (> 0). Beyond it the safety
+    # check ignores them and the cost holds them where they are predicted at the horizon.
+    replan_horizon: float = 5.0
+    # A new path replaces the current one only when its cost is lower by at
+    # least this fraction of the current one's (in [0, 1)).
+    replan_margin: float = 0.05
+    # How people are predicted: "constant_velocity" (from their state now) or
+    # "perfect" (scripted and recorded people as they will walk; a crowd at constant velocity).
+    prediction: str = "constant_velocity"
 
 
 @dc.dataclass

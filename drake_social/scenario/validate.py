@@ -24,7 +24,7 @@ from drake_social.limits import (ALGORITHMS, CONTACT_APPROXIMATIONS, INFORMED_AL
                                  MAX_TIME_LIMIT, MIN_CONTROL_PERIODS, SERVO_BANDWIDTH)
 from drake_social.scenario.crowd_rules import crowd_problems
 from drake_social.scenario.people_rules import check_people
-from drake_social.scenario.schema import (EXECUTIONS, INFORMED_MODES, NEAR_RADIUS_MODES, SIM_MODES, Bar,
+from drake_social.scenario.schema import (EXECUTIONS, INFORMED_MODES, NEAR_RADIUS_MODES, PREDICTIONS, SIM_MODES, Bar,
                                           ExecutionOptions, LShape, Scenario, interest_point_count)
 
 __all__ = [
@@ -350,6 +350,17 @@ def validate_scenario(scenario: Scenario, source: str = "<scenario>") -> None:
     c.length("planner.distance_weights", p.distance_weights, 4)
     c.positive("planner.distance_weights", p.distance_weights)
     c.positive("planner.collision_resolution", p.collision_resolution)
+    if not isinstance(p.replan, bool):
+        c.fail("planner.replan", f"must be true or false, got {_shown(p.replan)}")
+    for name in ("replan_rate", "replan_budget", "replan_horizon"):
+        c.positive(f"planner.{name}", getattr(p, name))
+    if not 1 <= p.replan_iterations <= MAX_ITERATIONS:
+        c.fail("planner.replan_iterations", f"must be in [1, {MAX_ITERATIONS}], got {p.replan_iterations}")
+    c.finite("planner.replan_margin", p.replan_margin)
+    if not 0.0 <= p.replan_margin < 1.0:
+        c.fail("planner.replan_margin", f"must be in [0, 1), got {p.replan_margin}")
+    if p.prediction not in PREDICTIONS:
+        c.fail("planner.prediction", f"unknown prediction {_shown(p.prediction)}; allowed: {', '.join(PREDICTIONS)}")
     e = scenario.execution
     if e.mode not in SIM_MODES:
         c.fail("execution.mode", f"unknown mode {_shown(e.mode)}; allowed: {', '.join(SIM_MODES)}")

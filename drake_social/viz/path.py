@@ -28,7 +28,7 @@ from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 
 from drake_social.cost import SocialCost
-from drake_social.kinematics import ArmGeometry, config_distance, cumulative_distance
+from drake_social.kinematics import ArmGeometry, config_distance, cumulative_distance, nominal_path_times
 from drake_social.people import PeopleLog, people_model
 from drake_social.planning.result import PlannerResult
 from drake_social.scenario import Scenario
@@ -385,18 +385,11 @@ def convergence_figure(histories: Mapping[str, np.ndarray], *, title: str | None
 
 def nominal_times(scenario: Scenario, waypoints: np.ndarray) -> np.ndarray:
     """The time (N,) seconds at which each waypoint is reached when the path is
-    driven at the execution limits: a straight motion takes the longest of its
-    base distance / ``execution.max_base_speed`` and each joint's
-    ``|delta psi_j| / execution.arm_max_velocity[j]`` (no acceleration phases,
-    no stops: a lower bound on an executed run's time)."""
-    wp = np.asarray(waypoints, float).reshape(-1, 4)
-    if len(wp) < 2:
-        return np.zeros(len(wp))
+    driven at the execution limits (:func:`drake_social.kinematics.nominal_path_times`
+    with the scenario's ``execution.max_base_speed`` and ``arm_max_velocity``;
+    a lower bound on an executed run's time)."""
     opts = scenario.execution
-    d = np.diff(wp, axis=0)
-    base = np.hypot(d[:, 0], d[:, 1]) / float(opts.max_base_speed)
-    arm = np.abs(d[:, 2:]) / np.asarray(opts.arm_max_velocity, float)
-    return np.concatenate([[0.0], np.cumsum(np.maximum(base, arm.max(axis=1)))])
+    return nominal_path_times(waypoints, opts.max_base_speed, opts.arm_max_velocity)
 
 
 def planned_people(scenario: Scenario, waypoints: np.ndarray, rate: float = PLAN_TRACK_RATE) -> PeopleLog | None:
