@@ -6,10 +6,10 @@ OUT    ?= out
 
 .PHONY: demo test test-fast bench install clean chromium mutate docs
 
-$(VENV)/.installed: pyproject.toml
+$(VENV)/.installed: pyproject.toml constraints.txt
 	$(PYTHON) -m venv $(VENV)
 	$(PY) -m pip install --quiet --upgrade pip
-	$(PY) -m pip install --quiet -e '.[test,bench,docs]'
+	$(PY) -m pip install --quiet -c constraints.txt -e '.[test,bench,docs]'
 	touch $@
 
 # numba's cache of the compiled kernels, filled with the commands' argument
