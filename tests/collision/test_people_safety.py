@@ -118,6 +118,7 @@ def test_motion_check_is_sound_and_not_overly_conservative(robot, rng):
     assert clear_said / clear_cases >= 0.97
 
 
+@pytest.mark.slow
 def test_grazing_motions_are_caught(robot, rng):
     """People placed so the exact minimum is within a few millimetres of the
     safety distance, either side: every one at or below it is refused."""
@@ -170,6 +171,7 @@ def test_a_walker_crossing_a_still_robot_mid_motion_is_caught(robot):
     walker = _standing((-5.0, 0.0), samples=21, dt=0.5, speed=2.0, velocity=(2.0, 0.0))  # at x = 0 when t = 2.5
     safety = PeopleSafety(scene, walker, SAFETY)
     assert safety.clearance(q_a, 0.0) > 4.0 and safety.clearance(q_b, 5.0) > 3.0  # far at both ends
+    assert _dense_min(geometry, walker, q_a, q_b, 0.0, 5.0) < 0  # the exact distance: they pass through the base
     assert not safety.motion_clear(q_a, q_b, 0.0, 5.0)
     assert safety.path_clear(np.array([q_a, q_a, q_b]), np.array([0.0, 0.1, 5.0])) == (False, 1)
     assert safety.motion_clear(q_a, q_b, 0.0, 0.5)  # over before they arrive
