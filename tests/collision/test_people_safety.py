@@ -289,3 +289,32 @@ def test_speed_on_office_walker_like_inputs(robot, rng):
         people_kernel.motion_clear_of_people(*m, *args)
     per_call = (time.perf_counter() - start) / len(motions)
     assert per_call < 1e-3
+
+
+@pytest.mark.slow
+def test_motion_check_is_sound_in_odd_cases(robot, rng):
+    """Fast walkers, one-sample predictions, late t0 (rounding), zero-length
+    and zero-duration motions, safety 0 .. 0.3 m: never a false clear."""
+    scene, geometry = robot
+    near = 0
+    for trial in range(300):
+        people, samples = int(rng.integers(1, 4)), int(rng.integers(1, 25))
+        dt, t0 = float(rng.choice([0.05, 0.1, 0.3])), float(rng.choice([0.0, 1000.0, 12345.678]))
+        walk = np.cumsum(rng.normal(0.0, 2.5, (samples - 1, people, 2)) * dt, axis=0)
+        pos = rng.uniform(-1.5, 1.5, (1, people, 2)) + np.concatenate([np.zeros((1, people, 2)), walk])
+        pos[:, :int(rng.integers(0, 2))] = pos[:1, :1]  # sometimes one stands
+        step = np.diff(pos, axis=0)
+        speeds = np.hypot(step[..., 0], step[..., 1]).max(axis=0) / dt if samples > 1 else np.zeros(people)
+        pred = Prediction(t0=t0, dt=dt, positions=pos, headings=np.zeros((samples, people)),
+                          present=rng.random((samples, people)) > 0.1, radii=rng.uniform(0.1, 0.3, people),
+                          speeds=speeds, max_speeds=speeds, names=tuple(map(str, range(people))))
+        q_a, q_b, duration = _motion(rng, 3.0)
+        if trial % 5 == 0:
+            q_b = q_a.copy()
+        t_a = t0 + rng.uniform(-0.5, (samples - 1) * dt + 0.5)
+        t_b = t_a + (duration if trial % 7 else 0.0)
+        safety = float(rng.choice([0.0, 0.05, 0.3]))
+        if _dense_min(geometry, pred, q_a, q_b, t_a, t_b, n=1001) <= safety:
+            near += 1
+            assert not PeopleSafety(scene, pred, safety).motion_clear(q_a, q_b, t_a, t_b), f"trial {trial}"
+    assert near > 50
