@@ -29,11 +29,18 @@ the motion's end, then
 Rewiring costs and people-checks the motion new -> near at ``tnode[new]``
 (the parent choice's cost was at the near node's time: not reused; the
 static part of its check is); a re-parented subtree's times are recomputed
-as its costs are propagated (its edges' costs are kept: approximate during
-the search, the replanner re-evaluates what it returns). Lazy costs stay
-exact (the social part is >= 0). Disabled, the loop runs exactly as
-without it, bit for bit. :func:`seed_chain` inserts a warm start's path as
-a chain from the root before the first sample.
+as its costs are propagated, its edges' costs kept (approximate during the
+search: the replanner re-evaluates what it uses), its edges' people checks
+redone at the new times: an edge that fails is cut off (cost inf, so its
+subtree is never a parent nor a solution until a rewiring reattaches it).
+A goal connection is costed and checked at its node's time; when that time
+has moved, the connection is redone before it can be the best. So every
+finite tree cost belongs to a path valid at its nodes' current times, and
+the best cost, unlike the static loop's, may rise (or become inf again)
+when a rewiring cuts the best path off. Lazy costs stay exact (the social
+part is >= 0). Disabled, the loop runs exactly as without it, bit for bit.
+:func:`seed_chain` inserts a warm start's path as a chain from the root
+before the first sample.
 """
 
 from __future__ import annotations
