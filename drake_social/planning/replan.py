@@ -47,7 +47,8 @@ from drake_social.limits import MAX_ITERATIONS
 from drake_social.people.prediction import Prediction
 from drake_social.planning.algorithms import AlgorithmSpec, algorithm_spec, base_only_weights, make_objective
 from drake_social.planning.replan_eval import PathEvaluation, PathJudge
-from drake_social.planning.replan_search import VERIFY_PATHS, SearchOutcome, run_search
+from drake_social.planning.replan_search import VERIFY_PATHS, SearchOutcome, run_search, search_planner
+from drake_social.planning.rrt_star import compiled
 from drake_social.planning.space import ConfigurationSpace
 
 __all__ = ["REPLAN_STATUSES", "ReplanResult", "Replanner", "VERIFY_PATHS", "VERIFY_RESERVE"]
@@ -195,6 +196,11 @@ class Replanner:
         self._weights = None if self.spec.objective == "length" else (
             base_only_weights(self.objective.social.geometry.num_interest_points)
             if self.spec.weights == "base_only" else None)
+        #: The RRT* every search runs (compiled, timed mode; its objective per prediction).
+        self.planner = search_planner(self)
+        supported, why = compiled.compiled_support(checker, self.objective, self.planner.options)
+        if not supported:
+            raise ValueError(f"{who}: the replanner's search runs the compiled tree loop only, and it cannot: {why}")
 
     # ---- judging -------------------------------------------------------------
 

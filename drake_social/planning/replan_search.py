@@ -15,7 +15,7 @@ from typing import TYPE_CHECKING, NamedTuple
 import numpy as np
 
 from drake_social.people.prediction import Prediction
-from drake_social.planning.objective import SocialObjective
+from drake_social.planning.objective import Objective, SocialObjective
 from drake_social.planning.result import PlanningInputError
 from drake_social.planning.rrt_star import RrtStar, RrtStarOptions
 from drake_social.planning.rrt_star import compiled
@@ -23,7 +23,7 @@ from drake_social.planning.rrt_star import compiled
 if TYPE_CHECKING:
     from drake_social.planning.replan import Replanner
 
-__all__ = ["VERIFY_PATHS", "SearchOutcome", "run_search", "search_planner", "tree_path"]
+__all__ = ["VERIFY_PATHS", "SearchOutcome", "run_search", "search_objective", "search_planner", "tree_path"]
 
 #: Goal connections of the search judged exactly, in ascending tree cost.
 VERIFY_PATHS = 4
@@ -52,16 +52,20 @@ def tree_path(nodes: np.ndarray, parents: np.ndarray, node: int, goal: np.ndarra
     return np.ascontiguousarray(path, float)
 
 
-def search_planner(replanner: "Replanner", prediction: Prediction, iterations: int) -> RrtStar:
-    """The RRT* of one replan: the replanner's algorithm with this
-    prediction's social cost, ``iterations`` samples, no optimisation."""
-    social = replanner.social_for(prediction)
-    objective = replanner.objective if social is None else \
-        SocialObjective(social, replanner.scenario.social.length_weight)
+def search_planner(replanner: "Replanner") -> RrtStar:
+    """The RRT* of the replans: the replanner's algorithm and room, no
+    optimisation (each search passes its own objective and iteration cap)."""
     options = RrtStarOptions.from_scenario(replanner.scenario.planner, informed=replanner.spec.informed)
-    options.iterations = int(iterations)
     options.optimize = False
-    return RrtStar(replanner.space, replanner.checker, objective, options, name=replanner.spec.name)
+    return RrtStar(replanner.space, replanner.checker, replanner.objective, options, name=replanner.spec.name)
+
+
+def search_objective(replanner: "Replanner", prediction: Prediction) -> Objective:
+    """The objective of one search: the replanner's, with this prediction's
+    people in its social cost (:meth:`SocialCost.for_prediction`)."""
+    social = replanner.social_for(prediction)
+    return replanner.objective if social is None else \
+        SocialObjective(social, replanner.scenario.social.length_weight)
 
 
 def run_search(replanner: "Replanner", q: np.ndarray, t_now: float, prediction: Prediction,
@@ -70,11 +74,11 @@ def run_search(replanner: "Replanner", q: np.ndarray, t_now: float, prediction: 
     """The timed search from ``q`` at ``t_now`` to the goal, seeded with
     ``candidate`` (or not), stopped at ``iterations`` samples or at the
     ``time.perf_counter()`` value ``stop``; its best goal connections."""
-    planner = search_planner(replanner, prediction, iterations)
     goal = replanner.goal
     timed = compiled.timed_params(prediction, replanner.scenario.execution, t_now, replanner.safety)
     try:
-        tree = planner.solve_timed(q, goal, rng, timed, seed_path=candidate, deadline=stop, iterations=iterations)
+        tree = replanner.planner.solve_timed(q, goal, rng, timed, seed_path=candidate, deadline=stop,
+                                             iterations=iterations, objective=search_objective(replanner, prediction))
     except PlanningInputError as e:
         return SearchOutcome([], 0, False, f"no search: {e}")
     goal_nodes = np.asarray(tree.goal_nodes, np.int64)
