@@ -308,10 +308,10 @@ class Replanner:
             if initial:
                 why = f"the first plan: cost {search_cost:.4g} after {search.iterations} samples"
             elif candidate is None:
-                why = f"no current path: the search's costs {search_cost:.4g}"
+                why = f"no current path: the search's path costs {search_cost:.4g}"
             elif not cand_safe:
                 why = f"the current path is not safe any more ({self._unsafe_words(cand, judge)}); " \
-                      f"the search's costs {search_cost:.4g}"
+                      f"the search's path costs {search_cost:.4g}"
             else:
                 why = (f"the search's path costs {search_cost:.4g}, below (1 - {self.margin:g}) x "
                        f"{cand_cost:.4g} of the current path")
