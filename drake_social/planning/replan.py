@@ -250,7 +250,8 @@ class Replanner:
             prediction: the people over the horizon.
             previous: the remainder of the path being driven, from ``q_now``
                 to the goal: ``[q_now] + old[index:]`` (N, 4); ``q_now`` is
-                put in front when its first row differs. None, or a single
+                put in front when its first row differs, and a row equal to
+                the one before it is dropped. None, or a single
                 row (a wait), is no candidate. While waiting, pass the path
                 waited on: it is kept again once it is safe.
             replan_index: 0 for the initial plan (``initial_iterations``
@@ -336,7 +337,8 @@ class Replanner:
                              f"path being driven), its last row is {prev[-1].tolist()}")
         if not np.array_equal(prev[0], q):
             prev = np.vstack([q[None], prev])
-        return prev
+        repeated = np.all(prev[1:] == prev[:-1], axis=1)  # a waypoint reached exactly: no zero-length motions
+        return np.ascontiguousarray(prev[np.concatenate([[True], ~repeated])])
 
     def _unsafe_words(self, ev: PathEvaluation, judge: PathJudge) -> str:
         """Why a judged path is not safe, in words."""

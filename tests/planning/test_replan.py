@@ -169,6 +169,19 @@ def test_evaluate_times_and_safety(corridor, room, first):
     assert not ev.safe and 0 <= ev.people_bad <= 2 and ev.static_bad == -1
 
 
+def test_candidate_rows(corridor, room, first):
+    """The candidate is ``previous`` from q_now: q_now put in front when
+    missing, repeated rows dropped; a single row (a wait) is no candidate."""
+    rp = replanner(corridor, room)
+    rest = first.waypoints[1:]
+    exact = rp.evaluate(rest, 1.0, nobody(1.0)).cost
+    for previous in (rest, rest[1:], np.vstack([rest[:1], rest])):
+        res = rp.plan(rest[0], 1.0, nobody(1.0), previous, replan_index=1)
+        assert res.candidate_cost == exact
+    res = rp.plan(rest[0], 1.0, nobody(1.0), rest[:1], replan_index=1)
+    assert res.candidate_cost == math.inf and res.status == "new" and "no current path" in res.reason
+
+
 # ---- a walker steps into the route -------------------------------------------------------
 
 
