@@ -297,7 +297,10 @@ class Replanner:
         search = run_search(self, q, t_now, prediction, candidate, iterations, stop,
                             np.random.default_rng([self.seed, int(replan_index)]))
         best, best_eval = None, None
-        for path in search.paths:
+        for judged, path in enumerate(search.paths):
+            if judged >= VERIFY_PATHS and (best is not None or (
+                    use_deadline and time.perf_counter() > t_start + self.budget)):
+                break  # the first few, and more only while none is safe and the budget lasts
             ev = judge.evaluate(path, t_now)
             if ev.safe and (best_eval is None or ev.cost < best_eval.cost):
                 best, best_eval = path, ev
@@ -354,5 +357,6 @@ class Replanner:
         if clearance <= judge.safety:
             return (f"waiting: a person is {clearance:.3f} m from the robot now (safety distance "
                     f"{judge.safety:g} m)")
-        now = "no current path" if candidate is None else f"the current path is not safe ({self._unsafe_words(cand, judge)})"
+        now = "no current path" if candidate is None else \
+            f"the current path is not safe ({self._unsafe_words(cand, judge)})"
         return f"waiting: {now}, and the search found no safe path to the goal ({search.message})"
