@@ -59,7 +59,7 @@ REPLAN_STATUSES = ("initial", "new", "kept", "wait")
 VERIFY_RESERVE = 0.1
 
 
-@dc.dataclass(frozen=True)
+@dc.dataclass(frozen=True, eq=False)
 class ReplanResult:
     """What one replan decided.
 
@@ -106,6 +106,16 @@ class ReplanResult:
         wp = np.array(self.waypoints, float).reshape(-1, 4)
         wp.flags.writeable = False
         object.__setattr__(self, "waypoints", wp)
+
+    def __eq__(self, other) -> bool:
+        """Equal fields, the waypoints bit for bit (``plan_time`` too: it is
+        wall-clock time, so two runs' results rarely compare equal)."""
+        if not isinstance(other, ReplanResult):
+            return NotImplemented
+        return all(np.array_equal(getattr(self, f.name), getattr(other, f.name)) if f.name == "waypoints"
+                   else getattr(self, f.name) == getattr(other, f.name) for f in dc.fields(self))
+
+    __hash__ = None  # holds an array
 
     @property
     def waiting(self) -> bool:

@@ -16,6 +16,7 @@ points at the nominal times of the samples.
 
 from __future__ import annotations
 
+import dataclasses as dc
 import math
 
 import numpy as np
@@ -151,6 +152,8 @@ def test_initial_plan(corridor, room, first):
     assert first.cost == pytest.approx(length, rel=1e-12)
     assert first.search_cost == first.cost and first.candidate_cost == math.inf
     assert not first.waypoints.flags.writeable
+    assert first == dc.replace(first) and first != dc.replace(first, cost=first.cost + 1.0)
+    assert first != dc.replace(first, waypoints=first.waypoints[::-1])
     record = first.to_record()
     assert record["status"] == "initial" and record["cost"] == first.cost
 
