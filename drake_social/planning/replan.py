@@ -47,7 +47,7 @@ from drake_social.limits import MAX_ITERATIONS
 from drake_social.people.prediction import Prediction
 from drake_social.planning.algorithms import AlgorithmSpec, algorithm_spec, base_only_weights, make_objective
 from drake_social.planning.replan_eval import PathEvaluation, PathJudge
-from drake_social.planning.replan_search import VERIFY_PATHS, SearchOutcome, run_search, search_planner
+from drake_social.planning.replan_search import VERIFY_PATHS, run_search, search_planner
 from drake_social.planning.rrt_star import compiled
 from drake_social.planning.space import ConfigurationSpace
 
@@ -324,7 +324,7 @@ class Replanner:
             elif candidate is None:
                 why = f"no current path: the search's path costs {search_cost:.4g}"
             elif not cand_safe:
-                why = f"the current path is not safe any more ({self._unsafe_words(cand, judge)}); " \
+                why = f"the current path is not safe any more ({judge.unsafe_words(cand)}); " \
                       f"the search's path costs {search_cost:.4g}"
             else:
                 why = (f"the search's path costs {search_cost:.4g}, below (1 - {self.margin:g}) x "
@@ -335,7 +335,7 @@ class Replanner:
                    (f"the search's best costs {search_cost:.4g}, not below (1 - {self.margin:g}) x {cand_cost:.4g}"
                     if best is not None else f"the search found no safe path ({search.message})"))
             return result(candidate, cand_cost, "initial" if initial else "kept", why, **common)
-        return result(q[None], math.inf, "wait", self._wait_words(q, t_now, candidate, cand, judge, search), **common)
+        return result(q[None], math.inf, "wait", judge.wait_words(q, t_now, cand, search.message), **common)
 
     def _candidate(self, q: np.ndarray, previous, who: str) -> np.ndarray | None:
         """The candidate path from ``q`` (None without one)."""
@@ -352,21 +352,3 @@ class Replanner:
             prev = np.vstack([q[None], prev])
         repeated = np.all(prev[1:] == prev[:-1], axis=1)  # a waypoint reached exactly: no zero-length motions
         return np.ascontiguousarray(prev[np.concatenate([[True], ~repeated])])
-
-    def _unsafe_words(self, ev: PathEvaluation, judge: PathJudge) -> str:
-        """Why a judged path is not safe, in words."""
-        k = ev.first_bad
-        span = f"motion {k}, t = {ev.times[k]:.2f} .. {ev.times[k + 1]:.2f} s"
-        if ev.static_bad == k:
-            return f"{span} collides with the room"
-        return f"{span} comes within {judge.safety:g} m of a predicted person"
-
-    def _wait_words(self, q, t_now, candidate, cand, judge: PathJudge, search: "SearchOutcome") -> str:
-        """Why nothing is safe, in words."""
-        clearance = float(judge.people.clearance(q, t_now))
-        if clearance <= judge.safety:
-            return (f"waiting: a person is {clearance:.3f} m from the robot now (safety distance "
-                    f"{judge.safety:g} m)")
-        now = "no current path" if candidate is None else \
-            f"the current path is not safe ({self._unsafe_words(cand, judge)})"
-        return f"waiting: {now}, and the search found no safe path to the goal ({search.message})"
