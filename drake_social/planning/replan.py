@@ -44,6 +44,7 @@ from drake_social.arguments import real_array, require_checker, require_instance
 from drake_social.collision.validity import CompiledSceneChecker
 from drake_social.cost.social import SocialCost
 from drake_social.limits import MAX_ITERATIONS
+from drake_social.people import people_model
 from drake_social.people.prediction import Prediction
 from drake_social.planning.algorithms import AlgorithmSpec, algorithm_spec, base_only_weights, make_objective
 from drake_social.planning.replan_eval import PathEvaluation, PathJudge
@@ -173,7 +174,7 @@ class Replanner:
             raise TypeError(f"{who}: checker must have a compiled scene (compiled_scene(), e.g. "
                             f"make_checker(without_people(scenario), 'planar')), got {type(checker).__name__}")
         room = getattr(checker, "scenario", None)
-        if room is not None and (room.people or room.people_file or room.crowd):
+        if room is not None and people_model(room).count > 0:
             raise ValueError(f"{who}: checker must be built on the room without people "
                              "(make_checker(without_people(scenario), 'planar')): the replanner checks people "
                              "against their prediction, not as static discs")

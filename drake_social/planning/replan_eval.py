@@ -85,7 +85,7 @@ class PathJudge:
         self.safety = float(safety)
         self.max_base_speed = float(max_base_speed)
         self.arm_max_velocity = np.asarray(arm_max_velocity, float).reshape(2)
-        self.people = PeopleSafety(checker.compiled_scene(), prediction, self.safety)
+        self.people_safety = PeopleSafety(checker.compiled_scene(), prediction, self.safety)
 
     def times(self, waypoints: np.ndarray, t0: float) -> np.ndarray:
         """The nominal time (N,) of each waypoint, driven from ``t0``."""
@@ -113,7 +113,7 @@ class PathJudge:
         per_motion = social + lw * length if lw > 0 else social
         ok = np.asarray(self.checker.are_motions_valid(wp[:-1], wp[1:]), bool)
         static_bad = int(np.argmin(ok)) if not ok.all() else -1
-        clear, people_bad = self.people.path_clear(wp, times)
+        clear, people_bad = self.people_safety.path_clear(wp, times)
         return PathEvaluation(times, float(per_motion.sum()), float(social.sum()), float(length.sum()),
                               static_bad, -1 if clear else int(people_bad))
 
@@ -129,7 +129,7 @@ class PathJudge:
         """Why the robot waits at ``q`` at time ``t``, in words: a person
         within the safety distance now, or the candidate's first unsafe
         motion (None: no candidate) and the search's account ``search``."""
-        clearance = float(self.people.clearance(q, t))
+        clearance = float(self.people_safety.clearance(q, t))
         if clearance <= self.safety:
             return f"waiting: a person is {clearance:.3f} m from the robot now (safety distance {self.safety:g} m)"
         now = "no current path" if candidate is None else \
