@@ -44,7 +44,7 @@ Ports:
 The replanner is any object with ``plan(q_now, t_now, prediction, previous,
 *, replan_index, deadline) -> ReplanResult`` (the default:
 :class:`~drake_social.planning.replan.Replanner` of the scenario's replanning
-options, on the room without its people; the first plan's has
+options, on the room without its people; the first plan has
 ``planner.iterations`` samples and no deadline).
 
 Example::
@@ -127,13 +127,13 @@ class ReplanningPlannerSystem(LeafSystem):
     Args:
         scenario: a validated scenario (goal, ``planner.replan_*`` options,
             ``planner.prediction``, safety distance, seed).
-        replanner: the replanner of the periodic replans (see the module
-            docstring); None = :class:`~drake_social.planning.replan.Replanner`
-            of the scenario (``planner.replan_iterations``, ``replan_budget``,
-            ``replan_margin``, ``execution.safety_distance``, ``random_seed``).
-        initial_replanner: the replanner of the first plan (no deadline);
-            None = the default one with ``planner.iterations`` samples when
-            ``replanner`` is None, else ``replanner`` itself.
+        replanner: the replanner of the first plan (``replan_index`` 0, no
+            deadline) and the periodic replans (see the module docstring);
+            None = :class:`~drake_social.planning.replan.Replanner` of the
+            scenario on the room without its people (``planner.iterations``
+            for the first plan, ``planner.replan_iterations``,
+            ``replan_budget``, ``replan_margin``, ``execution.safety_distance``,
+            ``random_seed``).
         people: the people model (the ``"perfect"`` prediction reads it);
             None = :func:`~drake_social.people.people_model` of the scenario.
         rate: replans per second; None = ``planner.replan_rate``.
@@ -151,36 +151,28 @@ class ReplanningPlannerSystem(LeafSystem):
         scenario: Scenario,
         replanner=None,
         *,
-        initial_replanner=None,
         people: PeopleModel | None = None,
         rate: float | None = None,
     ):
         super().__init__()
         require_scenario(scenario, "ReplanningPlannerSystem")
-        for name, value in (("replanner", replanner), ("initial_replanner", initial_replanner)):
-            if value is not None and not callable(getattr(value, "plan", None)):
-                raise TypeError(f"ReplanningPlannerSystem: {name} must have a plan(q_now, t_now, prediction, "
-                                f"previous, *, replan_index, deadline) method, got {type(value).__name__}")
+        if replanner is not None and not callable(getattr(replanner, "plan", None)):
+            raise TypeError(f"ReplanningPlannerSystem: replanner must have a plan(q_now, t_now, prediction, "
+                            f"previous, *, replan_index, deadline) method, got {type(replanner).__name__}")
         require_instance(people, PeopleModel, "ReplanningPlannerSystem", "people",
                          "a drake_social.people.PeopleModel", optional=True)
         rate = float(scenario.planner.replan_rate if rate is None else rate)
         if not (math.isfinite(rate) and rate > 0):
             raise ValueError(f"ReplanningPlannerSystem: rate must be a finite number of replans per second > 0, "
                              f"got {rate!r}")
-        if replanner is None:
+        if replanner is None:  # the scenario's, on the room alone (every person is the prediction's)
+            from drake_social.collision.drake_checker import make_checker
+            from drake_social.people import without_people
             from drake_social.planning.replan import Replanner
 
-            options = scenario.planner
-            common = dict(margin=float(options.replan_margin), safety=float(scenario.execution.safety_distance),
-                          seed=int(scenario.random_seed))
-            replanner = Replanner(scenario, iterations=int(options.replan_iterations),
-                                  budget=float(options.replan_budget), **common)
-            if initial_replanner is None:
-                initial_replanner = Replanner(scenario, iterations=int(options.iterations),
-                                              budget=float(options.replan_budget), **common)
+            replanner = Replanner(scenario, make_checker(without_people(scenario), "planar"))
         self._scenario = scenario
         self._replanner = replanner
-        self._initial = replanner if initial_replanner is None else initial_replanner
         self._people = people_model(scenario) if people is None else people
         self._prediction = scenario.planner.prediction
         self._horizon = float(scenario.planner.replan_horizon)
@@ -206,6 +198,11 @@ class ReplanningPlannerSystem(LeafSystem):
                                        prerequisites_of_calc=state)
         self.DeclareAbstractOutputPort("replans", lambda: AbstractValue.Make(()), self._CalcReplans,
                                        prerequisites_of_calc=state)
+
+    @property
+    def rate(self) -> float:
+        """Replans per second."""
+        return 1.0 / self._period
 
     @property
     def period(self) -> float:
@@ -246,7 +243,7 @@ class ReplanningPlannerSystem(LeafSystem):
 
     def _FirstPlan(self, context: Context, state: State) -> None:
         q, t, prediction = self._inputs(context)
-        result = self._initial.plan(q, t, prediction, None, replan_index=0, deadline=False)
+        result = self._replanner.plan(q, t, prediction, None, replan_index=0, deadline=False)
         if result.status != "wait" and result.status != "initial":
             result = dc.replace(result, status="initial")
         waiting = result.status == "wait"

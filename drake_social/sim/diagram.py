@@ -527,16 +527,16 @@ def build_checked(
         robot = _populate(plant, scenario, scenario_people.static)
 
     # ---- which target ---------------------------------------------------------
-    replanner: ReplanningPlannerSystem | None = None
+    replanning: ReplanningPlannerSystem | None = None
     if waypoints is None:
         sequencer = builder.AddNamedSystem(
             "sequencer", WaypointSequencer.from_options(opts, wait_for_reference=synchronized, versioned=replan))
         if replan:  # the room's planar checker of the replanner, not the one with the people at t = 0
-            replanner = builder.AddNamedSystem("planner", ReplanningPlannerSystem(scenario, replanner,
-                                                                                  people=scenario_people))
-            path_port = replanner.GetOutputPort("waypoints")
-            builder.Connect(replanner.GetOutputPort("version"), sequencer.GetInputPort("version"))
-            builder.Connect(sequencer.GetOutputPort("index"), replanner.GetInputPort("index"))
+            replanning = builder.AddNamedSystem("planner", ReplanningPlannerSystem(scenario, replanner,
+                                                                                   people=scenario_people))
+            path_port = replanning.GetOutputPort("waypoints")
+            builder.Connect(replanning.GetOutputPort("version"), sequencer.GetInputPort("version"))
+            builder.Connect(sequencer.GetOutputPort("index"), replanning.GetInputPort("index"))
         elif planner:
             path_port = builder.AddNamedSystem("planner", PlannerSystem(scenario, checker)).GetOutputPort("waypoints")
         else:  # a planner outside the diagram gives the path
@@ -697,14 +697,14 @@ def build_checked(
         builder.Connect(people.GetOutputPort("people_state"), monitor.GetInputPort("people_state"))
         stop_port = monitor.GetOutputPort("stop")
     hold_port = stop_port
-    if replanner is not None:  # the replanner reads the robot and the people; its wait holds the robot too
-        builder.Connect(q_port, replanner.GetInputPort("q"))
-        builder.Connect(people.GetOutputPort("people_state"), replanner.GetInputPort("people_state"))
-        hold_port = replanner.GetOutputPort("hold")
+    if replanning is not None:  # the replanner reads the robot and the people; its wait holds the robot too
+        builder.Connect(q_port, replanning.GetInputPort("q"))
+        builder.Connect(people.GetOutputPort("people_state"), replanning.GetInputPort("people_state"))
+        hold_port = replanning.GetOutputPort("hold")
         if stop_port is not None:  # either flag holds: the held systems read their sum > 0.5
             either = builder.AddNamedSystem("held", Adder(2, 1))
             builder.Connect(stop_port, either.get_input_port(0))
-            builder.Connect(replanner.GetOutputPort("hold"), either.get_input_port(1))
+            builder.Connect(replanning.GetOutputPort("hold"), either.get_input_port(1))
             hold_port = either.get_output_port()
     if hold_port is not None:
         for held in (sequencer, base_controller, reference if synchronized else arm):
@@ -728,9 +728,9 @@ def build_checked(
         exported["reference_feedforward"] = feedforward
     if stop_port is not None:
         exported["stop"] = stop_port
-    if replanner is not None:
-        exported["waiting"] = replanner.GetOutputPort("hold")
-        exported["path_version"] = replanner.GetOutputPort("version")
+    if replanning is not None:
+        exported["waiting"] = replanning.GetOutputPort("hold")
+        exported["path_version"] = replanning.GetOutputPort("version")
     for name, port in exported.items():
         builder.ExportOutput(port, name)
 
@@ -748,9 +748,9 @@ def build_checked(
         ports["crowd_state"] = people.GetOutputPort("crowd_state")
     if stop_port is not None:
         ports["stop"] = stop_port
-    if replanner is not None:
-        ports["version"] = replanner.GetOutputPort("version")
-        ports["waiting"] = replanner.GetOutputPort("hold")
+    if replanning is not None:
+        ports["version"] = replanning.GetOutputPort("version")
+        ports["waiting"] = replanning.GetOutputPort("hold")
     loggers = {}
     for name, port in ports.items():
         logger = LogVectorOutput(port, builder, publish_period=period)
@@ -769,5 +769,5 @@ def build_checked(
         diagram=diagram, plant=plant, scene_graph=scene_graph, robot=robot, scenario=scenario, mode=mode,
         execution=execution, waypoints=waypoints, meshcat=meshcat, visualizer=visualizer, loggers=loggers,
         planner_included=waypoints is None and planner, controller_included=controller,
-        replanning=replanner is not None,
+        replanning=replanning is not None,
     )
