@@ -220,3 +220,16 @@ def test_same_seed_same_episode_bit_for_bit(walked):
     np.testing.assert_array_equal(a.times, b.times)
     assert [(r.t, r.status, r.cost) for r in a.replans] == [(r.t, r.status, r.cost) for r in b.replans]
     assert not any(r.deadline_hit for r in a.replans)  # the iteration cap bound, not the clock
+
+
+def test_replan_none_follows_the_scenario_when_it_plans(tiny):
+    from drake_social.sim.diagram import resolve_replan
+
+    on = dc.replace(tiny, planner=dc.replace(tiny.planner, replan=True))
+    assert resolve_replan(on, None, False, True, "f") is True
+    assert resolve_replan(on, None, True, True, "f") is False  # a given path is executed as given
+    assert resolve_replan(on, None, False, False, "f") is False  # a planner outside the diagram
+    assert resolve_replan(tiny, None, False, True, "f") is False
+    assert resolve_replan(on, False, False, True, "f") is False
+    with pytest.raises(ValueError, match="f: replan=True needs the built-in planner"):
+        resolve_replan(tiny, True, False, False, "f")
