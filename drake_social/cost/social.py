@@ -4,12 +4,12 @@ from __future__ import annotations
 
 import numpy as np
 
-from drake_social.cost import kernel
+from drake_social.cost import kernel, timed_kernel
 from drake_social.cost.agf import (PersonalSpace, agf_xy, gaussian, inverse_variances, person_reaches,
                                    speed_scaled_sigmas)
 from drake_social.kinematics import ArmGeometry, config_distance, displacement_bound
 from drake_social.limits import MAX_MOTION_STEPS
-from drake_social.people import PeopleModel, PeopleState, people_model
+from drake_social.people import PeopleModel, PeopleState, Prediction, people_model
 
 __all__ = ["FIELD_CHUNK_ELEMENTS", "SocialCost", "interpolation_segments"]
 
@@ -150,6 +150,44 @@ class SocialCost:
         """
         model = people_model(scenario) if model is None else model
         return cls.from_scenario(scenario, weights, people=model.state_at(t))
+
+    @classmethod
+    def for_prediction(cls, scenario, prediction: Prediction, weights: np.ndarray | None = None) -> "SocialCost":
+        """The scenario's cost about the people of ``prediction``, for
+        :meth:`timed_motion_cost` (and the tree's compiled loop, through
+        :meth:`timed_kernel_args`).
+
+        Its ``people`` are every predicted person at the first sample (t0), in
+        the prediction's order, absent ones included, so that the per-person
+        parameters (:meth:`person_parameters`) line up with the prediction's
+        people: the time-indexed cost reads presence from the prediction at
+        each sample, whereas :meth:`motion_cost` (static) would count them all.
+        With ``social.speed_scaling`` each one's variances follow their speed
+        (``prediction.speeds``, Kirby's scaling by
+        :func:`~drake_social.cost.agf.speed_scaled_sigmas`), otherwise
+        everyone has ``social.sigma_h``.
+
+        Args:
+            weights: as in :meth:`from_scenario`.
+
+        Raises:
+            TypeError: ``scenario`` is not a Scenario or ``prediction`` not a Prediction.
+        """
+        from drake_social.arguments import require_scenario
+
+        require_scenario(scenario, "SocialCost.for_prediction")
+        _require_prediction(prediction, "SocialCost.for_prediction")
+        s = scenario.social
+        sigmas = speed_scaled_sigmas(prediction.speeds, s.side_ratio, s.rear_ratio) if s.speed_scaling else None
+        return cls(
+            ArmGeometry.from_scenario(scenario),
+            np.column_stack([prediction.positions[0], prediction.headings[0]]),
+            PersonalSpace.from_options(s),
+            weights=s.weights if weights is None else weights,
+            resolution=s.resolution,
+            distance_weights=scenario.planner.distance_weights,
+            sigmas=sigmas,
+        )
 
     def with_weights(self, weights: np.ndarray) -> "SocialCost":
         """The same cost with other interest-point weights."""
@@ -320,6 +358,187 @@ class SocialCost:
             *self._people_grid(),
         )  # fmt: skip
 
+    # ---- along motions, against predicted people -----------------------------
+
+    def timed_motion_cost(self, q_a: np.ndarray, q_b: np.ndarray, t_a, t_b, prediction: Prediction) -> np.ndarray:
+        """Msc of straight motions against the people predicted at the time
+        the robot is there (the replanner's objective).
+
+        Along motion e, ``q(u) = q_a + u (q_b - q_a)`` is reached at
+        ``t(u) = t_a + u (t_b - t_a)``; each trapezoid sample (u = k / n, the
+        steps of :meth:`segments`, as :meth:`motion_cost`) is evaluated
+        against the prediction's people at t(u): positions interpolated
+        between its samples, heading and presence of the sample at or before
+        t(u); before ``prediction.t0`` and beyond ``prediction.horizon`` the
+        first and last samples hold. An absent person adds nothing at a sample
+        (their raw Gaussian counts as 0 there, so a step where they appear or
+        leave is a threshold crossing). Each person has this cost's
+        per-person variances (:meth:`for_prediction` gives them from the
+        prediction's speeds). Otherwise the rule is :meth:`motion_cost`'s: a
+        static prediction gives its value (to about 1e-13 relative).
+
+        The compiled kernel (:func:`drake_social.cost.timed_kernel.msc_sums_timed`)
+        computes it with backend "numba"; backend "numpy" is the independent
+        reference (every sample of every motion against every person, no
+        culling), which the kernel is tested against.
+
+        Args:
+            q_a, q_b: motion ends (E, 4) or (4,), broadcastable.
+            t_a, t_b: the times at the ends (E,) or scalars, seconds
+                (finite, t_b >= t_a).
+            prediction: the people, a :class:`~drake_social.people.Prediction`
+                with as many people as this cost's per-person variances (any
+                number without them).
+
+        Returns:
+            (E,) costs (a 0-d value for a single motion).
+
+        Raises:
+            TypeError: ``prediction`` is not a Prediction.
+            ValueError: naming the argument: configurations not (E, 4) or not
+                finite, times not finite or of another length, t_b < t_a, a
+                prediction whose people do not match the per-person
+                variances or whose ``max_speeds`` understate its motion, or a
+                motion too long to sample.
+        """
+        q_a = np.asarray(q_a, dtype=float)
+        q_b = np.asarray(q_b, dtype=float)
+        single = q_a.ndim == 1 and q_b.ndim == 1 and np.ndim(t_a) == 0 and np.ndim(t_b) == 0
+        try:
+            q_a, q_b = np.broadcast_arrays(np.atleast_2d(q_a), np.atleast_2d(q_b))
+        except ValueError:
+            raise ValueError(f"timed_motion_cost: q_a {q_a.shape} and q_b {q_b.shape} do not broadcast") from None
+        if q_a.ndim != 2 or q_a.shape[1] != 4:
+            raise ValueError(f"timed_motion_cost: q_a and q_b must be (E, 4) or (4,) configurations, got {q_a.shape}")
+        if not (np.all(np.isfinite(q_a)) and np.all(np.isfinite(q_b))):
+            raise ValueError("timed_motion_cost needs finite configurations (q_a, q_b)")
+        e = len(q_a)
+        times = []
+        for name, value in (("t_a", t_a), ("t_b", t_b)):
+            value = np.asarray(value, dtype=float)
+            if value.ndim > 1 or (value.ndim == 1 and len(value) not in (1, e)):
+                raise ValueError(f"timed_motion_cost: {name} must be a scalar or ({e},) times, got shape {value.shape}")
+            value = np.ascontiguousarray(np.broadcast_to(value.reshape(-1), (e,)))
+            if not np.all(np.isfinite(value)):
+                raise ValueError(f"timed_motion_cost: {name} must be finite times (seconds), got {value}")
+            times.append(value)
+        t_a, t_b = times
+        if np.any(t_b < t_a):
+            bad = int(np.flatnonzero(t_b < t_a)[0])
+            raise ValueError(f"timed_motion_cost: t_b must be >= t_a; motion {bad} has t_a = {t_a[bad]!r}, "
+                             f"t_b = {t_b[bad]!r}")
+        _require_prediction(prediction, "SocialCost.timed_motion_cost")
+        args = self.timed_kernel_args(prediction)  # checks the people and max_speeds
+        out = np.zeros(e)
+        if prediction.count == 0 or len(self._active) == 0 or e == 0:
+            return out[0] if single else out
+        length = config_distance(q_a, q_b, self.distance_weights)
+        if self.backend == "numba":
+            try:
+                sums, n = timed_kernel.msc_sums_timed(np.ascontiguousarray(q_a), np.ascontiguousarray(q_b), t_a, t_b,
+                                                      *args)
+            except ValueError as kernel_error:
+                try:
+                    self.segments(q_a, q_b)  # raises, naming the motion and its bound
+                except ValueError as named:
+                    raise named from None
+                raise kernel_error
+        else:
+            n = self.segments(q_a, q_b)  # raises for a motion that cannot be sampled
+            sums = self._timed_sums(q_a, q_b, t_a, t_b, prediction, n)
+        out += sums * (length / n)
+        return out[0] if single else out
+
+    def timed_kernel_args(self, prediction: Prediction) -> tuple:
+        """The arguments of :func:`drake_social.cost.timed_kernel.msc_sums_timed`
+        after ``q_a, q_b, t_a, t_b``, for ``prediction``'s people:
+        ``(xy, theta, present, t0, dt, max_speeds, l1, l2, obj, active,
+        weights, lever, resolution, reaches, inv_front, inv_rear, inv_side,
+        tau, point_reach)`` (C-contiguous float arrays, ``present`` bool,
+        ``active`` int64, the scalars floats), so that ``sums, n =
+        msc_sums_timed(q_a, q_b, t_a, t_b, *cost.timed_kernel_args(p))`` and
+        ``Msc = sums * length / n``.
+
+        Raises:
+            TypeError: ``prediction`` is not a Prediction.
+            ValueError: the prediction's people do not match this cost's
+                per-person variances, or its ``max_speeds`` understate the
+                speed of its interpolated motion (the kernel's culling relies
+                on them).
+        """
+        _require_prediction(prediction, "SocialCost.timed_kernel_args")
+        f = np.ascontiguousarray
+        key = id(prediction)
+        cached = getattr(self, "_timed_args", None)
+        if cached is not None and cached[0] == key and cached[1] is prediction:
+            return cached[2]
+        speeds = _interpolated_speeds(prediction)
+        if not np.all(speeds <= prediction.max_speeds * (1.0 + 1e-9) + 1e-12):
+            bad = int(np.flatnonzero(~(speeds <= prediction.max_speeds * (1.0 + 1e-9) + 1e-12))[0])
+            raise ValueError(f"prediction.max_speeds[{bad}] = {prediction.max_speeds[bad]!r} m/s is below the "
+                             f"speed of that person's predicted motion, {speeds[bad]!r} m/s")
+        args = (
+            f(prediction.positions, float), f(prediction.headings, float), f(prediction.present, bool),
+            float(prediction.t0), float(prediction.dt), f(prediction.max_speeds, float),
+            *map(float, self.geometry.link_lengths), f(self.geometry.object_interest, float),
+            f(self._active, np.int64), f(self._active_weights, float), f(self._lever, float), float(self.resolution),
+            *(f(v, float) for v in self._timed_person_parameters(prediction.count)), float(self.space.threshold),
+            self._point_reach(),
+        )  # fmt: skip
+        self._timed_args = (key, prediction, args)
+        return args
+
+    def _timed_person_parameters(self, count: int) -> tuple:
+        """:meth:`person_parameters` for a prediction of ``count`` people."""
+        if self.sigmas is None:
+            return tuple(np.full(count, v) for v in (self.space.max_reach, *self._inverse_variances))
+        if count != len(self.people):
+            raise ValueError(f"the prediction has {count} people but this cost's per-person variances (sigmas) are "
+                             f"for {len(self.people)}: make the cost with SocialCost.for_prediction")
+        return self.person_parameters()
+
+    def _point_reach(self) -> float:
+        """The largest distance of a weighted interest point from the base centre, metres."""
+        return float(self.geometry.reach(active=self._active)[2]) if len(self._active) else 0.0
+
+    def _timed_sums(self, q_a, q_b, t_a, t_b, prediction, n) -> np.ndarray:
+        """The numpy reference of the time-indexed sums (E,): every sample of
+        every motion against every predicted person (no culling), in chunks
+        of about :data:`FIELD_CHUNK_ELEMENTS` (sample, point, person) values;
+        times h = length / n gives Msc."""
+        _, inv_front, inv_rear, inv_side = self._timed_person_parameters(prediction.count)
+        per_sample = len(self._active) * prediction.count
+        budget = max(1, FIELD_CHUNK_ELEMENTS // max(per_sample, 1))
+        dq, duration, tau = q_b - q_a, t_b - t_a, self.space.threshold
+        sums = np.zeros(len(q_a))
+        start = 0
+        while start < len(q_a):
+            stop, total = start + 1, n[start] + 1
+            while stop < len(q_a) and total + n[stop] + 1 <= budget:
+                total += n[stop] + 1
+                stop += 1
+            count = n[start:stop] + 1
+            edge = np.repeat(np.arange(start, stop), count)
+            k = np.arange(int(count.sum())) - np.repeat(np.cumsum(count) - count, count)
+            u = k / n[edge]
+            x, y = self.geometry.interest_xy(q_a[edge] + u[:, None] * dq[edge], self._active)  # (S, K)
+            pos, heading, here = _predicted_people(prediction, t_a[edge] + u * duration[edge])
+            g = gaussian(x[:, :, None] - pos[:, None, :, 0], y[:, :, None] - pos[:, None, :, 1],
+                         np.cos(heading)[:, None, :], np.sin(heading)[:, None, :], self.space,
+                         (inv_front, inv_rear, inv_side))  # (S, K, P)
+            g = np.where(here[:, None, :], g, 0.0)
+            step = np.flatnonzero(k[:-1] < n[edge[:-1]])  # consecutive samples of one motion
+            g0, g1 = g[step], g[step + 1]
+            hi, lo = np.maximum(g0, g1), np.minimum(g0, g1)
+            with np.errstate(divide="ignore", invalid="ignore"):
+                crossing = 0.5 * (hi + tau) * (hi - tau) / (hi - lo)
+            up0, up1 = g0 > tau, g1 > tau
+            area = np.where(up0 & up1, 0.5 * (g0 + g1), np.where(up0 ^ up1, crossing, 0.0))
+            per_step = np.einsum("skp,k->s", area, self._active_weights)
+            sums[start:stop] = np.bincount(edge[step] - start, weights=per_step, minlength=stop - start)
+            start = stop
+        return sums
+
     def _integrate(self, q_a, dq, n, relevant, t0, t1) -> np.ndarray:
         """Sums over steps of the threshold-aware trapezoid areas (E,), in one
         batch over the (motion, relevant person) pairs; times h gives Msc.
@@ -407,3 +626,37 @@ class SocialCost:
                 values[:, near] = agf_xy(cx, cy, self.people[near], self.space, sigmas=sigmas)
                 out[start : start + chunk] = values.sum(-1)
         return out.reshape(shape)
+
+
+def _require_prediction(prediction, who: str) -> None:
+    """Refuses anything but a :class:`~drake_social.people.Prediction`."""
+    if not isinstance(prediction, Prediction):
+        raise TypeError(f"{who}: prediction must be a drake_social.people.Prediction (people.predict, "
+                        f"constant_velocity, perfect_prediction), got {type(prediction).__name__}")
+
+
+def _predicted_people(prediction: Prediction, times: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The predicted people at each of ``times`` (T,): positions (T, P, 2)
+    interpolated between samples, headings (T, P) and presence (T, P) of the
+    sample at or before each time, clamped to the first and the last sample
+    (:meth:`Prediction.state_at`'s rule, batched)."""
+    s = (np.asarray(times, dtype=float) - prediction.t0) / prediction.dt
+    last = prediction.samples - 1
+    slot = np.zeros(len(s), dtype=np.int64)
+    frac = np.zeros(len(s))
+    slot[(s > 0) & (s >= last)] = last
+    mid = (s > 0) & (s < last)
+    slot[mid] = np.floor(s[mid]).astype(np.int64)
+    frac[mid] = s[mid] - slot[mid]
+    here = prediction.positions[slot]
+    nxt = prediction.positions[np.minimum(slot + 1, last)]
+    positions = here + frac[:, None, None] * (nxt - here)
+    return positions, prediction.headings[slot], prediction.present[slot]
+
+
+def _interpolated_speeds(prediction: Prediction) -> np.ndarray:
+    """(P,) each person's largest speed along the interpolated prediction, m/s."""
+    if prediction.samples < 2 or prediction.count == 0:
+        return np.zeros(prediction.count)
+    step = np.diff(prediction.positions, axis=0)
+    return np.hypot(step[..., 0], step[..., 1]).max(axis=0) / prediction.dt

@@ -1,0 +1,356 @@
+"""Anytime replanning among walking people: one replan from where the robot is.
+
+A :class:`Replanner` plans from the robot's configuration ``q_now`` at time
+``t_now`` to the scenario's goal against a
+:class:`~drake_social.people.prediction.Prediction` of the people
+(docs/replanning.md has the design):
+
+1. the **candidate** is the remainder of the path being driven (``previous``),
+   judged exactly under the new prediction (:mod:`.replan_eval`): its
+   time-indexed cost and whether it is still safe;
+2. a **search** (the compiled RRT* in its timed mode, seeded with the
+   candidate as a chain from the root) runs until ``budget`` seconds of wall
+   clock or ``iterations`` samples, whichever comes first;
+3. the search's best few goal connections (in ascending tree cost) are
+   **judged exactly** (the tree's costs of rewired subtrees are approximate:
+   their times moved);
+4. the best safe search path **replaces** the candidate only when it is
+   cheaper by the margin (``cost_new < (1 - margin) cost_candidate``) or the
+   candidate is no longer safe; when neither is safe the robot **waits**,
+   with the reason in words.
+
+Every random choice comes from ``numpy.random.default_rng([seed,
+replan_index])``: a replan whose search stopped at the iteration cap is
+reproducible bit for bit; one stopped by the wall clock (``deadline_hit``)
+depends on the machine.
+
+The replanner never builds a checker itself (planning sits below the
+checkers in the import layers): the caller passes the room's checker,
+``make_checker(without_people(scenario), "planar")``; the people are the
+prediction's alone.
+"""
+
+from __future__ import annotations
+
+import dataclasses as dc
+import math
+import time
+from typing import NamedTuple
+
+import numpy as np
+
+from drake_social.arguments import real_array, require_checker, require_instance, require_int, require_number, \
+    require_scenario
+from drake_social.collision.validity import CompiledSceneChecker
+from drake_social.cost.social import SocialCost
+from drake_social.limits import MAX_ITERATIONS
+from drake_social.people.prediction import Prediction
+from drake_social.planning.algorithms import AlgorithmSpec, algorithm_spec, base_only_weights, make_objective
+from drake_social.planning.replan_eval import PathEvaluation, PathJudge
+from drake_social.planning.replan_search import VERIFY_PATHS, SearchOutcome, run_search, search_planner
+from drake_social.planning.rrt_star import compiled
+from drake_social.planning.space import ConfigurationSpace
+
+__all__ = ["REPLAN_STATUSES", "ReplanResult", "Replanner", "VERIFY_PATHS", "VERIFY_RESERVE"]
+
+#: Values of :attr:`ReplanResult.status`.
+REPLAN_STATUSES = ("initial", "new", "kept", "wait")
+#: Fraction of the budget kept for the exact judgement after the search.
+VERIFY_RESERVE = 0.1
+
+
+@dc.dataclass(frozen=True)
+class ReplanResult:
+    """What one replan decided.
+
+    Attributes:
+        t: the replan's time (``t_now``), seconds.
+        waypoints: (N, 4) the path to drive from ``q_now`` (its first row) to
+            the goal; ``[q_now]`` (1, 4) while waiting.
+        cost: the exact time-indexed objective cost of ``waypoints`` (inf when waiting).
+        changed: the path to drive is a new one (status "new" or "initial");
+            False when the candidate is kept and while waiting (the caller
+            holds the robot; its last path stays the one to resume).
+        status: "initial" (the first plan, ``replan_index`` 0), "new" (the
+            search's path replaced the candidate), "kept" (the candidate
+            stays), "wait" (nothing safe).
+        reason: why, in words.
+        plan_time: wall-clock seconds of the whole replan (judging, search,
+            judging again).
+        iterations: samples the search drew.
+        deadline_hit: the search stopped at the wall-clock budget before the
+            iteration cap (the result then depends on the machine's speed).
+        candidate_cost: the candidate's exact cost when it is safe, inf when
+            there is none or it is not safe.
+        search_cost: the exact cost of the best safe search path judged, inf
+            when none.
+        replan_index: the replan's index (0: the initial plan).
+    """
+
+    t: float
+    waypoints: np.ndarray
+    cost: float
+    changed: bool
+    status: str
+    reason: str
+    plan_time: float
+    iterations: int
+    deadline_hit: bool
+    candidate_cost: float
+    search_cost: float
+    replan_index: int
+
+    def __post_init__(self) -> None:
+        if self.status not in REPLAN_STATUSES:
+            raise ValueError(f"ReplanResult.status must be one of {', '.join(REPLAN_STATUSES)}, got {self.status!r}")
+        wp = np.array(self.waypoints, float).reshape(-1, 4)
+        wp.flags.writeable = False
+        object.__setattr__(self, "waypoints", wp)
+
+    @property
+    def waiting(self) -> bool:
+        """Whether the robot is to hold position."""
+        return self.status == "wait"
+
+    def to_record(self) -> dict:
+        """The log's row (``replans.csv``): t, plan_time, cost (None when
+        infinite), changed, status, iterations, deadline_hit, reason."""
+        return {"t": float(self.t), "plan_time": float(self.plan_time),
+                "cost": float(self.cost) if math.isfinite(self.cost) else None, "changed": bool(self.changed),
+                "status": self.status, "iterations": int(self.iterations), "deadline_hit": bool(self.deadline_hit),
+                "reason": self.reason}
+
+
+class Replanner:
+    """Plans from where the robot is, again and again, among predicted people.
+
+    Args:
+        scenario: a validated :class:`~drake_social.scenario.Scenario` (its
+            goal, planner, social and execution sections).
+        checker: the room's checker, without people:
+            ``make_checker(without_people(scenario), "planar")`` (a checker
+            with a compiled scene: the compiled search and the people's
+            safety check read its planar scene). Every person, standing or
+            walking, is the prediction's.
+        algorithm: a name of :data:`~drake_social.planning.algorithms.ALGORITHM_SPECS`
+            or a spec; None = ``scenario.planner.algorithm``.
+        iterations: samples per replan at most; None = ``planner.replan_iterations``.
+        budget: wall-clock seconds per replan; None = ``planner.replan_budget``.
+        margin: the fraction by which a search path must be cheaper than the
+            candidate to replace it, in [0, 1); None = ``planner.replan_margin``.
+        safety: the smallest allowed surface distance from any part of the
+            robot to a predicted person's body, metres (>= 0); None =
+            ``execution.safety_distance``.
+        seed: the seed of every replan's generator (with the replan's index);
+            None = ``scenario.random_seed``.
+        initial_iterations: samples of the initial plan (``replan_index`` 0,
+            no deadline); None = ``planner.iterations``.
+
+    Raises:
+        TypeError: an argument of the wrong kind (a checker without a
+            compiled scene included), named.
+        ValueError: a value out of range, an unknown algorithm, or a checker
+            built on a scenario with people in it.
+    """
+
+    def __init__(self, scenario, checker, algorithm: str | AlgorithmSpec | None = None, *,
+                 iterations: int | None = None, budget: float | None = None, margin: float | None = None,
+                 safety: float | None = None, seed: int | None = None, initial_iterations: int | None = None):
+        who = "Replanner"
+        require_scenario(scenario, who)
+        require_checker(checker, who)
+        if not isinstance(checker, CompiledSceneChecker):
+            raise TypeError(f"{who}: checker must have a compiled scene (compiled_scene(), e.g. "
+                            f"make_checker(without_people(scenario), 'planar')), got {type(checker).__name__}")
+        room = getattr(checker, "scenario", None)
+        if room is not None and (room.people or room.people_file or room.crowd):
+            raise ValueError(f"{who}: checker must be built on the room without people "
+                             "(make_checker(without_people(scenario), 'planar')): the replanner checks people "
+                             "against their prediction, not as static discs")
+        p = scenario.planner
+        require_int(iterations, who, "iterations", minimum=1, maximum=MAX_ITERATIONS, optional=True)
+        require_int(initial_iterations, who, "initial_iterations", minimum=1, maximum=MAX_ITERATIONS, optional=True)
+        require_number(budget, who, "budget", positive=True, optional=True, unit="seconds")
+        require_number(margin, who, "margin", optional=True)
+        require_number(safety, who, "safety", optional=True, unit="metres")
+        require_int(seed, who, "seed", minimum=0, optional=True)
+        margin = p.replan_margin if margin is None else float(margin)
+        if not 0.0 <= margin < 1.0:
+            raise ValueError(f"{who}: margin must be in [0, 1), got {margin}")
+        safety = scenario.execution.safety_distance if safety is None else float(safety)
+        if not safety >= 0.0:
+            raise ValueError(f"{who}: safety must be >= 0 metres, got {safety}")
+        self.scenario = scenario
+        self.checker = checker
+        self.spec = algorithm_spec(p.algorithm if algorithm is None else algorithm, who)
+        self.iterations = p.replan_iterations if iterations is None else int(iterations)
+        self.initial_iterations = p.iterations if initial_iterations is None else int(initial_iterations)
+        self.budget = p.replan_budget if budget is None else float(budget)
+        self.margin = margin
+        self.safety = safety
+        self.seed = scenario.random_seed if seed is None else int(seed)
+        self.goal = np.asarray(scenario.goal, float)
+        self.space = ConfigurationSpace.from_scenario(scenario)
+        #: The static objective: its weights, length weight and distance weights (the search's is per prediction).
+        self.objective = make_objective(scenario, self.spec)
+        self._weights = None if self.spec.objective == "length" else (
+            base_only_weights(self.objective.social.geometry.num_interest_points)
+            if self.spec.weights == "base_only" else None)
+        #: The RRT* every search runs (compiled, timed mode; its objective per prediction).
+        self.planner = search_planner(self)
+        supported, why = compiled.compiled_support(checker, self.objective, self.planner.options)
+        if not supported:
+            raise ValueError(f"{who}: the replanner's search runs the compiled tree loop only, and it cannot: {why}")
+
+    # ---- judging -------------------------------------------------------------
+
+    def social_for(self, prediction: Prediction) -> SocialCost | None:
+        """The time-indexed social cost of this prediction (None for the length objective)."""
+        if self.spec.objective == "length":
+            return None
+        return SocialCost.for_prediction(self.scenario, prediction, weights=self._weights)
+
+    def judge(self, prediction: Prediction) -> PathJudge:
+        """The exact judge of paths under ``prediction`` (:class:`~.replan_eval.PathJudge`)."""
+        ex = self.scenario.execution
+        return PathJudge(self.objective, self.social_for(prediction), self.checker, prediction, self.safety,
+                         ex.max_base_speed, ex.arm_max_velocity)
+
+    def evaluate(self, waypoints: np.ndarray, t0: float, prediction: Prediction) -> PathEvaluation:
+        """A path's exact nominal times, time-indexed cost and safety.
+
+        Args:
+            waypoints: (N, 4) configurations, N >= 1.
+            t0: the time the first waypoint is left, seconds.
+            prediction: the people.
+
+        Returns:
+            A :class:`~.replan_eval.PathEvaluation` (``times``, ``cost``,
+            ``social``, ``length``, ``static_bad``, ``people_bad``, ``safe``).
+
+        Raises:
+            TypeError, ValueError: an argument of the wrong kind or shape, named.
+        """
+        who = "Replanner.evaluate"
+        wp = real_array(waypoints, who, "waypoints", (None, 4), layout="rows [x, y, psi1, psi2]", rows=(1, None),
+                        row_name="waypoint")
+        require_number(t0, who, "t0", unit="seconds")
+        require_instance(prediction, Prediction, who, "prediction", "a drake_social.people.Prediction")
+        return self.judge(prediction).evaluate(wp, float(t0))
+
+    # ---- one replan ------------------------------------------------------------
+
+    def plan(self, q_now: np.ndarray, t_now: float, prediction: Prediction, previous: np.ndarray | None = None, *,
+             replan_index: int, deadline: bool | None = None) -> ReplanResult:
+        """One replan from ``q_now`` at ``t_now`` (see the module docstring).
+
+        Args:
+            q_now: (4,) the robot's configuration now.
+            t_now: the time now, seconds (the path's first waypoint is left then).
+            prediction: the people over the horizon.
+            previous: the remainder of the path being driven, from ``q_now``
+                to the goal: ``[q_now] + old[index:]`` (N, 4); ``q_now`` is
+                put in front when its first row differs. None, or a single
+                row (a wait), is no candidate. While waiting, pass the path
+                waited on: it is kept again once it is safe.
+            replan_index: 0 for the initial plan (``initial_iterations``
+                samples, no deadline, status "initial"), then 1, 2, ...; it
+                seeds the generator with the replanner's seed.
+            deadline: stop the search at ``budget`` seconds of wall clock
+                (minus :data:`VERIFY_RESERVE` of it, kept for judging the
+                search's paths); None = for every replan but the initial one.
+
+        Returns:
+            A :class:`ReplanResult`.
+
+        Raises:
+            TypeError, ValueError: an argument of the wrong kind, shape or
+                value (``previous`` not ending at the goal), named.
+        """
+        t_start = time.perf_counter()
+        who = "Replanner.plan"
+        q = real_array(q_now, who, "q_now", (4,), layout="[x, y, psi1, psi2]")
+        require_number(t_now, who, "t_now", unit="seconds")
+        require_instance(prediction, Prediction, who, "prediction", "a drake_social.people.Prediction")
+        require_int(replan_index, who, "replan_index", minimum=0)
+        require_instance(deadline, bool, who, "deadline", "True or False", optional=True)
+        t_now = float(t_now)
+        initial = replan_index == 0
+        use_deadline = (not initial) if deadline is None else deadline
+        candidate = self._candidate(q, previous, who)
+        judge = self.judge(prediction)
+
+        def result(waypoints, cost, status, reason, iterations=0, deadline_hit=False, candidate_cost=math.inf,
+                   search_cost=math.inf) -> ReplanResult:
+            return ReplanResult(t_now, waypoints, float(cost), status in ("initial", "new"), status, reason,
+                                time.perf_counter() - t_start, int(iterations), bool(deadline_hit),
+                                float(candidate_cost), float(search_cost), int(replan_index))
+
+        if np.array_equal(q, self.goal):
+            return result(q[None], 0.0, "initial" if initial else "kept", "at the goal: nothing to plan",
+                          candidate_cost=0.0 if candidate is not None else math.inf)
+        cand = judge.evaluate(candidate, t_now) if candidate is not None else None
+        cand_cost = cand.cost if cand is not None and cand.safe else math.inf
+        stop = t_start + self.budget * (1.0 - VERIFY_RESERVE) if use_deadline else None
+        iterations = self.initial_iterations if initial else self.iterations
+        search = run_search(self, q, t_now, prediction, candidate, iterations, stop,
+                            np.random.default_rng([self.seed, int(replan_index)]))
+        best, best_eval = None, None
+        for path in search.paths:
+            ev = judge.evaluate(path, t_now)
+            if ev.safe and (best_eval is None or ev.cost < best_eval.cost):
+                best, best_eval = path, ev
+        search_cost = best_eval.cost if best_eval is not None else math.inf
+        common = dict(iterations=search.iterations, deadline_hit=search.deadline_hit, candidate_cost=cand_cost,
+                      search_cost=search_cost)
+        cand_safe = math.isfinite(cand_cost)
+        if best is not None and (not cand_safe or search_cost < (1.0 - self.margin) * cand_cost):
+            if initial:
+                why = f"the first plan: cost {search_cost:.4g} after {search.iterations} samples"
+            elif candidate is None:
+                why = f"no current path: the search's costs {search_cost:.4g}"
+            elif not cand_safe:
+                why = f"the current path is not safe any more ({self._unsafe_words(cand, judge)}); " \
+                      f"the search's costs {search_cost:.4g}"
+            else:
+                why = (f"the search's path costs {search_cost:.4g}, below (1 - {self.margin:g}) x "
+                       f"{cand_cost:.4g} of the current path")
+            return result(best, search_cost, "initial" if initial else "new", why, **common)
+        if cand_safe:
+            why = (f"the current path (cost {cand_cost:.4g}) stays: " +
+                   (f"the search's best costs {search_cost:.4g}, not below (1 - {self.margin:g}) x {cand_cost:.4g}"
+                    if best is not None else f"the search found no safe path ({search.message})"))
+            return result(candidate, cand_cost, "initial" if initial else "kept", why, **common)
+        return result(q[None], math.inf, "wait", self._wait_words(q, t_now, candidate, cand, judge, search), **common)
+
+    def _candidate(self, q: np.ndarray, previous, who: str) -> np.ndarray | None:
+        """The candidate path from ``q`` (None without one)."""
+        if previous is None:
+            return None
+        prev = real_array(previous, who, "previous", (None, 4), layout="rows [x, y, psi1, psi2]", rows=(1, None),
+                          row_name="waypoint")
+        if len(prev) == 1 and not np.array_equal(prev[0], self.goal):
+            return None  # a wait: no path to keep
+        if not np.array_equal(prev[-1], self.goal):
+            raise ValueError(f"{who}: previous must end at the goal {self.goal.tolist()} (the remainder of the "
+                             f"path being driven), its last row is {prev[-1].tolist()}")
+        if not np.array_equal(prev[0], q):
+            prev = np.vstack([q[None], prev])
+        return prev
+
+    def _unsafe_words(self, ev: PathEvaluation, judge: PathJudge) -> str:
+        """Why a judged path is not safe, in words."""
+        k = ev.first_bad
+        span = f"motion {k}, t = {ev.times[k]:.2f} .. {ev.times[k + 1]:.2f} s"
+        if ev.static_bad == k:
+            return f"{span} collides with the room"
+        return f"{span} comes within {judge.safety:g} m of a predicted person"
+
+    def _wait_words(self, q, t_now, candidate, cand, judge: PathJudge, search: "SearchOutcome") -> str:
+        """Why nothing is safe, in words."""
+        clearance = float(judge.people.clearance(q, t_now))
+        if clearance <= judge.safety:
+            return (f"waiting: a person is {clearance:.3f} m from the robot now (safety distance "
+                    f"{judge.safety:g} m)")
+        now = "no current path" if candidate is None else f"the current path is not safe ({self._unsafe_words(cand, judge)})"
+        return f"waiting: {now}, and the search found no safe path to the goal ({search.message})"

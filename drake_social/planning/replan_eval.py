@@ -1,0 +1,118 @@
+"""The replanner's exact judge of a path: its time-indexed cost and safety.
+
+A path is driven from ``t0`` at the execution limits
+(:func:`~drake_social.kinematics.nominal_path_times`); each motion's social
+cost is integrated against the people predicted at the time the robot is
+there (:meth:`~drake_social.cost.social.SocialCost.timed_motion_cost`), its
+length term is the objective's, and it is safe when the room's checker
+accepts it and no predicted person comes within the safety distance of the
+robot along it (:class:`~drake_social.collision.people_safety.PeopleSafety`).
+The search's tree costs are approximate once rewiring has moved a subtree in
+time; this module gives the numbers the replanner decides with.
+"""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import numpy as np
+
+from drake_social.collision.people_safety import PeopleSafety
+from drake_social.collision.validity import CompiledSceneChecker
+from drake_social.cost.social import SocialCost
+from drake_social.kinematics import config_distance, nominal_path_times
+from drake_social.people.prediction import Prediction
+from drake_social.planning.objective import Objective
+
+__all__ = ["PathEvaluation", "PathJudge"]
+
+
+class PathEvaluation(NamedTuple):
+    """A path judged at its nominal times.
+
+    Attributes:
+        times: (N,) the time each waypoint is reached, seconds.
+        cost: the objective along the path: the time-indexed social cost
+            (the objective's weights; 0 for the length objective) plus its
+            length term; 0 for a single waypoint.
+        social: the time-indexed social part of ``cost``.
+        length: the weighted configuration-space length (the length term
+            before ``length_weight``).
+        static_bad: the first motion the room's checker rejects, -1 when none.
+        people_bad: the first motion that comes within the safety distance of
+            a predicted person, -1 when none.
+    """
+
+    times: np.ndarray
+    cost: float
+    social: float
+    length: float
+    static_bad: int
+    people_bad: int
+
+    @property
+    def safe(self) -> bool:
+        """Valid in the room and clear of every predicted person."""
+        return self.static_bad < 0 and self.people_bad < 0
+
+    @property
+    def first_bad(self) -> int:
+        """The first motion that fails either check, -1 when none."""
+        bad = [i for i in (self.static_bad, self.people_bad) if i >= 0]
+        return min(bad) if bad else -1
+
+
+class PathJudge:
+    """Judges paths against one prediction (built once per replan).
+
+    Args:
+        objective: the planner's objective (its length weight, distance
+            weights and, for a social one, its interest-point weights).
+        social: the time-indexed social cost for this prediction
+            (:meth:`SocialCost.for_prediction`), None for the length objective.
+        checker: the room's checker (no people in it).
+        prediction: the people predicted over the horizon.
+        safety: the smallest allowed robot-to-body distance, metres.
+        max_base_speed, arm_max_velocity: the execution limits that time a path.
+    """
+
+    def __init__(self, objective: Objective, social: SocialCost | None, checker: CompiledSceneChecker,
+                 prediction: Prediction, safety: float, max_base_speed: float, arm_max_velocity) -> None:
+        self.objective = objective
+        self.social = social
+        self.checker = checker
+        self.prediction = prediction
+        self.safety = float(safety)
+        self.max_base_speed = float(max_base_speed)
+        self.arm_max_velocity = np.asarray(arm_max_velocity, float).reshape(2)
+        self.people = PeopleSafety(checker.compiled_scene(), prediction, self.safety)
+
+    def times(self, waypoints: np.ndarray, t0: float) -> np.ndarray:
+        """The nominal time (N,) of each waypoint, driven from ``t0``."""
+        return nominal_path_times(waypoints, self.max_base_speed, self.arm_max_velocity, t0)
+
+    def motion_costs(self, waypoints: np.ndarray, times: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The social part (E,) and the weighted length (E,) of every motion."""
+        a, b = waypoints[:-1], waypoints[1:]
+        length = config_distance(a, b, self.objective.distance_weights)
+        if self.social is None or len(a) == 0:
+            return np.zeros(len(a)), length
+        social = np.asarray(self.social.timed_motion_cost(a, b, times[:-1], times[1:], self.prediction), float)
+        return social.reshape(len(a)), length
+
+    def evaluate(self, waypoints: np.ndarray, t0: float) -> PathEvaluation:
+        """The exact time-indexed cost and safety of ``waypoints`` (N, 4) driven from ``t0``."""
+        wp = np.ascontiguousarray(waypoints, float)
+        times = self.times(wp, t0)
+        if len(wp) < 2:
+            return PathEvaluation(times, 0.0, 0.0, 0.0, -1, -1)
+        social, length = self.motion_costs(wp, times)
+        lw = float(self.objective.length_weight)
+        # The objective's own sum: social + lambda * length per motion (the length term only when lambda > 0,
+        # as SocialObjective.motion_cost adds it), summed over the motions.
+        per_motion = social + lw * length if lw > 0 else social
+        ok = np.asarray(self.checker.are_motions_valid(wp[:-1], wp[1:]), bool)
+        static_bad = int(np.argmin(ok)) if not ok.all() else -1
+        clear, people_bad = self.people.path_clear(wp, times)
+        return PathEvaluation(times, float(per_motion.sum()), float(social.sum()), float(length.sum()),
+                              static_bad, -1 if clear else int(people_bad))

@@ -1,0 +1,370 @@
+"""The replanner (drake_social.planning.replan) on a hand-built corridor.
+
+The room (12 x 7 m) has a central block (x 4 .. 8, y 1.6 .. 5.4): two 1.6 m
+corridors lead from the start (west) to the goal (east), one north, one
+south. A person standing in the middle of a corridor blocks it for the
+robot (0.95 m wide in its carrying pose) with a 0.05 m safety distance.
+People are given as hand-made predictions (a scripted walker's timed
+points, sampled at 0.1 s), with a horizon longer than any path here.
+
+Every returned path's distance to the people is checked again with an
+independent computation: the people's surface distances
+(:func:`drake_social.people.proximity.part_distances`) at 400 samples per
+motion, the people placed by ``numpy.interp`` of the walker's own timed
+points at the nominal times of the samples.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from drake_social.collision.drake_checker import make_checker
+from drake_social.kinematics import ArmGeometry, config_distance
+from drake_social.people import PeopleState, constant_velocity, people_model, without_people
+from drake_social.people.prediction import Prediction
+from drake_social.people.proximity import part_distances
+from drake_social.cost.social import SocialCost
+from drake_social.planning.objective import SocialObjective
+from drake_social.planning.replan import ReplanResult, Replanner
+from drake_social.scenario.load import load_scenario_text
+
+CORRIDOR = """
+description: "corridor: two routes around a central block"
+world:
+  bounds: [0.0, 0.0, 12.0, 7.0]
+  obstacles:
+    - {center: [6.0, 3.5], size: [4.0, 3.8]}
+robot: {base_radius: 0.35, link_lengths: [0.6, 0.5], link_width: 0.08}
+object: !Bar {length: 1.5, thickness: 0.05}
+start: [1.2, 3.5, -1.2292, 2.8]
+goal: [10.8, 3.5, -1.2292, 2.8]
+random_seed: 3
+social: {length_weight: 1.0}
+planner: {iterations: 1500, planning_range: 2.0, near_radius: 3.0, replan_iterations: 400}
+"""
+NORTH_Y, SOUTH_Y = 6.2, 0.8  # corridor centre lines
+HORIZON = 60.0  # seconds: longer than any path here
+
+
+@pytest.fixture(scope="module")
+def corridor():
+    return load_scenario_text(CORRIDOR, "corridor")
+
+
+@pytest.fixture(scope="module")
+def room(corridor):
+    return make_checker(without_people(corridor), "planar")
+
+
+def replanner(scenario, room, **kw) -> Replanner:
+    kw.setdefault("budget", 60.0)  # the iteration cap binds: reproducible
+    return Replanner(scenario, room, **kw)
+
+
+def walkers(t0: float, scripts: list[list[tuple[float, float, float]]], horizon: float = HORIZON,
+            dt: float = 0.1) -> Prediction:
+    """People walking timed points [(t, x, y), ...] (standing before the first and after the last)."""
+    times = t0 + dt * np.arange(int(round(horizon / dt)) + 1)
+    p = len(scripts)
+    pos = np.zeros((len(times), p, 2))
+    for i, script in enumerate(scripts):
+        ts, xs, ys = np.asarray(script, float).T
+        pos[:, i, 0], pos[:, i, 1] = np.interp(times, ts, xs), np.interp(times, ts, ys)
+    step = np.hypot(*np.diff(pos, axis=0).transpose(2, 0, 1)) / dt if len(times) > 1 else np.zeros((1, p))
+    now = step[0] if len(step) else np.zeros(p)
+    return Prediction(t0=t0, dt=dt, positions=pos, headings=np.zeros((len(times), p)),
+                      present=np.ones((len(times), p), bool), radii=np.full(p, 0.25), speeds=now,
+                      max_speeds=step.max(axis=0) if len(step) else np.zeros(p),
+                      names=tuple(f"walker {i}" for i in range(p)))
+
+
+def nobody(t0: float) -> Prediction:
+    return walkers(t0, [])
+
+
+def min_distance(scenario, waypoints, t0, prediction, scripts, samples=400) -> float:
+    """The robot's least surface distance to the walkers along the path driven
+    from t0, sampled densely; the walkers placed by np.interp of their scripts."""
+    ex = scenario.execution
+    geometry = ArmGeometry.from_scenario(scenario)
+    wp = np.asarray(waypoints, float)
+    best, t = math.inf, float(t0)
+    for a, b in zip(wp[:-1], wp[1:]):
+        d = b - a
+        duration = max(math.hypot(d[0], d[1]) / ex.max_base_speed, abs(d[2]) / ex.arm_max_velocity[0],
+                       abs(d[3]) / ex.arm_max_velocity[1])
+        u = np.linspace(0.0, 1.0, samples)
+        q = a + u[:, None] * d
+        ts = t + u * duration
+        centres = np.zeros((samples, len(scripts), 2))
+        for i, script in enumerate(scripts):
+            st, sx, sy = np.asarray(script, float).T
+            centres[:, i, 0], centres[:, i, 1] = np.interp(ts, st, sx), np.interp(ts, st, sy)
+        assert ts[-1] <= prediction.horizon  # the people are predicted all along
+        best = min(best, float(part_distances(geometry, q, centres, np.full(len(scripts), 0.25))["robot"].min()))
+        t += duration
+    return best
+
+
+def route(waypoints) -> str:
+    """'north' or 'south': the side of the block the base passes (x in 4 .. 8)."""
+    wp = np.asarray(waypoints, float)
+    fine = np.concatenate([a + np.linspace(0, 1, 50)[:, None] * (b - a) for a, b in zip(wp[:-1], wp[1:])])
+    inside = fine[(fine[:, 0] > 4.0) & (fine[:, 0] < 8.0)]
+    assert len(inside) and (np.all(inside[:, 1] > 3.5) or np.all(inside[:, 1] < 3.5))
+    return "north" if inside[0, 1] > 3.5 else "south"
+
+
+def along(result: ReplanResult, t: float) -> tuple[np.ndarray, np.ndarray]:
+    """Where the robot is at time t driving ``result``'s path (nominal times),
+    and the remainder from there: [q(t)] + the later waypoints."""
+    from drake_social.kinematics import nominal_path_times
+
+    wp = result.waypoints
+    times = nominal_path_times(wp, 0.5, [1.0, 1.0], result.t)
+    k = int(np.searchsorted(times, t, side="right")) - 1
+    k = min(max(k, 0), len(wp) - 2)
+    u = (t - times[k]) / (times[k + 1] - times[k])
+    q = wp[k] + min(max(u, 0.0), 1.0) * (wp[k + 1] - wp[k])
+    return q, np.vstack([q[None], wp[k + 1:]])
+
+
+@pytest.fixture(scope="module")
+def first(corridor, room):
+    return replanner(corridor, room).plan(np.asarray(corridor.start, float), 0.0, nobody(0.0), replan_index=0)
+
+
+# ---- the initial plan and the result ------------------------------------------------
+
+
+def test_initial_plan(corridor, room, first):
+    assert first.status == "initial" and first.changed and first.replan_index == 0
+    assert first.iterations == corridor.planner.iterations and not first.deadline_hit
+    np.testing.assert_array_equal(first.waypoints[0], corridor.start)
+    np.testing.assert_array_equal(first.waypoints[-1], corridor.goal)
+    assert room.are_motions_valid(first.waypoints[:-1], first.waypoints[1:]).all()
+    # Without people the cost is the length term alone: lambda * the weighted length.
+    length = config_distance(first.waypoints[:-1], first.waypoints[1:]).sum()
+    assert first.cost == pytest.approx(length, rel=1e-12)
+    assert first.search_cost == first.cost and first.candidate_cost == math.inf
+    assert not first.waypoints.flags.writeable
+    record = first.to_record()
+    assert record["status"] == "initial" and record["cost"] == first.cost
+
+
+def test_evaluate_times_and_safety(corridor, room, first):
+    rp = replanner(corridor, room)
+    wp = first.waypoints
+    ev = rp.evaluate(wp, 2.0, nobody(2.0))
+    d = np.diff(wp, axis=0)
+    durations = np.maximum(np.hypot(d[:, 0], d[:, 1]) / 0.5, np.abs(d[:, 2:]).max(axis=1) / 1.0)
+    np.testing.assert_allclose(ev.times, 2.0 + np.concatenate([[0.0], np.cumsum(durations)]), rtol=1e-12)
+    assert ev.safe and ev.first_bad == -1
+    # A person standing on the path's third waypoint: that motion (or an earlier one) is not safe.
+    x, y = wp[2, :2]
+    ev = rp.evaluate(wp, 0.0, walkers(0.0, [[(0.0, x, y)]]))
+    assert not ev.safe and 0 <= ev.people_bad <= 2 and ev.static_bad == -1
+
+
+# ---- a walker steps into the route -------------------------------------------------------
+
+
+def test_walker_steps_into_the_route(corridor, room, first):
+    """At t = 2 s a walker is seen entering the corridor the plan goes through;
+    it stops in its middle: the robot takes the other corridor."""
+    rp = replanner(corridor, room)
+    side = route(first.waypoints)
+    yc = NORTH_Y if side == "north" else SOUTH_Y
+    script = [(2.0, 9.0, yc), (5.0, 6.0, yc)]
+    prediction = walkers(2.0, [script])
+    q_now, previous = along(first, 2.0)
+    res = rp.plan(q_now, 2.0, prediction, previous, replan_index=1)
+    assert res.status == "new" and res.changed, res.reason
+    assert "not safe" in res.reason and res.candidate_cost == math.inf
+    assert route(res.waypoints) != side
+    np.testing.assert_array_equal(res.waypoints[0], q_now)
+    assert min_distance(corridor, res.waypoints, 2.0, prediction, [script]) > corridor.execution.safety_distance
+    # The cost reported is the exact one.
+    assert res.cost == rp.evaluate(res.waypoints, 2.0, prediction).cost == res.search_cost
+    # ... and the path it left would have come within the safety distance.
+    assert min_distance(corridor, previous, 2.0, prediction, [script]) <= corridor.execution.safety_distance
+
+
+def test_both_routes_blocked_waits(corridor, room, first):
+    rp = replanner(corridor, room)
+    scripts = [[(2.0, 6.0, NORTH_Y)], [(2.0, 6.0, SOUTH_Y)]]
+    q_now, previous = along(first, 2.0)
+    res = rp.plan(q_now, 2.0, walkers(2.0, scripts), previous, replan_index=1)
+    assert res.status == "wait" and res.waiting and not res.changed
+    np.testing.assert_array_equal(res.waypoints, q_now[None])
+    assert res.cost == math.inf and res.search_cost == math.inf and res.candidate_cost == math.inf
+    assert res.reason.startswith("waiting") and "no safe path" in res.reason
+
+
+def test_person_at_the_robot_waits(corridor, room, first):
+    rp = replanner(corridor, room)
+    q_now, previous = along(first, 2.0)
+    # A person 0.02 m from the base disc's surface (0.35 + 0.25 + 0.02 from its centre, on the side away from the arm).
+    person = [(2.0, q_now[0], q_now[1] + 0.62)]
+    res = rp.plan(q_now, 2.0, walkers(2.0, [person]), previous, replan_index=1)
+    assert res.status == "wait"
+    near = part_distances(ArmGeometry.from_scenario(corridor), q_now[None], np.array([person[0][1:]]),
+                          np.array([0.25]))["robot"][0]
+    assert near <= 0.02 + 1e-12
+    assert f"{near:.3f} m from the robot now" in res.reason
+
+
+# ---- people standing still: never dearer -------------------------------------------------
+
+
+STANDING = CORRIDOR.replace("random_seed: 3", """random_seed: 3
+people:
+  - {x: 2.6, y: 5.6, theta: -1.0, radius: 0.25}
+  - {x: 9.4, y: 1.4, theta: 2.0, radius: 0.25}
+  - {x: 6.0, y: 6.6, theta: -1.5708, radius: 0.25}""")
+
+
+def test_standing_people_never_a_dearer_path():
+    """People standing still: every replan along the driven plan returns the
+    current path or a cheaper one, under the static cost of today's planner
+    (SocialCost.motion_cost with the people where they stand)."""
+    scenario = load_scenario_text(STANDING, "corridor, standing people")
+    room = make_checker(without_people(scenario), "planar")
+    rp = replanner(scenario, room)
+    state = people_model(scenario).state_at(0.0)
+    static = SocialObjective(SocialCost.from_scenario(scenario), scenario.social.length_weight)
+
+    def today(wp):
+        return float(static.motion_cost(wp[:-1], wp[1:]).sum())
+
+    res = rp.plan(np.asarray(scenario.start, float), 0.0, constant_velocity(state, HORIZON), replan_index=0)
+    assert res.status == "initial"
+    assert res.cost == pytest.approx(today(res.waypoints), rel=1e-9)
+    statuses = []
+    for k, t in enumerate([3.0, 6.0, 9.0, 12.0, 15.0], start=1):
+        q_now, previous = along(res, t)
+        prediction = constant_velocity(PeopleState(t, state.positions, state.headings, state.velocities,
+                                                   state.radii, state.names), HORIZON)
+        assert prediction.static
+        new = rp.plan(q_now, t, prediction, previous, replan_index=k)
+        statuses.append(new.status)
+        assert new.status in ("kept", "new")
+        assert new.cost == pytest.approx(today(new.waypoints), rel=1e-9)
+        assert today(new.waypoints) <= today(previous) * (1 + 1e-9)
+        if new.status == "kept":
+            np.testing.assert_array_equal(new.waypoints, previous)
+        else:
+            assert new.cost < (1 - scenario.planner.replan_margin) * new.candidate_cost
+        res = new
+    assert "kept" in statuses
+
+
+# ---- determinism, the budget, the margin ---------------------------------------------------
+
+
+def _episode(scenario, room, seed):
+    rp = replanner(scenario, room, seed=seed)
+    res = rp.plan(np.asarray(scenario.start, float), 0.0, nobody(0.0), replan_index=0)
+    out = [res]
+    yc = NORTH_Y if route(res.waypoints) == "north" else SOUTH_Y
+    script = [(2.0, 9.0, yc), (5.0, 6.0, yc)]
+    for k, t in enumerate([2.0, 4.0, 6.0], start=1):
+        q_now, previous = along(res, t)
+        new = rp.plan(q_now, t, walkers(t, [script]), previous, replan_index=k)
+        out.append(new)
+        if new.status != "wait":
+            res = new
+    return out
+
+
+def test_same_seed_bit_for_bit(corridor, room):
+    a, b = _episode(corridor, room, 7), _episode(corridor, room, 7)
+    for x, y in zip(a, b):
+        assert x.waypoints.tobytes() == y.waypoints.tobytes()
+        assert (x.status, x.cost, x.iterations, x.candidate_cost, x.search_cost, x.reason) == \
+               (y.status, y.cost, y.iterations, y.candidate_cost, y.search_cost, y.reason)
+        assert not x.deadline_hit
+    c = _episode(corridor, room, 8)
+    assert any(x.waypoints.tobytes() != y.waypoints.tobytes() for x, y in zip(a, c))
+
+
+def test_over_budget_returns_the_best_found(corridor, room, first):
+    """A budget far too small for the iteration cap: the search stops at the
+    deadline and the replan returns a safe path (the candidate, or better)."""
+    rp = Replanner(corridor, room, budget=0.002, iterations=100_000)
+    yc = NORTH_Y if route(first.waypoints) == "north" else SOUTH_Y
+    script = [(2.0, 6.0, 3.5 + 3 * (yc - 3.5))]  # a person far outside the room: nothing blocked
+    prediction = walkers(2.0, [script])
+    q_now, previous = along(first, 2.0)
+    res = rp.plan(q_now, 2.0, prediction, previous, replan_index=1)
+    assert res.deadline_hit and 0 < res.iterations < 100_000
+    assert res.status in ("kept", "new")
+    assert res.cost <= res.candidate_cost
+    assert min_distance(corridor, res.waypoints, 2.0, prediction, [script]) > corridor.execution.safety_distance
+    # Without a candidate: the best path found by the deadline, or a wait; never an unsafe path.
+    blocked = [(2.0, 6.0, yc)]
+    res = rp.plan(q_now, 2.0, walkers(2.0, [blocked]), None, replan_index=2)
+    assert res.deadline_hit and res.status in ("new", "wait")
+    if res.status == "new":
+        assert min_distance(corridor, res.waypoints, 2.0, walkers(2.0, [blocked]), [blocked]) > 0.05
+
+
+def test_margin_keeps_one_of_two_equal_routes(corridor, room):
+    """Two routes of exactly equal cost (mirror images, arm fixed, no people):
+    with the margin the current one is kept at every replan; without it the
+    search's marginally shorter paths replace it."""
+    s = np.asarray(corridor.start, float)
+    g = np.asarray(corridor.goal, float)
+
+    def via(y):
+        return np.array([s, [3.4, y, *s[2:]], [8.6, y, *s[2:]], g])
+
+    north, south = via(NORTH_Y), via(SOUTH_Y)
+    rp = replanner(corridor, room, margin=0.05)
+    assert rp.evaluate(north, 0.0, nobody(0.0)).cost == rp.evaluate(south, 0.0, nobody(0.0)).cost
+    for candidate in (north, south):
+        for k in range(1, 5):
+            res = rp.plan(s, 0.0, nobody(0.0), candidate, replan_index=k)
+            assert res.status == "kept", res.reason
+            np.testing.assert_array_equal(res.waypoints, candidate)
+            assert res.search_cost >= 0.95 * res.candidate_cost
+    eager = replanner(corridor, room, margin=0.0)
+    switched = [eager.plan(s, 0.0, nobody(0.0), north, replan_index=k) for k in range(1, 5)]
+    assert any(r.status == "new" for r in switched)
+    for r in switched:
+        assert r.status == "kept" or r.cost < r.candidate_cost
+
+
+# ---- arguments ----------------------------------------------------------------------------------
+
+
+def test_arguments_are_checked(corridor, room, first):
+    with pytest.raises(TypeError, match="checker"):
+        Replanner(corridor, "planar")
+    with pytest.raises(ValueError, match="without people"):
+        Replanner(load_scenario_text(STANDING, "standing"), make_checker(load_scenario_text(STANDING, "s"), "planar"))
+    with pytest.raises(ValueError, match="margin"):
+        Replanner(corridor, room, margin=1.0)
+    with pytest.raises(ValueError, match="safety"):
+        Replanner(corridor, room, safety=-0.1)
+    with pytest.raises(ValueError, match="iterations"):
+        Replanner(corridor, room, iterations=0)
+    with pytest.raises(ValueError, match="budget"):
+        Replanner(corridor, room, budget=0.0)
+    rp = replanner(corridor, room)
+    assert (rp.iterations, rp.budget, rp.margin, rp.safety, rp.seed) == (
+        corridor.planner.replan_iterations, 60.0, corridor.planner.replan_margin,
+        corridor.execution.safety_distance, corridor.random_seed)
+    with pytest.raises(ValueError, match="previous must end at the goal"):
+        rp.plan(first.waypoints[0], 0.0, nobody(0.0), first.waypoints[:-1], replan_index=1)
+    with pytest.raises(TypeError, match="prediction"):
+        rp.plan(first.waypoints[0], 0.0, None, replan_index=1)
+    with pytest.raises(ValueError, match="replan_index"):
+        rp.plan(first.waypoints[0], 0.0, nobody(0.0), replan_index=-1)
+    with pytest.raises(ValueError, match="q_now"):
+        rp.plan([1.0, 2.0, 3.0], 0.0, nobody(0.0), replan_index=1)
+    with pytest.raises(ValueError, match="ReplanResult.status"):
+        ReplanResult(0.0, first.waypoints, 1.0, True, "maybe", "", 0.0, 0, False, 1.0, 1.0, 1)
