@@ -53,7 +53,8 @@ __all__ += ["PeopleImport", "run_people_import"]
 #: The files ``plan`` writes into ``out`` (a folder of such a name is refused before planning).
 PLAN_OUTPUTS = ("path.csv", "result.json", "path.png", "cost_profile.png", "convergence.png")
 #: The files ``simulate`` may write into ``out`` (replay.html when Meshcat records).
-SIMULATE_OUTPUTS = ("replay.html", "executed.csv", "people.csv", "path.png", "tracking.png", "sim.json")
+SIMULATE_OUTPUTS = ("replay.html", "executed.csv", "people.csv", "replans.csv", "path.png", "tracking.png",
+                    "sim.json")
 
 #: A progress callback: ``progress(done, total, status)`` (steps done of
 #: ``total``, and a short text such as ``"best 5.1"`` or ``"t = 3.2 s"``).
@@ -296,11 +297,14 @@ class SimulateRun:
 def run_simulate(*, scenario: Scenario | str | Path, out: str | Path, overrides: Sequence[str] = (),
                  path: str | Path | None = None, mode: str | None = None, execution: str | None = None,
                  algorithm: str | None = None, iterations: int | None = None, seed: int | None = None,
-                 checker: str = "planar", replay: bool = True, progress: Progress | None = None) -> SimulateRun:
+                 checker: str = "planar", replay: bool = True, progress: Progress | None = None,
+                 replan: bool | None = None) -> SimulateRun:
     """Plans the scenario (or reads ``path``), executes the path in Drake's
     Simulator and writes ``out``: replay.html (with ``replay``),
     executed.csv, people.csv (when the scenario has people: where they were
-    at the logged times), tracking.png and sim.json.
+    at the logged times), replans.csv (when replanning: one row per replan,
+    :func:`~drake_social.io.paths.write_replans_csv`), tracking.png and
+    sim.json (with replanning its ``replanning`` summary).
 
     Args:
         scenario: the scenario YAML file, or a :class:`~drake_social.scenario.Scenario`.
@@ -314,6 +318,8 @@ def run_simulate(*, scenario: Scenario | str | Path, out: str | Path, overrides:
         checker: the validity checker: planar, drake or numpy.
         replay: record the run in Meshcat and write replay.html.
         progress: optional :data:`Progress` over simulated time (tenths of a second).
+        replan: replan while executing (``--replan``); None =
+            ``planner.replan`` of the scenario; True with ``path`` is refused.
 
     Returns:
         A :class:`SimulateRun`: ``run.planner`` failed (no path),
@@ -330,7 +336,7 @@ def run_simulate(*, scenario: Scenario | str | Path, out: str | Path, overrides:
     from drake_social.experiments.metrics import execution_metrics
     from drake_social.io.json_numbers import finite_or_none
     from drake_social.io.outputs import OutputSet
-    from drake_social.io.paths import parse_path_csv, write_executed_csv, write_people_csv
+    from drake_social.io.paths import parse_path_csv, write_executed_csv, write_people_csv, write_replans_csv
     from drake_social.io.records import json_lines
     from drake_social.planning.result import PlanningInputError
     from drake_social.scenario import plant_time_step_problem, validate_scenario
@@ -341,6 +347,9 @@ def run_simulate(*, scenario: Scenario | str | Path, out: str | Path, overrides:
     out = Path(out)
     planning_only = [f"--{name}" for name, value in (("algorithm", algorithm), ("iterations", iterations),
                                                       ("seed", seed)) if value is not None]
+    if path is not None and replan:
+        raise ScenarioError(f"--replan: replans the path; with --path {path} nothing is planned (the path is "
+                            "executed as given): leave out one of them")
     if path is not None and planning_only:
         pronoun = "it" if len(planning_only) == 1 else "them"
         raise ScenarioError(f"{_listed(planning_only)}: only for planning; with --path {path} nothing is "
@@ -372,7 +381,8 @@ def run_simulate(*, scenario: Scenario | str | Path, out: str | Path, overrides:
             # The scenario is validated (loaded) and the path checked with the checker above: once.
             run = run_checked(loaded, mode=mode or opts.mode, execution=execution or opts.execution,
                               waypoints=waypoints, checker=chk, meshcat=meshcat, time_limit=float(opts.time_limit),
-                              analyze=True, analysis_checker=None, progress=report)
+                              analyze=True, analysis_checker=None, progress=report,
+                              replan=bool(loaded.planner.replan if replan is None else replan) and waypoints is None)
         except PlanningInputError as e:
             raise PlanningInputError(f"{source}: {e}") from e
         files, size = [], None
@@ -387,6 +397,9 @@ def run_simulate(*, scenario: Scenario | str | Path, out: str | Path, overrides:
             files.append("replay.html")
         write_executed_csv(outputs.path("executed.csv"), run.times, run.q, run.v)
         files.append("executed.csv")
+        if run.replanning is not None:
+            write_replans_csv(outputs.path("replans.csv"), run.replans)
+            files.append("replans.csv")
         if run.people is not None:
             write_people_csv(outputs.path("people.csv"), run.people)
             files.append("people.csv")
@@ -419,10 +432,12 @@ def _write_path_figure(path: Path, scenario: Scenario, run: SimulationResult, ti
     from drake_social.viz.show import MAP_DPI
 
     result = run.planner
-    if result is None:  # the path given with --path
+    if result is None:  # the path given with --path, or the path followed while replanning
         wp = np.asarray(run.waypoints, float).reshape(-1, 4)
         cost = float(SocialCost.from_scenario(scenario).motion_cost(wp[:-1], wp[1:]).sum()) if len(wp) > 1 else 0.0
-        result = PlannerResult(algorithm="given path", success=len(wp) >= 2, message="the path given with --path",
+        replanned = run.replanning is not None
+        result = PlannerResult(algorithm="replanned path" if replanned else "given path", success=len(wp) >= 2,
+                               message="the path followed, replanned" if replanned else "the path given with --path",
                                waypoints=wp, cost=cost, social_cost_full=cost, social_cost_planner=cost,
                                path_length=float(config_distance(wp[:-1], wp[1:]).sum()),
                                base_length=float(np.hypot(*np.diff(wp[:, :2], axis=0).T).sum()))

@@ -120,7 +120,7 @@ def _run_simulate(args: argparse.Namespace) -> int:
     done = _with_bar(_bar(args, "simulating"), app.run_simulate, scenario=args.scenario, out=out,
                      overrides=args.set or (), path=args.path, mode=args.mode, execution=args.execution,
                      algorithm=args.algorithm, iterations=args.iterations, seed=args.seed, checker=args.checker,
-                     replay=not args.no_replay)
+                     replay=not args.no_replay, replan=args.replan)
     run = done.run
     if run.planner is not None:
         print(run.planner.summary())

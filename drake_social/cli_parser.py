@@ -120,7 +120,8 @@ def _add_simulate(subparsers) -> None:
         "holonomic P-controller on four mecanum wheels and Ruckig trajectories in Drake's Simulator, checks "
         "the executed trajectory for collisions, integrates its social cost and measures its deviation from "
         "the plan. Writes DIR/replay.html (a standalone Meshcat replay: open it in a browser, no server), "
-        "DIR/executed.csv (t,x,y,psi1,psi2 and velocities), DIR/people.csv (t,id,x,y,theta,v: where the "
+        "DIR/executed.csv (t,x,y,psi1,psi2 and velocities), DIR/replans.csv (with --replan: one row per "
+        "replan), DIR/people.csv (t,id,x,y,theta,v: where the "
         "people were, when the scenario has people), DIR/path.png (when people move: their tracks and the "
         "executed base track), DIR/tracking.png (references against actual "
         "over time) and DIR/sim.json. Exit code 3 no path, 5 goal not reached "
@@ -135,6 +136,11 @@ def _add_simulate(subparsers) -> None:
                    help="synchronized (one phase-synchronized reference per segment, stays on the planned "
                         "segment) or paper (independent base P-control and arm trajectory, the paper's); "
                         "default: the scenario's execution.execution")
+    p.add_argument("--replan", action="store_true", default=None,
+                   help="replan while executing: every 1/planner.replan_rate s from the robot's configuration "
+                        "among the predicted people (within planner.replan_budget s each); the robot waits when "
+                        "no path is safe. Writes DIR/replans.csv (t,plan_time,cost,changed,status,iterations,"
+                        "deadline_hit) and sim.json's replanning summary; default: the scenario's planner.replan")
     p.add_argument("--path", type=Path, metavar="CSV",
                    help="follow this path (a path.csv of 'drake-social plan': header x,y,psi1,psi2, from the "
                         "scenario's start to its goal, at most 10,000 rows; every waypoint and segment is checked "

@@ -1,6 +1,8 @@
 """Drake systems for planning and path following.
 
-* :class:`PlannerSystem` plans once at initialization and outputs the path.
+* :class:`PlannerSystem` plans once at initialization and outputs the path;
+  :class:`ReplanningPlannerSystem` plans then replans periodically among
+  walking people.
 * :class:`WaypointSequencer` decides which waypoint is the current target.
 * :class:`HolonomicPController` drives the mecanum base towards it;
   :class:`MecanumDrive` turns wheel speeds into the base velocity.
@@ -24,6 +26,7 @@ from drake_social.control.holonomic import (
 from drake_social.control.people_geometry import PARKED_DEPTH, PeopleGeometry
 from drake_social.control.people_source import PEOPLE_VECTOR_FIELDS, PeopleSource, people_vector
 from drake_social.control.planner_system import PlannerSystem, path_parameter, waypoint_trajectory
+from drake_social.control.replanner_system import ReplanningPlannerSystem, ReplanState, replanning_summary
 from drake_social.control.ruckig_source import (
     RuckigSegment,
     RuckigTrajectorySource,
@@ -41,6 +44,8 @@ __all__ = [
     "PeopleGeometry",
     "PeopleSource",
     "PlannerSystem",
+    "ReplanState",
+    "ReplanningPlannerSystem",
     "RuckigSegment",
     "RuckigTrajectorySource",
     "SafetyMonitor",
@@ -53,6 +58,7 @@ __all__ = [
     "path_parameter",
     "people_vector",
     "reference_source_from_options",
+    "replanning_summary",
     "saturate_norm",
     "waypoint_trajectory",
     "wheel_limited_speed",

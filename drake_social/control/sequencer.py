@@ -11,6 +11,15 @@ also waits for a trajectory source to report that its reference has arrived
 ``done = 1`` instead. While the optional input ``hold`` (the safety
 monitor's stop; unconnected = never held) is above 0.5 it does not advance.
 
+A replanner changes the path under it: with ``versioned=True`` the input ``version`` (1;
+e.g. :class:`~drake_social.control.ReplanningPlannerSystem`'s) counts the
+paths, and a version different from the last one seen means a new path
+that starts at the robot's configuration: the index goes to ``min(1, N - 1)``
+(the new path's first waypoint after that configuration) and ``done`` to 0.
+The outputs answer for the new path at once (the version input is among
+their prerequisites, so the target never shows the new path at the old
+index); the update stores the new version. Without it (or unconnected), nothing of this runs.
+
 The decision is taken in a periodic discrete update (also declared as a
 forced update, so ``CalcForcedDiscreteVariableUpdate`` runs it); the outputs only read
 the state (and the waypoints), so ``target``, ``done`` and ``index`` have no
@@ -22,7 +31,7 @@ Ports:
 * inputs ``waypoints`` (abstract ``Value[object]``, an (N, 4) array, e.g.
   :class:`~drake_social.control.PlannerSystem`'s ``waypoints``; only when no
   fixed array is given), ``q`` (4), ``reference_done`` (1; only with
-  ``wait_for_reference=True``), ``hold`` (1, optional);
+  ``wait_for_reference=True``), ``hold`` (1, optional), ``version`` (1, only with ``versioned=True``; optional);
 * outputs ``target`` (4), ``done`` (1, 0.0 or 1.0), ``index`` (1).
 
 Example::
@@ -52,7 +61,7 @@ from drake_social.scenario import ExecutionOptions
 __all__ = ["WaypointSequencer"]
 
 # Layout of the single discrete state group.
-_INDEX, _DONE = 0, 1
+_INDEX, _DONE, _VERSION = 0, 1, 2
 
 
 def _checked_waypoints(waypoints, who: str) -> np.ndarray:
@@ -71,8 +80,10 @@ def _checked_waypoints(waypoints, who: str) -> np.ndarray:
 class WaypointSequencer(LeafSystem):
     """Steps through waypoints when the robot is within tolerance of the current one.
 
-    Discrete state: one group of size 2, ``[index, done]`` (the target index,
-    starting at 0, and the latched done flag, 0.0 or 1.0).
+    Discrete state: one group, ``[index, done]`` (the target index, starting
+    at 0, and the latched done flag, 0.0 or 1.0), with ``versioned=True``
+    ``[index, done, version]`` (the last path version seen on the ``version``
+    input, starting at 0).
 
     Args:
         waypoints: a fixed (N, 4) array of configurations ``[x, y, psi1,
@@ -85,6 +96,8 @@ class WaypointSequencer(LeafSystem):
         period: period of the discrete update, seconds (> 0).
         wait_for_reference: also require ``reference_done[0] > 0.5`` (declares
             the input port ``reference_done``).
+        versioned: declare the input port ``version`` (a replanner's path
+            version; see the module docstring).
 
     Raises:
         ValueError: a fixed array that is empty, not (N, 4) or not finite;
@@ -101,6 +114,7 @@ class WaypointSequencer(LeafSystem):
         joint_tolerance: float,
         period: float,
         wait_for_reference: bool = False,
+        versioned: bool = False,
     ):
         super().__init__()
         for name, value in (("base_tolerance", base_tolerance), ("joint_tolerance", joint_tolerance),
@@ -119,25 +133,29 @@ class WaypointSequencer(LeafSystem):
             self.DeclareVectorInputPort("reference_done", 1) if wait_for_reference else None
         )
         self._hold_port = self.DeclareVectorInputPort("hold", 1)
+        self._version_port = self.DeclareVectorInputPort("version", 1) if versioned else None
 
-        self._state_index = self.DeclareDiscreteState(2)  # [index, done], both start at 0
+        # [index, done] (+ version), all start at 0
+        self._state_index = self.DeclareDiscreteState(3 if versioned else 2)
         self.DeclarePeriodicDiscreteUpdateEvent(period, 0.0, self._Advance)
         # The same decision on demand (CalcForcedDiscreteVariableUpdate), for tests and scripts.
         self.DeclareForcedDiscreteUpdateEvent(self._Advance)
 
-        # Outputs read the state (and the waypoints), never q: no feedthrough from q.
+        # Outputs read the state (and the waypoints and version), never q: no feedthrough from q.
         state = {self.discrete_state_ticket(self._state_index)}
+        if self._version_port is not None:
+            state.add(self.input_port_ticket(self._version_port.get_index()))
         target_prereqs = set(state)
         if self._waypoints_port is not None:
             target_prereqs.add(self.input_port_ticket(self._waypoints_port.get_index()))
         self.DeclareVectorOutputPort("target", 4, self._CalcTarget, prerequisites_of_calc=target_prereqs)
         self.DeclareVectorOutputPort("done", 1, self._CalcDone, prerequisites_of_calc=state)
-        self.DeclareVectorOutputPort("index", 1, self._CalcIndex, prerequisites_of_calc=state)
+        self.DeclareVectorOutputPort("index", 1, self._CalcIndex, prerequisites_of_calc=target_prereqs)
 
     @classmethod
     def from_options(
         cls, execution_options: ExecutionOptions, waypoints: np.ndarray | None = None,
-        wait_for_reference: bool = False,
+        wait_for_reference: bool = False, versioned: bool = False,
     ) -> "WaypointSequencer":
         """A sequencer with the tolerances and period of a scenario's ``execution`` section."""
         require_execution_options(execution_options, "WaypointSequencer.from_options")
@@ -147,6 +165,7 @@ class WaypointSequencer(LeafSystem):
             joint_tolerance=execution_options.joint_tolerance,
             period=execution_options.control_period,
             wait_for_reference=wait_for_reference,
+            versioned=versioned,
         )
 
     # ---- helpers ---------------------------------------------------------------
@@ -160,19 +179,40 @@ class WaypointSequencer(LeafSystem):
         except ValueError as error:
             raise RuntimeError(f"{error} (read from the input port 'waypoints')") from None
 
+    def _NewVersion(self, context: Context) -> float | None:
+        """The ``version`` input when it differs from the last one seen, else None."""
+        if self._version_port is None or not self._version_port.HasValue(context):
+            return None
+        version = float(self._version_port.Eval(context)[0])
+        return None if version == context.get_discrete_state(self._state_index).GetAtIndex(_VERSION) else version
+
     def _Index(self, context: Context, n_waypoints: int) -> int:
         # Clamped so that a shorter array on the input never indexes past its end.
+        if self._NewVersion(context) is not None:
+            return min(1, n_waypoints - 1)
         index = int(round(context.get_discrete_state(self._state_index).GetAtIndex(_INDEX)))
         return min(max(index, 0), n_waypoints - 1)
+
+    def _Done(self, context: Context) -> float:
+        if self._NewVersion(context) is not None:
+            return 0.0
+        return context.get_discrete_state(self._state_index).GetAtIndex(_DONE)
 
     # ---- event -----------------------------------------------------------------
 
     def _Advance(self, context: Context, discrete_state: DiscreteValues) -> None:
+        version = self._NewVersion(context)
+        out = discrete_state.get_mutable_vector(self._state_index)
+        if version is not None:  # a new path from the robot's configuration: its waypoint 1 next
+            out.SetAtIndex(_INDEX, min(1, len(self._Waypoints(context)) - 1))
+            out.SetAtIndex(_DONE, 0.0)
+            out.SetAtIndex(_VERSION, version)
+            return None
         xd = context.get_discrete_state(self._state_index).value()
         if xd[_DONE] > 0.5:
             return EventStatus.DidNothing()  # latched
         if self._hold_port.HasValue(context) and self._hold_port.Eval(context)[0] > 0.5:
-            return EventStatus.DidNothing()  # held by the safety monitor
+            return EventStatus.DidNothing()  # held (the safety monitor's stop, a replanner's wait)
         waypoints = self._Waypoints(context)
         index = self._Index(context, len(waypoints))
         target = waypoints[index]
@@ -186,7 +226,6 @@ class WaypointSequencer(LeafSystem):
             arrived = self._reference_done_port.Eval(context)[0] > 0.5
         if not arrived:
             return EventStatus.DidNothing()  # nothing changed (the outputs still recompute each period)
-        out = discrete_state.get_mutable_vector(self._state_index)
         if index + 1 < len(waypoints):
             out.SetAtIndex(_INDEX, index + 1)  # one step per update
         else:
@@ -200,7 +239,11 @@ class WaypointSequencer(LeafSystem):
         output.SetFromVector(waypoints[self._Index(context, len(waypoints))])
 
     def _CalcDone(self, context: Context, output: BasicVector) -> None:
-        output.SetAtIndex(0, context.get_discrete_state(self._state_index).GetAtIndex(_DONE))
+        output.SetAtIndex(0, self._Done(context))
 
     def _CalcIndex(self, context: Context, output: BasicVector) -> None:
+        if self._NewVersion(context) is not None:
+            waypoints = self._Waypoints(context)
+            output.SetAtIndex(0, float(self._Index(context, len(waypoints))))
+            return
         output.SetAtIndex(0, context.get_discrete_state(self._state_index).GetAtIndex(_INDEX))

@@ -1,4 +1,4 @@
-"""Path files: the waypoint CSV that ``plan`` writes and ``simulate --path`` reads, and the executed CSV.
+"""Path files: the waypoint CSV that ``plan`` writes and ``simulate --path`` reads, the executed CSV, the replans.
 
 A path CSV has the header ``x,y,psi1,psi2`` and one configuration per row
 (metres, radians), written with 17 significant digits so that a path read
@@ -28,7 +28,7 @@ from drake_social.io.textfile import MAX_PATH_FILE_BYTES, read_text_file, shorte
 from drake_social.limits import MAX_WAYPOINTS
 
 __all__ = ["PATH_HEADER", "EXECUTED_HEADER", "parse_path_csv", "write_executed_csv", "write_path_csv",
-           "PEOPLE_HEADER", "write_people_csv"]
+           "PEOPLE_HEADER", "write_people_csv", "REPLANS_HEADER", "write_replans_csv"]
 
 #: The header of a path CSV: the four values of a configuration.
 PATH_HEADER = "x,y,psi1,psi2"
@@ -38,6 +38,8 @@ EXECUTED_HEADER = "t,x,y,psi1,psi2,vx,vy,dpsi1,dpsi2"
 #: heading (rad), speed (m/s); the columns of
 #: :data:`drake_social.people.PEOPLE_CSV_FIELDS` (``io`` sits below ``people``).
 PEOPLE_HEADER = "t,id,x,y,theta,v"
+#: The header of ``replans.csv``: one row per replan (see :func:`write_replans_csv`).
+REPLANS_HEADER = "t,plan_time,cost,changed,status,iterations,deadline_hit"
 
 
 def write_path_csv(path: str | Path, waypoints: Any) -> None:
@@ -82,6 +84,29 @@ def write_people_csv(path: str | Path, log: Any) -> None:
         writer.writerow(PEOPLE_HEADER.split(","))
         for t, pid, x, y, theta, v in log.csv_rows():
             writer.writerow([f"{t:.17g}", pid, f"{x:.17g}", f"{y:.17g}", f"{theta:.17g}", f"{v:.17g}"])
+
+
+def write_replans_csv(path: str | Path, replans: Any) -> None:
+    """Writes a run's replans as ``replans.csv``: header :data:`REPLANS_HEADER`,
+    one row per :class:`~drake_social.planning.replan.ReplanResult` in order
+    (the first plan's first): ``t`` the simulated time of the replan
+    (seconds), ``plan_time`` its computation (wall-clock seconds), ``cost``
+    (the exact time-indexed cost of the path it leaves in force; ``inf``
+    while waiting), ``changed`` (1: the path changed, else 0), ``status``
+    (initial, new, kept or wait), ``iterations`` (samples drawn),
+    ``deadline_hit`` (1: the budget stopped it, else 0). Numbers with 17
+    significant digits.
+
+    Args:
+        path: the file to write.
+        replans: the ReplanResults (``SimulationResult.replans``).
+    """
+    with open(path, "w", newline="") as f:
+        writer = csv.writer(f, lineterminator="\n")
+        writer.writerow(REPLANS_HEADER.split(","))
+        for r in replans:
+            writer.writerow([f"{float(r.t):.17g}", f"{float(r.plan_time):.17g}", f"{float(r.cost):.17g}",
+                             int(bool(r.changed)), r.status, int(r.iterations), int(bool(r.deadline_hit))])
 
 
 def parse_path_csv(path: str | Path, option: str = "--path") -> tuple[np.ndarray, list[int]]:

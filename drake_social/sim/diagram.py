@@ -41,6 +41,22 @@ still measures a person's distance in that mode.
 
     [h] safety (SafetyMonitor) ◀─ q, people_state; stop ─hold─▶ sequencer, controller, reference / arm
 
+With ``replan`` (``simulate --replan``, ``planner.replan: true``) the
+planner is a :class:`~drake_social.control.ReplanningPlannerSystem`::
+
+    [r] q, people_state, sequencer.index ─▶ planner (ReplanningPlannerSystem) ─waypoints, version─▶ sequencer
+    [r] planner.hold (waiting), [h] safety.stop ─▶ held (Adder) ─hold─▶ sequencer, controller, reference / arm
+
+The planner plans at initialization, then every ``1 / planner.replan_rate``
+seconds from the robot's configuration among the predicted people; a new
+path comes with a new ``version``, on which the sequencer heads for the new
+path's waypoint 1 and the jerk-limited reference turns towards it from its
+current position, velocity and acceleration (no jump in either). While no
+path is safe the planner's ``hold`` is 1 and the robot stops as on a safety
+stop (the systems held read ``hold`` > 0.5: the sum of the two flags). With
+standing people there is no safety monitor and the planner's hold alone
+holds.
+
 ``[h]``: only when the people move (``execution.safety_distance`` >= 0; 0
 stops on contact only). People who stand still are obstacles the planner
 already kept clear of; a plan may pass them closer than the safety distance,
@@ -111,6 +127,8 @@ script can wire another planner, controller or people model around it
              people_vector   6 P: per person [x, y, theta, vx, vy, radius]
                              (an absent person keeps a pose: see people_state's present)
              stop            1: 1.0 while the safety monitor holds the robot (only when people move)
+             waiting         1: 1.0 while the replanner finds no safe path (only with replan)
+             path_version    1: the replanner's path version (only with replan)
              query_object    SceneGraph's QueryObject (distances, collisions)
 
 A base controller outside the diagram reads ``robot_state`` and
@@ -126,7 +144,8 @@ velocity), ``wheel_speeds``, ``target`` (the sequencer's), ``reference``
 arm trajectory), ``index`` (the target index), ``done`` (the sequencer's flag),
 with a crowd ``crowd_state`` (the people source's discrete state, from
 which :meth:`~drake_social.control.PeopleSource.people_log` rebuilds the people),
-and ``stop`` (the safety monitor's flag; only when people move).
+``stop`` (the safety monitor's flag; only when people move), and with
+replanning ``version`` (the path version) and ``waiting`` (the planner's hold).
 """
 
 from __future__ import annotations
@@ -162,6 +181,7 @@ from drake_social.control import (
     PeopleGeometry,
     PeopleSource,
     PlannerSystem,
+    ReplanningPlannerSystem,
     SafetyMonitor,
     WaypointSequencer,
     arm_source_from_options,
@@ -176,7 +196,7 @@ from drake_social.scenario import (EXECUTIONS, SIM_MODES, SERVO_BANDWIDTH, SERVO
 from drake_social.waypoints import check_waypoints
 
 __all__ = ["DiagramArguments", "TransportDiagram", "build_diagram", "check_diagram_arguments", "check_diagram_options",
-           "check_diagram_waypoints", "scenario_plant_config", "servo_gains"]
+           "check_diagram_waypoints", "resolve_replan", "scenario_plant_config", "servo_gains"]
 
 
 @dc.dataclass
@@ -197,6 +217,7 @@ class TransportDiagram:
         loggers: name -> VectorLogSink (see the module docstring).
         planner_included, controller_included: whether the built-in planner
             and base controller are inside (see :func:`build_diagram`).
+        replanning: the planner is a :class:`~drake_social.control.ReplanningPlannerSystem`.
     """
 
     diagram: Diagram
@@ -212,6 +233,7 @@ class TransportDiagram:
     loggers: dict[str, VectorLogSink]
     planner_included: bool = True
     controller_included: bool = True
+    replanning: bool = False
 
     def subsystem(self, name: str):
         """The subsystem called ``name`` (e.g. ``"sequencer"``)."""
@@ -270,6 +292,8 @@ def build_diagram(
     controller: bool = True,
     plant_config: MultibodyPlantConfig | None = None,
     people: PeopleModel | None = None,
+    replan: bool | None = None,
+    replanner=None,
 ) -> TransportDiagram:
     """Builds the diagram that plans (or takes) a path and executes it.
 
@@ -302,6 +326,15 @@ def build_diagram(
             plant only places the shapes).
         people: the people model of the ``people`` source; None =
             :func:`~drake_social.people.people_model` of the scenario.
+        replan: the planner replans periodically (a
+            :class:`~drake_social.control.ReplanningPlannerSystem`, see the
+            module docstring); None = ``scenario.planner.replan`` when the
+            diagram plans (no ``waypoints``, ``planner`` True), else False.
+            True needs the built-in planner.
+        replanner: with replanning, the replanner of the first plan and
+            the replans (an object with ``plan(...)``, see
+            :class:`~drake_social.control.ReplanningPlannerSystem`); None =
+            the scenario's :class:`~drake_social.planning.replan.Replanner`.
 
     Returns:
         The :class:`TransportDiagram`.
@@ -322,9 +355,28 @@ def build_diagram(
                      "a pydrake.multibody.plant.MultibodyPlantConfig", optional=True)
     require_instance(people, PeopleModel, "build_diagram", "people",
                      "a drake_social.people.PeopleModel", optional=True)
+    replan = resolve_replan(scenario, replan, waypoints is not None, bool(planner), "build_diagram")
     return build_checked(scenario, checked.mode, checked.execution, checked.waypoints, checker, meshcat,
                          planner=bool(planner), controller=bool(controller), plant_config=plant_config,
-                         people=people)
+                         people=people, replan=replan, replanner=replanner)
+
+
+def resolve_replan(scenario: Scenario, replan, given_path: bool, planner: bool, who: str) -> bool:
+    """Whether a run replans: ``replan``, or with None ``scenario.planner.replan`` when it plans.
+
+    Raises:
+        TypeError: ``replan`` is not None, True or False.
+        ValueError: ``replan=True`` with given waypoints or without the built-in planner.
+    """
+    require_instance(replan, (bool, np.bool_), who, "replan", "True, False or None", optional=True)
+    if replan is None:
+        return bool(scenario.planner.replan) and planner and not given_path
+    if replan and given_path:
+        raise ValueError(f"{who}: replan=True replans the path; with given waypoints nothing is planned "
+                         "(leave out the waypoints, or replan)")
+    if replan and not planner:
+        raise ValueError(f"{who}: replan=True needs the built-in planner (planner=True)")
+    return bool(replan)
 
 
 @dc.dataclass(frozen=True)
@@ -445,7 +497,8 @@ def scenario_plant_config(scenario: Scenario) -> MultibodyPlantConfig:
 def build_checked(
     scenario: Scenario, mode: str, execution: str, waypoints: np.ndarray | None, checker: ValidityChecker | None,
     meshcat: Meshcat | None, *, planner: bool = True, controller: bool = True,
-    plant_config: MultibodyPlantConfig | None = None, people: PeopleModel | None = None,
+    plant_config: MultibodyPlantConfig | None = None, people: PeopleModel | None = None, replan: bool = False,
+    replanner=None,
 ) -> TransportDiagram:
     """:func:`build_diagram` with its arguments already checked
     (:func:`check_diagram_arguments`; ``mode`` and ``execution`` the ones in
@@ -474,10 +527,17 @@ def build_checked(
         robot = _populate(plant, scenario, scenario_people.static)
 
     # ---- which target ---------------------------------------------------------
+    replanning: ReplanningPlannerSystem | None = None
     if waypoints is None:
         sequencer = builder.AddNamedSystem(
-            "sequencer", WaypointSequencer.from_options(opts, wait_for_reference=synchronized))
-        if planner:
+            "sequencer", WaypointSequencer.from_options(opts, wait_for_reference=synchronized, versioned=replan))
+        if replan:  # the room's planar checker of the replanner, not the one with the people at t = 0
+            replanning = builder.AddNamedSystem("planner", ReplanningPlannerSystem(scenario, replanner,
+                                                                                   people=scenario_people))
+            path_port = replanning.GetOutputPort("waypoints")
+            builder.Connect(replanning.GetOutputPort("version"), sequencer.GetInputPort("version"))
+            builder.Connect(sequencer.GetOutputPort("index"), replanning.GetInputPort("index"))
+        elif planner:
             path_port = builder.AddNamedSystem("planner", PlannerSystem(scenario, checker)).GetOutputPort("waypoints")
         else:  # a planner outside the diagram gives the path
             path_in = builder.AddNamedSystem("path", PassThrough(AbstractValue.Make(np.zeros((0, 4)))))
@@ -636,9 +696,20 @@ def build_checked(
         builder.Connect(q_port, monitor.GetInputPort("q"))
         builder.Connect(people.GetOutputPort("people_state"), monitor.GetInputPort("people_state"))
         stop_port = monitor.GetOutputPort("stop")
+    hold_port = stop_port
+    if replanning is not None:  # the replanner reads the robot and the people; its wait holds the robot too
+        builder.Connect(q_port, replanning.GetInputPort("q"))
+        builder.Connect(people.GetOutputPort("people_state"), replanning.GetInputPort("people_state"))
+        hold_port = replanning.GetOutputPort("hold")
+        if stop_port is not None:  # either flag holds: the held systems read their sum > 0.5
+            either = builder.AddNamedSystem("held", Adder(2, 1))
+            builder.Connect(stop_port, either.get_input_port(0))
+            builder.Connect(replanning.GetOutputPort("hold"), either.get_input_port(1))
+            hold_port = either.get_output_port()
+    if hold_port is not None:
         for held in (sequencer, base_controller, reference if synchronized else arm):
             if held is not None:
-                builder.Connect(stop_port, held.GetInputPort("hold"))
+                builder.Connect(hold_port, held.GetInputPort("hold"))
 
     # ---- the station's ports --------------------------------------------------
     exported = {
@@ -657,6 +728,9 @@ def build_checked(
         exported["reference_feedforward"] = feedforward
     if stop_port is not None:
         exported["stop"] = stop_port
+    if replanning is not None:
+        exported["waiting"] = replanning.GetOutputPort("hold")
+        exported["path_version"] = replanning.GetOutputPort("version")
     for name, port in exported.items():
         builder.ExportOutput(port, name)
 
@@ -674,6 +748,9 @@ def build_checked(
         ports["crowd_state"] = people.GetOutputPort("crowd_state")
     if stop_port is not None:
         ports["stop"] = stop_port
+    if replanning is not None:
+        ports["version"] = replanning.GetOutputPort("version")
+        ports["waiting"] = replanning.GetOutputPort("hold")
     loggers = {}
     for name, port in ports.items():
         logger = LogVectorOutput(port, builder, publish_period=period)
@@ -692,4 +769,5 @@ def build_checked(
         diagram=diagram, plant=plant, scene_graph=scene_graph, robot=robot, scenario=scenario, mode=mode,
         execution=execution, waypoints=waypoints, meshcat=meshcat, visualizer=visualizer, loggers=loggers,
         planner_included=waypoints is None and planner, controller_included=controller,
+        replanning=replanning is not None,
     )

@@ -46,6 +46,7 @@ from drake_social.arguments import (
     require_number,
     require_scenario,
 )
+from drake_social.control import replanning_summary
 from drake_social.cost.social import SocialCost
 from drake_social.kinematics import ArmGeometry, configuration_limits
 from drake_social.model.plant import ACTUATED_JOINTS
@@ -59,11 +60,12 @@ from drake_social.sim.diagram import (
     build_checked,
     check_diagram_options,
     check_diagram_waypoints,
+    resolve_replan,
 )
 from drake_social.waypoints import waypoint_array
 
 __all__ = ["CHECKED_ROOM", "CHECKED_ROOM_AND_PEOPLE", "ExecutionReport", "LimitViolation", "SimulationResult",
-           "analyze_execution", "limit_violations", "scenario_simulator_config", "simulate"]
+           "analyze_execution", "limit_violations", "replanning_line", "scenario_simulator_config", "simulate"]
 
 #: Simulated seconds per AdvanceTo call between checks for the goal.
 _CHUNK = 0.25
@@ -197,6 +199,16 @@ class SimulationResult:
             stopped), ``person`` (nearest person's name, or index), ``part``
             (``base``, ``arm`` or ``object``) and ``distance`` (that part's
             surface distance at the start, metres).
+        replans: with replanning, every
+            :class:`~drake_social.planning.replan.ReplanResult` of the run in
+            order (the first plan's first; the replans after the goal was
+            reached are left out); empty without.
+        replanning: with replanning, the summary of ``replans``
+            (:func:`~drake_social.control.replanning_summary`: count, changed,
+            waits, plan times, deadline hits, rate, budget); None without.
+            With replanning ``waypoints`` is the path followed: each path up
+            to the waypoint it was heading for when a replan replaced it, then
+            the last one.
     """
 
     mode: str
@@ -220,6 +232,8 @@ class SimulationResult:
     people: PeopleLog | None = None
     stopped: np.ndarray = dc.field(default_factory=lambda: np.zeros(0, bool))
     stops: list[dict] = dc.field(default_factory=list)
+    replans: tuple = ()
+    replanning: dict | None = None
 
     @property
     def stopped_time(self) -> float:
@@ -240,6 +254,8 @@ class SimulationResult:
                         "BEYOND A LIMIT: " + "; ".join(str(v) for v in r.limit_violations)))
         if self.stops:
             line += f"; {len(self.stops)} safety stop{'s' if len(self.stops) > 1 else ''} ({self.stopped_time:.2f} s)"
+        if self.replanning is not None:
+            line += f"; {replanning_line(self.replanning)}"
         if self.sim_time > 0 and math.isfinite(self.realtime_factor):  # nothing simulated: no factor to show
             line += f"; {self.realtime_factor:.0f}x realtime"
         return line
@@ -271,7 +287,20 @@ class SimulationResult:
             out.update(r)
         if self.planner is not None:
             out["planner"] = {k: v for k, v in self.planner.to_record().items() if k != "cost_history"}
+        if self.replanning is not None:
+            out["replanning"] = dict(self.replanning)
         return out
+
+
+def replanning_line(summary: dict) -> str:
+    """A run's replanning summary (:func:`~drake_social.control.replanning_summary`) in words."""
+    line = (f"{summary['count']} replans at {summary['rate']:g} Hz: {summary['changed']} changed the path, "
+            f"{summary['waits']} waited")
+    if summary["count"]:
+        line += (f"; plan time median {summary['plan_time_median'] * 1e3:.1f} ms, p95 "
+                 f"{summary['plan_time_p95'] * 1e3:.1f} ms, max {summary['plan_time_max'] * 1e3:.1f} ms "
+                 f"(budget {summary['budget'] * 1e3:g} ms, {summary['deadline_hits']} deadline hits)")
+    return line
 
 
 #: A state beyond these is a diverged simulation, not a motion: speeds
@@ -498,6 +527,7 @@ def simulate(
     progress: Callable[[float], None] | None = None,
     simulator_config: SimulatorConfig | None = None,
     people: PeopleModel | None = None,
+    replan: bool | None = None,
 ) -> SimulationResult:
     """Plans (unless ``waypoints`` are given), executes and measures a transport.
 
@@ -521,6 +551,9 @@ def simulate(
             :func:`scenario_simulator_config`.
         people: the people model of the diagram (see
             :func:`~drake_social.sim.diagram.build_diagram`); None = the scenario's.
+        replan: replan while executing (see
+            :func:`~drake_social.sim.diagram.build_diagram`); None =
+            ``scenario.planner.replan`` when planning.
 
     Returns:
         The :class:`SimulationResult`; ``reached`` is False when no path was
@@ -552,10 +585,11 @@ def simulate(
         if problem:
             raise ValueError(f"simulate: {problem[0]} {problem[1]}")
     limit = float(scenario.execution.time_limit if time_limit is None else time_limit)
+    replan = resolve_replan(scenario, replan, waypoints is not None, True, "simulate")
     if waypoints is not None:
         waypoints = check_diagram_waypoints(scenario, waypoints, checker, "simulate")
     return run_checked(scenario, mode, execution, waypoints, checker, meshcat, limit, bool(analyze),
-                       analysis_checker, progress, simulator_config=simulator_config, people=people)
+                       analysis_checker, progress, simulator_config=simulator_config, people=people, replan=replan)
 
 
 def run_checked(
@@ -572,14 +606,19 @@ def run_checked(
     *,
     simulator_config: SimulatorConfig | None = None,
     people: PeopleModel | None = None,
+    replan: bool = False,
+    replanner=None,
 ) -> SimulationResult:
     """:func:`simulate` with its arguments already checked (the scenario
     validated, ``waypoints`` checked with ``checker`` by
     :func:`~drake_social.waypoints.check_waypoints`, ``mode``, ``execution``
     and ``time_limit`` the ones in force and allowed). For drake_social's own
-    callers that checked them once (``drake-social simulate``)."""
+    callers that checked them once (``drake-social simulate``). ``replan``:
+    whether to replan (resolved); ``replanner``: the replanner object of
+    :func:`~drake_social.sim.diagram.build_diagram` (None = the scenario's)."""
     limit = time_limit
-    built = build_checked(scenario, mode, execution, waypoints, checker, meshcat, people=people)
+    built = build_checked(scenario, mode, execution, waypoints, checker, meshcat, people=people, replan=replan,
+                          replanner=replanner)
     root = built.diagram.CreateDefaultContext()
     if built.visualizer is not None:
         from drake_social.sim.replay import start_recording
@@ -591,7 +630,10 @@ def run_checked(
     built.diagram.ExecuteInitializationEvents(root)
     planner_result = None
     path = built.waypoints
-    if path is None:
+    if built.replanning:  # a first plan that waits is no failure: the robot waits for a safe path
+        path = np.asarray(built.subsystem("planner").GetOutputPort("waypoints").Eval(
+            built.subsystem("planner").GetMyContextFromRoot(root)), float).reshape(-1, 4)
+    elif path is None:
         planner = built.subsystem("planner")
         planner_result = planner.GetOutputPort("result").Eval(planner.GetMyContextFromRoot(root))
         path = np.asarray(planner_result.waypoints, float).reshape(-1, 4)
@@ -653,22 +695,33 @@ def run_checked(
         times = times[:keep]
         data = {name: values[:keep] for name, values in data.items()}
     reached_at = [float(times[max(len(times) - 2, 0)])] if reached else []
+    replans, replanning = (), None
+    if built.replanning:
+        planner = built.subsystem("planner")
+        planner_context = planner.GetMyContextFromRoot(root)
+        end = float(times[-1]) if len(times) else 0.0
+        replans = tuple(r for r in planner.replans(planner_context) if r.t <= end + 1e-9)
+        path = planner.followed(planner_context)
+        replanning = replanning_summary(replans, planner.rate, float(scenario.planner.replan_budget))
     message = (f"goal reached at t = {reached_at[0]:.2f} s" if reached
                else f"goal not reached within the time limit of {limit:g} s "
-                    f"(at waypoint {int(data['index'][-1, 0]) if len(times) else 0} of {len(path) - 1})")
+                    + (f"(the last replan: {replans[-1].status})" if replans else
+                       f"(at waypoint {int(data['index'][-1, 0]) if len(times) else 0} of {len(path) - 1})"))
     result = SimulationResult(
         mode=built.mode, execution=built.execution, reached=reached, message=message,
         time_to_goal=reached_at[0] if reached else None, sim_time=sim_time, wall_time=wall,
         realtime_factor=sim_time / wall if wall > 0 else math.inf, waypoints=path, times=times,
         q=data["q"], v=data["v"], wheel_speeds=data["wheel_speeds"], target=data["target"],
         reference=data["reference"], target_index=data["index"][:, 0].astype(int), planner=planner_result,
-        stops=_stops(built, root, float(times[-1]) if len(times) else 0.0),
+        stops=_stops(built, root, float(times[-1]) if len(times) else 0.0), replans=replans, replanning=replanning,
     )
     result.stopped = _stopped(times, result.stops)
     source = built.subsystem("people")
     if source.model.count and len(times):  # the open-loop people sampled; a crowd from its logged state
         result.people = source.people_log(times, data.get("crowd_state"))
     _log.info("%s", result.summary())
+    if replanning is not None:
+        _log.info("replanning: %s", replanning_line(replanning))
     for stop in result.stops:
         _log.info("safety stop at t = %.3f s (%s of the robot %.3f m from %s) %s", stop["start"], stop["part"],
                   stop["distance"], stop["person"],

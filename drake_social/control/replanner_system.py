@@ -1,0 +1,347 @@
+"""The replanning planner as a Drake system: a first plan, then a replan every 1 / ``planner.replan_rate`` s.
+
+:class:`ReplanningPlannerSystem` sits beside :class:`~drake_social.control.PlannerSystem`
+(which plans once). An initialization event plans from the robot's
+configuration to the goal against the people predicted from their state at
+t = 0 (the :class:`~drake_social.planning.replan.ReplanResult` of status
+``"initial"``); a periodic unrestricted update every ``1 / replan_rate``
+seconds (the first one period after the start) builds the prediction
+(:func:`drake_social.people.predict`: ``planner.prediction`` over
+``planner.replan_horizon``) and calls the replanner with the remainder of
+the current path, ``[q] + path[index:]`` (``index`` the sequencer's current
+target), as its candidate. What a replan decides:
+
+* ``"new"`` (``changed``): its waypoints, from the robot's configuration at
+  the replan, become the path and ``version`` increments (the sequencer then
+  heads for the new path's waypoint 1);
+* ``"kept"``: the path and version stay (the sequencer goes on where it is);
+* ``"wait"``: no path is safe: ``hold`` is 1 until a later replan finds one
+  (the path and version stay, so the remainder is the next candidate).
+
+``hold`` also ends on ``"kept"`` and ``"new"``.
+
+Everything of a run is in one abstract state, an immutable
+:class:`ReplanState` (the path, version, hold, the latest result, the log of
+every result, the path followed so far): a second context, or a cloned one,
+runs on its own, and Drake's copies of the state share it instead of copying
+the log. The outputs read only that state (no direct feedthrough from ``q``,
+``people_state`` or ``index``): closing the loop through the sequencer and
+the robot creates no algebraic loop.
+
+Ports:
+
+* inputs ``q`` (4: ``[x, y, psi1, psi2]``, metres, radians), ``people_state``
+  (abstract :class:`~drake_social.people.PeopleState`, e.g.
+  :class:`~drake_social.control.PeopleSource`'s), ``index`` (1: the
+  sequencer's ``index``; unconnected = 0);
+* outputs ``waypoints`` (abstract (N, 4): the path to follow, from the
+  configuration at the replan that chose it to the goal; ``[q]`` (1, 4) when
+  no path was ever found), ``version`` (1: 0 for the first plan, +1 at each
+  change), ``hold`` (1: 1.0 while waiting), ``result`` (the latest
+  ReplanResult), ``replans`` (the tuple of every ReplanResult so far, the
+  first plan's included).
+
+The replanner is any object with ``plan(q_now, t_now, prediction, previous,
+*, replan_index, deadline) -> ReplanResult`` (the default:
+:class:`~drake_social.planning.replan.Replanner` of the scenario's replanning
+options, on the room without its people; the first plan has
+``planner.iterations`` samples and no deadline).
+
+Example::
+
+    from pydrake.systems.analysis import Simulator
+    from drake_social.sim import build_diagram
+
+    built = build_diagram(scenario, replan=True)   # "planner" is a ReplanningPlannerSystem
+    simulator = Simulator(built.diagram)
+    simulator.AdvanceTo(5.0)
+    planner = built.subsystem("planner")
+    print(len(planner.replans(planner.GetMyContextFromRoot(simulator.get_context()))))  # 51
+"""
+
+from __future__ import annotations
+
+import dataclasses as dc
+import logging
+import math
+
+import numpy as np
+from pydrake.common.value import AbstractValue
+from pydrake.systems.framework import BasicVector, Context, EventStatus, LeafSystem, State
+
+from drake_social.arguments import require_instance, require_scenario
+from drake_social.people import PeopleModel, PeopleState, people_model, predict
+from drake_social.scenario import Scenario
+
+__all__ = ["ReplanState", "ReplanningPlannerSystem", "replanning_summary"]
+
+_log = logging.getLogger(__name__)
+
+
+def _frozen(a) -> np.ndarray:
+    a = np.array(a, float).reshape(-1, 4)
+    a.flags.writeable = False
+    return a
+
+
+@dc.dataclass(frozen=True)
+class ReplanState:
+    """The replanning system's whole state in a context (immutable).
+
+    Attributes:
+        path: (N, 4) the path the sequencer follows (read-only), or None
+            before the first plan; with no path ever found, ``[q]`` at the
+            last replan.
+        planned: whether ``path`` leads to the goal (a plan was found).
+        version: 0 for the first plan, +1 at each change of the path.
+        hold: waiting: no safe path at the last replan.
+        result: the latest ReplanResult (None before the first plan).
+        log: every ReplanResult in order (the first plan's first).
+        followed: (M, 4) the path followed so far: the rows of each earlier
+            path up to the target it was heading for when it was replaced,
+            then the current path (its row ``offset`` is the current path's row 0).
+        offset: the row of ``followed`` where the current path starts.
+    """
+
+    path: np.ndarray | None = None
+    planned: bool = False
+    version: int = 0
+    hold: bool = False
+    result: object = None
+    log: tuple = ()
+    followed: np.ndarray | None = None
+    offset: int = 0
+
+    # Drake clones abstract state (Value[object] deep-copies): an immutable
+    # state is shared instead, so the log is never copied.
+    def __copy__(self):
+        return self
+
+    def __deepcopy__(self, memo):
+        return self
+
+
+class ReplanningPlannerSystem(LeafSystem):
+    """Plans at initialization, then replans periodically from the robot's configuration.
+
+    Args:
+        scenario: a validated scenario (goal, ``planner.replan_*`` options,
+            ``planner.prediction``, safety distance, seed).
+        replanner: the replanner of the first plan (``replan_index`` 0, no
+            deadline) and the periodic replans (see the module docstring);
+            None = :class:`~drake_social.planning.replan.Replanner` of the
+            scenario on the room without its people (``planner.iterations``
+            for the first plan, ``planner.replan_iterations``,
+            ``replan_budget``, ``replan_margin``, ``execution.safety_distance``,
+            ``random_seed``).
+        people: the people model (the ``"perfect"`` prediction reads it);
+            None = :func:`~drake_social.people.people_model` of the scenario.
+        rate: replans per second; None = ``planner.replan_rate``.
+
+    Raises:
+        TypeError, ValueError: an argument of the wrong kind or value (named).
+
+    Planning errors of the first plan (start or goal unusable) surface from
+    ``Simulator.Initialize()`` (or ``ExecuteInitializationEvents``). An
+    output evaluated before initialization raises a ``RuntimeError`` saying so.
+    """
+
+    def __init__(
+        self,
+        scenario: Scenario,
+        replanner=None,
+        *,
+        people: PeopleModel | None = None,
+        rate: float | None = None,
+    ):
+        super().__init__()
+        require_scenario(scenario, "ReplanningPlannerSystem")
+        if replanner is not None and not callable(getattr(replanner, "plan", None)):
+            raise TypeError(f"ReplanningPlannerSystem: replanner must have a plan(q_now, t_now, prediction, "
+                            f"previous, *, replan_index, deadline) method, got {type(replanner).__name__}")
+        require_instance(people, PeopleModel, "ReplanningPlannerSystem", "people",
+                         "a drake_social.people.PeopleModel", optional=True)
+        rate = float(scenario.planner.replan_rate if rate is None else rate)
+        if not (math.isfinite(rate) and rate > 0):
+            raise ValueError(f"ReplanningPlannerSystem: rate must be a finite number of replans per second > 0, "
+                             f"got {rate!r}")
+        if replanner is None:  # the scenario's, on the room alone (every person is the prediction's)
+            from drake_social.collision.drake_checker import make_checker
+            from drake_social.people import without_people
+            from drake_social.planning.replan import Replanner
+
+            replanner = Replanner(scenario, make_checker(without_people(scenario), "planar"))
+        self._scenario = scenario
+        self._replanner = replanner
+        self._people = people_model(scenario) if people is None else people
+        self._prediction = scenario.planner.prediction
+        self._horizon = float(scenario.planner.replan_horizon)
+        self._period = 1.0 / rate
+
+        self._q_port = self.DeclareVectorInputPort("q", 4)
+        self._people_port = self.DeclareAbstractInputPort(
+            "people_state", AbstractValue.Make(PeopleState(0.0, np.zeros((0, 2)), np.zeros(0), np.zeros((0, 2)),
+                                                           np.zeros(0), ())))
+        self._index_port = self.DeclareVectorInputPort("index", 1)
+        self._state_index = self.DeclareAbstractState(AbstractValue.Make(ReplanState()))
+        self.DeclareInitializationUnrestrictedUpdateEvent(self._FirstPlan)
+        self.DeclarePeriodicUnrestrictedUpdateEvent(self._period, self._period, self._Replan)
+        # The same replan on demand (CalcForcedUnrestrictedUpdate), for tests and scripts.
+        self.DeclareForcedUnrestrictedUpdateEvent(self._Replan)
+
+        state = {self.abstract_state_ticket(self._state_index)}
+        self.DeclareAbstractOutputPort("waypoints", lambda: AbstractValue.Make(np.zeros((0, 4))),
+                                       self._CalcWaypoints, prerequisites_of_calc=state)
+        self.DeclareVectorOutputPort("version", 1, self._CalcVersion, prerequisites_of_calc=state)
+        self.DeclareVectorOutputPort("hold", 1, self._CalcHold, prerequisites_of_calc=state)
+        self.DeclareAbstractOutputPort("result", lambda: AbstractValue.Make(None), self._CalcResult,
+                                       prerequisites_of_calc=state)
+        self.DeclareAbstractOutputPort("replans", lambda: AbstractValue.Make(()), self._CalcReplans,
+                                       prerequisites_of_calc=state)
+
+    @property
+    def rate(self) -> float:
+        """Replans per second."""
+        return 1.0 / self._period
+
+    @property
+    def period(self) -> float:
+        """Seconds between replans."""
+        return self._period
+
+    # ---- the state -------------------------------------------------------------
+
+    def state(self, context: Context) -> ReplanState:
+        """The :class:`ReplanState` in ``context`` (this system's context)."""
+        return context.get_abstract_state(self._state_index).get_value()
+
+    def replans(self, context: Context) -> tuple:
+        """Every ReplanResult so far in ``context``, the first plan's first."""
+        return self.state(context).log
+
+    def followed(self, context: Context) -> np.ndarray:
+        """(M, 4) the path followed so far (see :class:`ReplanState`)."""
+        return self._planned(context).followed
+
+    def _planned(self, context: Context) -> ReplanState:
+        state = self.state(context)
+        if state.path is None:
+            raise RuntimeError(
+                f"{self.get_name() or 'ReplanningPlannerSystem'}: the first path is planned at initialization; call "
+                "Simulator.Initialize() or system.ExecuteInitializationEvents(context) before evaluating its outputs")
+        return state
+
+    # ---- events ----------------------------------------------------------------
+
+    def _inputs(self, context: Context):
+        q = np.array(self._q_port.Eval(context), float)
+        people = self._people_port.Eval(context)
+        t = context.get_time()
+        prediction = predict(self._prediction, self._people, people.at_time(t) if people.t != t else people,
+                             self._horizon)
+        return q, t, prediction
+
+    def _FirstPlan(self, context: Context, state: State) -> None:
+        q, t, prediction = self._inputs(context)
+        result = self._replanner.plan(q, t, prediction, None, replan_index=0, deadline=False)
+        if result.status != "wait" and result.status != "initial":
+            result = dc.replace(result, status="initial")
+        waiting = result.status == "wait"
+        path = _frozen(result.waypoints)
+        new = ReplanState(path=path, planned=not waiting, version=0, hold=waiting, result=result, log=(result,),
+                          followed=path, offset=0)
+        _log.info("first plan at t = %.2f s: %s", t, _describe(result))
+        state.get_mutable_abstract_state(self._state_index).set_value(new)
+
+    def _Replan(self, context: Context, state: State):
+        old = self.state(context)
+        if old.path is None:  # not initialized (a forced update before the first plan)
+            raise RuntimeError(f"{self.get_name() or 'ReplanningPlannerSystem'}: replan before the first plan; "
+                               "run the initialization events first")
+        q, t, prediction = self._inputs(context)
+        index = 0
+        if self._index_port.HasValue(context):
+            index = min(max(int(round(self._index_port.Eval(context)[0])), 0), len(old.path) - 1)
+        previous = np.vstack([q[None], old.path[index:]]) if old.planned else None
+        result = self._replanner.plan(q, t, prediction, previous, replan_index=len(old.log), deadline=True)
+        log = old.log + (result,)
+        if result.status == "wait":
+            new = dc.replace(old, hold=True, result=result, log=log)
+            if not old.planned:  # nothing to follow yet: stay where the robot is
+                path = _frozen(result.waypoints)
+                new = dc.replace(new, path=path, followed=path)
+        elif result.changed or not old.planned:
+            path = _frozen(result.waypoints)
+            cut = old.offset + index if old.planned else 0
+            followed = np.vstack([old.followed[:cut], path]) if cut else path
+            followed.flags.writeable = False
+            new = ReplanState(path=path, planned=True, version=old.version + 1, hold=False, result=result, log=log,
+                              followed=followed, offset=cut)
+        else:
+            new = dc.replace(old, hold=False, result=result, log=log)
+        if new.hold != old.hold or new.version != old.version:
+            _log.debug("replan %d at t = %.2f s: %s", len(old.log), t, _describe(result))
+        state.get_mutable_abstract_state(self._state_index).set_value(new)
+        return EventStatus.Succeeded()
+
+    # ---- outputs ---------------------------------------------------------------
+
+    def _CalcWaypoints(self, context: Context, output: AbstractValue) -> None:
+        output.set_value(self._planned(context).path)
+
+    def _CalcVersion(self, context: Context, output: BasicVector) -> None:
+        output.SetAtIndex(0, float(self._planned(context).version))
+
+    def _CalcHold(self, context: Context, output: BasicVector) -> None:
+        output.SetAtIndex(0, 1.0 if self._planned(context).hold else 0.0)
+
+    def _CalcResult(self, context: Context, output: AbstractValue) -> None:
+        output.set_value(self._planned(context).result)
+
+    def _CalcReplans(self, context: Context, output: AbstractValue) -> None:
+        output.set_value(self.state(context).log)
+
+
+def _describe(result) -> str:
+    cost = "inf" if not math.isfinite(result.cost) else f"{result.cost:.4g}"
+    return (f"{result.status}, cost {cost}, {result.iterations} samples in {result.plan_time * 1e3:.1f} ms"
+            + (" (deadline)" if result.deadline_hit else "") + (f": {result.reason}" if result.reason else ""))
+
+
+def replanning_summary(replans, rate: float, budget: float) -> dict:
+    """The summary of a run's replans (``sim.json``'s ``replanning``).
+
+    Args:
+        replans: the ReplanResults in order (the first plan's first).
+        rate: replans per second (``planner.replan_rate``).
+        budget: seconds of one replan (``planner.replan_budget``).
+
+    Returns:
+        ``count`` (the periodic replans, the first plan excluded),
+        ``changed`` (of them, those that changed the path), ``waits`` (of
+        them, those that found no safe path), ``plan_time_median``,
+        ``plan_time_p95``, ``plan_time_max`` (seconds of computation of
+        those replans; None without any), ``deadline_hits`` (those stopped by
+        the budget), ``rate``, ``budget``, and ``first_plan_time`` (seconds
+        of the first plan; None without it).
+    """
+    replans = tuple(replans)
+    first = [r for r in replans if r.status == "initial" or r.replan_index == 0]
+    periodic = [r for r in replans if not (r.status == "initial" or r.replan_index == 0)]
+    times = np.array([r.plan_time for r in periodic], float)
+
+    def stat(value):
+        return float(value) if len(times) else None
+
+    return {
+        "count": len(periodic),
+        "changed": sum(1 for r in periodic if r.changed),
+        "waits": sum(1 for r in periodic if r.status == "wait"),
+        "plan_time_median": stat(np.median(times) if len(times) else None),
+        "plan_time_p95": stat(np.percentile(times, 95) if len(times) else None),
+        "plan_time_max": stat(times.max() if len(times) else None),
+        "deadline_hits": sum(1 for r in periodic if r.deadline_hit),
+        "rate": float(rate),
+        "budget": float(budget),
+        "first_plan_time": float(first[0].plan_time) if first else None,
+    }

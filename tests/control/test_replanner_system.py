@@ -1,0 +1,282 @@
+"""ReplanningPlannerSystem with a scripted test double of the replanner: its
+ports, no feedthrough, the version and hold it keeps, the remainder it hands
+the replanner, independent contexts; and the sequencer's version input."""
+
+from __future__ import annotations
+
+import dataclasses as dc
+import math
+
+import numpy as np
+import pytest
+from pydrake.systems.analysis import Simulator
+
+from drake_social.control import ReplanningPlannerSystem, WaypointSequencer, replanning_summary
+from drake_social.people import StaticPeople
+from drake_social.scenario import load_scenario
+
+GOAL = np.array([3.0, 0.0, 0.1, 0.2])
+
+
+@dc.dataclass(frozen=True)
+class FakeResult:
+    """The fields of drake_social.planning.replan.ReplanResult that the system reads."""
+
+    t: float
+    waypoints: np.ndarray
+    cost: float
+    changed: bool
+    status: str
+    reason: str
+    plan_time: float
+    iterations: int
+    deadline_hit: bool
+    replan_index: int
+
+
+class ScriptedReplanner:
+    """Answers each replan with the status of its script (by replan index) and records the calls.
+
+    ``"new"``: [q_now, a detour point, GOAL]; ``"kept"``: the remainder given;
+    ``"wait"``: [q_now]; ``"initial"``: [q_now, GOAL].
+    """
+
+    def __init__(self, script: dict[int, str]):
+        self.script = script
+        self.calls: list[dict] = []
+
+    def plan(self, q_now, t_now, prediction, previous=None, *, replan_index, deadline=True):
+        self.calls.append(dict(q=np.array(q_now), t=t_now, prediction=prediction,
+                               previous=None if previous is None else np.array(previous),
+                               replan_index=replan_index, deadline=deadline))
+        status = self.script.get(replan_index, "kept")
+        q = np.asarray(q_now, float)
+        if status == "initial":
+            wp = np.array([q, GOAL])
+        elif status == "new":
+            wp = np.array([q, [1.0 + replan_index, 1.0, 0.0, 0.0], GOAL])
+        elif status == "kept":
+            wp = np.array(previous)
+        else:
+            wp = q[None]
+        return FakeResult(t=t_now, waypoints=wp, cost=math.inf if status == "wait" else float(len(wp)),
+                          changed=status == "new", status=status, reason="", plan_time=0.001 * (replan_index + 1),
+                          iterations=10, deadline_hit=replan_index == 2, replan_index=replan_index)
+
+
+@pytest.fixture(scope="module")
+def scenario(tiny_scenario_path):
+    return load_scenario(tiny_scenario_path)
+
+
+PEOPLE = StaticPeople([[2.0, 1.0, 0.5]], [0.3], ["ann"])
+
+
+def _system(scenario, script, rate=None):
+    double = ScriptedReplanner(script)
+    return ReplanningPlannerSystem(scenario, double, people=PEOPLE, rate=rate), double
+
+
+def _context(dut, q=(0.0, 0.0, 0.0, 0.0), index=0.0):
+    context = dut.CreateDefaultContext()
+    dut.GetInputPort("q").FixValue(context, np.array(q, float))
+    dut.GetInputPort("people_state").FixValue(context, PEOPLE.state_at(0.0))
+    dut.GetInputPort("index").FixValue(context, [index])
+    return context
+
+
+def _replan(dut, context):
+    scratch = context.Clone()
+    dut.CalcForcedUnrestrictedUpdate(context, scratch.get_mutable_state())
+    context.SetAbstractState(0, scratch.get_abstract_state(0).get_value())
+
+
+def _outputs(dut, context):
+    return (np.array(dut.GetOutputPort("waypoints").Eval(context)), dut.GetOutputPort("version").Eval(context)[0],
+            dut.GetOutputPort("hold").Eval(context)[0])
+
+
+def test_ports_and_no_feedthrough(scenario):
+    dut, _ = _system(scenario, {0: "initial"})
+    assert [dut.get_input_port(i).get_name() for i in range(dut.num_input_ports())] == ["q", "people_state", "index"]
+    assert [dut.get_output_port(i).get_name() for i in range(dut.num_output_ports())] == [
+        "waypoints", "version", "hold", "result", "replans"]
+    for i in range(dut.num_input_ports()):
+        for o in range(dut.num_output_ports()):
+            assert not dut.HasDirectFeedthrough(i, o)
+
+
+def test_outputs_before_the_first_plan_say_so(scenario):
+    dut, _ = _system(scenario, {0: "initial"})
+    with pytest.raises(RuntimeError, match="initialization"):
+        dut.GetOutputPort("waypoints").Eval(_context(dut))
+
+
+def test_first_plan_is_initial_without_deadline(scenario):
+    dut, double = _system(scenario, {0: "new"})  # a replanner that says "new" for the first plan: made "initial"
+    context = _context(dut, q=(0.5, 0.0, 0.0, 0.0))
+    dut.ExecuteInitializationEvents(context)
+    waypoints, version, hold = _outputs(dut, context)
+    np.testing.assert_array_equal(waypoints[0], [0.5, 0.0, 0.0, 0.0])
+    assert (version, hold) == (0.0, 0.0)
+    (first,) = dut.GetOutputPort("replans").Eval(context)
+    assert first.status == "initial" and dut.GetOutputPort("result").Eval(context) is first
+    call = double.calls[0]
+    assert call["previous"] is None and call["replan_index"] == 0 and call["deadline"] is False
+    # The prediction: the scenario's kind and horizon, from the people's state now.
+    prediction = call["prediction"]
+    assert prediction.t0 == 0.0 and prediction.horizon == pytest.approx(scenario.planner.replan_horizon)
+    np.testing.assert_array_equal(prediction.positions[-1], [[2.0, 1.0]])
+
+
+def test_version_increments_only_on_a_change_and_hold_while_waiting(scenario):
+    script = {0: "initial", 1: "kept", 2: "new", 3: "wait", 4: "wait", 5: "kept", 6: "new"}
+    dut, double = _system(scenario, script)
+    context = _context(dut)
+    dut.ExecuteInitializationEvents(context)
+    seen = []
+    for k in range(1, 7):
+        dut.GetInputPort("q").FixValue(context, [0.1 * k, 0.0, 0.0, 0.0])
+        _replan(dut, context)
+        seen.append(_outputs(dut, context)[1:])
+    assert seen == [(0, 0), (1, 0), (1, 1), (1, 1), (1, 0), (2, 0)]
+    log = dut.GetOutputPort("replans").Eval(context)
+    assert [r.status for r in log] == [script[k] for k in range(7)]
+    assert [c["replan_index"] for c in double.calls] == list(range(7))
+    assert all(c["deadline"] for c in double.calls[1:])
+    # While waiting, the path to the goal is kept (the next candidate), not the wait's [q].
+    waypoints = _outputs(dut, context)[0]
+    np.testing.assert_allclose(waypoints, [[0.6, 0, 0, 0], [7.0, 1.0, 0, 0], GOAL], rtol=0, atol=1e-15)
+    # The replan after the waits got the path of replan 2 from q: [q] + path[index:] (index 0 here).
+    np.testing.assert_allclose(double.calls[5]["previous"], rtol=0, atol=1e-15, desired=
+                                  [[0.5, 0, 0, 0], [0.2, 0, 0, 0], [3.0, 1.0, 0, 0], GOAL])
+
+
+def test_remainder_is_q_then_the_path_from_the_sequencers_index(scenario):
+    dut, double = _system(scenario, {0: "initial", 1: "new", 2: "kept", 3: "new"})
+    context = _context(dut)
+    dut.ExecuteInitializationEvents(context)
+    _replan(dut, context)  # path [q, (2, 1), GOAL]
+    dut.GetInputPort("index").FixValue(context, [2.0])
+    dut.GetInputPort("q").FixValue(context, [2.5, 0.5, 0.0, 0.0])
+    _replan(dut, context)
+    np.testing.assert_array_equal(double.calls[2]["previous"], [[2.5, 0.5, 0, 0], GOAL])
+    # An index past the end (a stale one) is clamped to the last waypoint.
+    dut.GetInputPort("index").FixValue(context, [9.0])
+    _replan(dut, context)
+    np.testing.assert_array_equal(double.calls[3]["previous"], [[2.5, 0.5, 0, 0], GOAL])
+    # The path followed: the path of replan 1 (replacing the first at its index 0) up to its index 2
+    # (start, (2, 1)), then the new one from q.
+    followed = dut.followed(context)
+    np.testing.assert_array_equal(followed, [[0, 0, 0, 0], [2.0, 1.0, 0, 0], [2.5, 0.5, 0, 0], [4.0, 1.0, 0, 0],
+                                             GOAL])
+
+
+def test_no_path_at_first_waits_at_q_then_takes_the_first_path(scenario):
+    dut, double = _system(scenario, {0: "wait", 1: "wait", 2: "new"})
+    context = _context(dut, q=(0.2, 0.0, 0.0, 0.0))
+    dut.ExecuteInitializationEvents(context)
+    waypoints, version, hold = _outputs(dut, context)
+    np.testing.assert_array_equal(waypoints, [[0.2, 0, 0, 0]])
+    assert (version, hold) == (0, 1)
+    _replan(dut, context)
+    assert double.calls[1]["previous"] is None  # no path to the goal to offer as a candidate
+    _replan(dut, context)
+    waypoints, version, hold = _outputs(dut, context)
+    assert (version, hold) == (1, 0) and len(waypoints) == 3
+
+
+def test_two_contexts_run_on_their_own(scenario):
+    dut, _ = _system(scenario, {0: "initial", 1: "new", 2: "wait"})
+    a, b = _context(dut), _context(dut, q=(1.0, 0.0, 0.0, 0.0))
+    dut.ExecuteInitializationEvents(a)
+    dut.ExecuteInitializationEvents(b)
+    _replan(dut, a)
+    _replan(dut, a)
+    assert _outputs(dut, a)[1:] == (1, 1) and len(dut.replans(a)) == 3
+    assert _outputs(dut, b)[1:] == (0, 0) and len(dut.replans(b)) == 1
+    np.testing.assert_array_equal(_outputs(dut, b)[0], [[1.0, 0, 0, 0], GOAL])
+    clone = a.Clone()  # a clone shares the immutable state and goes on alone
+    _replan(dut, clone)
+    assert len(dut.replans(clone)) == 4 and len(dut.replans(a)) == 3
+
+
+def test_periodic_replans_at_the_rate(scenario):
+    dut, double = _system(scenario, {0: "initial"}, rate=5.0)
+    simulator = Simulator(dut, _context(dut))
+    simulator.Initialize()
+    simulator.AdvanceTo(1.01)
+    assert [c["t"] for c in double.calls] == pytest.approx([0.0, 0.2, 0.4, 0.6, 0.8, 1.0])
+    assert dut.period == pytest.approx(0.2)
+
+
+def test_bad_arguments_are_named(scenario):
+    with pytest.raises(TypeError, match="replanner must have a plan"):
+        ReplanningPlannerSystem(scenario, object())
+    with pytest.raises(ValueError, match="rate"):
+        ReplanningPlannerSystem(scenario, ScriptedReplanner({}), rate=0.0)
+
+
+def test_summary_counts_the_periodic_replans(scenario):
+    dut, _ = _system(scenario, {0: "initial", 1: "new", 2: "wait", 3: "kept", 4: "kept"})
+    context = _context(dut)
+    dut.ExecuteInitializationEvents(context)
+    for _ in range(4):
+        _replan(dut, context)
+    summary = replanning_summary(dut.replans(context), 10.0, 0.08)
+    times = [0.002, 0.003, 0.004, 0.005]
+    assert summary == {"count": 4, "changed": 1, "waits": 1, "plan_time_median": pytest.approx(np.median(times)),
+                       "plan_time_p95": pytest.approx(np.percentile(times, 95)), "plan_time_max": 0.005,
+                       "deadline_hits": 1, "rate": 10.0, "budget": 0.08, "first_plan_time": 0.001}
+    empty = replanning_summary((), 10.0, 0.08)
+    assert empty["count"] == 0 and empty["plan_time_median"] is None and empty["first_plan_time"] is None
+
+
+# ---- the sequencer's version input ---------------------------------------------
+
+WAYPOINTS = np.array([[0.0, 0, 0, 0], [1.0, 0, 0, 0], [2.0, 0, 0, 0]])
+
+
+def _sequencer_step(dut, context):
+    update = dut.AllocateDiscreteVariables()
+    dut.CalcForcedDiscreteVariableUpdate(context, update)
+    context.SetDiscreteState(update)
+
+
+def test_a_new_version_restarts_the_sequencer_at_waypoint_1():
+    dut = WaypointSequencer(base_tolerance=0.05, joint_tolerance=0.05, period=0.01, versioned=True)
+    assert [dut.get_input_port(i).get_name() for i in range(dut.num_input_ports())] == [
+        "waypoints", "q", "hold", "version"]
+    context = dut.CreateDefaultContext()
+    dut.GetInputPort("waypoints").FixValue(context, WAYPOINTS)
+    dut.GetInputPort("version").FixValue(context, [0.0])
+    for q in WAYPOINTS:  # to the end: done
+        dut.GetInputPort("q").FixValue(context, q)
+        _sequencer_step(dut, context)
+    assert dut.GetOutputPort("done").Eval(context)[0] == 1.0
+    new = np.array([[2.0, 0, 0, 0], [2.0, 1.0, 0, 0], [3.0, 1.0, 0, 0]])
+    dut.GetInputPort("waypoints").FixValue(context, new)
+    dut.GetInputPort("version").FixValue(context, [1.0])
+    # At once, before any update: the new path's waypoint 1, not done.
+    np.testing.assert_array_equal(dut.GetOutputPort("target").Eval(context), new[1])
+    assert dut.GetOutputPort("index").Eval(context)[0] == 1.0 and dut.GetOutputPort("done").Eval(context)[0] == 0.0
+    dut.GetInputPort("hold").FixValue(context, [1.0])  # the reset happens while held too
+    _sequencer_step(dut, context)
+    np.testing.assert_array_equal(context.get_discrete_state_vector().value(), [1.0, 0.0, 1.0])
+    dut.GetInputPort("hold").FixValue(context, [0.0])
+    dut.GetInputPort("q").FixValue(context, new[1])
+    _sequencer_step(dut, context)
+    np.testing.assert_array_equal(dut.GetOutputPort("target").Eval(context), new[2])
+    # A path of one row (a wait at q) clamps the index to 0.
+    dut.GetInputPort("waypoints").FixValue(context, new[:1])
+    dut.GetInputPort("version").FixValue(context, [2.0])
+    assert dut.GetOutputPort("index").Eval(context)[0] == 0.0
+
+
+def test_an_unconnected_version_changes_nothing():
+    dut = WaypointSequencer(WAYPOINTS, base_tolerance=0.05, joint_tolerance=0.05, period=0.01, versioned=True)
+    context = dut.CreateDefaultContext()
+    dut.GetInputPort("q").FixValue(context, WAYPOINTS[0])
+    _sequencer_step(dut, context)
+    np.testing.assert_array_equal(context.get_discrete_state_vector().value(), [1.0, 0.0, 0.0])
+    np.testing.assert_array_equal(dut.GetOutputPort("target").Eval(context), WAYPOINTS[1])

@@ -1,0 +1,226 @@
+"""Replanning in the execution diagram: the hand-over to a new path keeps the
+reference continuous, a wait holds the robot, and (with the real replanner) a
+walker stepping into the route of a corridor is never met within the safety
+distance, the same seed giving the same episode bit for bit."""
+
+from __future__ import annotations
+
+import dataclasses as dc
+import math
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+from pydrake.systems.analysis import Simulator
+
+from drake_social.kinematics import ArmGeometry
+from drake_social.people.proximity import part_distances
+from drake_social.scenario import load_scenario
+from drake_social.scenario.load import load_scenario_text
+from drake_social.sim import simulate
+from drake_social.sim.diagram import build_diagram
+from drake_social.sim.run import run_checked
+
+sys.path.insert(0, str(Path(__file__).parents[1] / "control"))
+from test_replanner_system import FakeResult  # noqa: E402  (the replanner's test double's result)
+
+DETOUR = [3.5, 1.8, 0.3, 1.2]
+
+
+class Detour:
+    """A scripted replanner: straight to the goal; at replan ``turn`` a detour
+    through DETOUR; waits at the replans in ``waits``; else keeps the path."""
+
+    def __init__(self, goal, turn: int = 8, waits=()):
+        self.goal, self.turn, self.waits = np.asarray(goal, float), turn, set(waits)
+
+    def plan(self, q_now, t_now, prediction, previous=None, *, replan_index, deadline=True):
+        q = np.asarray(q_now, float)
+        if replan_index in self.waits:
+            wp, status = q[None], "wait"
+        elif replan_index == self.turn:
+            wp, status = np.array([q, DETOUR, self.goal]), "new"
+        elif previous is None:
+            wp, status = np.array([q, self.goal]), "initial"
+        else:
+            wp, status = np.array(previous), "kept"
+        return FakeResult(t_now, wp, math.inf if status == "wait" else 1.0, status == "new", status, "", 0.0, 1,
+                          False, replan_index)
+
+
+@pytest.fixture(scope="module")
+def tiny(tiny_scenario_path):
+    return load_scenario(tiny_scenario_path)
+
+
+def _reference_log(built, until: float):
+    """The reference's position and velocity and the planner's version at every control period up to ``until``."""
+    period = built.scenario.execution.control_period
+    simulator = Simulator(built.diagram)
+    simulator.Initialize()
+    root = simulator.get_context()
+    reference = built.subsystem("reference")
+    context = reference.GetMyContextFromRoot(root)
+    planner = built.subsystem("planner")
+    planner_context = planner.GetMyContextFromRoot(root)
+    times, p, v, version = [], [], [], []
+    for k in range(1, int(round(until / period)) + 1):
+        simulator.AdvanceTo(k * period)
+        times.append(root.get_time())
+        p.append(reference.GetOutputPort("position").Eval(context).copy())
+        v.append(reference.GetOutputPort("velocity").Eval(context).copy())
+        version.append(planner.GetOutputPort("version").Eval(planner_context)[0])
+    return np.array(times), np.array(p), np.array(v), np.array(version), root
+
+
+def test_handover_keeps_the_reference_continuous_in_position_and_velocity(tiny):
+    built = build_diagram(tiny, replan=True, replanner=Detour(tiny.goal))
+    assert built.replanning and "held" not in [built.diagram.GetSystems()[i].get_name()
+                                                 for i in range(len(built.diagram.GetSystems()))]
+    times, p, v, version, _ = _reference_log(built, 2.0)
+    change = int(np.flatnonzero(np.diff(version) > 0)[0]) + 1
+    # Replan 8 runs at t = 0.8 s; AdvanceTo(0.8) stops before the events of t = 0.8 s, so the first
+    # sample that shows it is that of 0.81 s.
+    assert times[change] == pytest.approx(0.81)
+    ex = tiny.execution
+    period = ex.control_period
+    # One period moves the reference by at most its speed limit times the period, and changes its
+    # velocity by at most the acceleration limit times the period (the base's norm-limited pair may
+    # exceed its limit by sqrt(2) on a change of target mid-motion: RuckigTrajectorySource).
+    vmax = np.array([ex.max_base_speed * math.sqrt(2)] * 2 + list(ex.arm_max_velocity))
+    amax = np.array([ex.max_base_acceleration * math.sqrt(2)] * 2 + list(ex.arm_max_acceleration))
+    window = slice(change - 10, change + 10)
+    dp = np.abs(np.diff(p[window], axis=0))
+    dv = np.abs(np.diff(v[window], axis=0))
+    assert np.all(dp <= vmax * period * (1 + 1e-9) + 1e-12)
+    assert np.all(dv <= amax * period * (1 + 1e-9) + 1e-12)
+    # It was moving at the change, and turns towards the detour after it.
+    assert np.linalg.norm(v[change - 1, :2]) > 0.1
+    assert abs(v[change - 1, 1]) < 1e-12 and v[change + 30, 1] < 0  # heading south-east towards (3.5, 1.8), off the straight line y = 2.5
+
+
+def test_a_wait_holds_the_robot_and_the_path_resumes(tiny):
+    waits = range(5, 15)  # t = 0.5 .. 1.4 s
+    built = build_diagram(tiny, replan=True, replanner=Detour(tiny.goal, turn=-1, waits=waits))
+    times, p, v, version, root = _reference_log(built, 2.5)
+    held = (times > 0.52) & (times < 1.5)
+    np.testing.assert_array_equal(v[held], 0.0)  # the reference stands while waiting
+    assert np.ptp(p[held], axis=0).max() == 0.0
+    assert np.all(version == 0)  # a wait keeps the path
+    assert np.linalg.norm(v[-1, :2]) > 0.1  # and goes on along it after
+    assert abs(p[-1, 1] - 2.5) < 1e-9  # on the straight segment to the goal
+    planner = built.subsystem("planner")
+    statuses = [r.status for r in planner.replans(planner.GetMyContextFromRoot(root))]
+    assert statuses[5:15] == ["wait"] * 10 and statuses[15] == "kept"
+
+
+def test_replan_with_given_waypoints_is_refused(tiny):
+    with pytest.raises(ValueError, match="replan=True"):
+        build_diagram(tiny, replan=True, waypoints=np.array([tiny.start, tiny.goal]))
+    with pytest.raises(TypeError, match="replan"):
+        build_diagram(tiny, replan="yes")
+
+
+def test_a_replanning_run_reports_its_replans(tiny):
+    scenario = dc.replace(tiny, people=[])
+    run = run_checked(scenario, "kinematic", "synchronized", None, None, None, 30.0, False, None, None,
+                      replan=True, replanner=Detour(scenario.goal))
+    assert run.reached and run.planner is None
+    statuses = [r.status for r in run.replans]
+    assert statuses[0] == "initial" and statuses[8] == "new" and all(r.t <= run.times[-1] for r in run.replans)
+    summary = run.replanning
+    assert summary["count"] == len(run.replans) - 1 and summary["changed"] == 1 and summary["waits"] == 0
+    # The path followed: the first path up to the target it headed for (the goal: none of its rows but
+    # the start), then the detour from where the robot was at t = 0.8 s.
+    assert len(run.waypoints) == 4
+    np.testing.assert_array_equal(run.waypoints[0], scenario.start)
+    np.testing.assert_array_equal(run.waypoints[2:], [DETOUR, scenario.goal])
+    assert run.to_json_dict()["replanning"] == summary
+    assert "replans at 10 Hz: 1 changed the path, 0 waited" in run.summary()
+
+
+# ---- with the real replanner ---------------------------------------------------
+
+CORRIDOR = """
+description: "corridor: two routes around a central block, a walker stepping into one"
+world:
+  bounds: [0.0, 0.0, 12.0, 7.0]
+  obstacles:
+    - {center: [6.0, 3.5], size: [4.0, 3.0]}
+robot: {base_radius: 0.35, link_lengths: [0.6, 0.5], link_width: 0.08}
+object: !Bar {length: 1.5, thickness: 0.05}
+start: [1.2, 3.5, -1.2292, 2.8]
+goal: [10.8, 3.5, -1.2292, 2.8]
+random_seed: 3
+social: {length_weight: 1.0}
+planner: {iterations: 1500, planning_range: 2.0, near_radius: 3.0, replan_iterations: 400, replan_budget: 60.0}
+execution: {time_limit: 90.0}
+"""
+
+#: The walker: standing at the block's corner of the route's exit, then into the middle of
+#: the corridor towards the robot, where they stay. y of the corridor: north 6.0, south 1.0.
+WALKER = """
+people:
+  - name: walker
+    x: 8.6
+    y: {y0}
+    theta: 3.1416
+    radius: 0.25
+    trajectory: [[2.0, 8.6, {y0}], [4.0, 8.6, {y}], [6.0, 6.4, {y}]]
+"""
+
+
+def _corridor(route: str):
+    y0, y = (6.6, 6.0) if route == "north" else (0.4, 1.0)
+    return load_scenario_text(CORRIDOR + WALKER.format(y0=y0, y=y), f"corridor, walker {route}")
+
+
+def _route(waypoints) -> str:
+    wp = np.asarray(waypoints, float)
+    fine = np.concatenate([a + np.linspace(0, 1, 50)[:, None] * (b - a) for a, b in zip(wp[:-1], wp[1:])])
+    inside = fine[(fine[:, 0] > 4.0) & (fine[:, 0] < 8.0)]
+    return "north" if inside[0, 1] > 3.5 else "south"
+
+
+@pytest.fixture(scope="module")
+def walked():
+    """The corridor with the walker stepping into the first plan's route (the first plan only sees
+    the walker standing at the corridor's end, the same for both routes), run twice."""
+    pytest.importorskip("drake_social.planning.replan")
+    for route in ("south", "north"):
+        scenario = _corridor(route)
+        built = build_diagram(scenario, replan=True)
+        context = built.diagram.CreateDefaultContext()
+        built.diagram.ExecuteInitializationEvents(context)
+        planner = built.subsystem("planner")
+        first = planner.GetOutputPort("waypoints").Eval(planner.GetMyContextFromRoot(context))
+        if _route(first) == route:
+            break
+    else:
+        pytest.fail("the first plan takes neither route")
+    runs = [simulate(scenario, mode="kinematic", replan=True, analyze=False) for _ in range(2)]
+    return scenario, route, runs
+
+
+@pytest.mark.slow
+def test_the_robot_never_comes_within_the_safety_distance_of_the_walker(walked):
+    scenario, route, (run, _) = walked
+    geometry = ArmGeometry.from_scenario(scenario)
+    d = np.array([part_distances(geometry, q[None], run.people.positions[k], run.people.radii)["robot"].min()
+                  for k, q in enumerate(run.q)])
+    assert d.min() > scenario.execution.safety_distance
+    statuses = [r.status for r in run.replans]
+    assert run.reached or statuses[-1] == "wait"
+    # The walker mattered: the robot changed route or waited.
+    assert any(s in ("new", "wait") for s in statuses[1:]) or run.stops
+    assert run.replanning["count"] == len(run.replans) - 1 > 0
+
+
+@pytest.mark.slow
+def test_same_seed_same_episode_bit_for_bit(walked):
+    _, _, (a, b) = walked
+    np.testing.assert_array_equal(a.q, b.q)
+    np.testing.assert_array_equal(a.times, b.times)
+    assert [(r.t, r.status, r.cost) for r in a.replans] == [(r.t, r.status, r.cost) for r in b.replans]
+    assert not any(r.deadline_hit for r in a.replans)  # the iteration cap bound, not the clock
