@@ -9,7 +9,9 @@ instead of compiling. The warm-up goes through the same code as the commands
 (the planar checker of a small built-in room, :func:`~drake_social.planning.algorithms.plan`
 with every algorithm and both near-radius modes, the optimiser, every checker
 query and the social cost), so numba sees exactly their argument types; the
-execution analysis's searches are called with the types it passes.
+execution analysis's searches are called with the types it passes, and the
+replanner's search (the tree loop's timed mode, seeded, with a deadline) runs
+once on a tiny prediction.
 """
 
 from __future__ import annotations
@@ -76,6 +78,7 @@ def warm_up() -> dict[str, float | int]:
     checker.contacts(q_a), checker.body_poses(q_a), checker.capsules(q_a)
     _warm_up_analysis()
     _warm_up_people(scenario)
+    _warm_up_timed(scenario)
     return {"seconds": time.perf_counter() - t0, "compiled": cache_misses(),
             "functions": sum(len(d.signatures) for d in kernel_dispatchers().values())}
 
@@ -125,6 +128,24 @@ def _warm_up_people(scenario) -> None:
     q = np.array(scenario.start, float)
     model.crowd.step(np.array(model.crowd.initial_state(), float), 0.0, model.open_loop_state(0.0), q.copy())
     SafetyMonitor(ArmGeometry.from_scenario(people), safety_distance=0.05, period=0.01).too_close(q, state)
+
+
+def _warm_up_timed(scenario) -> None:
+    """The replanner's search (:meth:`~drake_social.planning.rrt_star.RrtStar.solve_timed`):
+    the room without its people, the person predicted at constant velocity,
+    a seed path and a deadline, with the argument types the replanner gives."""
+    from drake_social.collision.drake_checker import make_checker
+    from drake_social.people import constant_velocity, people_model, without_people
+    from drake_social.planning.algorithms import make_planner
+    from drake_social.planning.rrt_star.compiled import timed_params
+
+    planner = make_planner(scenario, make_checker(without_people(scenario), "planar"))
+    prediction = constant_velocity(people_model(scenario).state_at(0.0), 1.0)
+    timed = timed_params(prediction, scenario.execution, 0.0, scenario.execution.safety_distance)
+    start, goal = np.array(scenario.start, float), np.array(scenario.goal, float)
+    seed = np.stack([start, start + np.array([0.5, 0.0, 0.0, 0.0])])
+    planner.solve_timed(start, goal, np.random.default_rng(0), timed, seed_path=seed,
+                        deadline=time.perf_counter() + 60.0, iterations=40)
 
 
 def main(argv: list[str] | None = None) -> int:

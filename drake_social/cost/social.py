@@ -425,8 +425,8 @@ class SocialCost:
         t_a, t_b = times
         if np.any(t_b < t_a):
             bad = int(np.flatnonzero(t_b < t_a)[0])
-            raise ValueError(f"timed_motion_cost: t_b must be >= t_a; motion {bad} has t_a = {t_a[bad]!r}, "
-                             f"t_b = {t_b[bad]!r}")
+            raise ValueError(f"timed_motion_cost: t_b must be >= t_a; motion {bad} has t_a = {float(t_a[bad])!r}, "
+                             f"t_b = {float(t_b[bad])!r}")
         _require_prediction(prediction, "SocialCost.timed_motion_cost")
         args = self.timed_kernel_args(prediction)  # checks the people and max_speeds
         out = np.zeros(e)
@@ -475,8 +475,8 @@ class SocialCost:
         speeds = _interpolated_speeds(prediction)
         if not np.all(speeds <= prediction.max_speeds * (1.0 + 1e-9) + 1e-12):
             bad = int(np.flatnonzero(~(speeds <= prediction.max_speeds * (1.0 + 1e-9) + 1e-12))[0])
-            raise ValueError(f"prediction.max_speeds[{bad}] = {prediction.max_speeds[bad]!r} m/s is below the "
-                             f"speed of that person's predicted motion, {speeds[bad]!r} m/s")
+            raise ValueError(f"prediction.max_speeds[{bad}] = {float(prediction.max_speeds[bad])!r} m/s is below the "
+                             f"speed of that person's predicted motion, {float(speeds[bad])!r} m/s")
         args = (
             f(prediction.positions, float), f(prediction.headings, float), f(prediction.present, bool),
             float(prediction.t0), float(prediction.dt), f(prediction.max_speeds, float),
@@ -530,7 +530,7 @@ class SocialCost:
             step = np.flatnonzero(k[:-1] < n[edge[:-1]])  # consecutive samples of one motion
             g0, g1 = g[step], g[step + 1]
             hi, lo = np.maximum(g0, g1), np.minimum(g0, g1)
-            with np.errstate(divide="ignore", invalid="ignore"):
+            with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
                 crossing = 0.5 * (hi + tau) * (hi - tau) / (hi - lo)
             up0, up1 = g0 > tau, g1 > tau
             area = np.where(up0 & up1, 0.5 * (g0 + g1), np.where(up0 ^ up1, crossing, 0.0))

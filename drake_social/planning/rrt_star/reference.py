@@ -344,6 +344,81 @@ class RrtStar:
         result.informed_diameters = diameters
         return self._finish(result)
 
+    def solve_timed(self, start: np.ndarray, goal: np.ndarray, rng: np.random.Generator, timed, *,
+                    seed_path: np.ndarray | None = None, deadline: float | None = None,
+                    iterations: int | None = None, objective: Objective | None = None) -> compiled.CompiledTree:
+        """One search of the replanner: the compiled loop in timed mode.
+
+        Node times start at ``timed.t_root`` at ``start`` and add each
+        motion's nominal duration (:func:`drake_social.kinematics.nominal_durations`);
+        a motion's social cost is integrated against the predicted people at
+        those times, and a motion is valid when the static checker's check
+        passes and the robot stays farther than ``timed.safety`` from every
+        considered predicted person (:mod:`~drake_social.planning.rrt_star.tree_kernel`'s
+        docstring has the rules; rewiring keeps a moved subtree's edge costs,
+        so tree costs are approximate: re-evaluate what you use).
+
+        Args:
+            start, goal: configurations (4,) (the robot's now, the goal).
+            rng: the only source of randomness (same generator state, same
+                inputs, iteration cap binding => the same tree bit for bit).
+            timed: :class:`~.tree_kernel.TimedParams` from
+                :func:`drake_social.planning.rrt_star.compiled.timed_params`
+                ``(prediction, scenario.execution, t_now, safety)``.
+            seed_path: (M, 4) a warm start's path from ``start`` (e.g. the
+                remainder of the current path, ``[q_now] + old[index:]``):
+                inserted as a chain before the first sample, up to its first
+                invalid motion, its last node's goal connection tried; so
+                ``best_cost`` never exceeds that chain's cost when it reaches
+                the goal.
+            deadline: a ``time.perf_counter()`` value: stop at the first
+                chunk (``compiled.DEADLINE_CHUNK`` samples) past it.
+            iterations: the cap of samples (None: ``options.iterations``).
+            objective: this search's objective (None: the planner's). A
+                social objective's per-person parameters must be the
+                prediction's people (``SocialCost.for_prediction``).
+
+        Returns:
+            The :class:`~drake_social.planning.rrt_star.compiled.CompiledTree`:
+            ``nodes``, ``parents``, ``costs``, ``tnode`` (node times),
+            ``best_node`` / ``best_cost`` (-1 / inf: no goal connection),
+            ``goal_nodes`` / ``goal_edges`` (every goal connection: a
+            candidate path is ``nodes[path_to(g)]`` then the goal unless that
+            node is the goal, tree cost ``costs[g] + edge``), ``iterations``
+            (samples drawn), ``deadline_hit``, ``history`` (best cost per
+            sample drawn), ``counts``.
+
+        Raises:
+            TypeError: ``rng`` not a numpy Generator, ``timed`` not TimedParams.
+            PlanningInputError: start or goal not 4 finite numbers, outside
+                the space, invalid for the static checker, or equal; or the
+                configuration cannot run compiled (the timed mode has no
+                Python loop), with the reason.
+            ValueError: ``iterations`` out of range, ``seed_path`` malformed,
+                a social objective not for the prediction's people.
+        """
+        from drake_social.planning.rrt_star.tree_kernel import TimedParams
+
+        require_instance(rng, np.random.Generator, "RrtStar.solve_timed", "rng",
+                         "a numpy.random.Generator (numpy.random.default_rng(seed))")
+        require_instance(timed, TimedParams, "RrtStar.solve_timed", "timed",
+                         "a TimedParams (drake_social.planning.rrt_star.compiled.timed_params)")
+        objective = self.objective if objective is None else objective
+        require_instance(objective, Objective, "RrtStar.solve_timed", "objective", "an Objective")
+        k = self.options.iterations if iterations is None else int(iterations)
+        if not 1 <= k <= MAX_ITERATIONS:
+            raise ValueError(f"RrtStar.solve_timed: iterations must be in [1, {MAX_ITERATIONS}], got {iterations}")
+        start = real_array(start, "RrtStar.solve_timed", "start", (4,), layout="[x, y, psi1, psi2]",
+                           error=PlanningInputError)
+        goal = real_array(goal, "RrtStar.solve_timed", "goal", (4,), layout="[x, y, psi1, psi2]",
+                          error=PlanningInputError)
+        self._check_endpoints(start, goal)
+        supported, reason = compiled.compiled_support(self.checker, objective, self.options)
+        if not supported:
+            raise PlanningInputError(f"RrtStar.solve_timed needs the compiled loop: {reason}")
+        run = compiled.prepare(self.space, self.checker, objective, self.options, self.gamma, start, goal, timed, k)
+        return run.run(rng, deadline=deadline, seed_path=seed_path)
+
     @property
     def gamma(self) -> float:
         """gamma of the shrinking radius (unused in "fixed" mode)."""

@@ -15,6 +15,25 @@ are summed as numpy's ``einsum`` sums four terms on this platform,
 
 Motion checks call :mod:`drake_social.collision.planar_kernel` (the planar
 checker's compiled functions), motion costs :func:`drake_social.cost.kernel.msc_sums`.
+
+**Timed mode** (``GrowParams.timed.enabled``, for the replanner among walking
+people; :class:`TimedParams`): every node has a time ``tnode`` (the root's
+``t_root``; a child's its parent's plus the motion's nominal duration,
+:func:`drake_social.kinematics.nominal_durations`' formula), the social part
+of a motion's cost is :func:`drake_social.cost.timed_kernel.msc_sums_timed`
+at the motion's times, and a motion is valid when the static check passes
+and the robot stays clear of the predicted people by more than the safety
+distance (:func:`drake_social.collision.people_kernel.people_clearance` at
+the motion's end, then
+:func:`~drake_social.collision.people_kernel.motion_clear_of_people`).
+Rewiring costs and people-checks the motion new -> near at ``tnode[new]``
+(the parent choice's cost was at the near node's time: not reused; the
+static part of its check is); a re-parented subtree's times are recomputed
+as its costs are propagated (its edges' costs are kept: approximate during
+the search, the replanner re-evaluates what it returns). Lazy costs stay
+exact (the social part is >= 0). Disabled, the loop runs exactly as
+without it, bit for bit. :func:`seed_chain` inserts a warm start's path as
+a chain from the root before the first sample.
 """
 
 from __future__ import annotations
@@ -26,13 +45,15 @@ import numpy as np
 
 from drake_social.cost import kernel as cost_kernel
 from drake_social.collision import planar_kernel
+from drake_social.collision import people_kernel
 from drake_social.collision.validity import PlanarScene
+from drake_social.cost import timed_kernel
 
 njit = cost_kernel.njit
 AVAILABLE = cost_kernel.AVAILABLE
 
-__all__ = ["AVAILABLE", "GrowParams", "InformedParams", "PeopleGrid", "SocialParams", "TreeState", "grow",
-           "init_state"]
+__all__ = ["AVAILABLE", "GrowParams", "InformedParams", "PeopleGrid", "SocialParams", "TimedParams", "TreeState",
+           "grow", "init_state", "seed_chain"]
 
 
 class SocialParams(NamedTuple):
@@ -80,6 +101,25 @@ class InformedParams(NamedTuple):
     xy_scale: float  #: lambda min(w_x, w_y) of the admissible diameter
 
 
+class TimedParams(NamedTuple):
+    """The timed mode's inputs (see the module docstring): the node times'
+    model and the predicted people (:class:`drake_social.people.prediction.Prediction`'s
+    arrays). ``enabled=False`` (with empty arrays) is the static loop."""
+
+    enabled: bool  #: the timed mode is on
+    t_root: float  #: the root's time (the replan's time), seconds
+    base_speed: float  #: the base's nominal speed, m/s (execution.max_base_speed)
+    arm_speed: np.ndarray  #: (2,) the joints' nominal speeds, rad/s (execution.arm_max_velocity)
+    xy: np.ndarray  #: (H, P, 2) the people's predicted positions, metres
+    theta: np.ndarray  #: (H, P) their headings, radians
+    present: np.ndarray  #: (H, P) bool: in the scene at the sample
+    t0: float  #: the first sample's time, seconds
+    dt: float  #: seconds between samples
+    radii: np.ndarray  #: (P,) body radii, metres
+    max_speeds: np.ndarray  #: (P,) each person's largest predicted speed, m/s
+    safety: float  #: a motion is invalid where the robot comes within this of a person, metres
+
+
 class GrowParams(NamedTuple):
     """Everything :func:`grow` reads but never changes (configuration-space units)."""
 
@@ -100,6 +140,7 @@ class GrowParams(NamedTuple):
     scene: PlanarScene  #: the checker's compiled scene
     informed: InformedParams
     lazy: bool  #: lazy motion costs
+    timed: TimedParams  #: the timed mode (disabled: the static loop)
 
 
 class TreeState(NamedTuple):
@@ -124,6 +165,8 @@ class TreeState(NamedTuple):
     goal_clear: np.ndarray  #: (S,) the goal's capsule clearances
     ints: np.ndarray  #: (4,) int64 nodes, goal nodes, best node, first solution iteration (-1: none)
     floats: np.ndarray  #: (2,) best cost, ellipse diameter
+    tnode: np.ndarray  #: (cap,) node times, seconds (timed mode; the root's t_root, 0 when disabled)
+    goal_t: np.ndarray  #: the node time at which each goal connection was checked and costed (timed mode)
 
 
 @njit(cache=True)
@@ -163,6 +206,58 @@ def _costs(q_a, q_b, kind, lam, dw, soc, grid):
 
 
 @njit(cache=True)
+def _duration(q_a, q_b, base_speed, arm_speed):
+    """The nominal duration of the motion q_a -> q_b, seconds: exactly
+    :func:`drake_social.kinematics.nominal_durations` (the same operations)."""
+    base = math.hypot(q_b[0] - q_a[0], q_b[1] - q_a[1]) / base_speed
+    arm = max(abs(q_b[2] - q_a[2]) / arm_speed[0], abs(q_b[3] - q_a[3]) / arm_speed[1])
+    return max(base, arm)
+
+
+@njit(cache=True)
+def _timed_costs(q_a, q_b, t_a, t_b, kind, lam, dw, soc, grid, tp):
+    """Objective motion costs (E,) of q_a[e] -> q_b[e] driven from t_a[e] to
+    t_b[e]: :func:`_costs` with the social integral against the predicted
+    people (:func:`drake_social.cost.timed_kernel.msc_sums_timed`)."""
+    e_count = q_a.shape[0]
+    out = np.zeros(e_count)
+    length = np.empty(e_count)
+    for e in range(e_count):
+        length[e] = math.sqrt(_d2(q_b[e], q_a[e], dw))
+    if kind == 1:
+        (people, l1, l2, obj, active, weights, lever, resolution, reaches, inv_f, inv_r, inv_s, tau) = soc
+        if tp.xy.shape[1] > 0 and active.shape[0] > 0:
+            sums, n = timed_kernel.msc_sums_timed(
+                q_a, q_b, t_a, t_b, tp.xy, tp.theta, tp.present, tp.t0, tp.dt, tp.max_speeds, l1, l2, obj, active,
+                weights, lever, resolution, reaches, inv_f, inv_r, inv_s, tau, grid.point_reach,
+            )
+            for e in range(e_count):
+                out[e] += sums[e] * (length[e] / n[e])
+        if lam > 0:
+            for e in range(e_count):
+                out[e] = out[e] + lam * length[e]
+    else:
+        for e in range(e_count):
+            out[e] = lam * length[e]
+    return out
+
+
+@njit(cache=True)
+def _people_ok(q_a, q_b, t_a, t_b, scene, tp):
+    """The motion q_a -> q_b driven from t_a to t_b keeps the robot farther
+    than ``tp.safety`` from every considered predicted person (its end
+    first: the cheap rejection)."""
+    if tp.xy.shape[1] == 0:
+        return True
+    bodies, robot, levers = scene.bodies, scene.robot, scene.levers
+    if not people_kernel.people_clearance(q_b, t_b, bodies, robot, tp.xy, tp.present, tp.radii, tp.max_speeds,
+                                          tp.t0, tp.dt) > tp.safety:
+        return False
+    return people_kernel.motion_clear_of_people(q_a, q_b, t_a, t_b, bodies, robot, levers, tp.xy, tp.present,
+                                                tp.radii, tp.max_speeds, tp.t0, tp.dt, tp.safety)
+
+
+@njit(cache=True)
 def grow(rng, it_start, it_stop, params, state):
     """Iterations ``it_start .. it_stop - 1`` of the RRT* run (-1: the start's
     goal connection, before the first sample) with the :class:`GrowParams`
@@ -174,8 +269,10 @@ def grow(rng, it_start, it_stop, params, state):
     kind, lam, dw, soc, grid = params.kind, params.length_weight, params.distance_weights, params.social, params.grid
     c_lower, c_upper, bodies, robot, env, levers = params.scene
     (informed, mode, f1, f2, centre, rot, focal, xy_scale) = params.informed
+    tp = params.timed
+    timed = tp.enabled
     (q, parent, cost, edge, first_child, next_sib, prev_sib, clear, g_next, goal_nodes, goal_edges,
-     counts, history, diameters, g_head, g_geom, goal_clear, ints, floats) = state
+     counts, history, diameters, g_head, g_geom, goal_clear, ints, floats, tnode, goal_t) = state
     n, n_goal, best_node, first_iteration = ints[0], ints[1], ints[2], ints[3]
     best_cost, ellipse_c = floats[0], floats[1]
     cap = q.shape[0]
@@ -183,6 +280,8 @@ def grow(rng, it_start, it_stop, params, state):
     one = np.empty((1, 4))
     gq = np.empty((1, 4))
     gq[0] = goal
+    tg_a = np.empty(1)
+    tg_b = np.empty(1)
     near = np.empty(cap, dtype=np.int64)
     stack = np.empty(cap, dtype=np.int64)
 
@@ -229,7 +328,13 @@ def grow(rng, it_start, it_stop, params, state):
                     for s in range(m):
                         q_a[s] = q[near[s]]
                         q_b[s] = q_new
-                    checked = np.zeros(m, dtype=np.int8)  # 0 unknown, 1 valid, 2 invalid
+                    t_a = np.zeros(m)  # the motions' times near -> new (timed mode)
+                    t_b = np.zeros(m)
+                    if timed:
+                        for s in range(m):
+                            t_a[s] = tnode[near[s]]
+                            t_b[s] = t_a[s] + _duration(q_a[s], q_new, tp.base_speed, tp.arm_speed)
+                    checked = np.zeros(m, dtype=np.int8)  # 0 unknown, 1 valid, 2 invalid (the static check)
                     p_slot = -1
                     f_near = np.empty(m)
                     for s in range(m):
@@ -250,7 +355,8 @@ def grow(rng, it_start, it_stop, params, state):
                             if n_open == 0:
                                 if pos == m:
                                     break
-                                _cost_slots(by_bound[pos:pos + 1], phi, q_a, q_b, kind, lam, dw, soc, grid, counts)
+                                _cost_slots(by_bound[pos:pos + 1], phi, q_a, q_b, t_a, t_b, kind, lam, dw, soc, grid,
+                                            tp, counts)
                                 is_open[by_bound[pos]] = True
                                 n_open += 1
                                 pos += 1
@@ -262,7 +368,8 @@ def grow(rng, it_start, it_stop, params, state):
                             while stop < m and low[by_bound[stop]] <= t_min:
                                 stop += 1
                             if stop > pos:
-                                _cost_slots(by_bound[pos:stop], phi, q_a, q_b, kind, lam, dw, soc, grid, counts)
+                                _cost_slots(by_bound[pos:stop], phi, q_a, q_b, t_a, t_b, kind, lam, dw, soc, grid, tp,
+                                            counts)
                                 for t in range(pos, stop):
                                     is_open[by_bound[t]] = True
                                 n_open += stop - pos
@@ -277,11 +384,16 @@ def grow(rng, it_start, it_stop, params, state):
                             ok = planar_kernel.motion_valid_ends(q_a[slot], q_new, clear[near[slot]], c_new_caps,
                                                                  c_lower, c_upper, bodies, robot, env, levers)
                             checked[slot] = 1 if ok else 2
+                            if ok and timed:
+                                ok = _people_ok(q_a[slot], q_new, t_a[slot], t_b[slot], params.scene, tp)
                             if ok:
                                 p_slot = slot
                                 break
                     else:
-                        phi = _costs(q_a, q_b, kind, lam, dw, soc, grid)
+                        if timed:
+                            phi = _timed_costs(q_a, q_b, t_a, t_b, kind, lam, dw, soc, grid, tp)
+                        else:
+                            phi = _costs(q_a, q_b, kind, lam, dw, soc, grid)
                         bound = phi
                         counts[2] += m
                         order = np.argsort(f_near + phi, kind="mergesort")
@@ -291,6 +403,8 @@ def grow(rng, it_start, it_stop, params, state):
                             ok = planar_kernel.motion_valid_ends(q_a[s], q_new, clear[near[s]], c_new_caps, c_lower,
                                                                  c_upper, bodies, robot, env, levers)
                             checked[s] = 1 if ok else 2
+                            if ok and timed:
+                                ok = _people_ok(q_a[s], q_new, t_a[s], t_b[s], params.scene, tp)
                             if ok:
                                 p_slot = s
                                 break
@@ -313,6 +427,7 @@ def grow(rng, it_start, it_stop, params, state):
                             near = np.empty(cap, dtype=np.int64)
                             g_next = np.concatenate((g_next, np.full(cap - n, -1, dtype=np.int64)))
                             stack = np.empty(cap, dtype=np.int64)
+                            tnode = np.concatenate((tnode, np.zeros(cap - n)))
                         i_new = n
                         n += 1
                         p = near_idx[p_slot]
@@ -323,9 +438,13 @@ def grow(rng, it_start, it_stop, params, state):
                         edge[i_new] = phi[p_slot]
                         cost[i_new] = cost[p] + phi[p_slot]
                         _link(i_new, p, first_child, next_sib, prev_sib)
+                        tnode[i_new] = t_b[p_slot]
                         # ---- rewire
                         c_new = cost[i_new]
-                        if lazy and kind == 1 and lam > 0:
+                        if timed:
+                            _rewire_timed(i_new, m, near_idx, q_a, q_b, bound, checked, c_new_caps, q, parent, cost,
+                                          edge, first_child, next_sib, prev_sib, clear, tnode, stack, counts, params)
+                        elif lazy and kind == 1 and lam > 0:
                             todo = np.empty(m, dtype=np.int64)
                             nt = 0
                             for s in range(m):
@@ -333,43 +452,44 @@ def grow(rng, it_start, it_stop, params, state):
                                     todo[nt] = s
                                     nt += 1
                             if nt > 0:
-                                _cost_slots(todo[:nt], phi, q_a, q_b, kind, lam, dw, soc, grid, counts)
-                        cand = np.empty(m, dtype=np.int64)
-                        nc = 0
-                        for s in range(m):
-                            if c_new + phi[s] < cost[near_idx[s]]:
-                                cand[nc] = s
-                                nc += 1
-                        for ci in range(nc):
-                            s = cand[ci]
-                            j = near_idx[s]
-                            if j == parent[i_new] or not cost[i_new] + phi[s] < cost[j]:
-                                continue
-                            if checked[s] == 0:
-                                counts[1] += 1
-                                ok = planar_kernel.motion_valid_ends(q_new, q[j], c_new_caps, clear[j], c_lower,
-                                                                     c_upper, bodies, robot, env, levers)
-                            else:
-                                ok = checked[s] == 1
-                            if ok:
-                                _unlink(j, parent[j], first_child, next_sib, prev_sib)
-                                _link(j, i_new, first_child, next_sib, prev_sib)
-                                parent[j] = i_new
-                                edge[j] = phi[s]
-                                top = 0
-                                stack[0] = j
-                                top = 1
-                                while top > 0:
-                                    top -= 1
-                                    k = stack[top]
-                                    if k == i_new:
-                                        raise RuntimeError("rewiring a node under its descendant")
-                                    cost[k] = cost[parent[k]] + edge[k]
-                                    c = first_child[k]
-                                    while c >= 0:
-                                        stack[top] = c
-                                        top += 1
-                                        c = next_sib[c]
+                                _cost_slots(todo[:nt], phi, q_a, q_b, t_a, t_b, kind, lam, dw, soc, grid, tp, counts)
+                        if not timed:
+                            cand = np.empty(m, dtype=np.int64)
+                            nc = 0
+                            for s in range(m):
+                                if c_new + phi[s] < cost[near_idx[s]]:
+                                    cand[nc] = s
+                                    nc += 1
+                            for ci in range(nc):
+                                s = cand[ci]
+                                j = near_idx[s]
+                                if j == parent[i_new] or not cost[i_new] + phi[s] < cost[j]:
+                                    continue
+                                if checked[s] == 0:
+                                    counts[1] += 1
+                                    ok = planar_kernel.motion_valid_ends(q_new, q[j], c_new_caps, clear[j], c_lower,
+                                                                         c_upper, bodies, robot, env, levers)
+                                else:
+                                    ok = checked[s] == 1
+                                if ok:
+                                    _unlink(j, parent[j], first_child, next_sib, prev_sib)
+                                    _link(j, i_new, first_child, next_sib, prev_sib)
+                                    parent[j] = i_new
+                                    edge[j] = phi[s]
+                                    top = 0
+                                    stack[0] = j
+                                    top = 1
+                                    while top > 0:
+                                        top -= 1
+                                        k = stack[top]
+                                        if k == i_new:
+                                            raise RuntimeError("rewiring a node under its descendant")
+                                        cost[k] = cost[parent[k]] + edge[k]
+                                        c = first_child[k]
+                                        while c >= 0:
+                                            stack[top] = c
+                                            top += 1
+                                            c = next_sib[c]
                     else:
                         i_new = -1
                 else:
@@ -383,20 +503,56 @@ def grow(rng, it_start, it_stop, params, state):
                 if d != 0.0:
                     counts[2] += 1
                     one[0] = q[i_new]
-                    c_goal = _costs(one, gq, kind, lam, dw, soc, grid)[0]
+                    if timed:
+                        tg_a[0] = tnode[i_new]
+                        tg_b[0] = tnode[i_new] + _duration(q[i_new], goal, tp.base_speed, tp.arm_speed)
+                        c_goal = _timed_costs(one, gq, tg_a, tg_b, kind, lam, dw, soc, grid, tp)[0]
+                    else:
+                        c_goal = _costs(one, gq, kind, lam, dw, soc, grid)[0]
                     counts[1] += 1
                     ok = planar_kernel.motion_valid_ends(q[i_new], goal, clear[i_new], goal_clear, c_lower, c_upper,
                                                          bodies, robot, env, levers)
+                    if ok and timed:
+                        ok = _people_ok(q[i_new], goal, tg_a[0], tg_b[0], params.scene, tp)
                 if ok:
                     if n_goal == goal_nodes.shape[0]:
                         goal_nodes = np.concatenate((goal_nodes, np.empty(n_goal, dtype=np.int64)))
                         goal_edges = np.concatenate((goal_edges, np.empty(n_goal)))
+                        goal_t = np.concatenate((goal_t, np.zeros(n_goal)))
                     goal_nodes[n_goal] = i_new
                     goal_edges[n_goal] = c_goal
+                    goal_t[n_goal] = tnode[i_new]
                     n_goal += 1
         # The best goal connection, when the tree changed, or when the start's own
         # connection (made before the first sample) is not yet reported.
-        if it >= 0 and n_goal > 0 and (i_new >= 0 or best_node < 0):
+        if timed and it >= 0 and n_goal > 0 and (i_new >= 0 or best_node < 0):
+            # The cheapest goal connection whose check and cost are at its node's
+            # time now (a connection made before its node's time moved is redone
+            # first: invalid => inf); none finite => no solution (yet, again).
+            while True:
+                g_best, g = np.inf, -1
+                for t in range(n_goal):
+                    tot = cost[goal_nodes[t]] + goal_edges[t]
+                    if tot < g_best:
+                        g_best, g = tot, t
+                if g < 0 or goal_t[g] == tnode[goal_nodes[g]]:
+                    break
+                goal_edges[g] = _goal_edge(goal_nodes[g], q, clear, tnode, goal_clear, counts, params)
+                goal_t[g] = tnode[goal_nodes[g]]
+            if g < 0:
+                best_cost, best_node = np.inf, -1
+            else:
+                best_cost, best_node = g_best, goal_nodes[g]
+                if first_iteration < 0:
+                    first_iteration = it + 1
+            if informed:
+                if g < 0:
+                    ellipse_c = np.inf
+                elif mode == 0:
+                    ellipse_c = _xy_length(q, parent, best_node, goal)
+                else:
+                    ellipse_c = best_cost / xy_scale if xy_scale > 0 else np.inf
+        elif it >= 0 and n_goal > 0 and (i_new >= 0 or best_node < 0):
             g_best, g = np.inf, -1
             for t in range(n_goal):
                 tot = cost[goal_nodes[t]] + goal_edges[t]
@@ -417,17 +573,123 @@ def grow(rng, it_start, it_stop, params, state):
     ints[0], ints[1], ints[2], ints[3] = n, n_goal, best_node, first_iteration
     floats[0], floats[1] = best_cost, ellipse_c
     return TreeState(q, parent, cost, edge, first_child, next_sib, prev_sib, clear, g_next, goal_nodes, goal_edges,
-                     counts, history, diameters, g_head, g_geom, goal_clear, ints, floats)
+                     counts, history, diameters, g_head, g_geom, goal_clear, ints, floats, tnode, goal_t)
 
 
 @njit(cache=True)
-def _cost_slots(slots, phi, q_a, q_b, kind, lam, dw, soc, grid, counts):
-    """phi[slots] = the motion costs q_a[slots] -> q_b[slots] (RrtStar._extend's cost())."""
+def _rewire_timed(i_new, m, near_idx, q_a, q_b, bound, checked, c_new_caps, q, parent, cost, edge, first_child,
+                  next_sib, prev_sib, clear, tnode, stack, counts, params):
+    """The timed mode's rewiring of the near nodes (slots 0 .. m - 1 of
+    ``near_idx``, configurations ``q_a``; ``q_b`` rows are the new node's)
+    through the new node ``i_new``: each motion new -> near is costed and
+    people-checked from ``tnode[i_new]`` (lazily: only where ``c_new +
+    lambda * length`` can improve the near node); the static checks of the
+    parent choice (``checked``) are reused. A re-parented subtree's costs and
+    times are recomputed from its parents (its edge costs kept)."""
+    tp = params.timed
+    kind, lam, dw, soc, grid = params.kind, params.length_weight, params.distance_weights, params.social, params.grid
+    c_lower, c_upper, bodies, robot, env, levers = params.scene
+    lazy_bound = params.lazy and kind == 1 and lam > 0  # bound = lambda * length, a lower bound of every cost
+    q_new = q[i_new]
+    c_new = cost[i_new]
+    t_new = tnode[i_new]
+    ta = np.full(m, t_new)
+    tb = np.empty(m)
+    for s in range(m):
+        tb[s] = t_new + _duration(q_new, q_a[s], tp.base_speed, tp.arm_speed)
+    phi = np.full(m, np.inf)
+    todo = np.empty(m, dtype=np.int64)
+    nt = 0
+    for s in range(m):
+        j = near_idx[s]
+        if j != parent[i_new] and (not lazy_bound or c_new + bound[s] < cost[j]):
+            todo[nt] = s
+            nt += 1
+    if nt > 0:
+        _cost_slots(todo[:nt], phi, q_b, q_a, ta, tb, kind, lam, dw, soc, grid, tp, counts)
+    cand = np.empty(m, dtype=np.int64)
+    nc = 0
+    for s in range(m):
+        if c_new + phi[s] < cost[near_idx[s]]:
+            cand[nc] = s
+            nc += 1
+    for ci in range(nc):
+        s = cand[ci]
+        j = near_idx[s]
+        if j == parent[i_new] or not cost[i_new] + phi[s] < cost[j]:
+            continue
+        counts[1] += 1
+        if checked[s] == 0:
+            ok = planar_kernel.motion_valid_ends(q_new, q[j], c_new_caps, clear[j], c_lower, c_upper, bodies, robot,
+                                                 env, levers)
+        else:
+            ok = checked[s] == 1
+        if ok:
+            ok = _people_ok(q_new, q[j], ta[s], tb[s], params.scene, tp)
+        if ok:
+            _unlink(j, parent[j], first_child, next_sib, prev_sib)
+            _link(j, i_new, first_child, next_sib, prev_sib)
+            parent[j] = i_new
+            edge[j] = phi[s]
+            stack[0] = j
+            top = 1
+            while top > 0:
+                top -= 1
+                k = stack[top]
+                if k == i_new:
+                    raise RuntimeError("rewiring a node under its descendant")
+                t_old = tnode[k]
+                tnode[k] = tnode[parent[k]] + _duration(q[parent[k]], q[k], tp.base_speed, tp.arm_speed)
+                if k != j and tnode[k] != t_old and edge[k] < np.inf:
+                    # A moved descendant's motion, checked again at its new times: cut off when invalid.
+                    counts[1] += 1
+                    if not _people_ok(q[parent[k]], q[k], tnode[parent[k]], tnode[k], params.scene, tp):
+                        edge[k] = np.inf
+                cost[k] = cost[parent[k]] + edge[k]
+                c = first_child[k]
+                while c >= 0:
+                    stack[top] = c
+                    top += 1
+                    c = next_sib[c]
+
+
+@njit(cache=True)
+def _goal_edge(i, q, clear, tnode, goal_clear, counts, params):
+    """The timed mode's goal connection of node i redone at ``tnode[i]``: its
+    cost, or inf when the motion is not valid then (0 for a node at the goal)."""
+    goal, tp = params.goal, params.timed
+    c_lower, c_upper, bodies, robot, env, levers = params.scene
+    if _d2(goal, q[i], params.weights) == 0.0:
+        return 0.0
+    a = np.empty((1, 4))
+    b = np.empty((1, 4))
+    a[0] = q[i]
+    b[0] = goal
+    ta = np.full(1, tnode[i])
+    tb = np.full(1, tnode[i] + _duration(q[i], goal, tp.base_speed, tp.arm_speed))
+    counts[1] += 1
+    if not _people_ok(q[i], goal, ta[0], tb[0], params.scene, tp):
+        return np.inf
+    counts[2] += 1
+    return _timed_costs(a, b, ta, tb, params.kind, params.length_weight, params.distance_weights, params.social,
+                        params.grid, tp)[0]
+
+
+@njit(cache=True)
+def _cost_slots(slots, phi, q_a, q_b, t_a, t_b, kind, lam, dw, soc, grid, tp, counts):
+    """phi[slots] = the motion costs q_a[slots] -> q_b[slots] (RrtStar._extend's
+    cost()); in timed mode driven from t_a[slots] to t_b[slots]."""
     k = slots.shape[0]
     a, b = np.empty((k, 4)), np.empty((k, 4))
     for t in range(k):
         a[t], b[t] = q_a[slots[t]], q_b[slots[t]]
-    out = _costs(a, b, kind, lam, dw, soc, grid)
+    if tp.enabled:
+        ta, tb = np.empty(k), np.empty(k)
+        for t in range(k):
+            ta[t], tb[t] = t_a[slots[t]], t_b[slots[t]]
+        out = _timed_costs(a, b, ta, tb, kind, lam, dw, soc, grid, tp)
+    else:
+        out = _costs(a, b, kind, lam, dw, soc, grid)
     for t in range(k):
         phi[slots[t]] = out[t]
     counts[2] += k
@@ -467,8 +729,128 @@ def init_state(start, iterations, params):
     goal_clear = planar_kernel.capsule_clearances(goal, bodies, robot, env)
     ints = np.array([1, 0, -1, -1], dtype=np.int64)  # n, goal nodes, best node, first solution iteration
     floats = np.array([np.inf, np.inf])  # best cost, ellipse diameter
+    tnode = np.zeros(cap)
+    goal_t = np.zeros(16)
+    if params.timed.enabled:
+        tnode[0] = params.timed.t_root
     return TreeState(q, parent, cost, edge, first_child, next_sib, prev_sib, clear, g_next, goal_nodes, goal_edges,
-                     counts, history, diameters, g_head, g_geom, goal_clear, ints, floats)
+                     counts, history, diameters, g_head, g_geom, goal_clear, ints, floats, tnode, goal_t)
+
+
+@njit(cache=True)
+def _enlarge(state, cap):
+    """``state`` with room for ``cap`` nodes (the node arrays copied into larger ones)."""
+    (q, parent, cost, edge, first_child, next_sib, prev_sib, clear, g_next, goal_nodes, goal_edges,
+     counts, history, diameters, g_head, g_geom, goal_clear, ints, floats, tnode, goal_t) = state
+    n = ints[0]
+    q2 = np.empty((cap, 4))
+    q2[:n] = q[:n]
+    c2 = np.empty((cap, clear.shape[1]))
+    c2[:n] = clear[:n]
+    extra = cap - n
+    return TreeState(q2, np.concatenate((parent[:n], np.full(extra, -1, dtype=np.int64))),
+                     np.concatenate((cost[:n], np.zeros(extra))), np.concatenate((edge[:n], np.zeros(extra))),
+                     np.concatenate((first_child[:n], np.full(extra, -1, dtype=np.int64))),
+                     np.concatenate((next_sib[:n], np.full(extra, -1, dtype=np.int64))),
+                     np.concatenate((prev_sib[:n], np.full(extra, -1, dtype=np.int64))), c2,
+                     np.concatenate((g_next[:n], np.full(extra, -1, dtype=np.int64))), goal_nodes, goal_edges, counts,
+                     history, diameters, g_head, g_geom, goal_clear, ints, floats,
+                     np.concatenate((tnode[:n], np.zeros(extra))), goal_t)
+
+
+@njit(cache=True)
+def seed_chain(seed, params, state):
+    """Inserts the warm start's path ``seed`` (M, 4; ``seed[0]`` the root's
+    configuration) into a tree of the root alone, before the first sample:
+    each waypoint becomes the child of the previous one (repeated waypoints
+    skipped), its configuration and its motion checked (static, and the
+    people in timed mode at the motion's times) and costed as the loop
+    would; the chain stops before the first invalid waypoint. The last
+    inserted node's goal connection is tried as :func:`grow` tries a new
+    node's. Counted in ``counts`` as the loop counts. Returns the new state."""
+    goal, w, r_near = params.goal, params.weights, params.near_radius
+    kind, lam, dw, soc, grid = params.kind, params.length_weight, params.distance_weights, params.social, params.grid
+    c_lower, c_upper, bodies, robot, env, levers = params.scene
+    tp = params.timed
+    timed = tp.enabled
+    if state.ints[0] + seed.shape[0] > state.q.shape[0]:
+        state = _enlarge(state, state.ints[0] + seed.shape[0])
+    (q, parent, cost, edge, first_child, next_sib, prev_sib, clear, g_next, goal_nodes, goal_edges,
+     counts, history, diameters, g_head, g_geom, goal_clear, ints, floats, tnode, goal_t) = state
+    n, n_goal = ints[0], ints[1]
+    a = np.empty((1, 4))
+    b = np.empty((1, 4))
+    ta = np.zeros(1)
+    tb = np.zeros(1)
+    prev = 0
+    for k in range(1, seed.shape[0]):
+        qk = seed[k].copy()
+        if _d2(qk, q[prev], w) == 0.0:
+            continue
+        counts[0] += 1
+        caps = planar_kernel.capsule_clearances(qk, bodies, robot, env)
+        if not _valid(qk, caps, c_lower, c_upper):
+            break
+        a[0] = q[prev]
+        b[0] = qk
+        if timed:
+            ta[0] = tnode[prev]
+            tb[0] = ta[0] + _duration(q[prev], qk, tp.base_speed, tp.arm_speed)
+        counts[1] += 1
+        ok = planar_kernel.motion_valid_ends(q[prev], qk, clear[prev], caps, c_lower, c_upper, bodies, robot, env,
+                                             levers)
+        if ok and timed:
+            ok = _people_ok(q[prev], qk, ta[0], tb[0], params.scene, tp)
+        if not ok:
+            break
+        counts[2] += 1
+        if timed:
+            c = _timed_costs(a, b, ta, tb, kind, lam, dw, soc, grid, tp)[0]
+        else:
+            c = _costs(a, b, kind, lam, dw, soc, grid)[0]
+        i = n
+        n += 1
+        q[i] = qk
+        _insert(i, q, w, g_head, g_next, g_geom)
+        clear[i] = caps
+        parent[i] = prev
+        edge[i] = c
+        cost[i] = cost[prev] + c
+        _link(i, prev, first_child, next_sib, prev_sib)
+        tnode[i] = tb[0]
+        prev = i
+    if prev > 0:  # the chain's last node's goal connection
+        d = math.sqrt(_d2(goal, q[prev], w))
+        if d <= r_near:
+            c_goal = 0.0
+            ok = True
+            if d != 0.0:
+                counts[2] += 1
+                a[0] = q[prev]
+                b[0] = goal
+                if timed:
+                    ta[0] = tnode[prev]
+                    tb[0] = ta[0] + _duration(q[prev], goal, tp.base_speed, tp.arm_speed)
+                    c_goal = _timed_costs(a, b, ta, tb, kind, lam, dw, soc, grid, tp)[0]
+                else:
+                    c_goal = _costs(a, b, kind, lam, dw, soc, grid)[0]
+                counts[1] += 1
+                ok = planar_kernel.motion_valid_ends(q[prev], goal, clear[prev], goal_clear, c_lower, c_upper, bodies,
+                                                     robot, env, levers)
+                if ok and timed:
+                    ok = _people_ok(q[prev], goal, ta[0], tb[0], params.scene, tp)
+            if ok:
+                if n_goal == goal_nodes.shape[0]:
+                    goal_nodes = np.concatenate((goal_nodes, np.empty(n_goal, dtype=np.int64)))
+                    goal_edges = np.concatenate((goal_edges, np.empty(n_goal)))
+                    goal_t = np.concatenate((goal_t, np.zeros(n_goal)))
+                goal_nodes[n_goal] = prev
+                goal_edges[n_goal] = c_goal
+                goal_t[n_goal] = tnode[prev]
+                n_goal += 1
+    ints[0], ints[1] = n, n_goal
+    return TreeState(q, parent, cost, edge, first_child, next_sib, prev_sib, clear, g_next, goal_nodes, goal_edges,
+                     counts, history, diameters, g_head, g_geom, goal_clear, ints, floats, tnode, goal_t)
 
 
 @njit(cache=True)
