@@ -26,7 +26,6 @@ processor is named: wall-clock times hold for it alone.
 
 from __future__ import annotations
 
-import dataclasses as dc
 import logging
 from pathlib import Path
 from typing import Callable, Sequence
@@ -149,16 +148,13 @@ def rollout_replans(scenario: Scenario, count: int, *, checker: str = "planar", 
     return log
 
 
-def _simulated(scenario: Scenario, runs: int, checker: str, progress) -> dict:
+def _simulated(scenario: Scenario, runs: int, progress) -> dict:
     """``runs`` kinematic runs with replanning: realtime factors and the first run's log."""
-    from drake_social.collision.drake_checker import make_checker
     from drake_social.sim.run import simulate
 
-    replanning = dc.replace(scenario, planner=dc.replace(scenario.planner, replan=True))
     factors, first = [], None
     for i in range(runs):
-        run = simulate(replanning, mode="kinematic", execution="synchronized",
-                       checker=make_checker(replanning, checker), analyze=False)
+        run = simulate(scenario, mode="kinematic", execution="synchronized", analyze=False, replan=True)
         factors.append(float(run.realtime_factor))
         first = run if first is None else first
         if progress:
@@ -179,7 +175,8 @@ def run_replan_bench(scenario_path: str | Path = REPLAN_SCENARIO, *, count: int 
             replan options are used as they are).
         count: replans of the rollout (>= 1).
         runs: simulated runs with replanning (>= 0; 0 leaves the simulation out).
-        checker: the room's checker (the replanner's needs a compiled scene: planar).
+        checker: the rollout's room checker (the replanner's needs a compiled
+            scene: planar); the simulated runs use ``simulate``'s replanner.
         progress: optional ``progress(label)`` after the rollout and each run.
 
     Returns:
@@ -205,7 +202,7 @@ def run_replan_bench(scenario_path: str | Path = REPLAN_SCENARIO, *, count: int 
                      "iterations": int(p.iterations), "count": int(count), "runs": int(runs), "checker": checker},
         "processor": cpu_model(),
         "rollout": {"replans": int(len(log) - 1), **replan_time_stats(log, budget)},
-        "simulation": _simulated(scenario, runs, checker, progress) if runs > 0 else None,
+        "simulation": _simulated(scenario, runs, progress) if runs > 0 else None,
     }
     return out
 
