@@ -10,7 +10,8 @@ replan of the log (``SimulationResult.replans``, ReplanResult records of
   iteration count and no deadline) is left out of this panel and named in its
   legend, as it would flatten the scale;
 * the cost of the plan each replan returned (the exact time-indexed
-  objective; a wait has none), with a green triangle where the path changed.
+  objective; a wait has none), with a green triangle where the path changed
+  and a red mark at the foot of the panel at each replan that waited.
 
 On both, the time the robot waited (from a replan that found no safe path to
 the next one that did) is shaded. :func:`replan_series` gives the arrays the
@@ -115,16 +116,18 @@ def replan_figure(replans: Sequence, *, budget: float | None = None, title: str 
         pad = 0.05 * (hi - lo) if hi > lo else max(abs(hi), 1.0) * 0.05
         ax_cost.set_ylim(lo - pad, hi + 6 * pad)  # headroom for the legend
     changed = s["changed"] & finite
-    ax_cost.plot(t[changed], s["cost"][changed], "^", color="#2ca02c", markersize=6, label="path changed")
+    ax_cost.plot(t[changed], s["cost"][changed], "^", color="#2ca02c", markersize=5, label="path changed")
+    if s["wait"].any():  # a mark per waiting replan at the foot of the panel: seen however short the wait
+        ax_cost.plot(t[s["wait"]], np.full(int(s["wait"].sum()), 0.03), "v", color="#d62728", markersize=5,
+                     transform=ax_cost.get_xaxis_transform(), label="waited")
     waits = wait_intervals(t, s["wait"], end)
     for ax in (ax_time, ax_cost):
-        for k, (a, b) in enumerate(waits):
-            ax.axvspan(a, b, color="#d62728", alpha=0.15, linewidth=0,
-                       label="waiting" if (k == 0 and ax is ax_cost) else None)
+        for a, b in waits:
+            ax.axvspan(a, b, color="#d62728", alpha=0.15, linewidth=0)
         ax.grid(True, alpha=0.3)
     ax_cost.set_ylabel("cost")
     ax_cost.set_xlabel("simulated time (s)")
-    ax_cost.legend(fontsize=7, ncol=3, loc="upper right")
+    ax_cost.legend(fontsize=7, ncol=4, loc="upper right")
     return fig
 
 

@@ -90,6 +90,7 @@ def test_figure_plots_the_log():
     assert np.isnan(cost["cost of the plan"].get_ydata()).sum() == 5
     # Changed: the initial plan and k = 10, 25, 40 (the wait that changed has no cost).
     np.testing.assert_allclose(cost["path changed"].get_xdata(), [0.0, 1.0, 2.5, 4.0])
+    np.testing.assert_allclose(cost["waited"].get_xdata(), [2.0, 2.1, 2.2, 2.3, 2.4])
     # One wait shaded on each panel, 2.0 s to 2.5 s.
     for ax in (ax_time, ax_cost):
         (span,) = ax.patches
