@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 
 from drake_social.experiments.bench import replanning as dut
-from drake_social.experiments.bench.planners import cpu_model
+from drake_social.experiments.bench.machine import cpu_model
 from drake_social.kinematics import nominal_path_times
 
 
@@ -75,7 +75,8 @@ def test_position_at_follows_the_time_model():
 
 def test_markdown_rows():
     stats = dut.replan_time_stats(log(), 0.08)
-    entry = {"scenario": "office_walkers.yaml", "processor": "a CPU",
+    entry = {"scenario": "office_walkers.yaml", "processor": "a CPU", "load_average_start": [0.5, 0.4, 0.3],
+             "load_average_end": [1.25, 0.5, 0.4],
              "settings": {"algorithm": "social_rrt_star", "replan_rate": 10.0, "replan_budget": 0.08,
                           "replan_iterations": 500, "replan_horizon": 5.0, "prediction": "constant_velocity"},
              "rollout": {"replans": 40, **stats},
@@ -83,7 +84,8 @@ def test_markdown_rows():
                             "realtime_factor": {"median": 7.25, "min": 7.0, "max": 7.5, "n": 2},
                             "replan_time": stats}}
     text = "\n".join(dut.replan_markdown(entry))
-    assert "## Replanning (office_walkers)" in text and "processor: a CPU" in text
+    assert "## Replanning (office_walkers)" in text
+    assert "processor: a CPU (1-minute load average 0.50 at the start, 1.25 at the end)." in text
     row = (f"| 40 | {1e3 * stats['median']:.1f} | {1e3 * stats['p95']:.1f} | {1e3 * stats['max']:.1f} | 4 "
            f"| {stats['over_budget']} | 4 | 2 | 0.90 |")
     assert f"| kinematic rollout (first replans) {row}" in text
@@ -97,6 +99,7 @@ def test_rollout_is_the_replanners_log(tiny_scenario_path, tiny_scenario):
     entry = dut.run_replan_bench(tiny_scenario_path, count=5, runs=0, progress=labels.append)
     assert labels == ["tiny rollout of 5 replans"] and entry["simulation"] is None
     assert entry["processor"] == cpu_model() and entry["scenario"] == "tiny.yaml"
+    assert len(entry["load_average_start"]) == 3 and len(entry["load_average_end"]) == 3
     p = tiny_scenario.planner
     assert entry["settings"]["replan_budget"] == p.replan_budget and entry["settings"]["count"] == 5
     r = entry["rollout"]

@@ -41,6 +41,7 @@ import numpy as np
 from drake_social.collision.drake_checker import CHECKERS, make_checker
 from drake_social.planning.space import ConfigurationSpace
 from drake_social.collision.validity import ValidityChecker
+from drake_social.experiments.bench.machine import cpu_model, load_average as _load_average
 from drake_social.experiments.records import run_record
 from drake_social.io.records import write_json
 from drake_social.limits import PAPER_PLANNER
@@ -183,30 +184,6 @@ def _plan_ompl_runs(scenario: Scenario, key: str, iterations: int, seeds: int, c
         tick(f"ompl_rrt_star[{key}] seed {seed}")
     return {"objective_of": key, "checker": checker, "settings": settings.to_json_dict(), "runs": runs,
             "summary": summarize(runs)}
-
-
-def cpu_model(cpuinfo: str | Path = "/proc/cpuinfo") -> str | None:
-    """The processor's model name (Linux's ``/proc/cpuinfo``), else
-    ``platform.processor()``, else None: times from different processors
-    are not comparable, so the bench says which one it ran on."""
-    try:
-        for line in Path(cpuinfo).read_text(errors="replace").splitlines():
-            key, sep, value = line.partition(":")
-            if sep and key.strip() == "model name" and value.strip():
-                return value.strip()
-    except OSError:
-        pass
-    return platform.processor() or None
-
-
-def _load_average() -> list[float] | None:
-    """The 1, 5 and 15 minute load averages (None where the OS has none).
-    The bench itself keeps about one CPU busy: a load well above 1 at its
-    end, or above 0 at its start, means other work shared the machine."""
-    try:
-        return [round(x, 2) for x in os.getloadavg()]
-    except (AttributeError, OSError):
-        return None
 
 
 def _machine() -> dict:

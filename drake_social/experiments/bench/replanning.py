@@ -32,6 +32,7 @@ from typing import Callable, Sequence
 
 import numpy as np
 
+from drake_social.experiments.bench.machine import cpu_model, load_average
 from drake_social.kinematics import nominal_path_times
 from drake_social.scenario import Scenario, load_scenario
 
@@ -180,17 +181,17 @@ def run_replan_bench(scenario_path: str | Path = REPLAN_SCENARIO, *, count: int 
         progress: optional ``progress(label)`` after the rollout and each run.
 
     Returns:
-        ``{"scenario", "settings": {...}, "processor", "rollout": replan_time_stats + {"replans"},
-        "simulation": {...} or None}``.
+        ``{"scenario", "settings": {...}, "processor", "load_average_start",
+        "rollout": replan_time_stats + {"replans"}, "simulation": {...} or None,
+        "load_average_end"}`` (load averages: 1, 5, 15 min, or None).
     """
-    from drake_social.experiments.bench.planners import cpu_model
-
     if runs < 0:
         raise ValueError(f"runs must be >= 0, got {runs}")
     path = Path(scenario_path)
     scenario = load_scenario(path)
     p = scenario.planner
     budget = float(p.replan_budget)
+    load_start = load_average()
     log = rollout_replans(scenario, count, checker=checker)
     if progress:
         progress(f"{path.stem} rollout of {len(log) - 1} replans")
@@ -201,10 +202,20 @@ def run_replan_bench(scenario_path: str | Path = REPLAN_SCENARIO, *, count: int 
                      "replan_margin": float(p.replan_margin), "prediction": p.prediction,
                      "iterations": int(p.iterations), "count": int(count), "runs": int(runs), "checker": checker},
         "processor": cpu_model(),
+        "load_average_start": load_start,
         "rollout": {"replans": int(len(log) - 1), **replan_time_stats(log, budget)},
         "simulation": _simulated(scenario, runs, progress) if runs > 0 else None,
     }
+    out["load_average_end"] = load_average()
     return out
+
+
+def _load(entry: dict) -> str:
+    """The load averages around the run, in words ("" when unknown)."""
+    a, b = entry.get("load_average_start"), entry.get("load_average_end")
+    if not a or not b:
+        return ""
+    return f" (1-minute load average {a[0]:.2f} at the start, {b[0]:.2f} at the end)"
 
 
 def _ms(x: float | None) -> str:
@@ -217,7 +228,7 @@ def replan_markdown(entry: dict) -> list[str]:
     lines = ["", f"## Replanning ({Path(entry['scenario']).stem})", "",
              f"{s['algorithm']}, {s['replan_rate']:g} Hz, budget {1e3 * s['replan_budget']:g} ms, at most "
              f"{s['replan_iterations']} samples per replan, horizon {s['replan_horizon']:g} s, "
-             f"{s['prediction']} prediction; processor: {entry['processor'] or 'unknown'}. Replan times "
+             f"{s['prediction']} prediction; processor: {entry['processor'] or 'unknown'}{_load(entry)}. Replan times "
              f"(wall clock, the first plan apart; targets: median <= {1e3 * TARGET_MEDIAN:g} ms, 95th "
              f"percentile <= the budget):", "",
              "| replans of | n | median ms | p95 ms | max ms | deadline hits | over budget | path changes | waits "
