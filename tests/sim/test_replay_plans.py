@@ -195,3 +195,18 @@ def test_browser_shows_the_plan_of_each_time(replanned):
     for k, visible in expected.items():
         frames = browser.probe(html, times, f"{PLANS}/{k}")["frames"]
         assert [bool(f[2]) for f in frames] == visible, k
+
+
+def test_the_replanners_records_are_read():
+    """ReplanResult itself (drake_social.planning.replan), as SimulationResult.replans holds it."""
+    from drake_social.planning.replan import ReplanResult
+
+    def result(t, wp, status):
+        waiting = status == "wait"
+        return ReplanResult(t, wp, math.inf if waiting else 1.0, status in ("initial", "new"), status, "why", 0.01,
+                            100, False, 1.0, 1.0, int(round(10 * t)))
+
+    replans = [result(0.0, KNOTS, "initial"), result(0.1, KNOTS, "kept"), result(0.2, KNOTS[2:3], "wait"),
+               result(0.3, KNOTS[2:], "kept"), result(0.4, KNOTS[[2, 3]], "new")]
+    spans = replay_plans.plan_spans(replans)
+    assert [(s.start, s.wait) for s in spans] == [(0.0, False), (0.2, True), (0.3, False), (0.4, False)]
