@@ -219,3 +219,44 @@ def test_a_simulate_that_finds_no_path_shows_no_realtime_factor(tmp_path, capsys
     captured = capsys.readouterr()
     assert code == 3
     assert "no path to execute" in captured.out and "nan" not in captured.out and "realtime" not in captured.out
+
+
+def test_replan_with_a_path_is_refused(tmp_path, tiny_scenario_path, planned, capsys):
+    assert main(["simulate", str(tiny_scenario_path), "--path", str(planned), "--replan", "--no-replay",
+                 "--out", str(tmp_path)]) == 2
+    assert "--replan: replans the path; with --path" in capsys.readouterr().err
+    assert not (tmp_path / "sim.json").exists()
+
+
+def test_replan_writes_replans_csv_and_the_summary(tmp_path, tiny_scenario_path, capsys):
+    pytest.importorskip("drake_social.planning.replan")
+    code = main(["simulate", str(tiny_scenario_path), "--replan", "--no-replay", "--out", str(tmp_path),
+                 "--set", "planner: {replan_iterations: 100, replan_rate: 5.0}"])
+    out = capsys.readouterr().out
+    record = json.loads((tmp_path / "sim.json").read_text())
+    assert code == (0 if record["reached"] else 5)
+    names = sorted(p.name for p in tmp_path.iterdir() if not p.name.startswith("."))
+    assert names == ["executed.csv", "people.csv", "replans.csv", "sim.json", "tracking.png"]
+    lines = (tmp_path / "replans.csv").read_text().splitlines()
+    assert lines[0] == "t,plan_time,cost,changed,status,iterations,deadline_hit"
+    rows = [line.split(",") for line in lines[1:]]
+    assert rows[0][4] == "initial" and float(rows[0][0]) == 0.0
+    t = np.array([float(r[0]) for r in rows])
+    np.testing.assert_allclose(np.diff(t), 0.2, atol=1e-9)  # every 1/rate s of simulated time
+    assert {r[4] for r in rows[1:]} <= {"new", "kept", "wait"} and {r[3] for r in rows} <= {"0", "1"}
+    summary = record["replanning"]
+    plan_times = np.array([float(r[1]) for r in rows[1:]])
+    assert summary["count"] == len(rows) - 1
+    assert summary["changed"] == sum(r[3] == "1" for r in rows[1:])
+    assert summary["waits"] == sum(r[4] == "wait" for r in rows[1:])
+    assert summary["deadline_hits"] == sum(r[6] == "1" for r in rows[1:])
+    assert summary["plan_time_median"] == pytest.approx(np.median(plan_times))
+    assert summary["plan_time_p95"] == pytest.approx(np.percentile(plan_times, 95))
+    assert summary["plan_time_max"] == pytest.approx(plan_times.max())
+    assert (summary["rate"], summary["budget"]) == (5.0, 0.08)
+    assert f"{summary['count']} replans at 5 Hz" in out
+    # The followed path runs from the start to the goal.
+    wp = np.array(record["waypoints"])
+    assert "planner" not in record  # the replans are the record of the planning
+    if record["reached"]:
+        np.testing.assert_allclose(wp[-1], [6.5, 2.5, 0.0, 1.5708])

@@ -145,7 +145,8 @@ def test_a_cold_cache_is_said_once_with_the_compile_time(monkeypatch, caplog):
         calls.append((it_start, it_stop, params, state))
 
     grow.signatures = []  # not loaded in this process
-    fake = types.SimpleNamespace(grow=grow, init_state=lambda start, iterations, params: ("state", iterations))
+    fake = types.SimpleNamespace(grow=grow, init_state=lambda start, iterations, params: ("state", iterations),
+                                 seed_chain=lambda seed, params, state: state)  # a one-row seed: the tree unchanged
     monkeypatch.setattr(compiled, "tree_kernel", fake)
     options = types.SimpleNamespace(iterations=5)
     with caplog.at_level(logging.INFO, logger=compiled.__name__):

@@ -44,10 +44,11 @@ from drake_social.arguments import real_array, require_checker, require_instance
 from drake_social.collision.validity import CompiledSceneChecker
 from drake_social.cost.social import SocialCost
 from drake_social.limits import MAX_ITERATIONS
+from drake_social.people import people_model
 from drake_social.people.prediction import Prediction
 from drake_social.planning.algorithms import AlgorithmSpec, algorithm_spec, base_only_weights, make_objective
 from drake_social.planning.replan_eval import PathEvaluation, PathJudge
-from drake_social.planning.replan_search import VERIFY_PATHS, SearchOutcome, run_search, search_planner
+from drake_social.planning.replan_search import VERIFY_PATHS, run_search, search_planner
 from drake_social.planning.rrt_star import compiled
 from drake_social.planning.space import ConfigurationSpace
 
@@ -59,7 +60,7 @@ REPLAN_STATUSES = ("initial", "new", "kept", "wait")
 VERIFY_RESERVE = 0.1
 
 
-@dc.dataclass(frozen=True)
+@dc.dataclass(frozen=True, eq=False)
 class ReplanResult:
     """What one replan decided.
 
@@ -106,6 +107,16 @@ class ReplanResult:
         wp = np.array(self.waypoints, float).reshape(-1, 4)
         wp.flags.writeable = False
         object.__setattr__(self, "waypoints", wp)
+
+    def __eq__(self, other) -> bool:
+        """Equal fields, the waypoints bit for bit (``plan_time`` too: it is
+        wall-clock time, so two runs' results rarely compare equal)."""
+        if not isinstance(other, ReplanResult):
+            return NotImplemented
+        return all(np.array_equal(getattr(self, f.name), getattr(other, f.name)) if f.name == "waypoints"
+                   else getattr(self, f.name) == getattr(other, f.name) for f in dc.fields(self))
+
+    __hash__ = None  # holds an array
 
     @property
     def waiting(self) -> bool:
@@ -163,7 +174,7 @@ class Replanner:
             raise TypeError(f"{who}: checker must have a compiled scene (compiled_scene(), e.g. "
                             f"make_checker(without_people(scenario), 'planar')), got {type(checker).__name__}")
         room = getattr(checker, "scenario", None)
-        if room is not None and (room.people or room.people_file or room.crowd):
+        if room is not None and people_model(room).count > 0:
             raise ValueError(f"{who}: checker must be built on the room without people "
                              "(make_checker(without_people(scenario), 'planar')): the replanner checks people "
                              "against their prediction, not as static discs")
@@ -250,7 +261,8 @@ class Replanner:
             prediction: the people over the horizon.
             previous: the remainder of the path being driven, from ``q_now``
                 to the goal: ``[q_now] + old[index:]`` (N, 4); ``q_now`` is
-                put in front when its first row differs. None, or a single
+                put in front when its first row differs, and a row equal to
+                the one before it is dropped. None, or a single
                 row (a wait), is no candidate. While waiting, pass the path
                 waited on: it is kept again once it is safe.
             replan_index: 0 for the initial plan (``initial_iterations``
@@ -296,7 +308,10 @@ class Replanner:
         search = run_search(self, q, t_now, prediction, candidate, iterations, stop,
                             np.random.default_rng([self.seed, int(replan_index)]))
         best, best_eval = None, None
-        for path in search.paths:
+        for judged, path in enumerate(search.paths):
+            if judged >= VERIFY_PATHS and (best is not None or (
+                    use_deadline and time.perf_counter() > t_start + self.budget)):
+                break  # the first few, and more only while none is safe and the budget lasts
             ev = judge.evaluate(path, t_now)
             if ev.safe and (best_eval is None or ev.cost < best_eval.cost):
                 best, best_eval = path, ev
@@ -308,10 +323,10 @@ class Replanner:
             if initial:
                 why = f"the first plan: cost {search_cost:.4g} after {search.iterations} samples"
             elif candidate is None:
-                why = f"no current path: the search's costs {search_cost:.4g}"
+                why = f"no current path: the search's path costs {search_cost:.4g}"
             elif not cand_safe:
-                why = f"the current path is not safe any more ({self._unsafe_words(cand, judge)}); " \
-                      f"the search's costs {search_cost:.4g}"
+                why = f"the current path is not safe any more ({judge.unsafe_words(cand)}); " \
+                      f"the search's path costs {search_cost:.4g}"
             else:
                 why = (f"the search's path costs {search_cost:.4g}, below (1 - {self.margin:g}) x "
                        f"{cand_cost:.4g} of the current path")
@@ -321,7 +336,7 @@ class Replanner:
                    (f"the search's best costs {search_cost:.4g}, not below (1 - {self.margin:g}) x {cand_cost:.4g}"
                     if best is not None else f"the search found no safe path ({search.message})"))
             return result(candidate, cand_cost, "initial" if initial else "kept", why, **common)
-        return result(q[None], math.inf, "wait", self._wait_words(q, t_now, candidate, cand, judge, search), **common)
+        return result(q[None], math.inf, "wait", judge.wait_words(q, t_now, cand, search.message), **common)
 
     def _candidate(self, q: np.ndarray, previous, who: str) -> np.ndarray | None:
         """The candidate path from ``q`` (None without one)."""
@@ -336,21 +351,5 @@ class Replanner:
                              f"path being driven), its last row is {prev[-1].tolist()}")
         if not np.array_equal(prev[0], q):
             prev = np.vstack([q[None], prev])
-        return prev
-
-    def _unsafe_words(self, ev: PathEvaluation, judge: PathJudge) -> str:
-        """Why a judged path is not safe, in words."""
-        k = ev.first_bad
-        span = f"motion {k}, t = {ev.times[k]:.2f} .. {ev.times[k + 1]:.2f} s"
-        if ev.static_bad == k:
-            return f"{span} collides with the room"
-        return f"{span} comes within {judge.safety:g} m of a predicted person"
-
-    def _wait_words(self, q, t_now, candidate, cand, judge: PathJudge, search: "SearchOutcome") -> str:
-        """Why nothing is safe, in words."""
-        clearance = float(judge.people.clearance(q, t_now))
-        if clearance <= judge.safety:
-            return (f"waiting: a person is {clearance:.3f} m from the robot now (safety distance "
-                    f"{judge.safety:g} m)")
-        now = "no current path" if candidate is None else f"the current path is not safe ({self._unsafe_words(cand, judge)})"
-        return f"waiting: {now}, and the search found no safe path to the goal ({search.message})"
+        repeated = np.all(prev[1:] == prev[:-1], axis=1)  # a waypoint reached exactly: no zero-length motions
+        return np.ascontiguousarray(prev[np.concatenate([[True], ~repeated])])

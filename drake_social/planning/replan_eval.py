@@ -85,7 +85,7 @@ class PathJudge:
         self.safety = float(safety)
         self.max_base_speed = float(max_base_speed)
         self.arm_max_velocity = np.asarray(arm_max_velocity, float).reshape(2)
-        self.people = PeopleSafety(checker.compiled_scene(), prediction, self.safety)
+        self.people_safety = PeopleSafety(checker.compiled_scene(), prediction, self.safety)
 
     def times(self, waypoints: np.ndarray, t0: float) -> np.ndarray:
         """The nominal time (N,) of each waypoint, driven from ``t0``."""
@@ -113,6 +113,25 @@ class PathJudge:
         per_motion = social + lw * length if lw > 0 else social
         ok = np.asarray(self.checker.are_motions_valid(wp[:-1], wp[1:]), bool)
         static_bad = int(np.argmin(ok)) if not ok.all() else -1
-        clear, people_bad = self.people.path_clear(wp, times)
+        clear, people_bad = self.people_safety.path_clear(wp, times)
         return PathEvaluation(times, float(per_motion.sum()), float(social.sum()), float(length.sum()),
                               static_bad, -1 if clear else int(people_bad))
+
+    def unsafe_words(self, ev: PathEvaluation) -> str:
+        """Why a judged path is not safe, in words."""
+        k = ev.first_bad
+        span = f"motion {k}, t = {ev.times[k]:.2f} .. {ev.times[k + 1]:.2f} s"
+        if ev.static_bad == k:
+            return f"{span} collides with the room"
+        return f"{span} comes within {self.safety:g} m of a predicted person"
+
+    def wait_words(self, q: np.ndarray, t: float, candidate: PathEvaluation | None, search: str) -> str:
+        """Why the robot waits at ``q`` at time ``t``, in words: a person
+        within the safety distance now, or the candidate's first unsafe
+        motion (None: no candidate) and the search's account ``search``."""
+        clearance = float(self.people_safety.clearance(q, t))
+        if clearance <= self.safety:
+            return f"waiting: a person is {clearance:.3f} m from the robot now (safety distance {self.safety:g} m)"
+        now = "no current path" if candidate is None else \
+            f"the current path is not safe ({self.unsafe_words(candidate)})"
+        return f"waiting: {now}, and the search found no safe path to the goal ({search})"

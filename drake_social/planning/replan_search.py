@@ -4,7 +4,8 @@ with the path being driven, and its best goal connections.
 The tree's costs are exact for the motions as they were costed; a subtree
 that rewiring moved in time keeps its edges' costs (approximate). The
 replanner therefore takes the best few goal connections in ascending tree
-cost (:data:`VERIFY_PATHS`) and judges each exactly
+cost (:data:`VERIFY_PATHS`, more up to :data:`MAX_JUDGED` while none is
+safe) and judges each exactly
 (:mod:`drake_social.planning.replan_eval`).
 """
 
@@ -23,16 +24,19 @@ from drake_social.planning.rrt_star import compiled
 if TYPE_CHECKING:
     from drake_social.planning.replan import Replanner
 
-__all__ = ["VERIFY_PATHS", "SearchOutcome", "run_search", "search_objective", "search_planner", "tree_path"]
+__all__ = ["MAX_JUDGED", "VERIFY_PATHS", "SearchOutcome", "run_search", "search_objective", "search_planner",
+           "tree_path"]
 
-#: Goal connections of the search judged exactly, in ascending tree cost.
+#: Goal connections of the search judged exactly, in ascending tree cost ...
 VERIFY_PATHS = 4
+#: ... and at most this many when none of the first ones is safe (within the budget).
+MAX_JUDGED = 16
 
 
 class SearchOutcome(NamedTuple):
     """What one replan's search gives the judge."""
 
-    paths: list  #: up to VERIFY_PATHS paths (N, 4) from the root to the goal, in ascending tree cost
+    paths: list  #: up to MAX_JUDGED paths (N, 4) from the root to the goal, in ascending tree cost
     iterations: int  #: samples drawn
     deadline_hit: bool  #: stopped by the wall clock before the iteration cap
     message: str  #: what it did, in words
@@ -90,7 +94,7 @@ def run_search(replanner: "Replanner", q: np.ndarray, t_now: float, prediction: 
             continue
         seen.add(node)
         paths.append(tree_path(tree.nodes, tree.parents, node, goal))
-        if len(paths) == VERIFY_PATHS:
+        if len(paths) == MAX_JUDGED:
             break
     words = (f"{tree.iterations} samples, {len(tree.nodes)} nodes, {len(goal_nodes)} goal connections"
              + (", stopped at the deadline" if tree.deadline_hit else ""))

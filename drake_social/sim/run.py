@@ -16,6 +16,13 @@ are not where the robot met them): the distances to people are measured over
 time from the people log (:mod:`drake_social.experiments.metrics`), and
 :attr:`ExecutionReport.collision_checked` names what was checked.
 
+With ``replan`` (or the scenario's ``planner.replan``) the diagram's planner
+replans every ``1 / planner.replan_rate`` seconds
+(:class:`~drake_social.control.ReplanningPlannerSystem`): the result keeps
+every replan (:attr:`SimulationResult.replans`), their summary
+(:attr:`SimulationResult.replanning`, also in :meth:`SimulationResult.to_json_dict`
+and logged in one line) and, as ``waypoints``, the path followed.
+
 Example::
 
     from drake_social.scenario import load_scenario

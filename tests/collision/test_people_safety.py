@@ -118,6 +118,7 @@ def test_motion_check_is_sound_and_not_overly_conservative(robot, rng):
     assert clear_said / clear_cases >= 0.97
 
 
+@pytest.mark.slow
 def test_grazing_motions_are_caught(robot, rng):
     """People placed so the exact minimum is within a few millimetres of the
     safety distance, either side: every one at or below it is refused."""
@@ -170,6 +171,7 @@ def test_a_walker_crossing_a_still_robot_mid_motion_is_caught(robot):
     walker = _standing((-5.0, 0.0), samples=21, dt=0.5, speed=2.0, velocity=(2.0, 0.0))  # at x = 0 when t = 2.5
     safety = PeopleSafety(scene, walker, SAFETY)
     assert safety.clearance(q_a, 0.0) > 4.0 and safety.clearance(q_b, 5.0) > 3.0  # far at both ends
+    assert _dense_min(geometry, walker, q_a, q_b, 0.0, 5.0) < 0  # the exact distance: they pass through the base
     assert not safety.motion_clear(q_a, q_b, 0.0, 5.0)
     assert safety.path_clear(np.array([q_a, q_a, q_b]), np.array([0.0, 0.1, 5.0])) == (False, 1)
     assert safety.motion_clear(q_a, q_b, 0.0, 0.5)  # over before they arrive
@@ -287,3 +289,32 @@ def test_speed_on_office_walker_like_inputs(robot, rng):
         people_kernel.motion_clear_of_people(*m, *args)
     per_call = (time.perf_counter() - start) / len(motions)
     assert per_call < 1e-3
+
+
+@pytest.mark.slow
+def test_motion_check_is_sound_in_odd_cases(robot, rng):
+    """Fast walkers, one-sample predictions, late t0 (rounding), zero-length
+    and zero-duration motions, safety 0 .. 0.3 m: never a false clear."""
+    scene, geometry = robot
+    near = 0
+    for trial in range(300):
+        people, samples = int(rng.integers(1, 4)), int(rng.integers(1, 25))
+        dt, t0 = float(rng.choice([0.05, 0.1, 0.3])), float(rng.choice([0.0, 1000.0, 12345.678]))
+        walk = np.cumsum(rng.normal(0.0, 2.5, (samples - 1, people, 2)) * dt, axis=0)
+        pos = rng.uniform(-1.5, 1.5, (1, people, 2)) + np.concatenate([np.zeros((1, people, 2)), walk])
+        pos[:, :int(rng.integers(0, 2))] = pos[:1, :1]  # sometimes one stands
+        step = np.diff(pos, axis=0)
+        speeds = np.hypot(step[..., 0], step[..., 1]).max(axis=0) / dt if samples > 1 else np.zeros(people)
+        pred = Prediction(t0=t0, dt=dt, positions=pos, headings=np.zeros((samples, people)),
+                          present=rng.random((samples, people)) > 0.1, radii=rng.uniform(0.1, 0.3, people),
+                          speeds=speeds, max_speeds=speeds, names=tuple(map(str, range(people))))
+        q_a, q_b, duration = _motion(rng, 3.0)
+        if trial % 5 == 0:
+            q_b = q_a.copy()
+        t_a = t0 + rng.uniform(-0.5, (samples - 1) * dt + 0.5)
+        t_b = t_a + (duration if trial % 7 else 0.0)
+        safety = float(rng.choice([0.0, 0.05, 0.3]))
+        if _dense_min(geometry, pred, q_a, q_b, t_a, t_b, n=1001) <= safety:
+            near += 1
+            assert not PeopleSafety(scene, pred, safety).motion_clear(q_a, q_b, t_a, t_b), f"trial {trial}"
+    assert near > 50

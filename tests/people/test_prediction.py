@@ -125,8 +125,8 @@ def test_perfect_prediction_equals_the_scripted_peoples_states(walkers):
     assert pred.max_speeds.max() > 0.5  # people walk
     # At the sample times, state_at is the model's state.
     for k in (0, 17, 50):
-        np.testing.assert_allclose(pred.state_at(t_now + 0.1 * k).positions, walkers.state_at(t_now + 0.1 * k).positions,
-                                   atol=1e-12)
+        t = t_now + 0.1 * k
+        np.testing.assert_allclose(pred.state_at(t).positions, walkers.state_at(t).positions, atol=1e-12)
     assert predict("perfect", walkers, state, 5.0, 0.1).positions.tobytes() == pred.positions.tobytes()
 
 

@@ -158,22 +158,21 @@ planner: {iterations: 1500, planning_range: 2.0, near_radius: 3.0, replan_iterat
 execution: {time_limit: 90.0}
 """
 
-#: The walker: standing at the block's corner of the route's exit, then into the middle of
-#: the corridor towards the robot, where they stay. y of the corridor: north 6.0, south 1.0.
+#: The walker: standing in the north-east corner (where the first plan sees them, the same for
+#: both routes), then at 1.2 m/s into the east end of one corridor, where they stay (blocking it:
+#: 0.75 m are left on either side, the robot is 0.95 m wide).
+WALKERS = {
+    "north": [[2.5, 11.5, 6.5], [4.6, 9.0, 6.0], [5.85, 7.5, 6.0]],
+    "south": [[0.5, 11.5, 6.5], [3.6, 9.3, 3.5], [5.7, 9.0, 1.0], [6.95, 7.5, 1.0]],
+}
 WALKER = """
 people:
-  - name: walker
-    x: 8.6
-    y: {y0}
-    theta: 3.1416
-    radius: 0.25
-    trajectory: [[2.0, 8.6, {y0}], [4.0, 8.6, {y}], [6.0, 6.4, {y}]]
+  - {{name: walker, x: 11.5, y: 6.5, theta: 3.1416, radius: 0.25, trajectory: {trajectory}}}
 """
 
 
 def _corridor(route: str):
-    y0, y = (6.6, 6.0) if route == "north" else (0.4, 1.0)
-    return load_scenario_text(CORRIDOR + WALKER.format(y0=y0, y=y), f"corridor, walker {route}")
+    return load_scenario_text(CORRIDOR + WALKER.format(trajectory=WALKERS[route]), f"corridor, walker {route}")
 
 
 def _route(waypoints) -> str:
@@ -188,18 +187,13 @@ def walked():
     """The corridor with the walker stepping into the first plan's route (the first plan only sees
     the walker standing at the corridor's end, the same for both routes), run twice."""
     pytest.importorskip("drake_social.planning.replan")
-    for route in ("south", "north"):
-        scenario = _corridor(route)
-        built = build_diagram(scenario, replan=True)
-        context = built.diagram.CreateDefaultContext()
-        built.diagram.ExecuteInitializationEvents(context)
-        planner = built.subsystem("planner")
-        first = planner.GetOutputPort("waypoints").Eval(planner.GetMyContextFromRoot(context))
-        if _route(first) == route:
-            break
-    else:
-        pytest.fail("the first plan takes neither route")
-    runs = [simulate(scenario, mode="kinematic", replan=True, analyze=False) for _ in range(2)]
+    built = build_diagram(_corridor("north"), replan=True)
+    context = built.diagram.CreateDefaultContext()
+    built.diagram.ExecuteInitializationEvents(context)
+    planner = built.subsystem("planner")
+    route = _route(planner.GetOutputPort("waypoints").Eval(planner.GetMyContextFromRoot(context)))
+    scenario = _corridor(route)
+    runs = [simulate(scenario, mode="kinematic", replan=True, analyze=k == 0) for k in range(2)]
     return scenario, route, runs
 
 
@@ -215,6 +209,8 @@ def test_the_robot_never_comes_within_the_safety_distance_of_the_walker(walked):
     # The walker mattered: the robot changed route or waited.
     assert any(s in ("new", "wait") for s in statuses[1:]) or run.stops
     assert run.replanning["count"] == len(run.replans) - 1 > 0
+    # The hand-overs (a turn from the current motion towards the new path) stay clear of the block and walls.
+    assert run.report.collision_free and run.report.within_limits
 
 
 @pytest.mark.slow
@@ -224,3 +220,16 @@ def test_same_seed_same_episode_bit_for_bit(walked):
     np.testing.assert_array_equal(a.times, b.times)
     assert [(r.t, r.status, r.cost) for r in a.replans] == [(r.t, r.status, r.cost) for r in b.replans]
     assert not any(r.deadline_hit for r in a.replans)  # the iteration cap bound, not the clock
+
+
+def test_replan_none_follows_the_scenario_when_it_plans(tiny):
+    from drake_social.sim.diagram import resolve_replan
+
+    on = dc.replace(tiny, planner=dc.replace(tiny.planner, replan=True))
+    assert resolve_replan(on, None, False, True, "f") is True
+    assert resolve_replan(on, None, True, True, "f") is False  # a given path is executed as given
+    assert resolve_replan(on, None, False, False, "f") is False  # a planner outside the diagram
+    assert resolve_replan(tiny, None, False, True, "f") is False
+    assert resolve_replan(on, False, False, True, "f") is False
+    with pytest.raises(ValueError, match="f: replan=True needs the built-in planner"):
+        resolve_replan(tiny, True, False, False, "f")

@@ -29,11 +29,18 @@ the motion's end, then
 Rewiring costs and people-checks the motion new -> near at ``tnode[new]``
 (the parent choice's cost was at the near node's time: not reused; the
 static part of its check is); a re-parented subtree's times are recomputed
-as its costs are propagated (its edges' costs are kept: approximate during
-the search, the replanner re-evaluates what it returns). Lazy costs stay
-exact (the social part is >= 0). Disabled, the loop runs exactly as
-without it, bit for bit. :func:`seed_chain` inserts a warm start's path as
-a chain from the root before the first sample.
+as its costs are propagated, its edges' costs kept (approximate during the
+search: the replanner re-evaluates what it uses), its edges' people checks
+redone at the new times: an edge that fails is cut off (cost inf, so its
+subtree is never a parent nor a solution until a rewiring reattaches it).
+A goal connection is costed and checked at its node's time; when that time
+has moved, the connection is redone before it can be the best. So every
+finite tree cost belongs to a path valid at its nodes' current times, and
+the best cost, unlike the static loop's, may rise (or become inf again)
+when a rewiring cuts the best path off. Lazy costs stay exact (the social
+part is >= 0). Disabled, the loop runs exactly as without it, bit for bit.
+:func:`seed_chain` inserts a warm start's path as a chain from the root
+before the first sample.
 """
 
 from __future__ import annotations
@@ -582,14 +589,17 @@ def _rewire_timed(i_new, m, near_idx, q_a, q_b, bound, checked, c_new_caps, q, p
     """The timed mode's rewiring of the near nodes (slots 0 .. m - 1 of
     ``near_idx``, configurations ``q_a``; ``q_b`` rows are the new node's)
     through the new node ``i_new``: each motion new -> near is costed and
-    people-checked from ``tnode[i_new]`` (lazily: only where ``c_new +
-    lambda * length`` can improve the near node); the static checks of the
-    parent choice (``checked``) are reused. A re-parented subtree's costs and
-    times are recomputed from its parents (its edge costs kept)."""
+    people-checked from ``tnode[i_new]``, only where ``c_new + lambda *
+    length`` (a lower bound of its cost, the social part >= 0) can improve
+    the near node, lazy or not (the same rewiring, fewer integrals); the
+    static checks of the parent choice (``checked``) are reused. A
+    re-parented subtree's costs and times are recomputed from its parents
+    (its edge costs kept); a moved descendant's motion is people-checked
+    again at its new times and cut off (edge cost inf) when invalid, so every
+    node of finite cost has a tree path valid at its current times."""
     tp = params.timed
     kind, lam, dw, soc, grid = params.kind, params.length_weight, params.distance_weights, params.social, params.grid
     c_lower, c_upper, bodies, robot, env, levers = params.scene
-    lazy_bound = params.lazy and kind == 1 and lam > 0  # bound = lambda * length, a lower bound of every cost
     q_new = q[i_new]
     c_new = cost[i_new]
     t_new = tnode[i_new]
@@ -602,7 +612,7 @@ def _rewire_timed(i_new, m, near_idx, q_a, q_b, bound, checked, c_new_caps, q, p
     nt = 0
     for s in range(m):
         j = near_idx[s]
-        if j != parent[i_new] and (not lazy_bound or c_new + bound[s] < cost[j]):
+        if j != parent[i_new] and c_new + lam * math.sqrt(_d2(q_new, q_a[s], dw)) < cost[j]:
             todo[nt] = s
             nt += 1
     if nt > 0:
