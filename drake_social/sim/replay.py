@@ -32,6 +32,7 @@ import math
 import os
 import tempfile
 from pathlib import Path
+from typing import Sequence
 
 import numpy as np
 from pydrake.geometry import (
@@ -60,11 +61,13 @@ from drake_social.sim.replay_meshes import (  # noqa: F401  (textured_quad, set_
     VISUALIZER_PREFIX,
     arrow_mesh,
     field_png,
+    ribbon_mesh,
     set_texture_properties,
     textured_quad,
 )
 from drake_social.sim.replay_pack import compact_page
 from drake_social.sim.replay_people import animate_people, standing_mask, standing_people
+from drake_social.sim.replay_plans import animate_plans, path_width
 from drake_social.viz.world import (  # noqa: F401  (FIELD_MAX_CELLS, field_resolution: re-exported)
     FIELD_MAX_CELLS,
     FIELD_MIN_RESOLUTION,
@@ -79,6 +82,7 @@ __all__ = [
     "VISUALIZER_PREFIX",
     "add_visualizer",
     "animate_people",
+    "animate_plans",
     "draw_overlays",
     "field_resolution",
     "finish_recording",
@@ -156,45 +160,6 @@ def _field_mesh(scenario: Scenario, png: bytes | None = None) -> Mesh:
     return textured_quad(tuple(scenario.world.bounds), _field_png(scenario) if png is None else png)
 
 
-def ribbon_mesh(points: np.ndarray, width: float, z: float) -> tuple[np.ndarray, np.ndarray]:
-    """A flat strip of ``width`` metres along a 2-D polyline, at height ``z``.
-
-    Joints are mitred (the miter is capped at 3 half-widths so that a sharp
-    turn does not spike). Repeated points are dropped.
-
-    Args:
-        points: (N, 2) polyline, metres, N >= 2 distinct points.
-        width: strip width, metres (> 0).
-        z: height of the strip, metres.
-
-    Returns:
-        vertices (3, 2N) and faces (3, 2(N-1)) int32, as
-        ``Meshcat.SetTriangleMesh`` takes them.
-    """
-    p = np.asarray(points, float)[:, :2]
-    keep = np.r_[True, np.any(np.diff(p, axis=0) != 0, axis=1)]
-    p = p[keep]
-    if len(p) < 2:
-        raise ValueError(f"a ribbon needs at least 2 distinct points, got {len(p)}")
-    seg = np.diff(p, axis=0)
-    seg /= np.linalg.norm(seg, axis=1, keepdims=True)
-    normals = np.stack([-seg[:, 1], seg[:, 0]], axis=1)
-    # Per vertex: the mean of the adjacent segment normals, scaled to keep the
-    # strip's width along both segments (1 / cos of the half turn).
-    n = np.vstack([normals[:1], normals[:-1] + normals[1:], normals[-1:]])
-    n /= np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-12)
-    adjacent = np.vstack([normals[:1], normals])
-    cos_half = np.clip(np.sum(n * adjacent, axis=1), 1.0 / 3.0, 1.0)
-    offset = n * (width / 2 / cos_half)[:, None]
-    left, right = p + offset, p - offset
-    vertices = np.empty((3, 2 * len(p)))
-    vertices[:2, 0::2], vertices[:2, 1::2] = left.T, right.T
-    vertices[2] = z
-    k = np.arange(len(p) - 1)
-    faces = np.concatenate([np.stack([2 * k, 2 * k + 1, 2 * k + 2]), np.stack([2 * k + 1, 2 * k + 3, 2 * k + 2])], axis=1)
-    return np.asfortranarray(vertices), np.asfortranarray(faces.astype(np.int32))
-
-
 def draw_overlays(
     meshcat: Meshcat,
     scenario: Scenario,
@@ -202,6 +167,7 @@ def draw_overlays(
     *,
     prefix: str = OVERLAY_PREFIX,
     people: PeopleLog | None = None,
+    replans: Sequence | None = None,
 ) -> None:
     """Draws the heat map, the people's facing arrows and the planned path.
 
@@ -223,6 +189,12 @@ def draw_overlays(
             arrow and heat-map quad each (:func:`animate_people`, at
             ``scenario.execution.replay_fps``, the recording's rate); None or
             a static log: the scenario's people at t = 0, as always.
+        replans: the run's replanning log (``SimulationResult.replans``, a
+            sequence of ReplanResult; call after :func:`finish_recording`):
+            when not empty, each distinct plan and wait is drawn, visible
+            from its time until the next (:func:`animate_plans`, at
+            ``scenario.execution.replay_fps``), and ``waypoints`` is not
+            drawn; None or empty: the one path ``waypoints``.
     """
     if not prefix.startswith("/"):
         raise ValueError(f"prefix must be an absolute Meshcat path (start with '/'), got {prefix!r}")
@@ -246,17 +218,18 @@ def draw_overlays(
     for i, (x, y), theta, radius in zip(labels, standing.positions, standing.headings, standing.radii):
         vertices, faces = arrow_mesh(float(x), float(y), float(theta), float(radius))
         meshcat.SetTriangleMesh(f"{prefix}/people/{i}", vertices, faces, ARROW_RGBA)
-    if waypoints is not None:
+    replanned = replans is not None and len(replans) > 0
+    if waypoints is not None and not replanned:
         xy = np.asarray(waypoints, float).reshape(len(waypoints), -1)[:, :2]
         if len(np.unique(xy, axis=0)) >= 2:
-            x0, y0, x1, y1 = (float(v) for v in scenario.world.bounds)
-            width = max(PATH_WIDTH, max(x1 - x0, y1 - y0) / 250)  # a few pixels wide in the top view
-            vertices, faces = ribbon_mesh(xy, width, PATH_Z)
+            vertices, faces = ribbon_mesh(xy, path_width(scenario), PATH_Z)
             meshcat.SetTriangleMesh(f"{prefix}/path", vertices, faces, PATH_RGBA)
         else:
             _log.warning("path of %d waypoint(s) has fewer than 2 distinct points: not drawn", len(xy))
     if walking:
         animate_people(meshcat, scenario, people, float(scenario.execution.replay_fps), prefix=prefix, vmax=vmax)
+    if replanned:
+        animate_plans(meshcat, scenario, replans, float(scenario.execution.replay_fps), prefix=prefix)
 
 
 def top_view_frame(scenario: Scenario, *, aspect: float | None = 16 / 9,

@@ -31,6 +31,7 @@ __all__ = [
     "arrow_mesh",
     "field_png",
     "set_texture_properties",
+    "ribbon_mesh",
     "textured_quad",
 ]
 
@@ -120,3 +121,42 @@ def arrow_mesh(x: float, y: float, theta: float, radius: float) -> tuple[np.ndar
     vertices = np.vstack([xy.T, np.full(len(xy), ARROW_Z)])
     faces = np.array([[0, 1, 2], [0, 2, 3], [4, 5, 6]], dtype=np.int32).T
     return np.asfortranarray(vertices), np.asfortranarray(faces)
+
+
+def ribbon_mesh(points: np.ndarray, width: float, z: float) -> tuple[np.ndarray, np.ndarray]:
+    """A flat strip of ``width`` metres along a 2-D polyline, at height ``z``.
+
+    Joints are mitred (the miter is capped at 3 half-widths so that a sharp
+    turn does not spike). Repeated points are dropped.
+
+    Args:
+        points: (N, 2) polyline, metres, N >= 2 distinct points.
+        width: strip width, metres (> 0).
+        z: height of the strip, metres.
+
+    Returns:
+        vertices (3, 2N) and faces (3, 2(N-1)) int32, as
+        ``Meshcat.SetTriangleMesh`` takes them.
+    """
+    p = np.asarray(points, float)[:, :2]
+    keep = np.r_[True, np.any(np.diff(p, axis=0) != 0, axis=1)]
+    p = p[keep]
+    if len(p) < 2:
+        raise ValueError(f"a ribbon needs at least 2 distinct points, got {len(p)}")
+    seg = np.diff(p, axis=0)
+    seg /= np.linalg.norm(seg, axis=1, keepdims=True)
+    normals = np.stack([-seg[:, 1], seg[:, 0]], axis=1)
+    # Per vertex: the mean of the adjacent segment normals, scaled to keep the
+    # strip's width along both segments (1 / cos of the half turn).
+    n = np.vstack([normals[:1], normals[:-1] + normals[1:], normals[-1:]])
+    n /= np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-12)
+    adjacent = np.vstack([normals[:1], normals])
+    cos_half = np.clip(np.sum(n * adjacent, axis=1), 1.0 / 3.0, 1.0)
+    offset = n * (width / 2 / cos_half)[:, None]
+    left, right = p + offset, p - offset
+    vertices = np.empty((3, 2 * len(p)))
+    vertices[:2, 0::2], vertices[:2, 1::2] = left.T, right.T
+    vertices[2] = z
+    k = np.arange(len(p) - 1)
+    faces = np.concatenate([np.stack([2 * k, 2 * k + 1, 2 * k + 2]), np.stack([2 * k + 1, 2 * k + 3, 2 * k + 2])], axis=1)
+    return np.asfortranarray(vertices), np.asfortranarray(faces.astype(np.int32))

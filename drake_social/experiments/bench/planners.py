@@ -41,6 +41,7 @@ import numpy as np
 from drake_social.collision.drake_checker import CHECKERS, make_checker
 from drake_social.planning.space import ConfigurationSpace
 from drake_social.collision.validity import ValidityChecker
+from drake_social.experiments.bench.machine import cpu_model, load_average as _load_average
 from drake_social.experiments.records import run_record
 from drake_social.io.records import write_json
 from drake_social.limits import PAPER_PLANNER
@@ -185,30 +186,6 @@ def _plan_ompl_runs(scenario: Scenario, key: str, iterations: int, seeds: int, c
             "summary": summarize(runs)}
 
 
-def cpu_model(cpuinfo: str | Path = "/proc/cpuinfo") -> str | None:
-    """The processor's model name (Linux's ``/proc/cpuinfo``), else
-    ``platform.processor()``, else None: times from different processors
-    are not comparable, so the bench says which one it ran on."""
-    try:
-        for line in Path(cpuinfo).read_text(errors="replace").splitlines():
-            key, sep, value = line.partition(":")
-            if sep and key.strip() == "model name" and value.strip():
-                return value.strip()
-    except OSError:
-        pass
-    return platform.processor() or None
-
-
-def _load_average() -> list[float] | None:
-    """The 1, 5 and 15 minute load averages (None where the OS has none).
-    The bench itself keeps about one CPU busy: a load well above 1 at its
-    end, or above 0 at its start, means other work shared the machine."""
-    try:
-        return [round(x, 2) for x in os.getloadavg()]
-    except (AttributeError, OSError):
-        return None
-
-
 def _machine() -> dict:
     def version(name: str) -> str | None:
         try:
@@ -235,6 +212,9 @@ def run_bench(
     sim_runs: int = 0,
     scaling: bool = False,
     repeats: int = 1,
+    replan_runs: int = 0,
+    replan_count: int = 200,
+    replan_scenario: str | Path | None = None,
     out_dir: str | Path,
     progress: Callable[[int, int, str], None] | None = None,
 ) -> dict:
@@ -264,11 +244,21 @@ def run_bench(
             median of its repeats' (``planning_times``: all of them). A seeded run
             repeats its path exactly, so this only filters the machine's
             noise (other processes, a shared host) out of the times.
+        replan_runs: when > 0, also the replanning benchmark
+            (:func:`~drake_social.experiments.bench.replanning.run_replan_bench`
+            on ``replan_scenario``): replan times over a rollout of
+            ``replan_count`` replans and the realtime factor of this many
+            simulated kinematic runs with replanning (``replan_bench``).
+        replan_count: replans of that rollout (>= 1).
+        replan_scenario: its scenario file (None:
+            :data:`~drake_social.experiments.bench.replanning.REPLAN_SCENARIO`,
+            the office with walkers).
         out_dir: where the two files go (created).
         progress: optional ``progress(done, total, label)`` after each run.
 
     Returns:
-        ``{"settings", "machine", "ompl", "scenarios", "checker_bench"}``;
+        ``{"settings", "machine", "ompl", "scenarios", "checker_bench", "sim_bench",
+        "scaling_bench", "replan_bench"}`` (the last three None when not run);
         ``scenarios[file name]`` has ``algorithms[name] = {"runs": [...],
         "summary": {...}, "vs_ompl": {...}}`` and ``ompl[objective] =
         {"settings", "runs", "summary"}``. Per run: a run record
@@ -289,6 +279,8 @@ def run_bench(
             raise ValueError(f"{label} {value!r} not allowed; allowed: {', '.join(CHECKERS)}")
     if iterations < 1 or seeds < 1 or repeats < 1:
         raise ValueError(f"iterations, seeds and repeats must be >= 1, got {iterations}, {seeds}, {repeats}")
+    if replan_runs < 0 or replan_count < 1:
+        raise ValueError(f"replan_runs must be >= 0 and replan_count >= 1, got {replan_runs}, {replan_count}")
     paths = [Path(p) for p in scenario_paths]
     if not paths:
         raise ValueError("scenario_paths is empty")
@@ -300,6 +292,7 @@ def run_bench(
     total = len(paths) * seeds * (len(algorithms) + len(keys) * len(ompl_sets)) + (1 if include_checker else 0)
     total += len(paths) * len(SIM_MODES) * len(EXECUTIONS) * (sim_runs + 1) if sim_runs > 0 else 0
     total += len(paths) * (4 + 2 + 5 + 3) if scaling else 0  # run_scaling_bench's defaults
+    total += 1 + replan_runs if replan_runs > 0 else 0  # the rollout and the runs
     done = 0
 
     def tick(label: str) -> None:
@@ -376,6 +369,13 @@ def run_bench(
 
         scaling_bench = run_scaling_bench(scenario_paths=paths, checker=checker, progress=tick)
 
+    replan_bench = None
+    if replan_runs > 0:
+        from drake_social.experiments.bench.replanning import REPLAN_SCENARIO, run_replan_bench
+
+        replan_bench = run_replan_bench(REPLAN_SCENARIO if replan_scenario is None else replan_scenario,
+                                        count=replan_count, runs=replan_runs, progress=tick)
+
     out = {
         "settings": {"scenario_paths": [str(p) for p in paths], "algorithms": algorithms, "iterations": iterations,
                      "seeds": list(range(seeds)), "checker": checker, "ompl_checker": ompl_checker,
@@ -386,6 +386,7 @@ def run_bench(
         "checker_bench": checker_bench,
         "sim_bench": sim_bench,
         "scaling_bench": scaling_bench,
+        "replan_bench": replan_bench,
     }
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
@@ -500,4 +501,8 @@ def _markdown(out: dict) -> str:
         from drake_social.experiments.bench.scaling import markdown as scaling_markdown
 
         lines += scaling_markdown(out["scaling_bench"])
+    if out.get("replan_bench"):
+        from drake_social.experiments.bench.replanning import replan_markdown
+
+        lines += replan_markdown(out["replan_bench"])
     return "\n".join(lines) + "\n"
