@@ -240,7 +240,7 @@ def _add_experiment(subparsers) -> None:
 
 
 def _add_crowd_arguments(crowd: argparse.ArgumentParser) -> None:
-    from drake_social.experiments.crowd import DEFAULT_SCENARIOS, MAX_EPISODES, VARIANTS
+    from drake_social.limits import CROWD_SCENARIOS as DEFAULT_SCENARIOS, CROWD_VARIANTS as VARIANTS, MAX_EPISODES
 
     crowd.add_argument("--scenarios", type=Path, nargs="+", default=[Path(s) for s in DEFAULT_SCENARIOS],
                        metavar="FILE", help=f"scenario files with walking people (default: {' '.join(DEFAULT_SCENARIOS)})")

@@ -55,6 +55,7 @@ from drake_social.errors import ScenarioError
 from drake_social.experiments.study.executors import map_tasks
 from drake_social.experiments.study.scenarios import load_cached
 from drake_social.io.textfile import read_yaml_file
+from drake_social.limits import CROWD_SCENARIOS, CROWD_VARIANTS, MAX_EPISODES
 from drake_social.scenario.schema import Scenario
 
 __all__ = ["DEFAULT_SCENARIOS", "JITTER_TAG", "MAX_EPISODES", "TRACE_STEP", "VARIANTS", "CrowdResult", "CrowdStudy",
@@ -63,8 +64,9 @@ __all__ = ["DEFAULT_SCENARIOS", "JITTER_TAG", "MAX_EPISODES", "TRACE_STEP", "VAR
 _log = logging.getLogger(__name__)
 
 #: The scenarios of the study by default (relative to the working directory).
-DEFAULT_SCENARIOS = ("scenarios/office_walkers.yaml", "scenarios/lobby_crowd.yaml")
-#: Variant name -> the scenario overrides (YAML, as ``--set``) that make it.
+DEFAULT_SCENARIOS = CROWD_SCENARIOS
+#: Variant name -> the scenario overrides (YAML, as ``--set``) that make it
+#: (the names: :data:`drake_social.limits.CROWD_VARIANTS`, in this order).
 VARIANTS: dict[str, tuple[str, ...]] = {
     "plan_once": ("planner: {replan: false, algorithm: social_rrt_star}",),
     "replan_base": ("planner: {replan: true, algorithm: base_rrt_star}",),
@@ -73,8 +75,6 @@ VARIANTS: dict[str, tuple[str, ...]] = {
 }
 #: The second word of a walker's start-delay seed, [s_k, JITTER_TAG, i] ("JITT").
 JITTER_TAG = 0x4A495454
-#: Most episodes per scenario.
-MAX_EPISODES = 10_000
 #: Seconds between the samples of an episode's trace (the snapshots' data).
 TRACE_STEP = 0.25
 
