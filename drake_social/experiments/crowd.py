@@ -59,7 +59,8 @@ from drake_social.limits import CROWD_SCENARIOS, CROWD_VARIANTS, MAX_EPISODES
 from drake_social.scenario.schema import Scenario
 
 __all__ = ["DEFAULT_SCENARIOS", "JITTER_TAG", "MAX_EPISODES", "TRACE_STEP", "VARIANTS", "CrowdResult", "CrowdStudy",
-           "crowd_tasks", "episode_seeds", "perturb", "replan_stats", "run_crowd", "run_episode", "walker_delays"]
+           "check_crowd_study", "crowd_tasks", "episode_scenario", "episode_seeds", "perturb", "replan_stats", "replanning_available",
+           "run_crowd", "run_episode", "walker_delays"]
 
 _log = logging.getLogger(__name__)
 
@@ -98,7 +99,7 @@ class CrowdStudy:
 
     name: str = "crowd"
     scenarios: tuple[str, ...] = DEFAULT_SCENARIOS
-    variants: tuple[str, ...] = tuple(VARIANTS)
+    variants: tuple[str, ...] = CROWD_VARIANTS
     episodes: int = 20
     seed: int = 0
     jitter: float = 5.0
@@ -218,10 +219,35 @@ def crowd_tasks(study: CrowdStudy) -> list[dict]:
     return tasks
 
 
+def check_crowd_study(study: CrowdStudy) -> list[dict]:
+    """The study's tasks (:func:`crowd_tasks`), once the simulator is known to
+    replan when a variant asks for it.
+
+    Raises:
+        ScenarioError: as :func:`crowd_tasks`; a replanning variant where
+            :func:`replanning_available` is False.
+    """
+    if any(VARIANTS[v] != VARIANTS["plan_once"] for v in study.variants) and not replanning_available():
+        raise ScenarioError(f"crowd study: variants {list(study.variants)}: {_NO_REPLANNING}")
+    return crowd_tasks(study)
+
+
 def episode_scenario(task: dict) -> tuple[Scenario, dict[int, float]]:
     """The perturbed scenario of a task (:func:`perturb`) and its walkers' delays."""
     base = load_cached(task["source"], task["scenario_text"], tuple(task["overrides"]), f"variant {task['variant']}")
     return perturb(base, task["seed"], task["jitter"])
+
+
+def replanning_available() -> bool:
+    """Whether :func:`~drake_social.sim.run.simulate` replans in the loop
+    (``simulate(..., replan=True)``, issue 21's replanning planner system)."""
+    from drake_social.sim.run import simulate
+
+    return "replan" in inspect.signature(simulate).parameters
+
+
+_NO_REPLANNING = ("the replanning variants need simulate(..., replan=True) (issue 21's replanning planner system), "
+                  "which this installation does not have; run --variants plan_once")
 
 
 def _simulate(scenario: Scenario, checker, time_limit):
@@ -229,11 +255,9 @@ def _simulate(scenario: Scenario, checker, time_limit):
 
     options = {}
     if scenario.planner.replan:
-        # Replanning is the diagram's (issue 21's ReplanningPlannerSystem); a
-        # simulator without it would silently plan once.
-        if "replan" not in inspect.signature(simulate).parameters:
-            raise RuntimeError("the replanning variants need simulate(..., replan=True) (issue 21's replanning "
-                               "planner system), which this installation does not have; run --variants plan_once")
+        # Replanning is the diagram's; a simulator without it would silently plan once.
+        if not replanning_available():
+            raise RuntimeError(_NO_REPLANNING)
         options["replan"] = True
     # analyze=False: the executed trajectory's own analysis (social cost
     # against the plan, the room's collision check) is not the study's and
@@ -341,7 +365,7 @@ def run_crowd(study: CrowdStudy, *, executor: str = "process", workers: int = 1,
     """Runs every episode of ``study`` on an executor
     (:func:`~drake_social.experiments.study.executors.map_tasks`: in this
     process, a process pool or Dask); the records in task order."""
-    tasks = crowd_tasks(study)
+    tasks = check_crowd_study(study)
     t0 = time.perf_counter()
     records = map_tasks(run_episode, tasks, executor=executor, workers=workers, scheduler=scheduler,
                         progress=progress)

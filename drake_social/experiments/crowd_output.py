@@ -71,7 +71,7 @@ def write_figures(result: CrowdResult, out: Path) -> list[str]:
             episode = next(r for r in runs if "trace" in r)
             fig = snapshots_figure(result.scenario(stem), traced,
                                    title=f"{stem}, episode {episode['episode']} (seed {episode['seed']}): robot, "
-                                   "people, base track so far (dashed) and the path followed then (solid)")
+                                   "people, base track so far (red, dashed) and the path followed then (blue)")
             fig.savefig(out / f"snapshots_{stem}.png", dpi=90)
             names.append(f"snapshots_{stem}.png")
     return names
@@ -105,10 +105,10 @@ def run_crowd_study(study: CrowdStudy, out: str | Path, *, executor: str = "proc
     Raises:
         ScenarioError: a scenario or variant is invalid (before any episode).
     """
-    from drake_social.experiments.crowd import crowd_tasks, run_crowd
+    from drake_social.experiments.crowd import check_crowd_study, run_crowd
     from drake_social.io.outputs import OutputSet
 
-    crowd_tasks(study)  # every scenario and variant loaded and checked before the output folder is taken
+    check_crowd_study(study)  # every scenario and variant loaded and checked before the output folder is taken
     failure = None
     with OutputSet(out, "experiment", names=crowd_output_names(study)) as outputs:
         result = run_crowd(study, executor=executor, workers=workers, scheduler=scheduler, progress=progress)

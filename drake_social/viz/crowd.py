@@ -30,7 +30,7 @@ __all__ = ["VARIANT_COLORS", "part_boxplots_figure", "plan_at", "snapshot_times"
 #: Box colours of the variants, in the study's order.
 VARIANT_COLORS = ("#7f7f7f", "#ff9896", "#1f77b4", "#2ca02c", "#9467bd")
 #: Colour of the executed base track in the snapshots.
-TRACK_COLOR = "#555555"
+TRACK_COLOR = "#d62728"
 
 
 def part_boxplots_figure(values: Mapping[str, Mapping[str, Mapping[str, Sequence[float]]]], *, title: str,
@@ -144,8 +144,8 @@ def snapshots_figure(scenario: Scenario, traces: Mapping[str, Mapping], *, count
             draw_start_goal(ax, scenario, labels=False)
             plan = plan_at(tr.get("plans", ()), times[k])
             if len(plan):
-                ax.plot(plan[:, 0], plan[:, 1], "-", color=PATH_COLOR, linewidth=1.2, alpha=0.8, zorder=3)
-            ax.plot(q[: k + 1, 0], q[: k + 1, 1], "--", color=TRACK_COLOR, linewidth=0.9, zorder=3)
+                ax.plot(plan[:, 0], plan[:, 1], "-", color=PATH_COLOR, linewidth=1.0, alpha=0.6, zorder=3)
+            ax.plot(q[: k + 1, 0], q[: k + 1, 1], "--", color=TRACK_COLOR, linewidth=1.3, zorder=4)
             draw_robot(ax, geometry, q[k], interest_points=False)
             ended = " (ended)" if t > times[-1] + 1e-9 else ""
             ax.set_title(fit_width(f"{label}: t = {times[k]:.1f} s{ended}", width - 0.2, 8, max_lines=2), fontsize=8)

@@ -3,6 +3,7 @@ perturbation, statistics on hand-made records, and a tiny study end to end."""
 
 from __future__ import annotations
 
+import dataclasses as dc
 import json
 import math
 import types
@@ -230,3 +231,14 @@ def test_tiny_study_writes_its_outputs_and_does_not_depend_on_the_workers(tiny_w
         return json.dumps({k: v for k, v in r.items() if k not in _MACHINE}, sort_keys=True, default=str)
 
     assert [same(r) for r in one.records] == [same(r) for r in two.records]
+
+
+def test_a_replanning_variant_needs_a_simulator_that_replans(tiny_walker, monkeypatch):
+    from drake_social.experiments import crowd
+
+    study = CrowdStudy(scenarios=(str(tiny_walker),), variants=("plan_once", "replan_multi"), episodes=1)
+    monkeypatch.setattr(crowd, "replanning_available", lambda: False)
+    with pytest.raises(ScenarioError, match=r"crowd study: variants \['plan_once', 'replan_multi'\]: the replanning "
+                       r"variants need simulate\(\.\.\., replan=True\)"):
+        crowd.check_crowd_study(study)
+    assert len(crowd.check_crowd_study(dc.replace(study, variants=("plan_once",)))) == 1
