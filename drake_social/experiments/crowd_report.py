@@ -90,6 +90,9 @@ def claim_line(c: Comparison, scenario: str) -> str:
     (median 1.2 s vs 3.4 s, median difference -0.8 s, Wilcoxon p = 0.012)``."""
     what, unit = _metric_words(c.metric)
     u = f" {unit}" if unit else ""
+    if c.n == 0:
+        return (f"- **{c.verdict.upper()}**: {scenario}: {_LABEL[c.a[1]]} vs {_LABEL[c.b[1]]}: {what} {c.claim}: no "
+                "paired episode has a value on both sides")
     return (f"- **{c.verdict.upper()}**: {scenario}: {_LABEL[c.a[1]]} vs {_LABEL[c.b[1]]}: {what} {c.claim} in "
             f"{c.wins}/{c.n} paired episodes (median {c.median_a:.4g}{u} vs {c.median_b:.4g}{u}, median difference "
             f"{c.median_diff:+.3g}{u}, one-sided Wilcoxon p = {c.p:.3g})")

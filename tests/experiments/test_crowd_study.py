@@ -242,3 +242,11 @@ def test_a_replanning_variant_needs_a_simulator_that_replans(tiny_walker, monkey
                        r"variants need simulate\(\.\.\., replan=True\)"):
         crowd.check_crowd_study(study)
     assert len(crowd.check_crowd_study(dc.replace(study, variants=("plan_once",)))) == 1
+
+
+def test_a_claim_without_pairs_says_so():
+    records = _records([1.0, float("nan")], [float("nan"), 2.0], metric="nav_time_to_goal")
+    c = compare(records, "s", "replan_multi", "replan_base", "nav_time_to_goal", "lower")
+    assert c.n == 0
+    assert claim_line(c, "s") == ("- **NOT SUPPORTED**: s: replanning multi-point vs replanning base-only: time to "
+                                  "goal lower: no paired episode has a value on both sides")
