@@ -307,7 +307,8 @@ def run_episode(task: dict) -> dict:
     })
     record.update(execution_metrics(scenario, run))
     record.update(replan_stats(replans))
-    record["replan_times"] = [float(r.plan_time) for r in replans if r.status != "initial"] if replans else []
+    # Microseconds: finer is the machine's noise (and 3000 replans an episode make records.json large).
+    record["replan_times"] = [round(float(r.plan_time), 6) for r in replans if r.status != "initial"] if replans else []
     if task.get("trace"):
         record["trace"] = _trace(run, replans)
     return record

@@ -207,11 +207,12 @@ def report_markdown(result, figures: Sequence[str], budgets: dict[str, float]) -
     scenarios = list(dict.fromkeys(r["scenario"] for r in result.records)) or [s for s in result.scenario_texts]
     variants = list(st.variants)
     seeds = st.seeds()
+    limit = "each scenario's execution.time_limit" if st.time_limit is None else f"{st.time_limit:g} s"
     lines = [f"# drake-social experiment crowd ({st.name})", "",
              f"{len(result.records)} closed-loop episodes (kinematic): {st.episodes} per (scenario, variant), study "
              f"seed {st.seed} (episode seeds {seeds[:3]}{'...' if len(seeds) > 3 else ''}, shared by every scenario "
              f"and variant: paired), scripted walkers' start delays uniform in [0, {st.jitter:g}] s, time limit "
-             f"{'each scenario' + chr(39) + 's' if st.time_limit is None else f'{st.time_limit:g} s'}. Wall time "
+             f"{limit}. Wall time "
              f"{result.wall_time:.1f} s on {result.workers} worker(s) ({result.executor}), {os.cpu_count()} CPUs, "
              f"{platform.processor() or platform.machine()}, {platform.platform()}.", "",
              "Variants: " + "; ".join(f"`{v}` ({_LABEL[v]})" for v in variants) + ". Metrics over time against "
