@@ -49,6 +49,7 @@ __all__ = ["PLAN_OUTPUTS", "SIMULATE_OUTPUTS", "PlanRun", "Progress", "SimulateR
            "load_with_overrides", "paper_experiment", "read_path_csv", "run_bench", "run_plan", "run_show",
            "run_simulate", "run_study"]
 __all__ += ["PeopleImport", "run_people_import"]
+__all__ += ["run_crowd_experiment"]
 
 #: The files ``plan`` writes into ``out`` (a folder of such a name is refused before planning).
 PLAN_OUTPUTS = ("path.csv", "result.json", "path.png", "cost_profile.png", "convergence.png")
@@ -656,3 +657,27 @@ def run_people_import(*, file: str | Path, out: str | Path, layout: str = "xy", 
         raise
     first, last = rows[0][0], rows[-1][0]  # the rows are sorted by time
     return PeopleImport(out, len(rows), len({r[1] for r in rows}), last - first, first, last)
+
+
+# ---- experiment crowd ---------------------------------------------------------------
+
+
+def run_crowd_experiment(*, out: str | Path, executor: str = "process", workers: int = 1,
+                         scheduler: str | None = None, progress: Callable[[int, int, dict], None] | None = None,
+                         **settings):
+    """The closed-loop crowd study (``drake-social experiment crowd``): a
+    :class:`~drake_social.experiments.crowd.CrowdStudy` of ``settings``
+    (scenarios, variants, episodes, seed, jitter, time_limit), run and
+    written into ``out`` (:func:`~drake_social.experiments.crowd_output.run_crowd_study`).
+
+    Returns:
+        ``(CrowdResult, names written, the error of an output after the records or None)``.
+    """
+    from drake_social.experiments.crowd import CrowdStudy
+    from drake_social.experiments.crowd_output import run_crowd_study
+
+    check_scheduler(executor, scheduler)
+    for i, s in enumerate(settings.get("scenarios", ())):
+        check_regular_file(s, "scenario", f"--scenarios[{i}]")
+    study = CrowdStudy(**settings)
+    return run_crowd_study(study, out, executor=executor, workers=workers, scheduler=scheduler, progress=progress)

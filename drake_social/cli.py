@@ -173,6 +173,8 @@ def _run_experiment(args: argparse.Namespace) -> int:
             pass  # map_tasks says what to install
         else:
             logging.getLogger("distributed").setLevel(logging.WARNING)
+    if args.study == "crowd":
+        return _run_crowd(args)
     if args.study == "paper":
         study = app.paper_experiment(runs=args.runs, iterations=args.iterations, seed=args.seed,
                                      simulate=args.simulate, scenario_dir=args.scenario_dir)
@@ -213,6 +215,41 @@ def _run_experiment(args: argparse.Namespace) -> int:
         if line.startswith("- **"):
             print(line)
     print(f"wrote {out}/: {', '.join(done.files)}")
+    return 0
+
+
+def _run_crowd(args: argparse.Namespace) -> int:
+    from drake_social.experiments.study import StudyOutputError
+
+    out = args.out if args.out is not None else Path("out") / "crowd"
+    bar = None
+
+    def progress(done: int, total: int, record: dict) -> None:
+        nonlocal bar
+        if bar is None:
+            from tqdm import tqdm
+
+            bar = tqdm(total=total, desc="experiment crowd", unit="episode", file=sys.stderr, dynamic_ncols=True)
+        bar.set_postfix_str(f"{record['scenario']} {record['variant']} episode {record['episode']}", refresh=False)
+        bar.update(done - bar.n)
+
+    try:
+        result, files, failure = app.run_crowd_experiment(
+            out=out, executor=args.executor, workers=args.workers, scheduler=args.scheduler,
+            progress=progress if args.progress or sys.stderr.isatty() else None,
+            scenarios=tuple(str(s) for s in args.scenarios), variants=tuple(args.variants), episodes=args.episodes,
+            seed=args.seed, jitter=args.jitter, time_limit=args.time_limit)
+    finally:
+        if bar is not None:
+            bar.close()
+    print(f"{len(result.records)} episodes in {result.wall_time:.1f} s ({args.workers} worker(s), {args.executor})")
+    if failure is not None:
+        raise StudyOutputError(f"writing the crowd study's figures or REPORT.md into {out} failed: {failure}; "
+                                       f"its records are in {out / 'records.csv'} and {out / 'records.json'}") from failure
+    for line in (out / "REPORT.md").read_text().splitlines():
+        if line.startswith("- **"):
+            print(line)
+    print(f"wrote {out}/: {', '.join(files)}")
     return 0
 
 

@@ -222,7 +222,16 @@ def _add_experiment(subparsers) -> None:
                        help="also execute every path (kinematic simulation) and measure the executed trajectory")
     sweep = kinds.add_parser("sweep", help="your own study from a YAML file (see studies/example_sweep.yaml)")
     sweep.add_argument("config", type=Path, help="the sweep's YAML file")
-    for q in (paper, sweep):
+    crowd = kinds.add_parser(
+        "crowd", help="closed loop among walking people: plan-once against 10 Hz replanning, N seeded episodes",
+        description="Runs N seeded closed-loop episodes (kinematic) per scenario and variant: plan_once (the "
+        "paper's Social Risk-RRT*, planned at t = 0), replan_base (replanning, base-only), replan_multi "
+        "(replanning, multi-point) and replan_speed (replan_multi with speed-scaled AGF). Episode k's seed sets "
+        "random_seed (planner, crowd speeds) and delays each scripted walker's start by up to --jitter seconds; "
+        "the same for every variant (paired). Writes DIR/records.csv, DIR/records.json, per-part boxplots, "
+        "snapshots of an episode and DIR/REPORT.md (paired claim lines and the issue's targets).")
+    _add_crowd_arguments(crowd)
+    for q in (paper, sweep, crowd):
         q.add_argument("--out", type=Path, metavar="DIR", help="output directory (default: out/<study name>)")
         q.add_argument("--workers", type=_int_at_least(1, MAX_WORKERS), default=1, metavar="N",
                        help=f"parallel worker processes, at most {MAX_WORKERS} (each holds Drake: a few hundred MB; "
@@ -234,6 +243,30 @@ def _add_experiment(subparsers) -> None:
                        "(default: a LocalCluster of --workers processes)")
         q.add_argument("--progress", action="store_true",
                        help="draw the progress bar on stderr even when it is not a terminal")
+
+
+def _add_crowd_arguments(crowd: argparse.ArgumentParser) -> None:
+    from drake_social.limits import CROWD_SCENARIOS as DEFAULT_SCENARIOS, CROWD_VARIANTS as VARIANTS, MAX_EPISODES
+
+    crowd.add_argument("--scenarios", type=Path, nargs="+", default=[Path(s) for s in DEFAULT_SCENARIOS],
+                       metavar="FILE", help=f"scenario files with walking people (default: {' '.join(DEFAULT_SCENARIOS)})")
+    crowd.add_argument("--episodes", type=_int_at_least(1, MAX_EPISODES), default=20, metavar="N",
+                       help="seeded episodes per scenario and variant (default 20)")
+    crowd.add_argument("--variants", nargs="+", choices=list(VARIANTS), default=list(VARIANTS), metavar="NAME",
+                       help=f"variants to run, of {', '.join(VARIANTS)} (default: all)")
+    crowd.add_argument("--seed", type=_nonnegative_int, default=0, metavar="S",
+                       help="study seed; episode seeds are drawn from it with SeedSequence (default 0)")
+    crowd.add_argument("--jitter", type=_nonnegative_float, default=5.0, metavar="SECONDS",
+                       help="largest start delay of a scripted walker, seconds (default 5)")
+    crowd.add_argument("--time-limit", type=_positive_float, metavar="SECONDS",
+                       help="simulated seconds per episode (default: each scenario's execution.time_limit)")
+
+
+def _nonnegative_float(text: str) -> float:
+    value = _finite_float(text)
+    if not value >= 0:
+        raise argparse.ArgumentTypeError(f"must be a number >= 0, got {shorten(text)}")
+    return value
 
 
 def _finite_float(text: str) -> float:

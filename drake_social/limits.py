@@ -133,3 +133,10 @@ EXECUTORS = ("process", "dask")
 #: Values of ``planner.near_radius_mode`` and ``RrtStarOptions.near_radius_mode``:
 #: the near set's radius is r_near, or shrinks with the tree (capped at r_near).
 NEAR_RADIUS_MODES = ("fixed", "shrinking")
+
+#: The crowd study's variants (``experiment crowd --variants``; their overrides:
+#: ``drake_social.experiments.crowd.VARIANTS``), its default scenarios and
+#: the most episodes per scenario and variant.
+CROWD_VARIANTS = ("plan_once", "replan_base", "replan_multi", "replan_speed")
+CROWD_SCENARIOS = ("scenarios/office_walkers.yaml", "scenarios/lobby_crowd.yaml")
+MAX_EPISODES = 10_000

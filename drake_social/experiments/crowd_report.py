@@ -1,0 +1,235 @@
+"""The crowd study's statistics and REPORT.md (``drake-social experiment crowd``).
+
+Comparisons pair the variants over episodes (episode k of every variant has
+the same seed and the same walkers' delays): :func:`compare` reuses the
+studies' paired test (:func:`drake_social.experiments.study.report.paired`:
+medians, median of the differences a - b, wins, one-sided Wilcoxon
+signed-rank p-value, the verdict at ``ALPHA``), every episode that ran
+counting (a timed-out episode too; a metric that is NaN, e.g. the time to
+goal of one that did not arrive, leaves its pair out).
+
+:data:`CLAIMS` are the comparisons of the issue (what multi-point replanning
+buys over base-only replanning, replanning over planning once, speed scaling
+over the fixed AGF); :func:`target_lines` checks the issue's targets
+(no collision with people, success >= 95 %, replan time median <= 0.05 s and
+95th percentile <= the budget) on the replanning variants.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import platform
+from typing import Sequence
+
+import numpy as np
+
+from drake_social.experiments.study.report import ALPHA, Comparison, paired
+
+__all__ = ["CLAIMS", "PART_METRICS", "SUCCESS_TARGET", "compare", "claim_lines", "report_markdown", "target_lines",
+           "variant_table", "parts_table"]
+
+#: The per-part metrics of the tables and boxplots: (metric, header, unit, format).
+PART_METRICS = (("time_intimate", "intimate s", "s", ".3g"), ("time_personal", "personal s", "s", ".3g"),
+                ("min_dist", "min distance m", "m", ".3g"), ("collisions", "contacts", "", ".3g"))
+PARTS = ("base", "arm", "object", "robot")
+#: Success share the issue asks of the replanning variants.
+SUCCESS_TARGET = 0.95
+#: Replan time targets: median and 95th percentile (None = the scenario's budget), seconds.
+REPLAN_MEDIAN_TARGET = 0.05
+_LABEL = {"plan_once": "plan-once (paper)", "replan_base": "replanning base-only",
+          "replan_multi": "replanning multi-point", "replan_speed": "replanning multi-point + speed scaling"}
+_WORDS = {"time_intimate": "intimate-zone time", "time_personal": "personal-zone time", "min_dist": "minimum distance",
+          "collisions": "contacts", "time_to_goal": "time to goal", "stopped_time": "stopped time",
+          "stop_count": "safety stops"}
+
+#: (a, b, metric (a ``nav_`` field), claim): a is claimed lower/higher than b.
+CLAIMS = (
+    ("replan_multi", "replan_base", "nav_time_intimate_object", "lower"),
+    ("replan_multi", "replan_base", "nav_time_intimate_arm", "lower"),
+    ("replan_multi", "replan_base", "nav_time_personal_object", "lower"),
+    ("replan_multi", "replan_base", "nav_min_dist_object", "higher"),
+    ("replan_multi", "plan_once", "nav_time_intimate_robot", "lower"),
+    ("replan_multi", "plan_once", "nav_collisions_robot", "lower"),
+    ("replan_multi", "plan_once", "nav_min_dist_robot", "higher"),
+    ("replan_multi", "plan_once", "nav_stopped_time", "lower"),
+    ("replan_multi", "plan_once", "nav_time_to_goal", "lower"),
+    ("replan_speed", "replan_multi", "nav_time_personal_robot", "lower"),
+    ("replan_speed", "replan_multi", "nav_time_intimate_robot", "lower"),
+)
+
+
+def _view(records: Sequence[dict]) -> list[dict]:
+    """The records as :func:`paired` reads them: group = scenario, algorithm =
+    variant, run = episode, success = the episode ran."""
+    return [{**r, "group": r["scenario"], "algorithm": r["variant"], "run": r["episode"], "success": True}
+            for r in records]
+
+
+def compare(records: Sequence[dict], scenario: str, a: str, b: str, metric: str, claim: str = "lower") -> Comparison:
+    """Variant a against variant b on ``metric`` in ``scenario``, paired over
+    episodes (:func:`~drake_social.experiments.study.report.paired`)."""
+    return paired(_view(records), (scenario, a), (scenario, b), metric, claim)
+
+
+def _metric_words(metric: str) -> tuple[str, str]:
+    """``nav_time_intimate_object`` -> ("object intimate-zone time", "s")."""
+    name = metric.removeprefix("nav_")
+    for part in PARTS:
+        if name.endswith("_" + part):
+            base = name[: -len(part) - 1]
+            unit = "m" if base.startswith("min_dist") else "" if base == "collisions" else "s"
+            return f"{part} {_WORDS.get(base, base)}", unit
+    unit = "" if name in ("stop_count",) else "s"
+    return _WORDS.get(name, name), unit
+
+
+def claim_line(c: Comparison, scenario: str) -> str:
+    """One claim line: ``- **SUPPORTED**: office_walkers: replanning multi-point vs
+    replanning base-only: object intimate-zone time lower in 14/20 paired episodes
+    (median 1.2 s vs 3.4 s, median difference -0.8 s, Wilcoxon p = 0.012)``."""
+    what, unit = _metric_words(c.metric)
+    u = f" {unit}" if unit else ""
+    if c.n == 0:
+        return (f"- **{c.verdict.upper()}**: {scenario}: {_LABEL[c.a[1]]} vs {_LABEL[c.b[1]]}: {what} {c.claim}: no "
+                "paired episode has a value on both sides")
+    return (f"- **{c.verdict.upper()}**: {scenario}: {_LABEL[c.a[1]]} vs {_LABEL[c.b[1]]}: {what} {c.claim} in "
+            f"{c.wins}/{c.n} paired episodes (median {c.median_a:.4g}{u} vs {c.median_b:.4g}{u}, median difference "
+            f"{c.median_diff:+.3g}{u}, one-sided Wilcoxon p = {c.p:.3g})")
+
+
+def claim_lines(records: Sequence[dict], scenarios: Sequence[str], variants: Sequence[str]) -> list[str]:
+    """The :data:`CLAIMS` whose two variants ran, per scenario."""
+    lines = []
+    for s in scenarios:
+        for a, b, metric, claim in CLAIMS:
+            if a in variants and b in variants:
+                lines.append(claim_line(compare(records, s, a, b, metric, claim), s))
+    return lines
+
+
+def _runs(records, scenario, variant) -> list[dict]:
+    return [r for r in records if r["scenario"] == scenario and r["variant"] == variant]
+
+
+def _values(runs, field) -> np.ndarray:
+    return np.asarray([r[field] for r in runs if r.get(field) is not None and np.isfinite(r[field])], float)
+
+
+def target_lines(records: Sequence[dict], scenarios: Sequence[str], variants: Sequence[str],
+                 budgets: dict[str, float]) -> list[str]:
+    """The issue's targets per scenario and replanning variant: no contact
+    with a person in any episode, success >= :data:`SUCCESS_TARGET`, and
+    over every periodic replan of the episodes a median wall time <=
+    :data:`REPLAN_MEDIAN_TARGET` and a 95th percentile <= the scenario's
+    ``planner.replan_budget`` (``budgets``: scenario -> seconds). Plan-once
+    variants get the contact and success lines only, as a reference."""
+    lines = []
+    for s in scenarios:
+        for v in variants:
+            runs = _runs(records, s, v)
+            if not runs:
+                continue
+            n = len(runs)
+            touched = sum(1 for r in runs if (r.get("nav_collisions_robot") or 0) > 0)
+            contacts = int(sum(r.get("nav_collisions_robot") or 0 for r in runs))
+            stops = _values(runs, "nav_stop_count")
+            reached = sum(1 for r in runs if r["reached"] == 1.0)
+            tag = "target" if v != "plan_once" else "reference"
+            lines.append(f"- **{'MET' if touched == 0 else 'MISSED'}** ({tag}): {s}, {_LABEL[v]}: collisions with "
+                         f"people: {contacts} contact(s) in {touched}/{n} episodes (safety stops: "
+                         f"{int(stops.sum()) if len(stops) else 0} in all, median {np.median(stops) if len(stops) else 0:g} "
+                         f"per episode)")
+            lines.append(f"- **{'MET' if reached >= SUCCESS_TARGET * n else 'MISSED'}** ({tag}): {s}, {_LABEL[v]}: "
+                         f"success {reached}/{n} = {100 * reached / n:.1f} % (target >= {100 * SUCCESS_TARGET:.0f} %)")
+            if v == "plan_once":
+                continue
+            times = np.asarray([t for r in runs for t in r.get("replan_times", ())], float)
+            if not len(times):
+                lines.append(f"- **MISSED** (target): {s}, {_LABEL[v]}: no periodic replan was logged")
+                continue
+            med, p95 = float(np.median(times)), float(np.percentile(times, 95))
+            budget = budgets.get(s, math.nan)
+            hits = int(sum(r.get("replan_deadline_hits") or 0 for r in runs))
+            ok = med <= REPLAN_MEDIAN_TARGET and p95 <= budget
+            lines.append(f"- **{'MET' if ok else 'MISSED'}** (target): {s}, {_LABEL[v]}: replan time over {len(times)} "
+                         f"replans: median {med:.3g} s (target <= {REPLAN_MEDIAN_TARGET:g} s), 95th percentile "
+                         f"{p95:.3g} s (target <= the budget {budget:g} s), max {times.max():.3g} s, {hits} deadline hits")
+    return lines
+
+
+def _stat(values, fmt: str) -> str:
+    v = np.asarray([x for x in values if x is not None and np.isfinite(x)], float)
+    if not len(v):
+        return "n/a"
+    q25, med, q75 = np.percentile(v, [25, 50, 75])
+    return f"{med:{fmt}} [{q25:{fmt}}, {q75:{fmt}}]"
+
+
+_VARIANT_COLUMNS = (("nav_time_to_goal", "time to goal s", ".3g"), ("nav_stop_count", "safety stops", ".3g"),
+                    ("nav_stopped_time", "stopped s", ".3g"), ("replans", "replans", ".4g"),
+                    ("replan_changes", "changes", ".3g"), ("replan_waits", "waits", ".3g"),
+                    ("replan_time_median", "replan median s", ".3g"), ("replan_time_p95", "replan p95 s", ".3g"),
+                    ("replan_deadline_hits", "deadline hits", ".3g"), ("plan_time_initial", "first plan s", ".3g"),
+                    ("wall_time", "episode wall s", ".3g"))
+
+
+def variant_table(records: Sequence[dict], scenarios: Sequence[str], variants: Sequence[str]) -> list[str]:
+    """Per scenario and variant: success, and the medians [IQR] of the episode columns."""
+    lines = ["| scenario | variant | success | " + " | ".join(h for _, h, _ in _VARIANT_COLUMNS) + " |",
+             "|---|---|---:|" + "---:|" * len(_VARIANT_COLUMNS)]
+    for s in scenarios:
+        for v in variants:
+            runs = _runs(records, s, v)
+            if runs:
+                reached = sum(1 for r in runs if r["reached"] == 1.0)
+                lines.append(f"| {s} | {v} | {reached}/{len(runs)} | "
+                             + " | ".join(_stat([r.get(f) for r in runs], fmt) for f, _, fmt in _VARIANT_COLUMNS) + " |")
+    return lines
+
+
+def parts_table(records: Sequence[dict], scenarios: Sequence[str], variants: Sequence[str]) -> list[str]:
+    """Per scenario, variant and part: the medians [IQR] of :data:`PART_METRICS`."""
+    lines = ["| scenario | variant | part | " + " | ".join(h for _, h, _, _ in PART_METRICS) + " |",
+             "|---|---|---|" + "---:|" * len(PART_METRICS)]
+    for s in scenarios:
+        for v in variants:
+            runs = _runs(records, s, v)
+            for p in PARTS if runs else ():
+                lines.append(f"| {s} | {v} | {p} | " + " | ".join(
+                    _stat([r.get(f"nav_{m}_{p}") for r in runs], fmt) for m, _, _, fmt in PART_METRICS) + " |")
+    return lines
+
+
+def report_markdown(result, figures: Sequence[str], budgets: dict[str, float]) -> str:
+    """The whole REPORT.md of a :class:`~drake_social.experiments.crowd.CrowdResult`."""
+    st = result.study
+    scenarios = list(dict.fromkeys(r["scenario"] for r in result.records)) or [s for s in result.scenario_texts]
+    variants = list(st.variants)
+    seeds = st.seeds()
+    limit = "each scenario's execution.time_limit" if st.time_limit is None else f"{st.time_limit:g} s"
+    lines = [f"# drake-social experiment crowd ({st.name})", "",
+             f"{len(result.records)} closed-loop episodes (kinematic): {st.episodes} per (scenario, variant), study "
+             f"seed {st.seed} (episode seeds {seeds[:3]}{'...' if len(seeds) > 3 else ''}, shared by every scenario "
+             f"and variant: paired), scripted walkers' start delays uniform in [0, {st.jitter:g}] s, time limit "
+             f"{limit}. Wall time "
+             f"{result.wall_time:.1f} s on {result.workers} worker(s) ({result.executor}), {os.cpu_count()} CPUs, "
+             f"{platform.processor() or platform.machine()}, {platform.platform()}.", "",
+             "Variants: " + "; ".join(f"`{v}` ({_LABEL[v]})" for v in variants) + ". Metrics over time against "
+             "where the people were (`nav_*` of `records.csv`): surface-to-surface distances of each part (base, "
+             "arm, object, the whole robot) to the nearest present person; seconds in Hall's intimate (< 0.45 m) "
+             "and personal (< 1.2 m) zones; contacts (distance <= 0) counted where they start; safety stops of the "
+             "monitor; success = the goal reached within the time limit.", "",
+             "## Claims", "",
+             f"Paired over episodes, one-sided Wilcoxon signed-rank test at {ALPHA} (SUPPORTED: the claimed side wins "
+             "the median difference and p < 0.05; NOT SIGNIFICANT: it wins, p >= 0.05; NOT SUPPORTED: it does not "
+             "win).", ""]
+    lines += claim_lines(result.records, scenarios, variants) or ["- (fewer than two of the compared variants ran)"]
+    lines += ["", "## Targets (issue 21)", ""] + target_lines(result.records, scenarios, variants, budgets)
+    lines += ["", "## Episodes", "", "Cells: median [25th, 75th percentile] over the episodes.", ""]
+    lines += variant_table(result.records, scenarios, variants)
+    lines += ["", "## Per body part", ""] + parts_table(result.records, scenarios, variants)
+    lines += ["", "## Figures", ""] + [f"![{n}]({n})" for n in figures]
+    lines += ["", "Per-episode records: `records.csv` (scalars) and `records.json` (with the walkers' delays, every "
+              "replan's wall time and the traced episodes).", ""]
+    return "\n".join(lines)

@@ -1,0 +1,277 @@
+"""The closed-loop crowd study (``drake-social experiment crowd``): episode
+perturbation, statistics on hand-made records, and a tiny study end to end."""
+
+from __future__ import annotations
+
+import dataclasses as dc
+import json
+import math
+import types
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from drake_social.cli_parser import build_parser
+from drake_social.errors import ScenarioError
+from drake_social.experiments.crowd import (JITTER_TAG, VARIANTS, CrowdStudy, crowd_tasks, episode_scenario,
+                                            episode_seeds, perturb, replan_stats, walker_delays)
+from drake_social.experiments.crowd_report import claim_line, compare, target_lines
+from drake_social.people import people_model
+from drake_social.scenario import load_scenario
+
+TINY_WALKER = """\
+description: "tiny with a walker: an 8 x 5 m room, a desk, one person crossing, a 1.5 m bar"
+world:
+  bounds: [0.0, 0.0, 8.0, 5.0]
+  obstacles:
+    - {center: [4.0, 0.6], size: [1.6, 0.8], yaw: 0.0}
+people:
+  - {x: 7.0, y: 4.5, theta: 3.1416, radius: 0.25, name: "standing"}
+  - name: "walker"
+    x: 3.0
+    y: 4.5
+    theta: -1.5708
+    radius: 0.25
+    trajectory: [[1.0, 3.0, 4.5], [4.0, 3.5, 1.6], [7.0, 3.0, 4.5]]
+    loop: true
+robot:
+  base_radius: 0.35
+  link_lengths: [0.6, 0.5]
+  link_width: 0.08
+object: !Bar {length: 1.5, thickness: 0.05}
+start: [1.0, 2.5, 0.0, 1.5708]
+goal: [6.5, 2.5, 0.0, 1.5708]
+random_seed: 1
+planner: {iterations: 300}
+execution: {time_limit: 20.0}
+"""
+
+
+@pytest.fixture
+def tiny_walker(tmp_path) -> Path:
+    path = tmp_path / "tiny_walker.yaml"
+    path.write_text(TINY_WALKER)
+    return path
+
+
+def test_episode_seeds_are_the_study_run_seeds():
+    seeds = episode_seeds(7, 3)
+    assert seeds == [int(s.generate_state(1)[0]) for s in np.random.SeedSequence(7).spawn(3)]
+    assert CrowdStudy(scenarios=("a.yaml",), episodes=3, seed=7).seeds() == seeds
+
+
+def test_jitter_shifts_the_walkers_times_by_their_delays(tiny_walker):
+    scenario = load_scenario(tiny_walker)
+    seed, jitter = 12345, 2.0
+    # The delay by hand: the first uniform draw of the walker's own generator (index 1: the standing person is 0).
+    u = np.random.default_rng(np.random.SeedSequence([seed, JITTER_TAG, 1])).random()
+    episode, delays = perturb(scenario, seed, jitter)
+    assert delays == {1: pytest.approx(2.0 * u, abs=0)}
+    d = delays[1]
+    assert 0.0 <= d <= jitter
+    assert episode.random_seed == seed and scenario.random_seed == 1  # a copy; the loaded scenario unchanged
+    assert episode.people[0] == scenario.people[0]  # a standing person is not delayed
+    assert episode.people[1].trajectory == [[1.0 + d, 3.0, 4.5], [4.0 + d, 3.5, 1.6], [7.0 + d, 3.0, 4.5]]
+    assert scenario.people[1].trajectory[0] == [1.0, 3.0, 4.5]
+    # The walker stands at its first point d seconds longer, then walks the same route d seconds later.
+    model = people_model(episode)
+    np.testing.assert_allclose(model.state_at(0.0).positions[1], [3.0, 4.5])
+    np.testing.assert_allclose(model.state_at(1.0 + d).positions[1], [3.0, 4.5], atol=1e-12)
+    np.testing.assert_allclose(model.state_at(4.0 + d).positions[1], [3.5, 1.6], atol=1e-12)
+    np.testing.assert_allclose(model.state_at(2.5 + d).positions[1], [3.25, 3.05], atol=1e-12)  # half way
+    # The loop's period is kept: one period (6 s) later it is at the same point.
+    np.testing.assert_allclose(model.state_at(10.0 + d).positions[1], [3.5, 1.6], atol=1e-12)
+    # No jitter: the same trajectory.
+    same, zero = perturb(scenario, seed, 0.0)
+    assert zero == {1: 0.0} and same.people[1].trajectory == scenario.people[1].trajectory
+
+
+def test_episodes_are_deterministic_and_paired_across_variants(tiny_walker):
+    study = CrowdStudy(scenarios=(str(tiny_walker),), variants=("plan_once", "replan_multi", "replan_speed"),
+                       episodes=3, seed=4, jitter=3.0)
+    tasks = crowd_tasks(study)
+    assert len(tasks) == 9
+    assert [(t["variant"], t["episode"]) for t in tasks[:4]] == [("plan_once", 0), ("plan_once", 1),
+                                                                 ("plan_once", 2), ("replan_multi", 0)]
+    by = {(t["variant"], t["episode"]): t for t in tasks}
+    for k, seed in enumerate(study.seeds()):
+        scenarios = {v: episode_scenario(by[(v, k)]) for v in study.variants}
+        walkers = {v: [p.trajectory for p in s.people] for v, (s, _) in scenarios.items()}
+        assert walkers["plan_once"] == walkers["replan_multi"] == walkers["replan_speed"]
+        assert {s.random_seed for s, _ in scenarios.values()} == {seed}
+        assert scenarios["plan_once"][1] == walker_delays(load_scenario(tiny_walker), seed, 3.0)
+        again = episode_scenario(dict(by[("replan_speed", k)]))
+        assert [p.trajectory for p in again[0].people] == walkers["replan_speed"]
+        # The variants differ only by their overrides.
+        s_once, s_speed = scenarios["plan_once"][0], scenarios["replan_speed"][0]
+        assert (s_once.planner.replan, s_speed.planner.replan) == (False, True)
+        assert (s_once.social.speed_scaling, s_speed.social.speed_scaling) == (False, True)
+    delays = [episode_scenario(by[("plan_once", k)])[1][1] for k in range(3)]
+    assert len(set(delays)) == 3  # the episodes differ
+
+
+def test_variants_are_the_issue_s():
+    from drake_social.limits import CROWD_VARIANTS
+
+    assert list(VARIANTS) == list(CROWD_VARIANTS) == ["plan_once", "replan_base", "replan_multi", "replan_speed"]
+
+
+@pytest.mark.parametrize("settings, field", [
+    ({"episodes": 0}, "episodes"), ({"jitter": -1.0}, "jitter"), ({"variants": ("nope",)}, "variants"),
+    ({"scenarios": ("a/x.yaml", "b/x.yaml")}, "scenarios"), ({"seed": -1}, "seed"), ({"time_limit": 0.0}, "time_limit"),
+])
+def test_study_settings_are_checked(settings, field):
+    with pytest.raises(ScenarioError, match=f"crowd study: {field}"):
+        CrowdStudy(**{"scenarios": ("a.yaml",), **settings})
+
+
+def test_replan_stats_by_hand():
+    def r(status, changed, plan_time, hit=False):
+        return types.SimpleNamespace(status=status, changed=changed, plan_time=plan_time, deadline_hit=hit)
+
+    log = [r("initial", True, 0.5), r("new", True, 0.01), r("kept", False, 0.04, True), r("wait", True, 0.02),
+           r("kept", False, 0.03)]
+    s = replan_stats(log)
+    # The periodic replans: 0.01, 0.04, 0.02, 0.03 -> sorted 0.01 0.02 0.03 0.04: median 0.025,
+    # 95th percentile at rank 0.95 * 3 = 2.85: 0.03 + 0.85 * 0.01.
+    assert s == {"replans": 4.0, "replan_changes": 2.0, "replan_waits": 1.0,
+                 "replan_time_median": pytest.approx(0.025), "replan_time_p95": pytest.approx(0.0385),
+                 "replan_time_max": 0.04, "replan_deadline_hits": 1.0}
+    assert all(math.isnan(v) for v in replan_stats(None).values())
+
+
+def _records(values_a, values_b, metric="nav_time_intimate_object"):
+    out = []
+    for variant, values in (("replan_multi", values_a), ("replan_base", values_b)):
+        for k, v in enumerate(values):
+            out.append({"scenario": "s", "variant": variant, "episode": k, "reached": 1.0, metric: v})
+    return out
+
+
+def test_paired_statistics_on_hand_made_records():
+    # Differences multi - base: -1, -2, 0, -3, -4. Wilcoxon drops the zero: 4 negative
+    # differences, so W+ = 0, whose one-sided exact probability is 1 / 2^4.
+    records = _records([1.0, 2.0, 3.0, 4.0, 5.0], [2.0, 4.0, 3.0, 7.0, 9.0])
+    c = compare(records, "s", "replan_multi", "replan_base", "nav_time_intimate_object", "lower")
+    assert (c.n, c.wins) == (5, 4)
+    assert (c.median_a, c.median_b, c.median_diff) == (3.0, 4.0, -2.0)
+    assert c.p == pytest.approx(1 / 16)
+    assert c.verdict == "not significant"
+    line = claim_line(c, "s")
+    assert line == ("- **NOT SIGNIFICANT**: s: replanning multi-point vs replanning base-only: object intimate-zone "
+                    "time lower in 4/5 paired episodes (median 3 s vs 4 s, median difference -2 s, one-sided "
+                    "Wilcoxon p = 0.0625)")
+    # Five negative differences: p = 1 / 2^5 < 0.05; a NaN leaves its pair out.
+    records = _records([1.0, 2.0, 3.0, 4.0, 5.0, float("nan")], [2.0, 4.0, 3.5, 7.0, 9.0, 1.0])
+    c = compare(records, "s", "replan_multi", "replan_base", "nav_time_intimate_object", "lower")
+    assert (c.n, c.wins, c.p, c.verdict) == (5, 5, pytest.approx(1 / 32), "supported")
+    # The other way round: not supported.
+    c = compare(records, "s", "replan_base", "replan_multi", "nav_time_intimate_object", "lower")
+    assert c.verdict == "not supported" and c.wins == 0
+
+
+def test_target_lines_on_hand_made_records():
+    records = []
+    for k in range(20):
+        records.append({"scenario": "s", "variant": "replan_multi", "episode": k, "reached": float(k != 3),
+                        "nav_collisions_robot": 0.0, "nav_stop_count": float(k % 2),
+                        "replan_times": [0.01, 0.02, 0.09, 0.1] if k == 0 else [0.03], "replan_deadline_hits": float(k == 0)})
+    lines = target_lines(records, ["s"], ["replan_multi"], {"s": 0.08})
+    assert lines[0].startswith("- **MET** (target): s, replanning multi-point: collisions with people: 0 contact(s) "
+                               "in 0/20 episodes (safety stops: 10 in all")
+    assert lines[1] == ("- **MET** (target): s, replanning multi-point: success 19/20 = 95.0 % (target >= 95 %)")
+    # 23 replan times, sorted 0.01, 0.02, 0.03 x 19 (ranks 2..20), 0.09, 0.1: median 0.03; the 95th
+    # percentile at rank 0.95 * 22 = 20.9: 0.03 + 0.9 * (0.09 - 0.03) = 0.084 > the budget 0.08.
+    assert lines[2].startswith("- **MISSED** (target): s, replanning multi-point: replan time over 23 replans: "
+                               "median 0.03 s (target <= 0.05 s), 95th percentile 0.084 s")
+    assert lines[2].endswith("max 0.1 s, 1 deadline hits")
+
+
+def test_cli_parses_experiment_crowd():
+    args = build_parser().parse_args(["experiment", "crowd", "--episodes", "3", "--variants", "plan_once",
+                                      "replan_multi", "--jitter", "2.5", "--workers", "2", "--out", "x"])
+    assert (args.study, args.episodes, args.variants, args.jitter, args.workers) == \
+        ("crowd", 3, ["plan_once", "replan_multi"], 2.5, 2)
+    assert [str(s) for s in args.scenarios] == ["scenarios/office_walkers.yaml", "scenarios/lobby_crowd.yaml"]
+    for bad in (["--episodes", "0"], ["--jitter", "-1"], ["--variants", "nope"]):
+        with pytest.raises(SystemExit):
+            build_parser().parse_args(["experiment", "crowd", *bad])
+
+
+_MACHINE = ("wall_time", "plan_time_initial", "replan_time_median", "replan_time_p95", "replan_time_max",
+            "replan_times")
+
+
+@pytest.mark.slow
+def test_tiny_study_writes_its_outputs_and_does_not_depend_on_the_workers(tiny_walker, tmp_path):
+    from drake_social.experiments.crowd_output import run_crowd_study
+
+    study = CrowdStudy(scenarios=(str(tiny_walker),), variants=("plan_once",), episodes=2, seed=3, jitter=2.0,
+                       time_limit=12.0)
+    one, names, failure = run_crowd_study(study, tmp_path / "one", workers=1)
+    assert failure is None
+    assert names == ["records.csv", "records.json", "boxplots_tiny_walker.png", "snapshots_tiny_walker.png",
+                     "REPORT.md"]
+    for n in names:
+        assert (tmp_path / "one" / n).stat().st_size > 0
+    csv = (tmp_path / "one" / "records.csv").read_text().splitlines()
+    assert len(csv) == 3 and csv[0].startswith("index,scenario,variant,episode,seed,jitter,")
+    saved = json.loads((tmp_path / "one" / "records.json").read_text())
+    assert saved["seeds"] == study.seeds() and len(saved["episodes"]) == 2
+    report = (tmp_path / "one" / "REPORT.md").read_text()
+    assert "tiny_walker, plan-once (paper): success" in report and "![snapshots_tiny_walker.png]" in report
+    for r in one.records:
+        assert r["sim_time"] <= 12.0 + 1e-9 and r["nav_people_count"] == 2.0 and "nav_time_intimate_object" in r
+        assert math.isnan(r["replans"])
+    assert "trace" in one.records[0] and "trace" not in one.records[1]
+    two, _, _ = run_crowd_study(study, tmp_path / "two", workers=2)
+
+    def same(r):
+        return json.dumps({k: v for k, v in r.items() if k not in _MACHINE}, sort_keys=True, default=str)
+
+    assert [same(r) for r in one.records] == [same(r) for r in two.records]
+
+
+def test_a_replanning_variant_needs_a_simulator_that_replans(tiny_walker, monkeypatch):
+    from drake_social.experiments import crowd
+
+    study = CrowdStudy(scenarios=(str(tiny_walker),), variants=("plan_once", "replan_multi"), episodes=1)
+    monkeypatch.setattr(crowd, "replanning_available", lambda: False)
+    with pytest.raises(ScenarioError, match=r"crowd study: variants \['plan_once', 'replan_multi'\]: the replanning "
+                       r"variants need simulate\(\.\.\., replan=True\)"):
+        crowd.check_crowd_study(study)
+    assert len(crowd.check_crowd_study(dc.replace(study, variants=("plan_once",)))) == 1
+
+
+def test_a_claim_without_pairs_says_so():
+    records = _records([1.0, float("nan")], [float("nan"), 2.0], metric="nav_time_to_goal")
+    c = compare(records, "s", "replan_multi", "replan_base", "nav_time_to_goal", "lower")
+    assert c.n == 0
+    assert claim_line(c, "s") == ("- **NOT SUPPORTED**: s: replanning multi-point vs replanning base-only: time to "
+                                  "goal lower: no paired episode has a value on both sides")
+
+
+@pytest.mark.slow
+def test_replanning_episodes_are_paired_and_do_not_depend_on_the_workers(tmp_path):
+    """With a budget no replan reaches (the iteration cap binds), replanning
+    episodes are the same on 1 and 2 workers, bit for bit but for the wall clock."""
+    from drake_social.experiments.crowd import replanning_available, run_crowd
+
+    if not replanning_available():
+        pytest.skip("simulate(..., replan=True) is not in this tree yet")
+    path = tmp_path / "tiny_walker.yaml"
+    path.write_text(TINY_WALKER.replace("planner: {iterations: 300}", "planner: {iterations: 300, replan_rate: 2.0, "
+                                        "replan_iterations: 60, replan_budget: 30.0}"))
+    study = CrowdStudy(scenarios=(str(path),), variants=("replan_multi",), episodes=2, seed=5, jitter=2.0,
+                       time_limit=8.0)
+    one = run_crowd(study, workers=1)
+    two = run_crowd(study, workers=2)
+    for r in one.records:
+        assert r["replans"] >= 10 and r["replan_deadline_hits"] == 0.0  # 2 Hz over 8 s, none over the budget
+        assert r["replan_changes"] <= r["replans"] and len(r["replan_times"]) == r["replans"]
+
+    def same(r):
+        return json.dumps({k: v for k, v in r.items() if k not in _MACHINE}, sort_keys=True, default=str)
+
+    assert [same(r) for r in one.records] == [same(r) for r in two.records]
