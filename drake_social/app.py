@@ -54,8 +54,8 @@ __all__ += ["run_crowd_experiment"]
 #: The files ``plan`` writes into ``out`` (a folder of such a name is refused before planning).
 PLAN_OUTPUTS = ("path.csv", "result.json", "path.png", "cost_profile.png", "convergence.png")
 #: The files ``simulate`` may write into ``out`` (replay.html when Meshcat records).
-SIMULATE_OUTPUTS = ("replay.html", "executed.csv", "people.csv", "replans.csv", "path.png", "tracking.png",
-                    "sim.json")
+SIMULATE_OUTPUTS = ("replay.html", "executed.csv", "people.csv", "replans.csv", "replans.png", "path.png",
+                    "tracking.png", "sim.json")
 
 #: A progress callback: ``progress(done, total, status)`` (steps done of
 #: ``total``, and a short text such as ``"best 5.1"`` or ``"t = 3.2 s"``).
@@ -391,16 +391,21 @@ def run_simulate(*, scenario: Scenario | str | Path, out: str | Path, overrides:
             from drake_social.sim.replay import draw_overlays, set_top_view, write_replay_html
 
             # Walking people (SimulationResult.people, a PeopleLog) get animated arrows and heat-map quads.
+            # With replanning (run.replans not empty) each distinct plan and wait is drawn over its time.
             draw_overlays(meshcat, loaded, run.waypoints if len(run.waypoints) else None,
-                          people=getattr(run, "people", None))
+                          people=getattr(run, "people", None), replans=run.replans)
             fit = set_top_view(meshcat, loaded)
             size = write_replay_html(meshcat, outputs.path("replay.html"), fit=fit)
             files.append("replay.html")
         write_executed_csv(outputs.path("executed.csv"), run.times, run.q, run.v)
         files.append("executed.csv")
         if run.replanning is not None:
+            from drake_social.viz.replans import write_replan_figure
+
             write_replans_csv(outputs.path("replans.csv"), run.replans)
-            files.append("replans.csv")
+            write_replan_figure(run, outputs.folder, budget=float(loaded.planner.replan_budget),
+                                title=f"{_title(loaded, file)}: replans")
+            files += ["replans.csv", "replans.png"]
         if run.people is not None:
             write_people_csv(outputs.path("people.csv"), run.people)
             files.append("people.csv")

@@ -187,6 +187,12 @@ def _add_bench(subparsers) -> None:
                    help="also the scaling benchmark per scenario (minutes): social_rrt_star at K = 2000 .. 50,000 "
                         "with the shrinking radius and the fitted exponent of time ~ K^b, K = 2000 with "
                         "planner.optimize against the median of three K = 50,000 runs, and 50 people far away")
+    p.add_argument("--replan-runs", type=_nonnegative_int, default=0, metavar="N",
+                   help="also the replanning benchmark on scenarios/office_walkers.yaml: replan times over a "
+                        "kinematic rollout (--replan-count replans) and the realtime factor of N simulated "
+                        "kinematic runs with 10 Hz replanning (default 0: left out)")
+    p.add_argument("--replan-count", type=_positive_int, default=200, metavar="R",
+                   help="replans of the replanning benchmark's rollout (default 200)")
     p.add_argument("--out", type=Path, default=Path("out/bench"), metavar="DIR",
                    help="output directory (default: out/bench)")
     p.add_argument("--progress", action="store_true",
