@@ -18,7 +18,7 @@ seed perturbs the scenario (:func:`perturb`):
   ``[0, jitter]`` seconds: ``d_i = jitter * u``, ``u`` the first
   ``random()`` of ``numpy.random.default_rng(SeedSequence([s_k,
   JITTER_TAG, i]))``, ``i`` the walker's index in ``scenario.people``
-  (:func:`walker_delays`). Every time of its trajectory is shifted by
+  (:func:`~drake_social.people.jitter.walker_delays`). Every time of its trajectory is shifted by
   ``d_i``: the walker stands at its first point ``d_i`` seconds longer
   (where it is at t = 0 does not change, nor a loop's period). The tag keeps
   these draws apart from the planner's ``default_rng([seed, replan_index])``.
@@ -56,6 +56,7 @@ from drake_social.experiments.study.executors import map_tasks
 from drake_social.experiments.study.scenarios import load_cached
 from drake_social.io.textfile import read_yaml_file
 from drake_social.limits import CROWD_SCENARIOS, CROWD_VARIANTS, MAX_EPISODES
+from drake_social.people.jitter import JITTER_TAG, delay_walkers, has_people, walker_delays
 from drake_social.scenario.schema import Scenario
 
 __all__ = ["DEFAULT_SCENARIOS", "JITTER_TAG", "MAX_EPISODES", "TRACE_STEP", "VARIANTS", "CrowdResult", "CrowdStudy",
@@ -74,8 +75,6 @@ VARIANTS: dict[str, tuple[str, ...]] = {
     "replan_multi": ("planner: {replan: true, algorithm: social_rrt_star}",),
     "replan_speed": ("planner: {replan: true, algorithm: social_rrt_star}", "social: {speed_scaling: true}"),
 }
-#: The second word of a walker's start-delay seed, [s_k, JITTER_TAG, i] ("JITT").
-JITTER_TAG = 0x4A495454
 #: Seconds between the samples of an episode's trace (the snapshots' data).
 TRACE_STEP = 0.25
 
@@ -140,28 +139,15 @@ def episode_seeds(seed: int, episodes: int) -> list[int]:
     return [int(s.generate_state(1)[0]) for s in np.random.SeedSequence(seed).spawn(episodes)]
 
 
-def walker_delays(scenario: Scenario, seed: int, jitter: float) -> dict[int, float]:
-    """The start delay of every scripted walker of ``scenario`` in an episode of
-    seed ``seed``: person index -> seconds in [0, jitter] (module docstring)."""
-    delays = {}
-    for i, person in enumerate(scenario.people):
-        if person.trajectory is None:
-            continue
-        u = np.random.default_rng(np.random.SeedSequence([int(seed), JITTER_TAG, i])).random()
-        delays[i] = float(jitter * u)
-    return delays
-
-
 def perturb(scenario: Scenario, seed: int, jitter: float) -> tuple[Scenario, dict[int, float]]:
     """Episode ``seed`` of ``scenario``: ``random_seed = seed`` and every
-    scripted walker's trajectory times shifted by its :func:`walker_delays`.
+    scripted walker's trajectory times shifted by its
+    :func:`~drake_social.people.jitter.walker_delays`.
 
     Returns:
         ``(the episode's scenario (a copy; scenario is not changed), the delays)``.
     """
-    delays = walker_delays(scenario, seed, jitter)
-    people = [dc.replace(p, trajectory=[[t + delays[i], x, y] for t, x, y in p.trajectory]) if i in delays else p
-              for i, p in enumerate(scenario.people)]
+    people, delays = delay_walkers(scenario, seed, jitter)
     return dc.replace(scenario, people=people, random_seed=int(seed)), delays
 
 
@@ -209,7 +195,7 @@ def crowd_tasks(study: CrowdStudy) -> list[dict]:
         text = read_yaml_file(source, "scenario")
         for variant in study.variants:
             scenario = load_cached(str(source), text, VARIANTS[variant], f"variant {variant}")  # checked up front
-            if not (scenario.people or scenario.crowd is not None or scenario.people_file):
+            if not has_people(scenario):
                 raise ScenarioError(f"{source}: has no people: a crowd study needs walking people")
             for k, seed in enumerate(seeds):
                 tasks.append({"index": len(tasks), "scenario": Path(source).stem, "source": str(source),
