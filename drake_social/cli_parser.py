@@ -139,7 +139,7 @@ def _add_simulate(subparsers) -> None:
     p.add_argument("--replan", action="store_true", default=None,
                    help="replan while executing: every 1/planner.replan_rate s from the robot's configuration "
                         "among the predicted people (within planner.replan_budget s each); the robot waits when "
-                        "no path is safe. Writes DIR/replans.csv (t,plan_time,cost,changed,status,iterations,"
+                        "no path is safe. Writes DIR/replans.csv (t,plan_time,cost,changed,status,searched,iterations,"
                         "deadline_hit) and sim.json's replanning summary; default: the scenario's planner.replan")
     p.add_argument("--path", type=Path, metavar="CSV",
                    help="follow this path (a path.csv of 'drake-social plan': header x,y,psi1,psi2, from the "

@@ -236,9 +236,9 @@ def test_replan_writes_replans_csv_and_the_summary(tmp_path, tiny_scenario_path,
     record = json.loads((tmp_path / "sim.json").read_text())
     assert code == (0 if record["reached"] else 5)
     names = sorted(p.name for p in tmp_path.iterdir() if not p.name.startswith("."))
-    assert names == ["executed.csv", "people.csv", "replans.csv", "sim.json", "tracking.png"]
+    assert names == ["executed.csv", "people.csv", "replans.csv", "replans.png", "sim.json", "tracking.png"]
     lines = (tmp_path / "replans.csv").read_text().splitlines()
-    assert lines[0] == "t,plan_time,cost,changed,status,iterations,deadline_hit"
+    assert lines[0] == "t,plan_time,cost,changed,status,searched,iterations,deadline_hit"
     rows = [line.split(",") for line in lines[1:]]
     assert rows[0][4] == "initial" and float(rows[0][0]) == 0.0
     t = np.array([float(r[0]) for r in rows])

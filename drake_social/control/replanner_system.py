@@ -9,7 +9,13 @@ seconds (the first one period after the start) builds the prediction
 (:func:`drake_social.people.predict`: ``planner.prediction`` over
 ``planner.replan_horizon``) and calls the replanner with the remainder of
 the current path, ``[q] + path[index:]`` (``index`` the sequencer's current
-target), as its candidate. What a replan decides:
+target), as its candidate. While the robot drives (no wait in force) the
+motion to that target is *committed* (``commit=True``): the replan starts
+where the robot will come to rest at the target, so a new path keeps the
+target and the reference never bends off the judged segments. A search
+tree is grown at most every ``planner.replan_search_period`` seconds while
+the path stays safe (``search``), and at every replan that finds it unsafe
+or follows a wait. What a replan decides:
 
 * ``"new"`` (``changed``): its waypoints, from the robot's configuration at
   the replan, become the path and ``version`` increments (the sequencer then
@@ -18,7 +24,11 @@ target), as its candidate. What a replan decides:
 * ``"wait"``: no path is safe: ``hold`` is 1 until a later replan finds one
   (the path and version stay, so the remainder is the next candidate).
 
-``hold`` also ends on ``"kept"`` and ``"new"``.
+* ``"evade"`` (``changed``): no path is safe and a person is predicted to
+  come within the safety distance of the robot standing still: as ``"new"``,
+  with a path that first steps the base aside.
+
+``hold`` also ends on ``"kept"``, ``"new"`` and ``"evade"``.
 
 Everything of a run is in one abstract state, an immutable
 :class:`ReplanState` (the path, version, hold, the latest result, the log of
@@ -42,7 +52,7 @@ Ports:
   first plan's included).
 
 The replanner is any object with ``plan(q_now, t_now, prediction, previous,
-*, replan_index, deadline) -> ReplanResult`` (the default:
+*, replan_index, deadline, commit, search) -> ReplanResult`` (the default:
 :class:`~drake_social.planning.replan.Replanner` of the scenario's replanning
 options, on the room without its people; the first plan has
 ``planner.iterations`` samples and no deadline).
@@ -101,6 +111,8 @@ class ReplanState:
             path up to the target it was heading for when it was replaced,
             then the current path (its row ``offset`` is the current path's row 0).
         offset: the row of ``followed`` where the current path starts.
+        searched_at: the time of the last replan that grew a search tree
+            (-inf before any).
     """
 
     path: np.ndarray | None = None
@@ -111,6 +123,7 @@ class ReplanState:
     log: tuple = ()
     followed: np.ndarray | None = None
     offset: int = 0
+    searched_at: float = -math.inf
 
     # Drake clones abstract state (Value[object] deep-copies): an immutable
     # state is shared instead, so the log is never copied.
@@ -158,7 +171,8 @@ class ReplanningPlannerSystem(LeafSystem):
         require_scenario(scenario, "ReplanningPlannerSystem")
         if replanner is not None and not callable(getattr(replanner, "plan", None)):
             raise TypeError(f"ReplanningPlannerSystem: replanner must have a plan(q_now, t_now, prediction, "
-                            f"previous, *, replan_index, deadline) method, got {type(replanner).__name__}")
+                            f"previous, *, replan_index, deadline, commit, search) method, "
+                            f"got {type(replanner).__name__}")
         require_instance(people, PeopleModel, "ReplanningPlannerSystem", "people",
                          "a drake_social.people.PeopleModel", optional=True)
         rate = float(scenario.planner.replan_rate if rate is None else rate)
@@ -177,6 +191,7 @@ class ReplanningPlannerSystem(LeafSystem):
         self._prediction = scenario.planner.prediction
         self._horizon = float(scenario.planner.replan_horizon)
         self._period = 1.0 / rate
+        self._search_period = float(scenario.planner.replan_search_period)
 
         self._q_port = self.DeclareVectorInputPort("q", 4)
         self._people_port = self.DeclareAbstractInputPort(
@@ -249,7 +264,7 @@ class ReplanningPlannerSystem(LeafSystem):
         waiting = result.status == "wait"
         path = _frozen(result.waypoints)
         new = ReplanState(path=path, planned=not waiting, version=0, hold=waiting, result=result, log=(result,),
-                          followed=path, offset=0)
+                          followed=path, offset=0, searched_at=t)
         _log.info("first plan at t = %.2f s: %s", t, _describe(result))
         state.get_mutable_abstract_state(self._state_index).set_value(new)
 
@@ -263,7 +278,11 @@ class ReplanningPlannerSystem(LeafSystem):
         if self._index_port.HasValue(context):
             index = min(max(int(round(self._index_port.Eval(context)[0])), 0), len(old.path) - 1)
         previous = np.vstack([q[None], old.path[index:]]) if old.planned else None
-        result = self._replanner.plan(q, t, prediction, previous, replan_index=len(old.log), deadline=True)
+        # Moving along the path (not held): the motion to the sequencer's target is committed.
+        # A search while the path stays safe every replan_search_period s, and always after a wait.
+        search = old.hold or t - old.searched_at >= self._search_period - 1e-9
+        result = self._replanner.plan(q, t, prediction, previous, replan_index=len(old.log), deadline=True,
+                                      commit=old.planned and not old.hold, search=search)
         log = old.log + (result,)
         if result.status == "wait":
             new = dc.replace(old, hold=True, result=result, log=log)
@@ -276,9 +295,11 @@ class ReplanningPlannerSystem(LeafSystem):
             followed = np.vstack([old.followed[:cut], path]) if cut else path
             followed.flags.writeable = False
             new = ReplanState(path=path, planned=True, version=old.version + 1, hold=False, result=result, log=log,
-                              followed=followed, offset=cut)
+                              followed=followed, offset=cut, searched_at=old.searched_at)
         else:
             new = dc.replace(old, hold=False, result=result, log=log)
+        if getattr(result, "searched", True):
+            new = dc.replace(new, searched_at=t)
         if new.hold != old.hold or new.version != old.version:
             _log.debug("replan %d at t = %.2f s: %s", len(old.log), t, _describe(result))
         state.get_mutable_abstract_state(self._state_index).set_value(new)
@@ -319,7 +340,10 @@ def replanning_summary(replans, rate: float, budget: float) -> dict:
     Returns:
         ``count`` (the periodic replans, the first plan excluded),
         ``changed`` (of them, those that changed the path), ``waits`` (of
-        them, those that found no safe path), ``plan_time_median``,
+        them, those that found no safe path and held the robot),
+        ``evasions`` (of them, those that stepped the robot aside),
+        ``searches`` (of them, those that grew a search tree),
+        ``search_time_median`` (seconds of those; None without any), ``plan_time_median``,
         ``plan_time_p95``, ``plan_time_max`` (seconds of computation of
         those replans; None without any), ``deadline_hits`` (those stopped by
         the budget), ``rate``, ``budget``, and ``first_plan_time`` (seconds
@@ -329,6 +353,7 @@ def replanning_summary(replans, rate: float, budget: float) -> dict:
     first = [r for r in replans if r.status == "initial" or r.replan_index == 0]
     periodic = [r for r in replans if not (r.status == "initial" or r.replan_index == 0)]
     times = np.array([r.plan_time for r in periodic], float)
+    searched = np.array([r.plan_time for r in periodic if getattr(r, "searched", True)], float)
 
     def stat(value):
         return float(value) if len(times) else None
@@ -337,6 +362,9 @@ def replanning_summary(replans, rate: float, budget: float) -> dict:
         "count": len(periodic),
         "changed": sum(1 for r in periodic if r.changed),
         "waits": sum(1 for r in periodic if r.status == "wait"),
+        "evasions": sum(1 for r in periodic if r.status == "evade"),
+        "searches": len(searched),
+        "search_time_median": float(np.median(searched)) if len(searched) else None,
         "plan_time_median": stat(np.median(times) if len(times) else None),
         "plan_time_p95": stat(np.percentile(times, 95) if len(times) else None),
         "plan_time_max": stat(times.max() if len(times) else None),

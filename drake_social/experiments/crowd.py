@@ -162,23 +162,30 @@ def replan_stats(replans: Sequence | None) -> dict[str, float]:
     Returns:
         ``replans`` (count), ``replan_changes`` (the path changed),
         ``replan_waits`` (status ``"wait"``: no safe path, the robot held),
+        ``replan_evasions`` (status ``"evade"``: the robot stepped aside),
+        ``replan_searches`` (replans that grew a search tree),
         ``replan_time_median`` / ``_p95`` / ``_max`` (wall seconds; NaN
-        without replans), ``replan_deadline_hits``; all NaN when
+        without replans), ``replan_search_time_median`` (of the replans
+        that searched; NaN without any), ``replan_deadline_hits``; all NaN when
         ``replans`` is None (a plan-once episode).
     """
-    keys = ("replans", "replan_changes", "replan_waits", "replan_time_median", "replan_time_p95", "replan_time_max",
-            "replan_deadline_hits")
+    keys = ("replans", "replan_changes", "replan_waits", "replan_evasions", "replan_searches", "replan_time_median",
+            "replan_time_p95", "replan_time_max", "replan_search_time_median", "replan_deadline_hits")
     if replans is None:
         return dict.fromkeys(keys, math.nan)
     periodic = [r for r in replans if r.status != "initial"]
     times = np.array([r.plan_time for r in periodic], float)
+    searched = np.array([r.plan_time for r in periodic if getattr(r, "searched", True)], float)
     return {
         "replans": float(len(periodic)),
         "replan_changes": float(sum(bool(r.changed) for r in periodic)),
         "replan_waits": float(sum(r.status == "wait" for r in periodic)),
+        "replan_evasions": float(sum(r.status == "evade" for r in periodic)),
+        "replan_searches": float(len(searched)),
         "replan_time_median": float(np.median(times)) if len(times) else math.nan,
         "replan_time_p95": float(np.percentile(times, 95)) if len(times) else math.nan,
         "replan_time_max": float(times.max()) if len(times) else math.nan,
+        "replan_search_time_median": float(np.median(searched)) if len(searched) else math.nan,
         "replan_deadline_hits": float(sum(bool(r.deadline_hit) for r in periodic)),
     }
 

@@ -39,7 +39,7 @@ EXECUTED_HEADER = "t,x,y,psi1,psi2,vx,vy,dpsi1,dpsi2"
 #: :data:`drake_social.people.PEOPLE_CSV_FIELDS` (``io`` sits below ``people``).
 PEOPLE_HEADER = "t,id,x,y,theta,v"
 #: The header of ``replans.csv``: one row per replan (see :func:`write_replans_csv`).
-REPLANS_HEADER = "t,plan_time,cost,changed,status,iterations,deadline_hit"
+REPLANS_HEADER = "t,plan_time,cost,changed,status,searched,iterations,deadline_hit"
 
 
 def write_path_csv(path: str | Path, waypoints: Any) -> None:
@@ -93,7 +93,8 @@ def write_replans_csv(path: str | Path, replans: Any) -> None:
     (seconds), ``plan_time`` its computation (wall-clock seconds), ``cost``
     (the exact time-indexed cost of the path it leaves in force; ``inf``
     while waiting), ``changed`` (1: the path changed, else 0), ``status``
-    (initial, new, kept or wait), ``iterations`` (samples drawn),
+    (initial, new, kept or wait), ``searched`` (1: the search tree was
+    grown, 0: the current path was only judged), ``iterations`` (samples drawn),
     ``deadline_hit`` (1: the budget stopped it, else 0). Numbers with 17
     significant digits.
 
@@ -106,7 +107,8 @@ def write_replans_csv(path: str | Path, replans: Any) -> None:
         writer.writerow(REPLANS_HEADER.split(","))
         for r in replans:
             writer.writerow([f"{float(r.t):.17g}", f"{float(r.plan_time):.17g}", f"{float(r.cost):.17g}",
-                             int(bool(r.changed)), r.status, int(r.iterations), int(bool(r.deadline_hit))])
+                             int(bool(r.changed)), r.status, int(bool(r.searched)), int(r.iterations),
+                             int(bool(r.deadline_hit))])
 
 
 def parse_path_csv(path: str | Path, option: str = "--path") -> tuple[np.ndarray, list[int]]:

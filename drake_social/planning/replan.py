@@ -48,6 +48,7 @@ from drake_social.people import people_model
 from drake_social.people.prediction import Prediction
 from drake_social.planning.algorithms import AlgorithmSpec, algorithm_spec, base_only_weights, make_objective
 from drake_social.planning.replan_eval import PathEvaluation, PathJudge
+from drake_social.planning.replan_evade import escape, standing_clear
 from drake_social.planning.replan_search import VERIFY_PATHS, run_search, search_planner
 from drake_social.planning.rrt_star import compiled
 from drake_social.planning.space import ConfigurationSpace
@@ -55,7 +56,9 @@ from drake_social.planning.space import ConfigurationSpace
 __all__ = ["REPLAN_STATUSES", "ReplanResult", "Replanner", "VERIFY_PATHS", "VERIFY_RESERVE"]
 
 #: Values of :attr:`ReplanResult.status`.
-REPLAN_STATUSES = ("initial", "new", "kept", "wait")
+REPLAN_STATUSES = ("initial", "new", "kept", "wait", "evade")
+#: The statuses that change the path to drive.
+CHANGES = ("initial", "new", "evade")
 #: Fraction of the budget kept for the exact judgement after the search.
 VERIFY_RESERVE = 0.1
 
@@ -69,12 +72,16 @@ class ReplanResult:
         waypoints: (N, 4) the path to drive from ``q_now`` (its first row) to
             the goal; ``[q_now]`` (1, 4) while waiting.
         cost: the exact time-indexed objective cost of ``waypoints`` (inf when waiting).
-        changed: the path to drive is a new one (status "new" or "initial");
+        changed: the path to drive is a new one (status "new", "evade" or "initial");
             False when the candidate is kept and while waiting (the caller
             holds the robot; its last path stays the one to resume).
         status: "initial" (the first plan, ``replan_index`` 0), "new" (the
             search's path replaced the candidate), "kept" (the candidate
-            stays), "wait" (nothing safe).
+            stays), "wait" (nothing safe: the robot holds), "evade" (nothing
+            safe, and a person is predicted to come within the safety
+            distance of the robot standing still: the path steps the base
+            aside first, :mod:`.replan_evade`, then comes back to the
+            current path).
         reason: why, in words.
         plan_time: wall-clock seconds of the whole replan (judging, search,
             judging again).
@@ -86,6 +93,8 @@ class ReplanResult:
         search_cost: the exact cost of the best safe search path judged, inf
             when none.
         replan_index: the replan's index (0: the initial plan).
+        searched: the search tree was grown (False: the candidate was only
+            judged and kept, or the robot waits on an unsafe committed motion).
     """
 
     t: float
@@ -100,6 +109,7 @@ class ReplanResult:
     candidate_cost: float
     search_cost: float
     replan_index: int
+    searched: bool = False
 
     def __post_init__(self) -> None:
         if self.status not in REPLAN_STATUSES:
@@ -125,11 +135,11 @@ class ReplanResult:
 
     def to_record(self) -> dict:
         """The log's row (``replans.csv``): t, plan_time, cost (None when
-        infinite), changed, status, iterations, deadline_hit, reason."""
+        infinite), changed, status, searched, iterations, deadline_hit, reason."""
         return {"t": float(self.t), "plan_time": float(self.plan_time),
                 "cost": float(self.cost) if math.isfinite(self.cost) else None, "changed": bool(self.changed),
-                "status": self.status, "iterations": int(self.iterations), "deadline_hit": bool(self.deadline_hit),
-                "reason": self.reason}
+                "status": self.status, "searched": bool(self.searched), "iterations": int(self.iterations),
+                "deadline_hit": bool(self.deadline_hit), "reason": self.reason}
 
 
 class Replanner:
@@ -252,7 +262,8 @@ class Replanner:
     # ---- one replan ------------------------------------------------------------
 
     def plan(self, q_now: np.ndarray, t_now: float, prediction: Prediction, previous: np.ndarray | None = None, *,
-             replan_index: int, deadline: bool | None = None) -> ReplanResult:
+             replan_index: int, deadline: bool | None = None, commit: bool = False,
+             search: bool = True) -> ReplanResult:
         """One replan from ``q_now`` at ``t_now`` (see the module docstring).
 
         Args:
@@ -271,6 +282,17 @@ class Replanner:
             deadline: stop the search at ``budget`` seconds of wall clock
                 (minus :data:`VERIFY_RESERVE` of it, kept for judging the
                 search's paths); None = for every replan but the initial one.
+            commit: the robot is moving towards ``previous``'s second row
+                and will reach it at rest (the sequencer's target): that
+                motion is kept as it is and the replan is made from its end,
+                at the time the robot gets there. Every path then starts
+                with it, so a new path takes over where the reference comes
+                to rest and the robot drives exactly the segments judged. When
+                the committed motion is not safe any more, the robot waits
+                (it holds where it is; the next replan starts from rest).
+            search: grow the search tree; False only judges the candidate and
+                keeps it when it is safe (the tree is grown anyway when it is
+                not, or when there is none).
 
         Returns:
             A :class:`ReplanResult`.
@@ -286,23 +308,67 @@ class Replanner:
         require_instance(prediction, Prediction, who, "prediction", "a drake_social.people.Prediction")
         require_int(replan_index, who, "replan_index", minimum=0)
         require_instance(deadline, bool, who, "deadline", "True or False", optional=True)
+        require_instance(commit, bool, who, "commit", "True or False")
+        require_instance(search, bool, who, "search", "True or False")
         t_now = float(t_now)
         initial = replan_index == 0
         use_deadline = (not initial) if deadline is None else deadline
         candidate = self._candidate(q, previous, who)
         judge = self.judge(prediction)
+        if commit and candidate is not None and len(candidate) >= 2 and not initial:
+            return self._plan_committed(q, t_now, prediction, candidate, judge, t_start, replan_index,
+                                        use_deadline, search)
+        return self._plan_from(q, t_now, prediction, candidate, judge, t_start, replan_index, use_deadline, search)
+
+    def _plan_committed(self, q: np.ndarray, t_now: float, prediction: Prediction, candidate: np.ndarray,
+                        judge: PathJudge, t_start: float, replan_index: int, use_deadline: bool,
+                        search: bool) -> ReplanResult:
+        """A replan from the end of the committed motion ``candidate[0] -> candidate[1]``."""
+        head = judge.evaluate(candidate[:2], t_now)
+        if not head.safe:
+            held = ReplanResult(t_now, q[None], math.inf, False, "wait",
+                                f"waiting: the motion being driven is not safe any more ({judge.unsafe_words(head)})",
+                                time.perf_counter() - t_start, 0, False, math.inf, math.inf, int(replan_index))
+            return self._hold_or_evade(held, q, t_now, judge, prediction, candidate, t_start)
+        rest = self._plan_from(candidate[1], float(head.times[1]), prediction, candidate[1:], judge, t_start,
+                               replan_index, use_deadline, search)
+        if rest.waiting or rest.status == "evade":
+            if rest.waiting and standing_clear(judge, candidate[1], float(head.times[1]), prediction.horizon):
+                # Nothing safe from the motion's end, but the robot may stand there: it drives on and waits there.
+                return dc.replace(rest, t=t_now, waypoints=candidate, status="kept", cost=math.inf,
+                                  reason=rest.reason.replace("waiting:", "driving on to the end of the motion "
+                                                             "being driven, to wait there:", 1),
+                                  plan_time=time.perf_counter() - t_start)
+            held = dc.replace(rest, t=t_now, waypoints=q[None], status="wait", changed=False, cost=math.inf,
+                              reason=rest.reason.replace("waiting:", "waiting: from the end of the motion being "
+                                                         "driven,", 1), plan_time=time.perf_counter() - t_start)
+            return self._hold_or_evade(held, q, t_now, judge, prediction, candidate, t_start)
+        cost = head.cost
+        return dc.replace(rest, t=t_now, waypoints=np.vstack([q[None], rest.waypoints]), cost=cost + rest.cost,
+                          candidate_cost=cost + rest.candidate_cost, search_cost=cost + rest.search_cost,
+                          plan_time=time.perf_counter() - t_start)
+
+    def _plan_from(self, q: np.ndarray, t_now: float, prediction: Prediction, candidate: np.ndarray | None,
+                   judge: PathJudge, t_start: float, replan_index: int, use_deadline: bool,
+                   grow: bool) -> ReplanResult:
+        """The replan from ``q`` at ``t_now`` (the module docstring's steps;
+        ``grow`` False: no search while the candidate is safe)."""
+        initial = replan_index == 0
 
         def result(waypoints, cost, status, reason, iterations=0, deadline_hit=False, candidate_cost=math.inf,
-                   search_cost=math.inf) -> ReplanResult:
-            return ReplanResult(t_now, waypoints, float(cost), status in ("initial", "new"), status, reason,
+                   search_cost=math.inf, searched=False) -> ReplanResult:
+            return ReplanResult(t_now, waypoints, float(cost), status in CHANGES, status, reason,
                                 time.perf_counter() - t_start, int(iterations), bool(deadline_hit),
-                                float(candidate_cost), float(search_cost), int(replan_index))
+                                float(candidate_cost), float(search_cost), int(replan_index), bool(searched))
 
         if np.array_equal(q, self.goal):
             return result(q[None], 0.0, "initial" if initial else "kept", "at the goal: nothing to plan",
                           candidate_cost=0.0 if candidate is not None else math.inf)
         cand = judge.evaluate(candidate, t_now) if candidate is not None else None
         cand_cost = cand.cost if cand is not None and cand.safe else math.inf
+        if not grow and math.isfinite(cand_cost) and not initial:
+            return result(candidate, cand_cost, "kept", f"the current path (cost {cand_cost:.4g}) is still safe: "
+                          "kept without a search", candidate_cost=cand_cost)
         stop = t_start + self.budget * (1.0 - VERIFY_RESERVE) if use_deadline else None
         iterations = self.initial_iterations if initial else self.iterations
         search = run_search(self, q, t_now, prediction, candidate, iterations, stop,
@@ -317,7 +383,7 @@ class Replanner:
                 best, best_eval = path, ev
         search_cost = best_eval.cost if best_eval is not None else math.inf
         common = dict(iterations=search.iterations, deadline_hit=search.deadline_hit, candidate_cost=cand_cost,
-                      search_cost=search_cost)
+                      search_cost=search_cost, searched=True)
         cand_safe = math.isfinite(cand_cost)
         if best is not None and (not cand_safe or search_cost < (1.0 - self.margin) * cand_cost):
             if initial:
@@ -336,7 +402,26 @@ class Replanner:
                    (f"the search's best costs {search_cost:.4g}, not below (1 - {self.margin:g}) x {cand_cost:.4g}"
                     if best is not None else f"the search found no safe path ({search.message})"))
             return result(candidate, cand_cost, "initial" if initial else "kept", why, **common)
-        return result(q[None], math.inf, "wait", judge.wait_words(q, t_now, cand, search.message), **common)
+        held = result(q[None], math.inf, "wait", judge.wait_words(q, t_now, cand, search.message), **common)
+        return held if initial else self._hold_or_evade(held, q, t_now, judge, prediction, candidate, t_start)
+
+    def _hold_or_evade(self, held: ReplanResult, q: np.ndarray, t_now: float, judge: PathJudge,
+                       prediction: Prediction, candidate: np.ndarray | None, t_start: float) -> ReplanResult:
+        """``held`` (a wait at ``q``), or an escape (:mod:`.replan_evade`)
+        when standing at ``q`` is not safe until the horizon and there is a
+        path to come back to (``candidate``, from ``q`` to the goal): the new
+        path is ``[q, escape end] + candidate``, status "evade"."""
+        if candidate is None or standing_clear(judge, q, t_now, prediction.horizon):
+            return held
+        way = escape(judge, self.space, q, t_now, prediction.horizon)
+        if way is None:
+            return dc.replace(held, reason=held.reason + "; no escape motion is clear either",
+                              plan_time=time.perf_counter() - t_start)
+        shift = way.q[:2] - q[:2]
+        return dc.replace(held, waypoints=np.vstack([q[None], way.q[None], candidate]), changed=True, status="evade",
+                          reason=f"evading: standing here is not safe before t = {prediction.horizon:.2f} s "
+                                 f"({held.reason}); the base steps aside by [{shift[0]:.2f}, {shift[1]:.2f}] m",
+                          plan_time=time.perf_counter() - t_start)
 
     def _candidate(self, q: np.ndarray, previous, who: str) -> np.ndarray | None:
         """The candidate path from ``q`` (None without one)."""

@@ -347,6 +347,11 @@ class PlannerOptions:
     # A new path replaces the current one only when its cost is lower by at
     # least this fraction of the current one's (in [0, 1)).
     replan_margin: float = 0.05
+    # Seconds of simulated time between two searches while the current path
+    # stays safe (>= 0; 0 = a search at every replan). Every replan judges the
+    # current path against the new prediction; one that finds it unsafe
+    # searches at once.
+    replan_search_period: float = 1.0
     # How people are predicted: "constant_velocity" (from their state now) or
     # "perfect" (scripted and recorded people as they will walk; a crowd at constant velocity).
     prediction: str = "constant_velocity"

@@ -44,7 +44,7 @@ PLANS = "plans"
 #: apart from the heat map's reds and the arm's yellows).
 WAIT_RGBA = Rgba(0.75, 0.0, 0.75, 1.0)
 #: Statuses of a ReplanResult (drake_social.planning.replan).
-_STATUSES = ("initial", "new", "kept", "wait")
+_STATUSES = ("initial", "new", "kept", "wait", "evade")
 
 
 @dc.dataclass(frozen=True)

@@ -32,6 +32,7 @@ class FakeResult:
     iterations: int
     deadline_hit: bool
     replan_index: int
+    searched: bool = True
 
 
 class ScriptedReplanner:
@@ -45,10 +46,11 @@ class ScriptedReplanner:
         self.script = script
         self.calls: list[dict] = []
 
-    def plan(self, q_now, t_now, prediction, previous=None, *, replan_index, deadline=True):
+    def plan(self, q_now, t_now, prediction, previous=None, *, replan_index, deadline=True, commit=False,
+             search=True):
         self.calls.append(dict(q=np.array(q_now), t=t_now, prediction=prediction,
                                previous=None if previous is None else np.array(previous),
-                               replan_index=replan_index, deadline=deadline))
+                               replan_index=replan_index, deadline=deadline, commit=commit, search=search))
         status = self.script.get(replan_index, "kept")
         q = np.asarray(q_now, float)
         if status == "initial":
@@ -57,11 +59,14 @@ class ScriptedReplanner:
             wp = np.array([q, [1.0 + replan_index, 1.0, 0.0, 0.0], GOAL])
         elif status == "kept":
             wp = np.array(previous)
+        elif status == "evade":
+            wp = np.vstack([q, q + [0.0, 0.5, 0.0, 0.0], previous])
         else:
             wp = q[None]
         return FakeResult(t=t_now, waypoints=wp, cost=math.inf if status == "wait" else float(len(wp)),
-                          changed=status == "new", status=status, reason="", plan_time=0.001 * (replan_index + 1),
-                          iterations=10, deadline_hit=replan_index == 2, replan_index=replan_index)
+                          changed=status in ("new", "evade"), status=status, reason="",
+                          plan_time=0.001 * (replan_index + 1), iterations=10, deadline_hit=replan_index == 2,
+                          replan_index=replan_index, searched=search)
 
 
 @pytest.fixture(scope="module")
@@ -144,6 +149,10 @@ def test_version_increments_only_on_a_change_and_hold_while_waiting(scenario):
     assert [r.status for r in log] == [script[k] for k in range(7)]
     assert [c["replan_index"] for c in double.calls] == list(range(7))
     assert all(c["deadline"] for c in double.calls[1:])
+    # Driving (no wait in force) commits the motion to the target; after a wait the robot starts from rest.
+    assert [c["commit"] for c in double.calls[1:]] == [True, True, True, False, False, True]
+    # All at t = 0 (forced updates): a search only after a wait, within replan_search_period of the first plan.
+    assert [c["search"] for c in double.calls[1:]] == [False, False, False, True, True, False]
     # While waiting, the path to the goal is kept (the next candidate), not the wait's [q].
     waypoints = _outputs(dut, context)[0]
     np.testing.assert_allclose(waypoints, [[0.6, 0, 0, 0], [7.0, 1.0, 0, 0], GOAL], rtol=0, atol=1e-15)
@@ -218,14 +227,16 @@ def test_bad_arguments_are_named(scenario):
 
 
 def test_summary_counts_the_periodic_replans(scenario):
-    dut, _ = _system(scenario, {0: "initial", 1: "new", 2: "wait", 3: "kept", 4: "kept"})
+    dut, _ = _system(scenario, {0: "initial", 1: "new", 2: "wait", 3: "evade", 4: "kept"})
     context = _context(dut)
     dut.ExecuteInitializationEvents(context)
     for _ in range(4):
         _replan(dut, context)
     summary = replanning_summary(dut.replans(context), 10.0, 0.08)
     times = [0.002, 0.003, 0.004, 0.005]
-    assert summary == {"count": 4, "changed": 1, "waits": 1, "plan_time_median": pytest.approx(np.median(times)),
+    # All at t = 0: only the replan after the wait (replan 3) searched.
+    assert summary == {"count": 4, "changed": 2, "waits": 1, "evasions": 1, "searches": 1, "search_time_median": 0.004,
+                       "plan_time_median": pytest.approx(np.median(times)),
                        "plan_time_p95": pytest.approx(np.percentile(times, 95)), "plan_time_max": 0.005,
                        "deadline_hits": 1, "rate": 10.0, "budget": 0.08, "first_plan_time": 0.001}
     empty = replanning_summary((), 10.0, 0.08)

@@ -368,6 +368,95 @@ def test_margin_stops_changes_for_small_gains(corridor, room, first):
     assert all(0.95 * r.candidate_cost <= r.search_cost < r.candidate_cost for r in changes[0.0])
 
 
+# ---- committing to the motion being driven, searching less often, stepping aside ---------------
+
+
+def test_committed_motion_starts_every_path(corridor, room, first):
+    """With ``commit`` the motion to the next waypoint is kept: a walker
+    stepping into the route beyond it makes a new path that still starts
+    [q_now, that waypoint], timed from there; the robot drives exactly the
+    judged segments."""
+    rp = replanner(corridor, room)
+    side = route(first.waypoints)
+    yc = NORTH_Y if side == "north" else SOUTH_Y
+    script = [(2.0, 9.0, yc), (5.0, 6.0, yc)]
+    prediction = walkers(2.0, [script])
+    q_now, previous = along(first, 2.0)
+    res = rp.plan(q_now, 2.0, prediction, previous, replan_index=1, commit=True)
+    assert res.status == "new" and res.searched, res.reason
+    np.testing.assert_array_equal(res.waypoints[:2], previous[:2])
+    assert route(res.waypoints) != side
+    assert min_distance(corridor, res.waypoints, 2.0, prediction, [script]) > corridor.execution.safety_distance
+    # Its cost: the committed motion's plus the rest's, from the time the robot reaches the motion's end.
+    assert res.cost == pytest.approx(rp.evaluate(res.waypoints, 2.0, prediction).cost, rel=1e-9)
+    # Nobody about: the committed candidate is kept as it is.
+    kept = rp.plan(q_now, 2.0, nobody(2.0), previous, replan_index=1, commit=True)
+    assert kept.status in ("kept", "new") and np.array_equal(kept.waypoints[:2], previous[:2])
+
+
+def test_committed_motion_unsafe_holds(corridor, room, first):
+    """A person standing on the committed motion: the robot holds at once."""
+    rp = replanner(corridor, room)
+    q_now, previous = along(first, 2.0)
+    mid = 0.5 * (previous[0] + previous[1])
+    res = rp.plan(q_now, 2.0, walkers(2.0, [[(2.0, mid[0], mid[1])]]), previous, replan_index=1, commit=True)
+    assert res.status == "wait" and not res.searched and res.iterations == 0
+    assert "motion being driven is not safe" in res.reason
+    np.testing.assert_array_equal(res.waypoints, q_now[None])
+
+
+def test_no_search_keeps_a_safe_candidate_and_searches_an_unsafe_one(corridor, room, first):
+    rp = replanner(corridor, room)
+    q_now, previous = along(first, 2.0)
+    res = rp.plan(q_now, 2.0, nobody(2.0), previous, replan_index=1, search=False)
+    assert res.status == "kept" and not res.searched and res.iterations == 0
+    np.testing.assert_array_equal(res.waypoints, previous)
+    assert res.cost == rp.evaluate(previous, 2.0, nobody(2.0)).cost
+    yc = NORTH_Y if route(first.waypoints) == "north" else SOUTH_Y
+    blocked = walkers(2.0, [[(2.0, 6.0, yc)]])
+    res = rp.plan(q_now, 2.0, blocked, previous, replan_index=1, search=False)
+    assert res.searched and res.iterations == corridor.planner.replan_iterations
+    assert res.status == "new" and res.candidate_cost == math.inf
+
+
+def test_steps_aside_from_a_walker_coming_at_it(corridor, room, first):
+    """Both corridors blocked by standing people and a walker heading
+    straight for the robot: standing still is not safe, so the robot steps
+    aside; the escape motion and the robot standing at its end are clear of
+    every person until the horizon (checked densely and independently)."""
+    rp = replanner(corridor, room)
+    q_now, previous = along(first, 2.0)
+    x, y = q_now[:2]
+    walker = [(2.0, x, 6.7), (2.0 + (6.7 - 0.3) / 1.1, x, 0.3)]  # north to south through the base, 1.1 m/s
+    scripts = [[(2.0, 6.0, NORTH_Y)], [(2.0, 6.0, SOUTH_Y)], walker]
+    prediction = walkers(2.0, scripts, horizon=8.0)
+    res = rp.plan(q_now, 2.0, prediction, previous, replan_index=1)
+    assert res.status == "evade" and res.changed and not res.waiting, res.reason
+    assert "evading" in res.reason
+    wp = res.waypoints
+    np.testing.assert_array_equal(wp[0], q_now)
+    np.testing.assert_array_equal(wp[1, 2:], q_now[2:])  # the arm as it is
+    np.testing.assert_array_equal(wp[2:], previous)  # then back to the path
+    assert room.are_motions_valid(wp[:1], wp[1:2]).all()
+    safety = corridor.execution.safety_distance
+    assert min_distance(corridor, wp[:2], 2.0, prediction, scripts) > safety
+    # Standing at the escape's end until the horizon: the people placed independently.
+    ex = corridor.execution
+    arrive = 2.0 + math.hypot(*(wp[1, :2] - q_now[:2])) / ex.max_base_speed
+    ts = np.linspace(arrive, prediction.horizon, 400)
+    centres = np.stack([np.stack([np.interp(ts, *np.asarray(sc, float)[:, [0, 1]].T),
+                                  np.interp(ts, *np.asarray(sc, float)[:, [0, 2]].T)], axis=1) for sc in scripts],
+                       axis=1)
+    geometry = ArmGeometry.from_scenario(corridor)
+    near = min(float(part_distances(geometry, wp[1][None], centres[k][None], np.full(3, 0.25))["robot"].min())
+               for k in range(len(ts)))
+    assert near > safety
+    # Where it stood, the walker would have come within the safety distance.
+    stand = min(float(part_distances(geometry, q_now[None], centres[k][None], np.full(3, 0.25))["robot"].min())
+                for k in range(len(ts)))
+    assert stand <= safety
+
+
 # ---- arguments ----------------------------------------------------------------------------------
 
 

@@ -60,7 +60,7 @@ def replan_time_stats(replans: Sequence, budget: float) -> dict:
         ``n`` (replans but the first plan), ``median``, ``p95``, ``max``,
         ``mean`` (seconds; None when n = 0), ``deadline_hits`` (the search
         stopped at the budget), ``over_budget`` (plan_time > budget, the
-        judging included), ``path_changes`` (status "new"), ``waits``,
+        judging included), ``path_changes`` (status "new" or "evade"), ``waits``,
         ``initial_plan_time`` (s, None without a first plan).
     """
     later = [r for r in replans if r.status != "initial"]
@@ -69,7 +69,7 @@ def replan_time_stats(replans: Sequence, budget: float) -> dict:
     out = {"n": int(len(later)), "median": None, "p95": None, "max": None, "mean": None,
            "deadline_hits": int(sum(bool(r.deadline_hit) for r in later)),
            "over_budget": int(np.sum(times > budget)),
-           "path_changes": int(sum(r.status == "new" for r in later)),
+           "path_changes": int(sum(bool(r.changed) for r in later)),
            "waits": int(sum(r.status == "wait" for r in later)),
            "initial_plan_time": float(first[0].plan_time) if first else None}
     if len(times):
@@ -129,6 +129,7 @@ def rollout_replans(scenario: Scenario, count: int, *, checker: str = "planar", 
     log = [first]
     # The path being driven from time t_path, or waited on (it starts where the robot holds); None: no path.
     path, t_path, waiting = (None if first.waiting else first.waypoints), 0.0, first.waiting
+    searched_at = 0.0
     for k in range(1, count + 1):
         t = k / float(p.replan_rate)
         remaining = path
@@ -137,7 +138,12 @@ def rollout_replans(scenario: Scenario, count: int, *, checker: str = "planar", 
             remaining = np.vstack([q[None], path[index:]])
         if np.array_equal(q, goal):
             break
-        r = replanner.plan(q, t, prediction(t), remaining, replan_index=k)
+        # As ReplanningPlannerSystem: the motion being driven is committed, and a search is due every
+        # replan_search_period s while the path stays safe, or after a wait.
+        search = waiting or t - searched_at >= float(p.replan_search_period) - 1e-9
+        r = replanner.plan(q, t, prediction(t), remaining, replan_index=k, commit=path is not None and not waiting,
+                           search=search)
+        searched_at = t if r.searched else searched_at
         log.append(r)
         waiting = r.waiting
         if waiting:
