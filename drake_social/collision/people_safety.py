@@ -87,6 +87,15 @@ class PeopleSafety:
         return float(people_kernel.people_clearance(q, t, self._bodies, self._robot, xy, present, radii, max_speeds,
                                                     t0, dt))
 
+    def clearances(self, q: np.ndarray, t: np.ndarray) -> np.ndarray:
+        """:meth:`clearance` of each configuration q[i] (M, 4) at time t[i] (M,), metres."""
+        who = "PeopleSafety.clearances"
+        q = real_array(q, who, "q", (None, 4), layout="rows [x, y, psi1, psi2]")
+        t = real_array(t, who, "t", (len(q),), layout="one time per configuration, seconds")
+        xy, present, radii, max_speeds, t0, dt = self._people
+        return np.array([people_kernel.people_clearance(q[i], float(t[i]), self._bodies, self._robot, xy, present,
+                                                        radii, max_speeds, t0, dt) for i in range(len(q))], float)
+
     def _motion(self, q_a: np.ndarray, q_b: np.ndarray, t_a: float, t_b: float) -> bool:
         xy, present, radii, max_speeds, t0, dt = self._people
         return bool(people_kernel.motion_clear_of_people(q_a, q_b, t_a, t_b, self._bodies, self._robot, self._levers,

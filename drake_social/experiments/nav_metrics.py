@@ -59,6 +59,9 @@ key                                unit     definition
                                             NaN when D = 0
 ``collisions_<part>``              count    contact episodes: runs of consecutive samples with
                                             d_k <= 0, each counted where it starts
+``collisions_moving_<part>``       count    of those, the ones that start while the robot moves
+                                            (q_k != q_{k-1}); the others began with the robot
+                                            standing still: a person walked into it
 ``collision_time_<part>``          s        held time with d_k <= 0
 ``space_compliance_<part>``        0..1     personal-space compliance (Francis et al.): the
                                             share of the time outside every present person's
@@ -205,6 +208,8 @@ def run_metrics(scenario, times: np.ndarray, q: np.ndarray, people: PeopleLog | 
     else:
         dist = proximity.part_distances(g, q, people.positions, people.radii, people.present)
         agf = _agf_over_time(scenario, g, q, people)
+    # The robot moves at sample k when its configuration changed since sample k - 1.
+    moving = np.concatenate([[False], np.any(np.diff(q, axis=0) != 0.0, axis=1)])
     for part in RUN_PARTS:
         d = dist[part]
         out[f"min_dist_{part}"] = float(d.min())
@@ -216,6 +221,9 @@ def run_metrics(scenario, times: np.ndarray, q: np.ndarray, people: PeopleLog | 
             out[f"share_{name}_{part}"] = share(seconds)
         count, seconds = episodes(d <= 0.0, times)
         out[f"collisions_{part}"] = float(count)
+        touching = d <= 0.0
+        starts = touching & ~np.concatenate([[False], touching[:-1]])
+        out[f"collisions_moving_{part}"] = float(np.sum(starts & moving))
         out[f"collision_time_{part}"] = seconds
         out[f"space_compliance_{part}"] = share(held_time(d >= zones.intimate, times))
         out[f"agf_time_{part}"] = float(np.trapezoid(agf[part], times)) if t > 1 else 0.0

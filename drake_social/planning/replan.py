@@ -420,7 +420,9 @@ class Replanner:
         shift = way.q[:2] - q[:2]
         return dc.replace(held, waypoints=np.vstack([q[None], way.q[None], candidate]), changed=True, status="evade",
                           reason=f"evading: standing here is not safe before t = {prediction.horizon:.2f} s "
-                                 f"({held.reason}); the base steps aside by [{shift[0]:.2f}, {shift[1]:.2f}] m",
+                                 f"({held.reason}); the base steps aside by [{shift[0]:.2f}, {shift[1]:.2f}] m "
+                                 + ("(clear)" if way.clear else f"(the best effort: least clearance "
+                                                                f"{way.clearance:.2f} m as predicted)"),
                           plan_time=time.perf_counter() - t_start)
 
     def _candidate(self, q: np.ndarray, previous, who: str) -> np.ndarray | None:

@@ -5,12 +5,21 @@ predicted person is coming within the safety distance of the robot *standing
 there* before the prediction's horizon (a walker who does not see it, say),
 holding is not safe either. :func:`escape` then looks for a short base motion
 out of the way: the base moved by :data:`ESCAPE_DISTANCES` metres in each of
-:data:`ESCAPE_DIRECTIONS` directions, the arm as it is. An escape is usable
-when the room's checker accepts the motion, the motion driven at the
-nominal speeds keeps clear of every predicted person, and the robot standing
-at its end stays clear until the horizon. The shortest usable escape is
-taken, and of those the one whose end is farthest from the people at the
-horizon; none usable: the robot holds (and says why).
+:data:`ESCAPE_DIRECTIONS` directions, the arm as it is, each accepted by the
+room's checker and driven at the nominal speeds.
+
+1. **Clear escapes** first: the motion keeps clear of every predicted person
+   (the exact, sound check of the replanner's paths) and the robot standing
+   at its end stays clear until the horizon. The shortest is taken, and of
+   those the one whose end is farthest from the people at the horizon.
+2. Without one (a person already close, or coming too fast), the **best
+   effort**: the escape whose least clearance over the motion and the wait
+   at its end until the horizon (sampled every :data:`SAMPLE_STEP` seconds)
+   is the largest, when it beats standing still by :data:`BETTER_BY`
+   metres. It is not certified: it is the way out that keeps the robot
+   farthest from the people as predicted.
+
+None of either: the robot holds (and says why).
 """
 
 from __future__ import annotations
@@ -20,26 +29,61 @@ from typing import NamedTuple
 
 import numpy as np
 
-__all__ = ["ESCAPE_DIRECTIONS", "ESCAPE_DISTANCES", "Escape", "escape", "standing_clear"]
+__all__ = ["BETTER_BY", "ESCAPE_DIRECTIONS", "ESCAPE_DISTANCES", "SAMPLE_STEP", "Escape", "escape", "standing_clear"]
 
 #: Directions of the base's escape motions (evenly spaced from +x).
 ESCAPE_DIRECTIONS = 16
 #: Lengths of the base's escape motions, metres, tried shortest first.
 ESCAPE_DISTANCES = (0.4, 0.8, 1.2, 1.6)
+#: Seconds between the clearance samples of a best-effort escape.
+SAMPLE_STEP = 0.2
+#: Metres by which a best-effort escape's least clearance must beat standing still.
+BETTER_BY = 0.05
 
 
 class Escape(NamedTuple):
-    """A usable escape motion."""
+    """An escape motion."""
 
     q: np.ndarray  #: (4,) where the escape ends (the arm unchanged)
     t_end: float  #: when the robot gets there at the nominal speeds, seconds
-    clearance: float  #: its clearance to the people at the horizon, metres (inf: nobody considered)
+    clearance: float  #: clear: at its end at the horizon; best effort: least over the motion and the wait (metres)
+    clear: bool  #: certified clear (step 1) or a best effort (step 2)
 
 
 def standing_clear(judge, q: np.ndarray, t_from: float, t_to: float) -> bool:
     """Whether the robot standing at ``q`` from ``t_from`` to ``t_to``
     keeps more than the judge's safety distance from every predicted person."""
     return bool(judge.people_safety.motion_clear(q, q, float(t_from), max(float(t_from), float(t_to))))
+
+
+def _candidates(judge, space, q: np.ndarray) -> list[tuple[np.ndarray, float]]:
+    """Every escape end the room allows, with its distance, shortest first."""
+    angles = 2.0 * math.pi * np.arange(ESCAPE_DIRECTIONS) / ESCAPE_DIRECTIONS
+    unit = np.stack([np.cos(angles), np.sin(angles)], axis=1)
+    out = []
+    for d in ESCAPE_DISTANCES:
+        ends = np.repeat(q[None], ESCAPE_DIRECTIONS, axis=0)
+        ends[:, :2] += d * unit
+        inside = np.asarray(space.contains(ends), bool).reshape(-1)
+        if not inside.any():
+            continue
+        valid = np.asarray(judge.checker.are_motions_valid(np.repeat(q[None], int(inside.sum()), axis=0),
+                                                           ends[inside]), bool)
+        out += [(end, d) for end in ends[inside][valid]]
+    return out
+
+
+def _least_clearance(judge, q: np.ndarray, end: np.ndarray, t_now: float, t_end: float, t_horizon: float) -> float:
+    """The least sampled clearance driving q -> end from t_now to t_end, then standing at end until t_horizon."""
+    n_move = max(2, int(math.ceil((t_end - t_now) / SAMPLE_STEP)) + 1)
+    u = np.linspace(0.0, 1.0, n_move)
+    qs = [q + u[:, None] * (end - q)]
+    ts = [t_now + u * (t_end - t_now)]
+    if t_horizon > t_end:
+        n_wait = max(2, int(math.ceil((t_horizon - t_end) / SAMPLE_STEP)) + 1)
+        ts.append(np.linspace(t_end, t_horizon, n_wait))
+        qs.append(np.repeat(end[None], n_wait, axis=0))
+    return float(judge.people_safety.clearances(np.concatenate(qs), np.concatenate(ts)).min())
 
 
 def escape(judge, space, q: np.ndarray, t_now: float, t_horizon: float) -> Escape | None:
@@ -54,27 +98,24 @@ def escape(judge, space, q: np.ndarray, t_now: float, t_horizon: float) -> Escap
         t_horizon: the prediction's last time, seconds.
     """
     q = np.asarray(q, float)
-    angles = 2.0 * math.pi * np.arange(ESCAPE_DIRECTIONS) / ESCAPE_DIRECTIONS
-    unit = np.stack([np.cos(angles), np.sin(angles)], axis=1)
-    for d in ESCAPE_DISTANCES:
-        ends = np.repeat(q[None], ESCAPE_DIRECTIONS, axis=0)
-        ends[:, :2] += d * unit
-        inside = np.asarray(space.contains(ends), bool).reshape(-1)
-        valid = np.zeros(ESCAPE_DIRECTIONS, bool)
-        if inside.any():
-            starts = np.repeat(q[None], int(inside.sum()), axis=0)
-            valid[inside] = np.asarray(judge.checker.are_motions_valid(starts, ends[inside]), bool)
-        best = None
-        for k in np.flatnonzero(valid):
-            times = judge.times(np.stack([q, ends[k]]), t_now)
-            t_end = float(times[1])
-            if not judge.people_safety.motion_clear(q, ends[k], float(t_now), t_end):
-                continue
-            if not standing_clear(judge, ends[k], t_end, t_horizon):
-                continue
-            clearance = float(judge.people_safety.clearance(ends[k], max(t_end, t_horizon)))
-            if best is None or clearance > best.clearance:
-                best = Escape(ends[k].copy(), t_end, clearance)
-        if best is not None:
-            return best
-    return None
+    ends = _candidates(judge, space, q)
+    timed = [(end, d, float(judge.times(np.stack([q, end]), t_now)[1])) for end, d in ends]
+    best = None
+    for end, d, t_end in timed:  # 1. clear escapes, the shortest first
+        if best is not None and d > best[1]:
+            break
+        if not (judge.people_safety.motion_clear(q, end, float(t_now), t_end)
+                and standing_clear(judge, end, t_end, t_horizon)):
+            continue
+        clearance = float(judge.people_safety.clearance(end, max(t_end, t_horizon)))
+        if best is None or clearance > best[0].clearance:
+            best = (Escape(end.copy(), t_end, clearance, True), d)
+    if best is not None:
+        return best[0]
+    standing = _least_clearance(judge, q, q, t_now, t_now, t_horizon)  # 2. the best effort
+    effort = None
+    for end, d, t_end in timed:
+        least = _least_clearance(judge, q, end, t_now, t_end, t_horizon)
+        if least > standing + BETTER_BY and (effort is None or least > effort.clearance):
+            effort = Escape(end.copy(), t_end, least, False)
+    return effort

@@ -432,7 +432,7 @@ def test_steps_aside_from_a_walker_coming_at_it(corridor, room, first):
     prediction = walkers(2.0, scripts, horizon=8.0)
     res = rp.plan(q_now, 2.0, prediction, previous, replan_index=1)
     assert res.status == "evade" and res.changed and not res.waiting, res.reason
-    assert "evading" in res.reason
+    assert "evading" in res.reason and "(clear)" in res.reason
     wp = res.waypoints
     np.testing.assert_array_equal(wp[0], q_now)
     np.testing.assert_array_equal(wp[1, 2:], q_now[2:])  # the arm as it is

@@ -35,7 +35,8 @@ class Detour:
     def __init__(self, goal, turn: int = 8, waits=()):
         self.goal, self.turn, self.waits = np.asarray(goal, float), turn, set(waits)
 
-    def plan(self, q_now, t_now, prediction, previous=None, *, replan_index, deadline=True):
+    def plan(self, q_now, t_now, prediction, previous=None, *, replan_index, deadline=True, commit=False,
+             search=True):
         q = np.asarray(q_now, float)
         if replan_index in self.waits:
             wp, status = q[None], "wait"
