@@ -413,16 +413,22 @@ class Replanner:
         path is ``[q, escape end] + candidate``, status "evade"."""
         if candidate is None or standing_clear(judge, q, t_now, prediction.horizon):
             return held
-        way = escape(judge, self.space, q, t_now, prediction.horizon)
+        current = candidate[1] if len(candidate) > 1 else None
+        way = escape(judge, self.space, q, t_now, prediction.horizon, current)
         if way is None:
             return dc.replace(held, reason=held.reason + "; no escape motion is clear either",
+                              plan_time=time.perf_counter() - t_start)
+        how = "(clear)" if way.clear else \
+            f"(the best effort: least clearance {way.clearance:.2f} m as predicted)"
+        if way.q is current:  # driving on is the way out: the path stays
+            return dc.replace(held, waypoints=candidate, changed=False, status="kept",
+                              reason=f"evading: standing here is not safe before t = {prediction.horizon:.2f} s "
+                                     f"({held.reason}); driving on to the next waypoint is the way out {how}",
                               plan_time=time.perf_counter() - t_start)
         shift = way.q[:2] - q[:2]
         return dc.replace(held, waypoints=np.vstack([q[None], way.q[None], candidate]), changed=True, status="evade",
                           reason=f"evading: standing here is not safe before t = {prediction.horizon:.2f} s "
-                                 f"({held.reason}); the base steps aside by [{shift[0]:.2f}, {shift[1]:.2f}] m "
-                                 + ("(clear)" if way.clear else f"(the best effort: least clearance "
-                                                                f"{way.clearance:.2f} m as predicted)"),
+                                 f"({held.reason}); the base steps aside by [{shift[0]:.2f}, {shift[1]:.2f}] m {how}",
                           plan_time=time.perf_counter() - t_start)
 
     def _candidate(self, q: np.ndarray, previous, who: str) -> np.ndarray | None:

@@ -19,7 +19,11 @@ room's checker and driven at the nominal speeds.
    metres. It is not certified: it is the way out that keeps the robot
    farthest from the people as predicted.
 
-None of either: the robot holds (and says why).
+The motion the robot is driving (``current``: the next waypoint of its
+path) is a candidate too, and is preferred: clear, it is taken at once; as
+a best effort, while its least clearance is within :data:`BETTER_BY` of the
+best one's (so that an escape under way is not swapped every replan for
+one barely better). None of either: the robot holds (and says why).
 """
 
 from __future__ import annotations
@@ -86,7 +90,8 @@ def _least_clearance(judge, q: np.ndarray, end: np.ndarray, t_now: float, t_end:
     return float(judge.people_safety.clearances(np.concatenate(qs), np.concatenate(ts)).min())
 
 
-def escape(judge, space, q: np.ndarray, t_now: float, t_horizon: float) -> Escape | None:
+def escape(judge, space, q: np.ndarray, t_now: float, t_horizon: float,
+           current: np.ndarray | None = None) -> Escape | None:
     """The escape from ``q`` at ``t_now`` (see the module docstring), or None.
 
     Args:
@@ -96,8 +101,17 @@ def escape(judge, space, q: np.ndarray, t_now: float, t_horizon: float) -> Escap
         q: (4,) the robot's configuration.
         t_now: the time now, seconds.
         t_horizon: the prediction's last time, seconds.
+        current: (4,) the end of the motion being driven, or None (the
+            returned escape's ``q`` is then this very array when chosen).
     """
     q = np.asarray(q, float)
+    if current is not None and not np.array_equal(current, q):
+        t_cur = float(judge.times(np.stack([q, current]), t_now)[1])
+        if (judge.people_safety.motion_clear(q, current, float(t_now), t_cur)
+                and standing_clear(judge, current, t_cur, t_horizon)):
+            return Escape(current, t_cur, float(judge.people_safety.clearance(current, max(t_cur, t_horizon))), True)
+    else:
+        current = None
     ends = _candidates(judge, space, q)
     timed = [(end, d, float(judge.times(np.stack([q, end]), t_now)[1])) for end, d in ends]
     best = None
@@ -118,4 +132,9 @@ def escape(judge, space, q: np.ndarray, t_now: float, t_horizon: float) -> Escap
         least = _least_clearance(judge, q, end, t_now, t_end, t_horizon)
         if least > standing + BETTER_BY and (effort is None or least > effort.clearance):
             effort = Escape(end.copy(), t_end, least, False)
+    if effort is not None and current is not None:
+        t_cur = float(judge.times(np.stack([q, current]), t_now)[1])
+        least = _least_clearance(judge, q, current, t_now, t_cur, t_horizon)
+        if least > standing + BETTER_BY and least >= effort.clearance - BETTER_BY:
+            return Escape(current, t_cur, least, False)
     return effort

@@ -419,42 +419,52 @@ def test_no_search_keeps_a_safe_candidate_and_searches_an_unsafe_one(corridor, r
     assert res.status == "new" and res.candidate_cost == math.inf
 
 
+def clear_until(scenario, q_a, q_b, t0, horizon, scripts) -> float:
+    """The least distance to the walkers driving q_a -> q_b from t0 (nominal
+    time), then standing at q_b until ``horizon``; independent of the kernel."""
+    geometry = ArmGeometry.from_scenario(scenario)
+    arrive = t0 + math.hypot(*(q_b[:2] - q_a[:2])) / scenario.execution.max_base_speed
+    u = np.linspace(0.0, 1.0, 400)
+    ts = np.concatenate([t0 + u * (arrive - t0), np.linspace(arrive, horizon, 400)])
+    qs = np.concatenate([q_a + u[:, None] * (q_b - q_a), np.repeat(q_b[None], 400, axis=0)])
+    centres = np.stack([np.stack([np.interp(ts, *np.asarray(sc, float)[:, [0, 1]].T),
+                                  np.interp(ts, *np.asarray(sc, float)[:, [0, 2]].T)], axis=1) for sc in scripts],
+                       axis=1)
+    return min(float(part_distances(geometry, qs[k][None], centres[k][None], np.full(len(scripts), 0.25))
+                     ["robot"].min()) for k in range(len(ts)))
+
+
 def test_steps_aside_from_a_walker_coming_at_it(corridor, room, first):
     """Both corridors blocked by standing people and a walker heading
-    straight for the robot: standing still is not safe, so the robot steps
-    aside; the escape motion and the robot standing at its end are clear of
-    every person until the horizon (checked densely and independently)."""
+    straight for the robot: standing still is not safe. Driving on to the
+    next waypoint gets out of the way, so the path is kept; with a next
+    waypoint in the walker's way, the robot steps aside. Either way the
+    motion and the robot standing at its end are clear of every person until
+    the horizon (checked densely and independently), where standing still
+    was not."""
     rp = replanner(corridor, room)
     q_now, previous = along(first, 2.0)
     x, y = q_now[:2]
     walker = [(2.0, x, 6.7), (2.0 + (6.7 - 0.3) / 1.1, x, 0.3)]  # north to south through the base, 1.1 m/s
     scripts = [[(2.0, 6.0, NORTH_Y)], [(2.0, 6.0, SOUTH_Y)], walker]
     prediction = walkers(2.0, scripts, horizon=8.0)
+    safety = corridor.execution.safety_distance
+    assert clear_until(corridor, q_now, q_now, 2.0, prediction.horizon, scripts) <= safety
     res = rp.plan(q_now, 2.0, prediction, previous, replan_index=1)
+    assert res.status == "kept" and "driving on to the next waypoint" in res.reason and "(clear)" in res.reason
+    np.testing.assert_array_equal(res.waypoints, previous)
+    assert clear_until(corridor, q_now, previous[1], 2.0, prediction.horizon, scripts) > safety
+    # A next waypoint in the walker's way: the base steps aside, then comes back to the path.
+    blocked = np.vstack([q_now[None], q_now + [0.0, -1.5, 0.0, 0.0], previous[1:]])
+    res = rp.plan(q_now, 2.0, prediction, blocked, replan_index=1)
     assert res.status == "evade" and res.changed and not res.waiting, res.reason
     assert "evading" in res.reason and "(clear)" in res.reason
     wp = res.waypoints
     np.testing.assert_array_equal(wp[0], q_now)
     np.testing.assert_array_equal(wp[1, 2:], q_now[2:])  # the arm as it is
-    np.testing.assert_array_equal(wp[2:], previous)  # then back to the path
+    np.testing.assert_array_equal(wp[2:], blocked)
     assert room.are_motions_valid(wp[:1], wp[1:2]).all()
-    safety = corridor.execution.safety_distance
-    assert min_distance(corridor, wp[:2], 2.0, prediction, scripts) > safety
-    # Standing at the escape's end until the horizon: the people placed independently.
-    ex = corridor.execution
-    arrive = 2.0 + math.hypot(*(wp[1, :2] - q_now[:2])) / ex.max_base_speed
-    ts = np.linspace(arrive, prediction.horizon, 400)
-    centres = np.stack([np.stack([np.interp(ts, *np.asarray(sc, float)[:, [0, 1]].T),
-                                  np.interp(ts, *np.asarray(sc, float)[:, [0, 2]].T)], axis=1) for sc in scripts],
-                       axis=1)
-    geometry = ArmGeometry.from_scenario(corridor)
-    near = min(float(part_distances(geometry, wp[1][None], centres[k][None], np.full(3, 0.25))["robot"].min())
-               for k in range(len(ts)))
-    assert near > safety
-    # Where it stood, the walker would have come within the safety distance.
-    stand = min(float(part_distances(geometry, q_now[None], centres[k][None], np.full(3, 0.25))["robot"].min())
-                for k in range(len(ts)))
-    assert stand <= safety
+    assert clear_until(corridor, q_now, wp[1], 2.0, prediction.horizon, scripts) > safety
 
 
 # ---- arguments ----------------------------------------------------------------------------------
