@@ -48,7 +48,7 @@ from drake_social.people import people_model
 from drake_social.people.prediction import Prediction
 from drake_social.planning.algorithms import AlgorithmSpec, algorithm_spec, base_only_weights, make_objective
 from drake_social.planning.replan_eval import PathEvaluation, PathJudge
-from drake_social.planning.replan_evade import escape, standing_clear
+from drake_social.planning.replan_evade import LOOKAHEAD, escape, standing_clear
 from drake_social.planning.replan_search import VERIFY_PATHS, run_search, search_planner
 from drake_social.planning.rrt_star import compiled
 from drake_social.planning.space import ConfigurationSpace
@@ -147,7 +147,9 @@ class Replanner:
 
     Args:
         scenario: a validated :class:`~drake_social.scenario.Scenario` (its
-            goal, planner, social and execution sections).
+            goal, planner, social and execution sections); the objective
+            adds ``planner.replan_length_weight`` to ``social.length_weight``
+            (:attr:`scenario` is that copy).
         checker: the room's checker, without people:
             ``make_checker(without_people(scenario), "planar")`` (a checker
             with a compiled scene: the compiled search and the people's
@@ -166,6 +168,10 @@ class Replanner:
             None = ``scenario.random_seed``.
         initial_iterations: samples of the initial plan (``replan_index`` 0,
             no deadline); None = ``planner.iterations``.
+        lookahead: seconds ahead that the robot standing still must stay
+            clear of predicted people, else it steps aside
+            (:mod:`.replan_evade`; default
+            :data:`~drake_social.planning.replan_evade.LOOKAHEAD`).
 
     Raises:
         TypeError: an argument of the wrong kind (a checker without a
@@ -176,7 +182,8 @@ class Replanner:
 
     def __init__(self, scenario, checker, algorithm: str | AlgorithmSpec | None = None, *,
                  iterations: int | None = None, budget: float | None = None, margin: float | None = None,
-                 safety: float | None = None, seed: int | None = None, initial_iterations: int | None = None):
+                 safety: float | None = None, seed: int | None = None, initial_iterations: int | None = None,
+                 lookahead: float = LOOKAHEAD):
         who = "Replanner"
         require_scenario(scenario, who)
         require_checker(checker, who)
@@ -195,12 +202,17 @@ class Replanner:
         require_number(margin, who, "margin", optional=True)
         require_number(safety, who, "safety", optional=True, unit="metres")
         require_int(seed, who, "seed", minimum=0, optional=True)
+        require_number(lookahead, who, "lookahead", positive=True, unit="seconds")
         margin = p.replan_margin if margin is None else float(margin)
         if not 0.0 <= margin < 1.0:
             raise ValueError(f"{who}: margin must be in [0, 1), got {margin}")
         safety = scenario.execution.safety_distance if safety is None else float(safety)
         if not safety >= 0.0:
             raise ValueError(f"{who}: safety must be >= 0 metres, got {safety}")
+        # The replanner's objective: the scenario's, with planner.replan_length_weight added to its length weight.
+        social = scenario.social
+        scenario = dc.replace(scenario, social=dc.replace(
+            social, length_weight=float(social.length_weight) + float(p.replan_length_weight)))
         self.scenario = scenario
         self.checker = checker
         self.spec = algorithm_spec(p.algorithm if algorithm is None else algorithm, who)
@@ -209,6 +221,7 @@ class Replanner:
         self.budget = p.replan_budget if budget is None else float(budget)
         self.margin = margin
         self.safety = safety
+        self.lookahead = float(lookahead)
         self.seed = scenario.random_seed if seed is None else int(seed)
         self.goal = np.asarray(scenario.goal, float)
         self.space = ConfigurationSpace.from_scenario(scenario)
@@ -333,7 +346,9 @@ class Replanner:
         rest = self._plan_from(candidate[1], float(head.times[1]), prediction, candidate[1:], judge, t_start,
                                replan_index, use_deadline, search)
         if rest.waiting or rest.status == "evade":
-            if rest.waiting and standing_clear(judge, candidate[1], float(head.times[1]), prediction.horizon):
+            t_b = float(head.times[1])
+            if rest.waiting and standing_clear(judge, candidate[1], t_b, min(prediction.horizon,
+                                                                             t_b + self.lookahead)):
                 # Nothing safe from the motion's end, but the robot may stand there: it drives on and waits there.
                 return dc.replace(rest, t=t_now, waypoints=candidate, status="kept", cost=math.inf,
                                   reason=rest.reason.replace("waiting:", "driving on to the end of the motion "
@@ -411,10 +426,11 @@ class Replanner:
         when standing at ``q`` is not safe until the horizon and there is a
         path to come back to (``candidate``, from ``q`` to the goal): the new
         path is ``[q, escape end] + candidate``, status "evade"."""
-        if candidate is None or standing_clear(judge, q, t_now, prediction.horizon):
+        until = min(prediction.horizon, t_now + self.lookahead)
+        if candidate is None or standing_clear(judge, q, t_now, until):
             return held
         current = candidate[1] if len(candidate) > 1 else None
-        way = escape(judge, self.space, q, t_now, prediction.horizon, current)
+        way = escape(judge, self.space, q, t_now, until, current)
         if way is None:
             return dc.replace(held, reason=held.reason + "; no escape motion is clear either",
                               plan_time=time.perf_counter() - t_start)
@@ -422,12 +438,12 @@ class Replanner:
             f"(the best effort: least clearance {way.clearance:.2f} m as predicted)"
         if way.q is current:  # driving on is the way out: the path stays
             return dc.replace(held, waypoints=candidate, changed=False, status="kept",
-                              reason=f"evading: standing here is not safe before t = {prediction.horizon:.2f} s "
+                              reason=f"evading: standing here is not safe before t = {until:.2f} s "
                                      f"({held.reason}); driving on to the next waypoint is the way out {how}",
                               plan_time=time.perf_counter() - t_start)
         shift = way.q[:2] - q[:2]
         return dc.replace(held, waypoints=np.vstack([q[None], way.q[None], candidate]), changed=True, status="evade",
-                          reason=f"evading: standing here is not safe before t = {prediction.horizon:.2f} s "
+                          reason=f"evading: standing here is not safe before t = {until:.2f} s "
                                  f"({held.reason}); the base steps aside by [{shift[0]:.2f}, {shift[1]:.2f}] m {how}",
                           plan_time=time.perf_counter() - t_start)
 

@@ -3,7 +3,8 @@
 A replan that finds no safe path would hold the robot where it is. When a
 predicted person is coming within the safety distance of the robot *standing
 there* before the prediction's horizon (a walker who does not see it, say),
-holding is not safe either. :func:`escape` then looks for a short base motion
+holding is not safe either (within :data:`LOOKAHEAD` seconds: the callers
+pass ``min(horizon, t_now + LOOKAHEAD)`` as the horizon). :func:`escape` then looks for a short base motion
 out of the way: the base moved by :data:`ESCAPE_DISTANCES` metres in each of
 :data:`ESCAPE_DIRECTIONS` directions, the arm as it is, each accepted by the
 room's checker and driven at the nominal speeds.
@@ -33,7 +34,8 @@ from typing import NamedTuple
 
 import numpy as np
 
-__all__ = ["BETTER_BY", "ESCAPE_DIRECTIONS", "ESCAPE_DISTANCES", "SAMPLE_STEP", "Escape", "escape", "standing_clear"]
+__all__ = ["BETTER_BY", "ESCAPE_DIRECTIONS", "ESCAPE_DISTANCES", "LOOKAHEAD", "SAMPLE_STEP", "Escape", "escape",
+           "standing_clear"]
 
 #: Directions of the base's escape motions (evenly spaced from +x).
 ESCAPE_DIRECTIONS = 16
@@ -43,6 +45,9 @@ ESCAPE_DISTANCES = (0.4, 0.8, 1.2, 1.6)
 SAMPLE_STEP = 0.2
 #: Metres by which a best-effort escape's least clearance must beat standing still.
 BETTER_BY = 0.05
+#: Seconds ahead that standing still must stay clear (at most the prediction's horizon): a
+#: person predicted to reach the robot later may still turn, stop or step aside.
+LOOKAHEAD = 2.0
 
 
 class Escape(NamedTuple):

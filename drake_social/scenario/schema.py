@@ -352,6 +352,11 @@ class PlannerOptions:
     # current path against the new prediction; one that finds it unsafe
     # searches at once.
     replan_search_period: float = 1.0
+    # Added to social.length_weight in the replanner's objective (>= 0): while
+    # the robot drives, time passes for everyone, and among routes of about
+    # equal social cost the shorter one should win (without it a replan may
+    # take any of many near-zero-cost detours; docs/replanning.md).
+    replan_length_weight: float = 0.1
     # How people are predicted: "constant_velocity" (from their state now) or
     # "perfect" (scripted and recorded people as they will walk; a crowd at constant velocity).
     prediction: str = "constant_velocity"

@@ -359,6 +359,9 @@ def validate_scenario(scenario: Scenario, source: str = "<scenario>") -> None:
     c.finite("planner.replan_margin", p.replan_margin)
     if not 0.0 <= p.replan_margin < 1.0:
         c.fail("planner.replan_margin", f"must be in [0, 1), got {p.replan_margin}")
+    c.finite("planner.replan_length_weight", p.replan_length_weight)
+    if not p.replan_length_weight >= 0.0:
+        c.fail("planner.replan_length_weight", f"must be >= 0, got {p.replan_length_weight}")
     c.finite("planner.replan_search_period", p.replan_search_period)
     if not p.replan_search_period >= 0.0:
         c.fail("planner.replan_search_period", f"must be >= 0 seconds, got {p.replan_search_period}")

@@ -44,7 +44,7 @@ start: [1.2, 3.5, -1.2292, 2.8]
 goal: [10.8, 3.5, -1.2292, 2.8]
 random_seed: 3
 social: {length_weight: 1.0}
-planner: {iterations: 1500, planning_range: 2.0, near_radius: 3.0, replan_iterations: 400}
+planner: {iterations: 1500, planning_range: 2.0, near_radius: 3.0, replan_iterations: 400, replan_length_weight: 0.0}
 """
 NORTH_Y, SOUTH_Y = 6.0, 1.0  # corridor centre lines
 HORIZON = 60.0  # seconds: longer than any path here
@@ -156,6 +156,16 @@ def test_initial_plan(corridor, room, first):
     assert first != dc.replace(first, waypoints=first.waypoints[::-1])
     record = first.to_record()
     assert record["status"] == "initial" and record["cost"] == first.cost
+
+
+def test_replan_length_weight_adds_to_the_objective(corridor, room, first):
+    """planner.replan_length_weight is added to social.length_weight: with
+    nobody about a path's cost is (1.0 + 0.5) x its weighted length."""
+    heavier = dc.replace(corridor, planner=dc.replace(corridor.planner, replan_length_weight=0.5))
+    rp = replanner(heavier, room)
+    assert rp.scenario.social.length_weight == 1.5 and corridor.social.length_weight == 1.0
+    length = config_distance(first.waypoints[:-1], first.waypoints[1:]).sum()
+    assert rp.evaluate(first.waypoints, 0.0, nobody(0.0)).cost == pytest.approx(1.5 * length, rel=1e-12)
 
 
 def test_evaluate_times_and_safety(corridor, room, first):
@@ -442,7 +452,7 @@ def test_steps_aside_from_a_walker_coming_at_it(corridor, room, first):
     motion and the robot standing at its end are clear of every person until
     the horizon (checked densely and independently), where standing still
     was not."""
-    rp = replanner(corridor, room)
+    rp = replanner(corridor, room, lookahead=8.0)  # the whole prediction
     q_now, previous = along(first, 2.0)
     x, y = q_now[:2]
     walker = [(2.0, x, 6.7), (2.0 + (6.7 - 0.3) / 1.1, x, 0.3)]  # north to south through the base, 1.1 m/s
