@@ -354,9 +354,10 @@ class Replanner:
                                   reason=rest.reason.replace("waiting:", "driving on to the end of the motion "
                                                              "being driven, to wait there:", 1),
                                   plan_time=time.perf_counter() - t_start)
+            why = rest.reason.replace("waiting:", "waiting: from the end of the motion being driven,", 1) \
+                if rest.waiting else "waiting: standing at the end of the motion being driven would not be safe"
             held = dc.replace(rest, t=t_now, waypoints=q[None], status="wait", changed=False, cost=math.inf,
-                              reason=rest.reason.replace("waiting:", "waiting: from the end of the motion being "
-                                                         "driven,", 1), plan_time=time.perf_counter() - t_start)
+                              reason=why, plan_time=time.perf_counter() - t_start)
             return self._hold_or_evade(held, q, t_now, judge, prediction, candidate, t_start)
         cost = head.cost
         return dc.replace(rest, t=t_now, waypoints=np.vstack([q[None], rest.waypoints]), cost=cost + rest.cost,
