@@ -63,6 +63,38 @@ def _points(q0, q1, q2, q3, l1, l2, obj, active, xs, ys):
 
 
 @njit(cache=True)
+def motion_samples(x, y, psi1, psi2, d0, d1, d2, d3, n, k_lo, k_hi, l1, l2, obj, active, xs, ys):
+    """Interest points ``active`` at the samples k = k_lo .. k_hi of the
+    motion from [x, y, psi1, psi2] by [d0, d1, d2, d3] in n steps (u = k / n)
+    into xs[:, k], ys[:, k]; the arm's angles by rotation steps from the first
+    (angle addition, ~1e-15 from cos/sin)."""
+    t = k_lo / n
+    th1, th12 = psi1 + t * d2, psi1 + psi2 + t * (d2 + d3)
+    c1, s1, c12, s12 = math.cos(th1), math.sin(th1), math.cos(th12), math.sin(th12)
+    cd1, sd1 = math.cos(d2 / n), math.sin(d2 / n)
+    cd12, sd12 = math.cos((d2 + d3) / n), math.sin((d2 + d3) / n)
+    for k in range(k_lo, k_hi + 1):
+        t = k / n
+        x0, y0 = x + t * d0, y + t * d1
+        ex, ey = x0 + l1 * c1, y0 + l1 * s1
+        gx, gy = ex + l2 * c12, ey + l2 * s12
+        for j in range(active.shape[0]):
+            p = active[j]
+            if p == 0:
+                xs[j, k], ys[j, k] = x0, y0
+            elif p == 1:
+                xs[j, k], ys[j, k] = ex, ey
+            elif p == 2:
+                xs[j, k], ys[j, k] = gx, gy
+            else:
+                ox, oy = obj[p - 3, 0], obj[p - 3, 1]
+                xs[j, k] = gx + c12 * ox - s12 * oy
+                ys[j, k] = gy + s12 * ox + c12 * oy
+        c1, s1 = c1 * cd1 - s1 * sd1, s1 * cd1 + c1 * sd1
+        c12, s12 = c12 * cd12 - s12 * sd12, s12 * cd12 + c12 * sd12
+
+
+@njit(cache=True)
 def _point_levers(l1, l2, obj, active):
     """(K, 2) per interest point ``(c_shoulder, c_gripper)``: the base centre
     moves with the base only, the elbow also turns about the shoulder (l1),
@@ -356,32 +388,9 @@ def msc_sums(
                 k_lo, k_hi = min(k_lo, k0), max(k_hi, k1)
         if k_hi < 0:
             continue
-        # The samples k_lo..k_hi, once for all people; the arm's angles by
-        # rotation steps from the first (angle addition, ~1e-15 from cos/sin).
-        t = k_lo / n
-        th1, th12 = q_a[e, 2] + t * d2, q_a[e, 2] + q_a[e, 3] + t * (d2 + d3)
-        c1, s1, c12, s12 = math.cos(th1), math.sin(th1), math.cos(th12), math.sin(th12)
-        cd1, sd1 = math.cos(d2 / n), math.sin(d2 / n)
-        cd12, sd12 = math.cos((d2 + d3) / n), math.sin((d2 + d3) / n)
-        for k in range(k_lo, k_hi + 1):
-            t = k / n
-            x0, y0 = q_a[e, 0] + t * d0, q_a[e, 1] + t * d1
-            ex, ey = x0 + l1 * c1, y0 + l1 * s1
-            gx, gy = ex + l2 * c12, ey + l2 * s12
-            for j in range(k_count):
-                p = active[j]
-                if p == 0:
-                    xs[j, k], ys[j, k] = x0, y0
-                elif p == 1:
-                    xs[j, k], ys[j, k] = ex, ey
-                elif p == 2:
-                    xs[j, k], ys[j, k] = gx, gy
-                else:
-                    ox, oy = obj[p - 3, 0], obj[p - 3, 1]
-                    xs[j, k] = gx + c12 * ox - s12 * oy
-                    ys[j, k] = gy + s12 * ox + c12 * oy
-            c1, s1 = c1 * cd1 - s1 * sd1, s1 * cd1 + c1 * sd1
-            c12, s12 = c12 * cd12 - s12 * sd12, s12 * cd12 + c12 * sd12
+        # The samples k_lo..k_hi, once for all people.
+        motion_samples(q_a[e, 0], q_a[e, 1], q_a[e, 2], q_a[e, 3], d0, d1, d2, d3, n, k_lo, k_hi, l1, l2, obj,
+                       active, xs, ys)
         # The samples of every (candidate, point) window in one run: their
         # exponents, then exp and the trapezoids in two long vector loops.
         count = 0

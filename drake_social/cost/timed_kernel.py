@@ -215,31 +215,10 @@ def msc_sums_timed(
         if k_hi < 0:
             continue
         # The robot's samples k_lo..k_hi, as msc_sums takes them, and their times.
-        u = k_lo / n
-        th1, th12 = q_a[e, 2] + u * d2, q_a[e, 2] + q_a[e, 3] + u * (d2 + d3)
-        c1, s1, c12, s12 = math.cos(th1), math.sin(th1), math.cos(th12), math.sin(th12)
-        cd1, sd1 = math.cos(d2 / n), math.sin(d2 / n)
-        cd12, sd12 = math.cos((d2 + d3) / n), math.sin((d2 + d3) / n)
+        kernel.motion_samples(q_a[e, 0], q_a[e, 1], q_a[e, 2], q_a[e, 3], d0, d1, d2, d3, n, k_lo, k_hi, l1, l2,
+                              obj, active, xs, ys)
         for k in range(k_lo, k_hi + 1):
-            u = k / n
-            x0, y0 = q_a[e, 0] + u * d0, q_a[e, 1] + u * d1
-            ex, ey = x0 + l1 * c1, y0 + l1 * s1
-            gx, gy = ex + l2 * c12, ey + l2 * s12
-            for j in range(k_count):
-                p = active[j]
-                if p == 0:
-                    xs[j, k], ys[j, k] = x0, y0
-                elif p == 1:
-                    xs[j, k], ys[j, k] = ex, ey
-                elif p == 2:
-                    xs[j, k], ys[j, k] = gx, gy
-                else:
-                    ox, oy = obj[p - 3, 0], obj[p - 3, 1]
-                    xs[j, k] = gx + c12 * ox - s12 * oy
-                    ys[j, k] = gy + s12 * ox + c12 * oy
-            c1, s1 = c1 * cd1 - s1 * sd1, s1 * cd1 + c1 * sd1
-            c12, s12 = c12 * cd12 - s12 * sd12, s12 * cd12 + c12 * sd12
-            slots[k], fracs[k] = _slot(ta + u * dtime, t0, dt, s_count)
+            slots[k], fracs[k] = _slot(ta + (k / n) * dtime, t0, dt, s_count)
         # Each candidate at the samples of its windows.
         count = 0
         for i in range(m):

@@ -27,6 +27,7 @@ class Replan:
     changed: bool = False
     cost: float = 1.0
     iterations: int = 500
+    searched: bool = True
 
 
 def log() -> list[Replan]:
@@ -35,7 +36,8 @@ def log() -> list[Replan]:
     for k in range(1, 41):
         status = "wait" if k in (7, 8) else ("new" if k % 10 == 0 else "kept")
         out.append(Replan(0.1 * k, float(rng.uniform(0.02, 0.09)), status, deadline_hit=k % 9 == 0,
-                          changed=status == "new", cost=math.inf if status == "wait" else 1.0))
+                          changed=status == "new", cost=math.inf if status == "wait" else 1.0,
+                          searched=k % 4 == 0 or status != "kept"))
     return out
 
 
@@ -48,6 +50,9 @@ def test_replan_time_stats_leave_the_first_plan_apart():
     assert s["mean"] == pytest.approx(times.mean(), rel=1e-15)
     assert s["deadline_hits"] == 4 and s["over_budget"] == int(np.sum(times > 0.08))
     assert s["path_changes"] == 4 and s["waits"] == 2
+    searched = np.array([r.plan_time for r in replans[1:] if r.searched])
+    assert s["searches"] == len(searched) == 13  # k a multiple of 4 (10 of them), the waits 7, 8 and the new 10, 30
+    assert s["search_median"] == np.median(searched) and s["search_p95"] == np.percentile(searched, 95)
     empty = dut.replan_time_stats(replans[:1], 0.08)
     assert empty["n"] == 0 and empty["median"] is None and empty["initial_plan_time"] == 0.9
 
@@ -86,7 +91,8 @@ def test_markdown_rows():
     text = "\n".join(dut.replan_markdown(entry))
     assert "## Replanning (office_walkers)" in text
     assert "processor: a CPU (1-minute load average 0.50 at the start, 1.25 at the end)." in text
-    row = (f"| 40 | {1e3 * stats['median']:.1f} | {1e3 * stats['p95']:.1f} | {1e3 * stats['max']:.1f} | 4 "
+    row = (f"| 40 | {1e3 * stats['median']:.1f} | {1e3 * stats['p95']:.1f} | {1e3 * stats['max']:.1f} | 13 "
+           f"| {1e3 * stats['search_median']:.1f} / {1e3 * stats['search_p95']:.1f} | 4 "
            f"| {stats['over_budget']} | 4 | 2 | 0.90 |")
     assert f"| kinematic rollout (first replans) {row}" in text
     assert f"| simulated run (kinematic) {row}" in text
@@ -107,7 +113,7 @@ def test_rollout_is_the_replanners_log(tiny_scenario_path, tiny_scenario):
     replans = dut.rollout_replans(tiny_scenario, 5, warm=False)
     assert [x.replan_index for x in replans] == list(range(6))
     np.testing.assert_allclose([x.t for x in replans], np.arange(6) / p.replan_rate)
-    assert replans[0].status == "initial" and all(x.status in ("new", "kept", "wait") for x in replans[1:])
+    assert replans[0].status == "initial" and all(x.status in ("new", "kept", "wait", "evade") for x in replans[1:])
     # Each replan starts where the path decided before it had brought the robot.
     ex = tiny_scenario.execution
     for before, now in zip(replans, replans[1:]):

@@ -61,17 +61,23 @@ def replan_time_stats(replans: Sequence, budget: float) -> dict:
         ``mean`` (seconds; None when n = 0), ``deadline_hits`` (the search
         stopped at the budget), ``over_budget`` (plan_time > budget, the
         judging included), ``path_changes`` (status "new" or "evade"), ``waits``,
-        ``initial_plan_time`` (s, None without a first plan).
+        ``initial_plan_time`` (s, None without a first plan), ``searches``
+        (replans that grew a search tree) and ``search_median``,
+        ``search_p95`` (seconds of those; None without any).
     """
     later = [r for r in replans if r.status != "initial"]
     first = [r for r in replans if r.status == "initial"]
     times = np.array([float(r.plan_time) for r in later], float)
+    searched = np.array([float(r.plan_time) for r in later if getattr(r, "searched", True)], float)
     out = {"n": int(len(later)), "median": None, "p95": None, "max": None, "mean": None,
            "deadline_hits": int(sum(bool(r.deadline_hit) for r in later)),
            "over_budget": int(np.sum(times > budget)),
            "path_changes": int(sum(bool(r.changed) for r in later)),
            "waits": int(sum(r.status == "wait" for r in later)),
-           "initial_plan_time": float(first[0].plan_time) if first else None}
+           "initial_plan_time": float(first[0].plan_time) if first else None,
+           "searches": int(len(searched)),
+           "search_median": float(np.median(searched)) if len(searched) else None,
+           "search_p95": float(np.percentile(searched, 95)) if len(searched) else None}
     if len(times):
         out.update(median=float(np.median(times)), p95=float(np.percentile(times, 95)), max=float(times.max()),
                    mean=float(times.mean()))
@@ -237,8 +243,9 @@ def replan_markdown(entry: dict) -> list[str]:
              f"{s['prediction']} prediction; processor: {entry['processor'] or 'unknown'}{_load(entry)}. Replan times "
              f"(wall clock, the first plan apart; targets: median <= {1e3 * TARGET_MEDIAN:g} ms, 95th "
              f"percentile <= the budget):", "",
-             "| replans of | n | median ms | p95 ms | max ms | deadline hits | over budget | path changes | waits "
-             "| first plan s |", "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|"]
+             "| replans of | n | median ms | p95 ms | max ms | searches | their median / p95 ms | deadline hits "
+             "| over budget | path changes | waits | first plan s |",
+             "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|"]
     rows = [("kinematic rollout (first replans)", entry["rollout"])]
     sim = entry.get("simulation")
     if sim:
@@ -246,7 +253,7 @@ def replan_markdown(entry: dict) -> list[str]:
     for label, r in rows:
         first = "n/a" if r["initial_plan_time"] is None else f"{r['initial_plan_time']:.2f}"
         lines.append(f"| {label} | {r['n']} | {_ms(r['median'])} | {_ms(r['p95'])} | {_ms(r['max'])} "
-                     f"| {r['deadline_hits']} | {r['over_budget']} | {r['path_changes']} | {r['waits']} | {first} |")
+                     f"| {r['searches']} | {_ms(r['search_median'])} / {_ms(r['search_p95'])} | {r['deadline_hits']} | {r['over_budget']} | {r['path_changes']} | {r['waits']} | {first} |")
     if sim:
         rf = sim["realtime_factor"]
         ttg = "not reached" if sim["time_to_goal"] is None else f"goal at {sim['time_to_goal']:.1f} s"
