@@ -49,6 +49,7 @@ from drake_social.people.prediction import Prediction
 from drake_social.planning.algorithms import AlgorithmSpec, algorithm_spec, base_only_weights, make_objective
 from drake_social.planning.replan_eval import PathEvaluation, PathJudge
 from drake_social.planning.replan_evade import LOOKAHEAD, escape, standing_clear
+from drake_social.planning.replan_shortcut import shortcut
 from drake_social.planning.replan_search import VERIFY_PATHS, run_search, search_planner
 from drake_social.planning.rrt_star import compiled
 from drake_social.planning.space import ConfigurationSpace
@@ -397,6 +398,8 @@ class Replanner:
             ev = judge.evaluate(path, t_now)
             if ev.safe and (best_eval is None or ev.cost < best_eval.cost):
                 best, best_eval = path, ev
+        if best is not None:
+            best, best_eval = shortcut(judge, best, t_now, best_eval)
         search_cost = best_eval.cost if best_eval is not None else math.inf
         common = dict(iterations=search.iterations, deadline_hit=search.deadline_hit, candidate_cost=cand_cost,
                       search_cost=search_cost, searched=True)

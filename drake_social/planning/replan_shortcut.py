@@ -1,0 +1,65 @@
+"""Shortcuts of a replan's path: fewer, longer motions where they stay safe and cost less.
+
+The search's paths are raw RRT* paths (500 samples, no optimisation): they
+zigzag, and the sequencer brings the robot to rest at every waypoint.
+:func:`shortcut` walks the path greedily: from each kept waypoint it takes
+the farthest of the next :data:`WINDOW` waypoints that one straight motion
+reaches, accepted by the room's checker and clear of the predicted people at
+its nominal times (the exact checks of the replanner's judge). The shortened
+path is judged exactly and replaces the path only when it is safe and
+cheaper under the objective: a shortcut never raises the cost nor comes
+closer to a predicted person than the safety distance.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from drake_social.kinematics import nominal_durations
+
+__all__ = ["WINDOW", "shortcut"]
+
+#: How many waypoints ahead a shortcut may reach (the farthest tried first).
+WINDOW = 8
+
+
+def shortcut(judge, path: np.ndarray, t0: float, evaluation):
+    """The path (N, 4) driven from ``t0``, shortened (see the module docstring).
+
+    Args:
+        judge: the replan's :class:`~drake_social.planning.replan_eval.PathJudge`.
+        path: (N, 4) a safe path.
+        t0: when its first waypoint is left, seconds.
+        evaluation: ``judge.evaluate(path, t0)``.
+
+    Returns:
+        ``(path, evaluation)``: the shortened path and its exact evaluation
+        when it is safe and cheaper, else the inputs.
+    """
+    wp = np.asarray(path, float)
+    n = len(wp)
+    if n < 3:
+        return path, evaluation
+    keep, i, t = [0], 0, float(t0)
+    ex_speed, arm_speed = judge.max_base_speed, judge.arm_max_velocity
+    while i < n - 1:
+        ends = np.arange(min(n - 1, i + WINDOW), i + 1, -1)  # farthest first, i + 1 excluded (always there)
+        j = i + 1
+        if len(ends):
+            ok = np.asarray(judge.checker.are_motions_valid(np.repeat(wp[i][None], len(ends), axis=0), wp[ends]),
+                            bool)
+            durations = nominal_durations(np.repeat(wp[i][None], len(ends), axis=0), wp[ends], ex_speed, arm_speed)
+            for end, valid, duration in zip(ends, ok, durations):
+                if valid and judge.people_safety.motion_clear(wp[i], wp[end], t, t + float(duration)):
+                    j = int(end)
+                    break
+        t += float(nominal_durations(wp[i][None], wp[j][None], ex_speed, arm_speed)[0])
+        keep.append(j)
+        i = j
+    if len(keep) == n:
+        return path, evaluation
+    short = np.ascontiguousarray(wp[keep])
+    ev = judge.evaluate(short, float(t0))
+    if ev.safe and ev.cost < evaluation.cost:
+        return short, ev
+    return path, evaluation
