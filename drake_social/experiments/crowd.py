@@ -151,6 +151,11 @@ def perturb(scenario: Scenario, seed: int, jitter: float) -> tuple[Scenario, dic
     return dc.replace(scenario, people=people, random_seed=int(seed)), delays
 
 
+def _first(r) -> bool:
+    """The first plan of a replanning run (``replan_index`` 0, or status "initial"; it may be a wait)."""
+    return r.status == "initial" or getattr(r, "replan_index", None) == 0
+
+
 def replan_stats(replans: Sequence | None) -> dict[str, float]:
     """The replanning statistics of an episode from its replan log
     (``SimulationResult.replans``: ``ReplanResult`` s with ``status``,
@@ -173,7 +178,7 @@ def replan_stats(replans: Sequence | None) -> dict[str, float]:
             "replan_time_p95", "replan_time_max", "replan_search_time_median", "replan_deadline_hits")
     if replans is None:
         return dict.fromkeys(keys, math.nan)
-    periodic = [r for r in replans if r.status != "initial"]
+    periodic = [r for r in replans if not _first(r)]
     times = np.array([r.plan_time for r in periodic], float)
     searched = np.array([r.plan_time for r in periodic if getattr(r, "searched", True)], float)
     return {
@@ -301,7 +306,7 @@ def run_episode(task: dict) -> dict:
     record.update(execution_metrics(scenario, run))
     record.update(replan_stats(replans))
     # Microseconds: finer is the machine's noise (and 3000 replans an episode make records.json large).
-    record["replan_times"] = [round(float(r.plan_time), 6) for r in replans if r.status != "initial"] if replans else []
+    record["replan_times"] = [round(float(r.plan_time), 6) for r in replans if not _first(r)] if replans else []
     if task.get("trace"):
         record["trace"] = _trace(run, replans)
     return record

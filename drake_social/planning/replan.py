@@ -72,7 +72,10 @@ class ReplanResult:
         t: the replan's time (``t_now``), seconds.
         waypoints: (N, 4) the path to drive from ``q_now`` (its first row) to
             the goal; ``[q_now]`` (1, 4) while waiting.
-        cost: the exact time-indexed objective cost of ``waypoints`` (inf when waiting).
+        cost: the exact time-indexed objective cost of ``waypoints``; inf
+            when waiting, and for a way out of a person's path that is not
+            safe itself ("evade", or "kept" to drive on: standing still was
+            predicted worse).
         changed: the path to drive is a new one (status "new", "evade" or "initial");
             False when the candidate is kept and while waiting (the caller
             holds the robot; its last path stays the one to resume).
@@ -345,7 +348,7 @@ class Replanner:
                                 time.perf_counter() - t_start, 0, False, math.inf, math.inf, int(replan_index))
             return self._hold_or_evade(held, q, t_now, judge, prediction, candidate, t_start)
         rest = self._plan_from(candidate[1], float(head.times[1]), prediction, candidate[1:], judge, t_start,
-                               replan_index, use_deadline, search)
+                               replan_index, use_deadline, search, head_cost=float(head.cost))
         if rest.waiting or rest.status == "evade":
             t_b = float(head.times[1])
             if rest.waiting and standing_clear(judge, candidate[1], t_b, min(prediction.horizon,
@@ -367,9 +370,11 @@ class Replanner:
 
     def _plan_from(self, q: np.ndarray, t_now: float, prediction: Prediction, candidate: np.ndarray | None,
                    judge: PathJudge, t_start: float, replan_index: int, use_deadline: bool,
-                   grow: bool) -> ReplanResult:
+                   grow: bool, head_cost: float = 0.0) -> ReplanResult:
         """The replan from ``q`` at ``t_now`` (the module docstring's steps;
-        ``grow`` False: no search while the candidate is safe)."""
+        ``grow`` False: no search while the candidate is safe). ``head_cost``:
+        the cost of the committed motion before ``q``, part of both paths'
+        costs in the margin's comparison and in the reason's words."""
         initial = replan_index == 0
 
         def result(waypoints, cost, status, reason, iterations=0, deadline_hit=False, candidate_cost=math.inf,
@@ -384,8 +389,8 @@ class Replanner:
         cand = judge.evaluate(candidate, t_now) if candidate is not None else None
         cand_cost = cand.cost if cand is not None and cand.safe else math.inf
         if not grow and math.isfinite(cand_cost) and not initial:
-            return result(candidate, cand_cost, "kept", f"the current path (cost {cand_cost:.4g}) is still safe: "
-                          "kept without a search", candidate_cost=cand_cost)
+            return result(candidate, cand_cost, "kept", f"the current path (cost {head_cost + cand_cost:.4g}) is "
+                          "still safe: kept without a search", candidate_cost=cand_cost)
         stop = t_start + self.budget * (1.0 - VERIFY_RESERVE) if use_deadline else None
         iterations = self.initial_iterations if initial else self.iterations
         search = run_search(self, q, t_now, prediction, candidate, iterations, stop,
@@ -404,21 +409,22 @@ class Replanner:
         common = dict(iterations=search.iterations, deadline_hit=search.deadline_hit, candidate_cost=cand_cost,
                       search_cost=search_cost, searched=True)
         cand_safe = math.isfinite(cand_cost)
-        if best is not None and (not cand_safe or search_cost < (1.0 - self.margin) * cand_cost):
+        whole_search, whole_cand = head_cost + search_cost, head_cost + cand_cost  # the paths from the robot
+        if best is not None and (not cand_safe or whole_search < (1.0 - self.margin) * whole_cand):
             if initial:
                 why = f"the first plan: cost {search_cost:.4g} after {search.iterations} samples"
             elif candidate is None:
                 why = f"no current path: the search's path costs {search_cost:.4g}"
             elif not cand_safe:
                 why = f"the current path is not safe any more ({judge.unsafe_words(cand)}); " \
-                      f"the search's path costs {search_cost:.4g}"
+                      f"the search's path costs {whole_search:.4g}"
             else:
-                why = (f"the search's path costs {search_cost:.4g}, below (1 - {self.margin:g}) x "
-                       f"{cand_cost:.4g} of the current path")
+                why = (f"the search's path costs {whole_search:.4g}, below (1 - {self.margin:g}) x "
+                       f"{whole_cand:.4g} of the current path")
             return result(best, search_cost, "initial" if initial else "new", why, **common)
         if cand_safe:
-            why = (f"the current path (cost {cand_cost:.4g}) stays: " +
-                   (f"the search's best costs {search_cost:.4g}, not below (1 - {self.margin:g}) x {cand_cost:.4g}"
+            why = (f"the current path (cost {whole_cand:.4g}) stays: " +
+                   (f"the search's best costs {whole_search:.4g}, not below (1 - {self.margin:g}) x {whole_cand:.4g}"
                     if best is not None else f"the search found no safe path ({search.message})"))
             return result(candidate, cand_cost, "initial" if initial else "kept", why, **common)
         held = result(q[None], math.inf, "wait", judge.wait_words(q, t_now, cand, search.message), **common)

@@ -107,16 +107,18 @@ def escape(judge, space, q: np.ndarray, t_now: float, t_horizon: float,
         t_now: the time now, seconds.
         t_horizon: the prediction's last time, seconds.
         current: (4,) the end of the motion being driven, or None (the
-            returned escape's ``q`` is then this very array when chosen).
+            returned escape's ``q`` is then this very array when chosen;
+            left out when it is ``q`` or the room's checker rejects the motion).
     """
     q = np.asarray(q, float)
-    if current is not None and not np.array_equal(current, q):
+    if current is not None and (np.array_equal(current, q)
+                                or not bool(judge.checker.are_motions_valid(q[None], current[None])[0])):
+        current = None  # no motion, or one the room does not allow
+    if current is not None:
         t_cur = float(judge.times(np.stack([q, current]), t_now)[1])
         if (judge.people_safety.motion_clear(q, current, float(t_now), t_cur)
                 and standing_clear(judge, current, t_cur, t_horizon)):
             return Escape(current, t_cur, float(judge.people_safety.clearance(current, max(t_cur, t_horizon))), True)
-    else:
-        current = None
     ends = _candidates(judge, space, q)
     timed = [(end, d, float(judge.times(np.stack([q, end]), t_now)[1])) for end, d in ends]
     best = None
@@ -137,9 +139,9 @@ def escape(judge, space, q: np.ndarray, t_now: float, t_horizon: float,
         least = _least_clearance(judge, q, end, t_now, t_end, t_horizon)
         if least > standing + BETTER_BY and (effort is None or least > effort.clearance):
             effort = Escape(end.copy(), t_end, least, False)
-    if effort is not None and current is not None:
+    if current is not None:
         t_cur = float(judge.times(np.stack([q, current]), t_now)[1])
         least = _least_clearance(judge, q, current, t_now, t_cur, t_horizon)
-        if least > standing + BETTER_BY and least >= effort.clearance - BETTER_BY:
+        if least > standing + BETTER_BY and (effort is None or least >= effort.clearance - BETTER_BY):
             return Escape(current, t_cur, least, False)
     return effort

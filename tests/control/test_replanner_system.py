@@ -161,6 +161,26 @@ def test_version_increments_only_on_a_change_and_hold_while_waiting(scenario):
                                   [[0.5, 0, 0, 0], [0.2, 0, 0, 0], [3.0, 1.0, 0, 0], GOAL])
 
 
+def test_an_escape_is_a_new_path_that_ends_the_wait(scenario):
+    dut, double = _system(scenario, {0: "initial", 1: "wait", 2: "evade"})
+    context = _context(dut)
+    dut.ExecuteInitializationEvents(context)
+    q = np.array([0.3, 0.2, 0.0, 0.0])
+    dut.GetInputPort("q").FixValue(context, q)
+    _replan(dut, context)
+    assert _outputs(dut, context)[1:] == (0, 1)  # waiting: held, same version
+    _replan(dut, context)
+    waypoints, version, hold = _outputs(dut, context)
+    assert (version, hold) == (1, 0)  # the escape is a new path, and the hold ends
+    # [q, q stepped aside, then the path waited on from q]: the candidate of replan 2 was [q] + the first path.
+    previous = double.calls[2]["previous"]
+    np.testing.assert_array_equal(previous[0], q)
+    np.testing.assert_array_equal(previous[-1], GOAL)
+    np.testing.assert_array_equal(waypoints, np.vstack([q, q + [0.0, 0.5, 0.0, 0.0], previous]))
+    assert double.calls[2]["commit"] is False and double.calls[2]["search"] is True  # from rest, after a wait
+    np.testing.assert_array_equal(dut.followed(context), waypoints)  # replaced at index 0: nothing followed before
+
+
 def test_remainder_is_q_then_the_path_from_the_sequencers_index(scenario):
     dut, double = _system(scenario, {0: "initial", 1: "new", 2: "kept", 3: "new"})
     context = _context(dut)

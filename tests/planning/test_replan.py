@@ -404,6 +404,13 @@ def test_committed_motion_starts_every_path(corridor, room, first):
     # Nobody about: the committed candidate is kept as it is.
     kept = rp.plan(q_now, 2.0, nobody(2.0), previous, replan_index=1, commit=True)
     assert kept.status in ("kept", "new") and np.array_equal(kept.waypoints[:2], previous[:2])
+    # The margin compares the whole paths from the robot (the committed motion's cost in both).
+    whole = rp.evaluate(previous, 2.0, nobody(2.0)).cost
+    assert kept.candidate_cost == pytest.approx(whole, rel=1e-9)
+    if kept.status == "new":
+        assert kept.search_cost < 0.95 * kept.candidate_cost
+    else:
+        assert kept.search_cost >= 0.95 * kept.candidate_cost
 
 
 def test_committed_motion_unsafe_holds(corridor, room, first):

@@ -19,7 +19,7 @@ mode with replanning at 10 Hz at least 5x):
   (simulated seconds per wall second of ``AdvanceTo``, the replans included)
   and the times of every replan of the first run's log.
 
-Replan times exclude the first plan (``status == "initial"``: the full
+Replan times exclude the first plan (``replan_index`` 0, ``status == "initial"`` unless it waits: the full
 iteration count, no deadline, at initialization); it is reported apart. The
 processor is named: wall-clock times hold for it alone.
 """
@@ -65,8 +65,9 @@ def replan_time_stats(replans: Sequence, budget: float) -> dict:
         (replans that grew a search tree) and ``search_median``,
         ``search_p95`` (seconds of those; None without any).
     """
-    later = [r for r in replans if r.status != "initial"]
-    first = [r for r in replans if r.status == "initial"]
+    is_first = [r.status == "initial" or getattr(r, "replan_index", None) == 0 for r in replans]  # a wait too
+    later = [r for r, f in zip(replans, is_first) if not f]
+    first = [r for r, f in zip(replans, is_first) if f]
     times = np.array([float(r.plan_time) for r in later], float)
     searched = np.array([float(r.plan_time) for r in later if getattr(r, "searched", True)], float)
     out = {"n": int(len(later)), "median": None, "p95": None, "max": None, "mean": None,
