@@ -202,6 +202,7 @@ def test_cli_parses_experiment_crowd():
 
 
 _MACHINE = ("wall_time", "plan_time_initial", "replan_time_median", "replan_time_p95", "replan_time_max",
+            "replan_search_time_median",
             "replan_times")
 
 
