@@ -24,7 +24,7 @@ from typing import Sequence
 
 import numpy as np
 
-from drake_social.experiments.study.report import ALPHA, Comparison, paired
+from drake_social.experiments.study.report import ALPHA, Comparison, median_iqr, paired
 
 __all__ = ["CLAIMS", "PART_METRICS", "SUCCESS_TARGET", "compare", "claim_lines", "report_markdown", "target_lines",
            "variant_table", "parts_table"]
@@ -158,14 +158,6 @@ def target_lines(records: Sequence[dict], scenarios: Sequence[str], variants: Se
     return lines
 
 
-def _stat(values, fmt: str) -> str:
-    v = np.asarray([x for x in values if x is not None and np.isfinite(x)], float)
-    if not len(v):
-        return "n/a"
-    q25, med, q75 = np.percentile(v, [25, 50, 75])
-    return f"{med:{fmt}} [{q25:{fmt}}, {q75:{fmt}}]"
-
-
 _VARIANT_COLUMNS = (("nav_time_to_goal", "time to goal s", ".3g"), ("nav_stop_count", "safety stops", ".3g"),
                     ("nav_stopped_time", "stopped s", ".3g"), ("replans", "replans", ".4g"),
                     ("replan_changes", "changes", ".3g"), ("replan_waits", "waits", ".3g"),
@@ -184,7 +176,7 @@ def variant_table(records: Sequence[dict], scenarios: Sequence[str], variants: S
             if runs:
                 reached = sum(1 for r in runs if r["reached"] == 1.0)
                 lines.append(f"| {s} | {v} | {reached}/{len(runs)} | "
-                             + " | ".join(_stat([r.get(f) for r in runs], fmt) for f, _, fmt in _VARIANT_COLUMNS) + " |")
+                             + " | ".join(median_iqr([r.get(f) for r in runs], fmt) for f, _, fmt in _VARIANT_COLUMNS) + " |")
     return lines
 
 
@@ -197,7 +189,7 @@ def parts_table(records: Sequence[dict], scenarios: Sequence[str], variants: Seq
             runs = _runs(records, s, v)
             for p in PARTS if runs else ():
                 lines.append(f"| {s} | {v} | {p} | " + " | ".join(
-                    _stat([r.get(f"nav_{m}_{p}") for r in runs], fmt) for m, _, _, fmt in PART_METRICS) + " |")
+                    median_iqr([r.get(f"nav_{m}_{p}") for r in runs], fmt) for m, _, _, fmt in PART_METRICS) + " |")
     return lines
 
 

@@ -26,7 +26,7 @@ import numpy as np
 from drake_social.experiments.study.people_tables import people_tables
 from drake_social.experiments.study.results import best_runs
 
-__all__ = ["ALPHA", "OFF_SCALE_FACTOR", "Claim", "Comparison", "axis_stretch", "boxplot_values", "paired",
+__all__ = ["ALPHA", "OFF_SCALE_FACTOR", "Claim", "Comparison", "axis_stretch", "boxplot_values", "median_iqr", "paired",
            "figure_names", "paper_claims", "report_markdown", "write_figures"]
 
 #: Significance level of the one-sided paired test.
@@ -211,7 +211,9 @@ _SUMMARY = (("F_multi", "F all points", ".4g"), ("F_base", "F base only", ".4g")
             ("min_dist_robot", "min distance m", ".3g"), ("planning_time", "planning s", ".3g"))
 
 
-def _stat(values, fmt: str) -> str:
+def median_iqr(values, fmt: str) -> str:
+    """``"median [25th, 75th percentile]"`` of the finite values (None and NaN
+    left out), each in ``fmt``; "n/a" when there is none."""
     v = np.asarray([x for x in values if x is not None and np.isfinite(x)], float)
     if not len(v):
         return "n/a"
@@ -226,7 +228,7 @@ def summary_table(result) -> list[str]:
         for a in g.algorithms:
             runs = [r for r in result.records if r["group"] == g.name and r["algorithm"] == a]
             ok = [r for r in runs if r["success"]]
-            cells = [_stat([r.get(f) for r in (runs if f == "planning_time" else ok)], fmt) for f, _, fmt in _SUMMARY]
+            cells = [median_iqr([r.get(f) for r in (runs if f == "planning_time" else ok)], fmt) for f, _, fmt in _SUMMARY]
             lines.append(f"| {g.name} | {a} | {len(ok)}/{len(runs)} | " + " | ".join(cells) + " |")
     return lines
 
@@ -246,9 +248,9 @@ def parts_table(result, groups: Sequence[str] | None = None) -> list[str]:
             parts = [k.removeprefix("min_dist_") for k in ok[0] if k.startswith("min_dist_")]
             for p in parts:
                 close = [r.get(f"zone_intimate_{p}", math.nan) + r.get(f"zone_personal_{p}", math.nan) for r in ok]
-                cells = [_stat([r.get(f"{m}_{p}") for r in ok], fmt) for m, fmt in (("min_dist", ".3g"),)]
-                cells.append(_stat(close, ".2f"))
-                cells += [_stat([r.get(f"{m}_{p}") for r in ok], fmt)
+                cells = [median_iqr([r.get(f"{m}_{p}") for r in ok], fmt) for m, fmt in (("min_dist", ".3g"),)]
+                cells.append(median_iqr(close, ".2f"))
+                cells += [median_iqr([r.get(f"{m}_{p}") for r in ok], fmt)
                           for m, fmt in (("zone_social", ".2f"), ("agf_max", ".3g"), ("agf_mean", ".3g"))]
                 lines.append(f"| {g.name} | {a} | {p} | " + " | ".join(cells) + " |")
     return lines
@@ -422,7 +424,7 @@ def report_markdown(result, figures: Sequence[str], arena_files: Sequence[str] =
     if paper:
         lines += ["", "Per-part tables of every group are in `results.csv` (`min_dist_<part>`, `zone_<zone>_<part>`, "
                   "`agf_max_<part>`, `agf_mean_<part>`)."]
-    walking = people_tables(result, _stat)
+    walking = people_tables(result, median_iqr)
     lines += ["", *walking] if walking else []
     lines += ["", "## Figures", ""] + [f"![{n}]({n})" for n in figures]
     if arena_files:
