@@ -17,7 +17,8 @@ The rules, each checked over the whole graph:
    ===== ==================================================================
    0     ``limits``, ``errors``, ``io`` (the package itself),
          ``io.textfile``, ``io.json_numbers``, ``_kernel_cache``
-   1     ``kinematics`` (pure numpy; the schema's types only for annotations)
+   1     ``kinematics`` (pure numpy; the schema's types only for annotations),
+         ``maps`` (map_server maps: numpy, PyYAML, Pillow)
    2     ``scenario`` (schema, load, validate), ``arguments``
    3     ``people``, ``world``, ``cost``, ``collision`` (the package),
          ``collision.validity``, ``collision.geometric``,
@@ -64,6 +65,7 @@ LAYERS: dict[str, int] = {
     "drake_social.io.json_numbers": 0,
     "drake_social._kernel_cache": 0,
     "drake_social.kinematics": 1,
+    "drake_social.maps": 1,
     "drake_social.scenario": 2,
     "drake_social.arguments": 2,
     "drake_social.waypoints": 3,

@@ -1,4 +1,4 @@
-"""The pure-numpy core (kinematics, cost/, planning/, the numpy half of
+"""The pure-numpy core (kinematics, cost/, planning/, maps/, the numpy half of
 collision/ and the modules they use: arguments, textfile, waypoints, limits)
 never imports pydrake."""
 
@@ -18,10 +18,10 @@ PROBE = textwrap.dedent(
     for name in ("drake_social.kinematics", "drake_social.cost", "drake_social.planning", "drake_social.arguments",
                  "drake_social.io.textfile", "drake_social.waypoints", "drake_social.limits",
                  "drake_social.collision.validity", "drake_social.collision.geometric",
-                 "drake_social.collision.planar_kernel"):
+                 "drake_social.collision.planar_kernel", "drake_social.maps"):
         importlib.import_module(name)
         imported.append(name)
-    for package in ("drake_social.cost", "drake_social.planning"):
+    for package in ("drake_social.cost", "drake_social.planning", "drake_social.maps"):
         pkg = importlib.import_module(package)
         for info in pkgutil.walk_packages(pkg.__path__, prefix=package + "."):
             importlib.import_module(info.name)
@@ -55,7 +55,8 @@ def test_core_modules_do_not_import_pydrake():
     imported = set(dut["imported"])
     # pkgutil found the modules known today (and whatever is added later).
     assert {"drake_social.cost.agf", "drake_social.cost.social", "drake_social.collision.validity",
-            "drake_social.arguments", "drake_social.io.textfile", "drake_social.waypoints", "drake_social.limits"} <= imported
+            "drake_social.arguments", "drake_social.io.textfile", "drake_social.waypoints", "drake_social.limits",
+            "drake_social.maps.read", "drake_social.maps.boxes", "drake_social.maps.generate"} <= imported
     assert dut["pydrake"] == [], f"pydrake modules loaded by the core: {dut['pydrake'][:5]}"
 
 
