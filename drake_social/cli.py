@@ -14,6 +14,8 @@ Usage::
     drake-social simulate scenarios/tiny.yaml --mode dynamic --execution paper --path out/tiny/path.csv
     drake-social bench --seeds 10 --out out/bench
     drake-social people import biwi_eth.txt --out people.csv --rotate 1.5708 --offset 2 1 --start 0 --end 60
+    drake-social map inspect scenarios/maps/office_floor.yaml
+    drake-social map scenario lab_map.yaml --start 1 2 --goal 14 6 --out lab.yaml
 
 Exit codes: 0 success; 1 an output could not be written (also when another
 run of the same command is writing into the same ``--out``: refused at once,
@@ -267,6 +269,24 @@ def _run_people(args: argparse.Namespace) -> int:
 
 
 _RUNS["people"] = _run_people
+
+
+def _run_map(args: argparse.Namespace) -> int:
+    from drake_social import map_tools
+
+    if args.map_command == "inspect":
+        out = args.out if args.out is not None else Path("out") / args.map.stem
+        summary = map_tools.inspect_map(args.map, out, unknown=args.unknown)
+        print("\n".join(summary.lines()))
+        return 0
+    written = map_tools.write_map_scenario(args.map, args.scenario_out, args.start, args.goal, unknown=args.unknown,
+                                           arm=args.arm, seed=args.seed, force=args.force)
+    print(f"wrote {written}: the bar carried from ({args.start[0]:g}, {args.start[1]:g}) to "
+          f"({args.goal[0]:g}, {args.goal[1]:g}) through {args.map}; next: drake-social plan {written}")
+    return 0
+
+
+_RUNS["map"] = _run_map
 
 
 def main(argv: Sequence[str] | None = None) -> int:

@@ -319,6 +319,42 @@ def _add_people(subparsers) -> None:
     imp.add_argument("--no-theta", action="store_true", help="write t,id,x,y only (no heading column)")
 
 
+def _add_map(subparsers) -> None:
+    p = subparsers.add_parser("map", help="occupancy-grid maps (ROS map_server YAML + image): inspect, start a scenario",
+                              description="Tools for a scenario's world.map: a ROS map_server map (a YAML file "
+                              "naming a PGM, PNG or BMP image, its resolution, origin and thresholds).")
+    actions = p.add_subparsers(dest="map_command", metavar="ACTION", required=True)
+    inspect = actions.add_parser(
+        "inspect", help="print a map's size, extent, cells and boxes, and draw it (DIR/map.png)",
+        description="Reads the map as map_server does, decomposes its occupied (and unknown) cells into boxes, "
+        "prints the grid's size, extent, cell counts and box count, and writes DIR/map.png: the cells under "
+        "the boxes' outlines.")
+    inspect.add_argument("map", type=Path, help="the map's YAML file, e.g. scenarios/maps/office_floor.yaml")
+    inspect.add_argument("--out", type=Path, metavar="DIR", help="output directory (default: out/<map name>)")
+    inspect.add_argument("--unknown", choices=("obstacle", "free"), default="obstacle",
+                         help="unknown cells are obstacles (default, as in a scenario) or free")
+    scenario = actions.add_parser(
+        "scenario", help="write a scenario around a map: the bar carried from --start to --goal",
+        description="Writes a scenario YAML naming the map (relative to the scenario file), with the robot "
+        "carrying the 1.5 m bar from --start to --goal and no people yet. It is loaded and checked first: a "
+        "start or goal in an occupied or unknown cell, or with the arm or bar in a box, is refused. Then: "
+        "drake-social plan FILE.")
+    scenario.add_argument("map", type=Path, help="the map's YAML file")
+    scenario.add_argument("--start", type=_finite_float, nargs=2, required=True, metavar=("X", "Y"),
+                          help="the base's start position, metres (world frame)")
+    scenario.add_argument("--goal", type=_finite_float, nargs=2, required=True, metavar=("X", "Y"),
+                          help="the base's goal position, metres")
+    scenario.add_argument("--arm", type=_finite_float, nargs=2, default=(-1.2292, 2.8), metavar=("PSI1", "PSI2"),
+                          help="the arm's joints at start and goal, radians (default -1.2292 2.8: the carrying "
+                          "pose, the bar along x beside the base)")
+    scenario.add_argument("--unknown", choices=("obstacle", "free"), default="obstacle",
+                          help="world.unknown: unknown cells are obstacles (default) or free")
+    scenario.add_argument("--seed", type=_int_at_least(0), default=0, help="random_seed (default 0)")
+    scenario.add_argument("--out", dest="scenario_out", type=Path, required=True, metavar="FILE",
+                          help="the scenario file to write (.yaml; written atomically)")
+    scenario.add_argument("--force", action="store_true", help="replace FILE when it exists")
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser with every subcommand; ``args.command`` names the one chosen."""
     parser = argparse.ArgumentParser(
@@ -328,6 +364,6 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--version", action="version", version=f"%(prog)s {__version__}")
     parser.add_argument("-v", "--verbose", action="store_true", help="log progress (INFO level)")
     subparsers = parser.add_subparsers(dest="command", metavar="COMMAND")
-    for add in (_add_show, _add_plan, _add_simulate, _add_bench, _add_experiment, _add_people):
+    for add in (_add_show, _add_plan, _add_simulate, _add_bench, _add_experiment, _add_people, _add_map):
         add(subparsers)
     return parser

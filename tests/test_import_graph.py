@@ -28,7 +28,7 @@ The rules, each checked over the whole graph:
          (Drake: the plant and Drake's checker)
    5     ``control``, ``viz``
    6     ``sim``, ``io.paths`` (path CSVs, which a run may read)
-   7     ``io.outputs``, ``io.records``, ``experiments``, ``app``
+   7     ``io.outputs``, ``io.records``, ``experiments``, ``app``, ``map_tools``
    8     ``cli``, ``cli_parser``, ``cli_progress``
    ===== ==================================================================
 
@@ -90,6 +90,7 @@ LAYERS: dict[str, int] = {
     "drake_social.io.records": 7,
     "drake_social.experiments": 7,
     "drake_social.app": 7,
+    "drake_social.map_tools": 7,
     "drake_social.warmup": 7,
     "drake_social.cli": 8,
     "drake_social.cli_parser": 8,

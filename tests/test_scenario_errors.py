@@ -341,7 +341,7 @@ def test_a_sparse_file_of_nuls_at_the_size_limit_is_refused(tmp_path, capsys):
                    "people_file_ids, robot, object, start, goal, social, planner, execution, random_seed), got a list"),
     ("{a: 1}: 2", "line 1: a key must be a field name (description, world, people, crowd, people_file, "
                   "people_file_ids, robot, object, start, goal, social, planner, execution, random_seed), got a mapping"),
-    ("world: {? [1]: 2}", "line 1: world: a key must be a field name (bounds, obstacles, wall_thickness), got a list"),
+    ("world: {? [1]: 2}", "line 1: world: a key must be a field name (bounds, obstacles, wall_thickness, map, unknown), got a list"),
     ("social: {weights: {? [1]: 2}}", "line 1: social.weights: must be a list of numbers, got a mapping"),
     ("!Foo 3: 1", "line 1: 3: unknown field at the top level; allowed: description, world, people, crowd, "
                   "people_file, people_file_ids, robot, object, start, goal, social, planner, execution, random_seed"),
@@ -363,9 +363,9 @@ def test_keys_that_are_not_field_names(override, message):
     ("execution: {time_limit: !!timestamp 2001-01-01}",
      "execution.time_limit: must be a number, got '2001-01-01'"),
     ("description: !Foo x", "description: must be a string without a tag, got !Foo 'x'"),
-    ("world: !Bar {}", "world: must be a mapping (World: bounds, obstacles, wall_thickness) without a tag, got !Bar "
+    ("world: !Bar {}", "world: must be a mapping (World: bounds, obstacles, wall_thickness, map, unknown) without a tag, got !Bar "
                        "a mapping"),
-    ("world: !!set {a}", "world: must be a mapping (World: bounds, obstacles, wall_thickness) without a tag, got "
+    ("world: !!set {a}", "world: must be a mapping (World: bounds, obstacles, wall_thickness, map, unknown) without a tag, got "
                          "!!set a mapping"),
     ("people: !!omap []", "people: must be a list of mappings (Person: x, y, theta, radius, name, trajectory, loop) without a tag, got "
                           "!!omap a list"),

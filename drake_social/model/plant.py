@@ -70,12 +70,13 @@ def wall_boxes(scenario: Scenario) -> dict[str, Box]:
 def environment_names(scenario: Scenario) -> list[str]:
     """Names of the environment's collision shapes, as used in error messages.
 
-    ``obstacle[i]`` for ``world.obstacles[i]``, ``person[i]`` (plus its name
+    ``obstacle[i]`` for ``world.obstacles[i]``, ``map[j]`` for box j of the
+    map (:class:`~drake_social.world.WorldGeometry`), ``person[i]`` (plus its name
     in quotes, when it has one) for each person present at t = 0
     (:func:`people_at_start`; i is the person's index among all the scenario's
     people, so a recorded id entering later leaves a gap), and ``wall_<side>``.
     """
-    names = [f"obstacle[{i}]" for i in range(len(world_model(scenario).boxes))]
+    names = world_model(scenario).box_names
     indices, people = people_at_start(scenario)
     return names + person_geometry_names(people.names, indices) + list(WALL_NAMES)
 
@@ -125,9 +126,13 @@ def environment_parts(indices: Sequence[int], size: int | None = None) -> list[l
 
 
 def _register(plant: MultibodyPlant, name: str, X_WG: RigidTransform, shape, kind: str) -> None:
+    """Registers an anchored shape: collision geometry, and visual geometry
+    except for the map's boxes (the replay draws the map as one mesh,
+    :mod:`drake_social.sim.replay_map`)."""
     world = plant.world_body()
     plant.RegisterCollisionGeometry(world, X_WG, shape, name, _FRICTION)
-    plant.RegisterVisualGeometry(world, X_WG, shape, name, np.array(_ENV_COLOURS[kind]))
+    if kind != "map":
+        plant.RegisterVisualGeometry(world, X_WG, shape, name, np.array(_ENV_COLOURS[kind]))
 
 
 def environment_discs(scenario: Scenario) -> np.ndarray:
@@ -166,7 +171,8 @@ def add_environment(plant: MultibodyPlant, scenario: Scenario, only: Sequence[in
     wanted = set(range(len(names))) if only is None else {int(i) for i in only}
     if not with_people:
         wanted -= set(range(n_obstacles, n_obstacles + n_people))
-    shapes = [(i, world.boxes, i, "obstacle") for i in range(n_obstacles)]
+    first_map = n_obstacles - world.map_box_count
+    shapes = [(i, world.boxes, i, "obstacle" if i < first_map else "map") for i in range(n_obstacles)]
     shapes += [(n_obstacles + n_people + k, world.walls, k, "wall") for k in range(len(world.walls))]
     for i, boxes, k, kind in shapes:
         if i in wanted:

@@ -21,7 +21,7 @@ from drake_social.limits import (ALGORITHMS, CHECKERS, MAX_CONTROL_STEPS, MAX_DY
                                  SERVO_BASE_TIME_CONSTANT)
 from drake_social.scenario.load import (MAX_YAML_DEPTH, MAX_YAML_NODES, check_node, check_yaml, compose_yaml,
                                         load_scenario, load_scenario_text)
-from drake_social.scenario.schema import (EXECUTIONS, INFORMED_MODES, NEAR_RADIUS_MODES, PREDICTIONS, SIM_MODES, Bar, Box, Crowd,
+from drake_social.scenario.schema import (EXECUTIONS, INFORMED_MODES, MAP_UNKNOWN, NEAR_RADIUS_MODES, PREDICTIONS, SIM_MODES, Bar, Box, Crowd,
                                           CrowdPerson, ExecutionOptions, LShape, Person, PlannerOptions, Polyline, Robot,
                                           Scenario, SocialCostOptions, World, interest_point_count)
 from drake_social.scenario.validate import (drake_config_problem, period_count, plant_time_step_problem,
@@ -32,6 +32,7 @@ __all__ = [
     "CHECKERS",
     "EXECUTIONS",
     "INFORMED_MODES",
+    "MAP_UNKNOWN",
     "MAX_CONTROL_STEPS",
     "MAX_DYNAMIC_PLANT_TIME_STEP",
     "MAX_ITERATIONS",

@@ -14,6 +14,7 @@ import math
 import numpy as np
 
 from drake_social.kinematics import ArmGeometry
+from drake_social.scenario.map_rules import obstacle_arrays, obstacle_label
 
 __all__ = ["MAX_CROWD_TIME_STEP", "MAX_WALKING_SPEED", "MIN_WALKING_SPEED", "crowd_problems"]
 
@@ -35,17 +36,19 @@ def _finite(*values) -> bool:
         return False
 
 
-def _box_distance(x: float, y: float, boxes) -> float:
-    """Distance from (x, y) to the nearest of ``boxes`` (schema ``Box`` records), metres; negative inside."""
-    best = math.inf
-    for b in boxes:
-        c, s = math.cos(b.yaw), math.sin(b.yaw)
-        rx, ry = x - b.center[0], y - b.center[1]
-        lx, ly = c * rx + s * ry, -s * rx + c * ry
-        ox, oy = abs(lx) - b.size[0] / 2, abs(ly) - b.size[1] / 2
-        d = math.hypot(max(ox, 0.0), max(oy, 0.0)) + min(max(ox, oy), 0.0)
-        best = min(best, d)
-    return best
+def _box_distance(x: float, y: float, boxes) -> tuple[float, int]:
+    """Signed distance from (x, y) to the nearest of ``boxes`` (:func:`obstacle_arrays`), metres
+    (negative inside), and that box's index (-1 without boxes)."""
+    centers, sizes, yaws = boxes
+    if not len(yaws):
+        return math.inf, -1
+    c, s = np.cos(yaws), np.sin(yaws)
+    rx, ry = x - centers[:, 0], y - centers[:, 1]
+    ox = np.abs(c * rx + s * ry) - sizes[:, 0] / 2
+    oy = np.abs(-s * rx + c * ry) - sizes[:, 1] / 2
+    d = np.hypot(np.maximum(ox, 0.0), np.maximum(oy, 0.0)) + np.minimum(np.maximum(ox, oy), 0.0)
+    k = int(np.argmin(d))
+    return float(d[k]), k
 
 
 def _robot_distance(x: float, y: float, geometry: ArmGeometry, q) -> float:
@@ -110,7 +113,7 @@ def crowd_problems(scenario) -> list[tuple[str, str]]:
     if not crowd.people:
         out.append(("crowd.people", "needs at least one person (leave out the crowd section for none)"))
     x_min, y_min, x_max, y_max = (float(v) for v in scenario.world.bounds)
-    boxes = scenario.world.obstacles
+    boxes = obstacle_arrays(scenario.world)
     try:
         geometry = ArmGeometry.from_scenario(scenario)
         robot_q = np.asarray(scenario.start, float).reshape(4)
@@ -127,10 +130,10 @@ def crowd_problems(scenario) -> list[tuple[str, str]]:
             out.append((field, f"{what} ({x:g}, {y:g}) must lie at least the radius {r:g} m inside world.bounds "
                                f"{list(scenario.world.bounds)}"))
             return
-        d = _box_distance(x, y, boxes)
+        d, k = _box_distance(x, y, boxes)
         if d < r:
-            out.append((field, f"{what} ({x:g}, {y:g}) puts the body (radius {r:g} m) inside an obstacle of "
-                               f"world.obstacles (the centre is {d:.3g} m from it; must be >= {r:g})"))
+            out.append((field, f"{what} ({x:g}, {y:g}) puts the body (radius {r:g} m) inside "
+                               f"{obstacle_label(scenario.world, k)} (the centre is {d:.3g} m from it; must be >= {r:g})"))
 
     for i, p in enumerate(crowd.people):
         f = f"crowd.people[{i}]"

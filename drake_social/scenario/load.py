@@ -21,6 +21,7 @@ from typing import Sequence, Union
 
 from drake_social.errors import ScenarioError
 from drake_social.io.textfile import read_yaml_file, shorten
+from drake_social.scenario.map_rules import map_extent
 from drake_social.scenario.schema import Scenario
 from drake_social.scenario.validate import validate_scenario
 
@@ -90,14 +91,16 @@ def load_scenario_text(text: str, source: str, overrides: str | Sequence[str] | 
         sources.append((f"{source} ({overrides_name} {shorten(repr(extra))})", extra))
     stages = []
     scenario = None
+    bounds_given = False
     for where, data in sources:
-        check_yaml(data, where)
+        bounds_given |= _sets(check_yaml(data, where), "world", "bounds")
         try:
             scenario = yaml_load_typed(schema=Scenario, data=data, **({} if scenario is None else
                                                                         {"defaults": scenario}))
         except Exception as e:  # what check_yaml lets through; Drake's message has no file name: add it
             raise ScenarioError(f"{where}: {e}") from e
         _resolve_people_file(scenario, base_dir)
+        _resolve_map(scenario, base_dir, bounds_given, where)
         stages.append(scenario)
     # Blame the source after which the scenario stopped being valid: a bad
     # --set is named, not the file it was applied to.
@@ -117,6 +120,34 @@ def _resolve_people_file(scenario: Scenario, base_dir: str | Path | None) -> Non
     if name is None or not name.strip() or Path(name).is_absolute():
         return  # an empty name is refused by the validation
     scenario.people_file = str((Path.cwd() if base_dir is None else Path(base_dir)).absolute() / name)
+
+
+def _sets(root, *keys: str) -> bool:
+    """Whether the YAML mapping node ``root`` has the nested key ``keys``."""
+    node = root
+    for key in keys:
+        if getattr(node, "tag", None) != _MAP_TAG:
+            return False
+        node = next((v for k, v in node.value if getattr(k, "value", None) == key), None)
+        if node is None:
+            return False
+    return True
+
+
+def _resolve_map(scenario: Scenario, base_dir: str | Path | None, bounds_given: bool, where: str) -> None:
+    """Makes a relative ``world.map`` absolute, relative to ``base_dir`` (None:
+    the working directory), and sets ``world.bounds`` to the map's extent
+    when no source has given them."""
+    name = scenario.world.map
+    if name is None or not name.strip():
+        return  # an empty name is refused by the validation
+    if not Path(name).is_absolute():
+        scenario.world.map = str((Path.cwd() if base_dir is None else Path(base_dir)).absolute() / name)
+    if not bounds_given:
+        try:
+            scenario.world.bounds = map_extent(scenario.world)
+        except ScenarioError as e:
+            raise ScenarioError(f"{where}: world.map: {e}") from None
 
 
 def _is_valid(scenario: Scenario) -> bool:
@@ -261,7 +292,7 @@ def compose_yaml(text: str, source: str):
             loader.dispose()
 
 
-def check_yaml(text: str, source: str, schema: type = Scenario) -> None:
+def check_yaml(text: str, source: str, schema: type = Scenario):
     """Checks YAML ``text`` against the dataclass ``schema`` before it is loaded.
 
     Parses it with :func:`compose_yaml` (its nesting and size limits), then
@@ -269,6 +300,9 @@ def check_yaml(text: str, source: str, schema: type = Scenario) -> None:
     keys the schema does not have and values of the wrong type (a word for a
     number, null or a mapping for a list, an unknown ``!Tag``). Values are
     not range-checked here (see :func:`validate_scenario`).
+
+    Returns:
+        The document's root node (:func:`compose_yaml`).
 
     Raises:
         ScenarioError: ``<source>: line <n>: <dotted field>: <what is allowed>, got <value>``.
@@ -278,6 +312,7 @@ def check_yaml(text: str, source: str, schema: type = Scenario) -> None:
         raise ScenarioError(f"{source}: empty; a {schema.__name__.lower()} is a mapping "
                             f"({', '.join(f.name for f in dc.fields(schema))})")
     check_node(schema, root, source)
+    return root
 
 
 def check_node(schema: type, node, source: str, field: str = "") -> None:

@@ -38,6 +38,7 @@ import numpy as np
 from drake_social.errors import ScenarioError
 from drake_social.io.textfile import shorten
 from drake_social.kinematics import ArmGeometry
+from drake_social.scenario.map_rules import obstacle_arrays, obstacle_label
 from drake_social.scenario.heading import heading_knots
 from drake_social.scenario.people_file import read_people_file
 
@@ -147,9 +148,7 @@ def robot_clearance(geometry: ArmGeometry, q, centres, radii) -> tuple[np.ndarra
 
 def _boxes(world) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The obstacles' centres (K, 2), sizes (K, 2) and yaws (K,)."""
-    boxes = world.obstacles
-    return (np.array([b.center for b in boxes], float).reshape(-1, 2),
-            np.array([b.size for b in boxes], float).reshape(-1, 2), np.array([b.yaw for b in boxes], float))
+    return obstacle_arrays(world)
 
 
 def _first_hit(gaps: np.ndarray, radius: float) -> tuple[int, float] | None:
@@ -217,7 +216,7 @@ def check_people(scenario, fail: Fail) -> None:
                                             f"{list(w.bounds)} into the walls; the whole body must stay inside")
             hit = _first_hit(segment_box_distance(a, b, *boxes), r)
             if hit is not None:
-                fail(f"{field}.trajectory", f"{where} passes through world.obstacles[{hit[0]}] (the body's centre "
+                fail(f"{field}.trajectory", f"{where} passes through {obstacle_label(w, hit[0])} (the body's centre "
                                             f"comes {hit[1]:.3g} m from it, closer than its radius {r:g} m)")
         start_clear(f"{field}.trajectory[0]", "the first point", first, r, True)
 
@@ -242,7 +241,7 @@ def _check_starts(scenario, geometry: ArmGeometry, boxes, starts, fail: Fail) ->
     for n, (field, what, centre, radius, at_zero) in enumerate(starts):
         hit = _first_hit(gaps[n], radius)
         if hit is not None:
-            fail(field, f"{what} {_fmt(centre)} puts the body (radius {radius:g} m) inside world.obstacles[{hit[0]}] "
+            fail(field, f"{what} {_fmt(centre)} puts the body (radius {radius:g} m) inside {obstacle_label(scenario.world, hit[0])} "
                         f"(its centre is {hit[1]:.3g} m from the box); a person must start clear of the obstacles")
         if at_zero and clearance[n] < 0:
             fail(field, f"{what} {_fmt(centre)} puts the body (radius {radius:g} m) into the robot's {parts[n]} at "
@@ -346,5 +345,5 @@ def _check_recorded_segments(scenario, recording, ids, boxes, fail: Fail) -> Non
     if n == first_out:
         fail(field, f"{where} takes the body (radius {tr.radius:g} m) out of world.bounds {list(w.bounds)} into "
                     "the walls; the whole body must stay inside")
-    fail(field, f"{where} passes through world.obstacles[{box}] (the body's centre comes {gap:.3g} m from it, "
+    fail(field, f"{where} passes through {obstacle_label(w, box)} (the body's centre comes {gap:.3g} m from it, "
                 f"closer than its radius {tr.radius:g} m)")

@@ -24,6 +24,7 @@ import numpy as np
 
 from drake_social.errors import ScenarioError
 from drake_social.limits import ALGORITHMS, CHECKERS, NEAR_RADIUS_MODES
+from drake_social.maps import MAP_UNKNOWN_CHOICES
 
 __all__ = [
     "ALGORITHMS",
@@ -65,6 +66,9 @@ SIM_MODES = ("kinematic", "dynamic")
 #: checked), or the paper's independent base P-controller and arm trajectory.
 EXECUTIONS = ("synchronized", "paper")
 
+#: What a map's unknown cells are (``world.unknown``).
+MAP_UNKNOWN = MAP_UNKNOWN_CHOICES
+
 
 @dc.dataclass
 class Box:
@@ -83,11 +87,18 @@ class World:
     """The room: its walls and the obstacles inside it."""
 
     # Room bounds [x_min, y_min, x_max, y_max], metres; walls stand on them.
+    # With a map and no bounds given: the map's extent.
     bounds: list[float] = dc.field(default_factory=lambda: [0.0, 0.0, 10.0, 10.0])
-    # Static obstacles (desks, walls, shelves).
+    # Static obstacles (desks, walls, shelves), added to the map's.
     obstacles: list[Box] = dc.field(default_factory=list)
     # Thickness of the four boundary walls, metres, built outside the bounds.
     wall_thickness: float = 0.1
+    # An occupancy-grid map in the ROS map_server format: its YAML file
+    # (naming the PGM, PNG or BMP image), relative to the scenario file.
+    # Occupied cells become obstacle boxes. None = no map.
+    map: Optional[str] = None
+    # What the map's unknown cells are: "obstacle" or "free".
+    unknown: str = "obstacle"
 
 
 @dc.dataclass

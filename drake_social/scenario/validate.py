@@ -23,6 +23,7 @@ from drake_social.limits import (ALGORITHMS, CONTACT_APPROXIMATIONS, INFORMED_AL
                                  MAX_ITERATIONS, MAX_MOTION_STEPS, MAX_OBJECT_POINTS, MAX_PLANT_STEPS, MAX_REPLAY_FPS,
                                  MAX_TIME_LIMIT, MIN_CONTROL_PERIODS, SERVO_BANDWIDTH)
 from drake_social.scenario.crowd_rules import crowd_problems
+from drake_social.scenario.map_rules import check_map
 from drake_social.scenario.people_rules import check_people
 from drake_social.scenario.schema import (EXECUTIONS, INFORMED_MODES, NEAR_RADIUS_MODES, PREDICTIONS, SIM_MODES, Bar,
                                           ExecutionOptions, LShape, Scenario, interest_point_count)
@@ -301,6 +302,8 @@ def validate_scenario(scenario: Scenario, source: str = "<scenario>") -> None:
     if np.array_equal(np.asarray(scenario.start, float), np.asarray(scenario.goal, float)):
         c.fail("goal", f"must differ from start (both are {list(scenario.goal)}): a transport from a "
                        "configuration to itself has nothing to plan or execute")
+    # The map: readable, the base of start and goal in free cells.
+    check_map(scenario, c.fail)
     # Trajectories, the recorded file and where people start (against the robot at start).
     check_people(scenario, c.fail)
 

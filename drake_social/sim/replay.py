@@ -8,6 +8,9 @@ know is drawn by :func:`draw_overlays` under its own path
 (:data:`OVERLAY_PREFIX`, never under the visualizer's prefix, which the
 visualizer deletes at initialization):
 
+* ``<prefix>/map``: the boxes of the scenario's occupancy-grid map as one
+  mesh (:mod:`drake_social.sim.replay_map`; the plant gives them no
+  illustration geometry);
 * ``<prefix>/field``: the social-cost heat map as one textured quad (an OBJ,
   its MTL and a PNG, all in memory), emissive so that lights do not darken it;
 * ``<prefix>/people/<i>``: an arrow along each person's facing ``theta``;
@@ -51,6 +54,7 @@ from pydrake.systems.framework import DiagramBuilder
 from drake_social.cost import SocialCost
 from drake_social.people import PeopleLog, PeopleState, people_model
 from drake_social.scenario import Scenario
+from drake_social.world import world_model
 from drake_social.sim.replay_meshes import (  # noqa: F401  (textured_quad, set_texture_properties: re-exported)
     ARROW_RGBA,
     FIELD_Z,
@@ -65,6 +69,7 @@ from drake_social.sim.replay_meshes import (  # noqa: F401  (textured_quad, set_
     set_texture_properties,
     textured_quad,
 )
+from drake_social.sim.replay_map import draw_map_mesh
 from drake_social.sim.replay_pack import compact_page
 from drake_social.sim.replay_people import animate_people, standing_mask, standing_people
 from drake_social.sim.replay_plans import animate_plans, path_width
@@ -211,6 +216,7 @@ def draw_overlays(
         standing = people_model(scenario).state_at(0.0)
         labels = np.arange(standing.count)
         field = _field_mesh(scenario)
+    draw_map_mesh(meshcat, world_model(scenario), f"{prefix}/map")
     meshcat.SetObject(f"{prefix}/field", field, Rgba(1, 1, 1, 1))
     meshcat.SetTransform(f"{prefix}/field", RigidTransform([0.0, 0.0, FIELD_Z]))
     set_texture_properties(meshcat, f"{prefix}/field")

@@ -15,9 +15,12 @@ from typing import Sequence
 import numpy as np
 from matplotlib.axes import Axes
 from matplotlib.image import AxesImage
+from matplotlib.collections import PolyCollection
 from matplotlib.patches import Circle, FancyArrow, Polygon, Rectangle
+from matplotlib.transforms import Affine2D
 
 from drake_social.cost import SocialCost
+from drake_social.maps import OCCUPIED, UNKNOWN, OccupancyMap
 from drake_social.people import PeopleState, people_model
 from drake_social.scenario import Box, Scenario
 from drake_social.viz.labels import MAX_LABEL_CHARS, fit_text
@@ -25,20 +28,29 @@ from drake_social.world import Boxes, world_model
 
 __all__ = [
     "FIELD_CMAP",
+    "MAP_BOX_EDGE",
+    "MAP_OCCUPIED_RGBA",
+    "MAP_UNKNOWN_RGBA",
     "OBSTACLE_COLOR",
     "PERSON_COLOR",
     "VIEW_MARGIN",
     "box_corners",
     "draw_social_field",
+    "draw_map",
     "draw_world",
     "FIELD_MAX_CELLS",
     "FIELD_MIN_RESOLUTION",
     "field_grid",
     "field_resolution",
+    "map_rgba",
 ]
 
 #: Fill of walls and obstacles.
 OBSTACLE_COLOR = "#5b5b5b"
+#: A map's occupied and unknown cells (RGBA, 0-1) and the outline of its boxes.
+MAP_OCCUPIED_RGBA = (0.25, 0.25, 0.25, 1.0)
+MAP_UNKNOWN_RGBA = (0.55, 0.55, 0.6, 0.45)
+MAP_BOX_EDGE = "#1f77b4"
 #: Fill of person bodies.
 PERSON_COLOR = "#e8c39e"
 #: Colour map of the social-cost heat map (white at zero cost).
@@ -77,9 +89,10 @@ def draw_world(ax: Axes, scenario: Scenario, *, names: bool = True, margin: floa
             (:func:`drake_social.people.people_model`).
 
     Returns:
-        Artists by kind: "walls", "obstacles", "people", "arrows", "names".
-        The first wall is labelled "wall / obstacle" and the first person
-        "person (arrow: facing)" for legends.
+        Artists by kind: "walls", "obstacles", "people", "arrows", "names",
+        and with a map "map" (:func:`draw_map`). The first wall is labelled
+        "wall / obstacle" and the first person "person (arrow: facing)" for
+        legends.
     """
     w = world_model(scenario)
     x0, y0, x1, y1 = (float(v) for v in w.bounds)
@@ -98,10 +111,13 @@ def draw_world(ax: Axes, scenario: Scenario, *, names: bool = True, margin: floa
         patch = Rectangle((x, y), dx, dy, facecolor=OBSTACLE_COLOR, edgecolor="none", zorder=2)
         out["walls"].append(ax.add_patch(patch))
     out["walls"][0].set_label("wall / obstacle")
-    for corners in w.boxes.corners:
+    hand = len(w.boxes) - w.map_box_count
+    for corners in w.boxes.corners[:hand]:
         patch = Polygon(corners, closed=True, facecolor=OBSTACLE_COLOR, edgecolor="#2b2b2b",
                         linewidth=0.6, zorder=2)
         out["obstacles"].append(ax.add_patch(patch))
+    if w.map is not None:
+        out["map"] = draw_map(ax, w.map, w.boxes.corners[hand:])
     for i, ((px, py), theta, radius, name) in enumerate(zip(people.positions, people.headings, people.radii,
                                                            people.names)):
         px, py, theta, radius = float(px), float(py), float(theta), float(radius)
@@ -128,6 +144,38 @@ def draw_world(ax: Axes, scenario: Scenario, *, names: bool = True, margin: floa
     ax.set_xlabel("x [m]")
     ax.set_ylabel("y [m]")
     return out
+
+
+def map_rgba(grid: OccupancyMap) -> np.ndarray:
+    """The map's cells as an RGBA image (H, W, 4) in the map's grid order
+    (row 0 = the bottom row): occupied :data:`MAP_OCCUPIED_RGBA`, unknown
+    :data:`MAP_UNKNOWN_RGBA`, free transparent."""
+    out = np.zeros((*grid.shape, 4))
+    out[grid.classes == OCCUPIED] = MAP_OCCUPIED_RGBA
+    out[grid.classes == UNKNOWN] = MAP_UNKNOWN_RGBA
+    return out
+
+
+def draw_map(ax: Axes, grid: OccupancyMap, corners: np.ndarray) -> list:
+    """Draws an occupancy-grid map's cells under the outlines of its boxes.
+
+    The image (:func:`map_rgba`, free cells transparent, so the heat map
+    shows through) is placed by the map's origin and yaw; the boxes
+    (``corners`` (K, 4, 2)) the planner sees are outlined on top of it.
+
+    Returns:
+        ``[image, outlines]``; the image is labelled "map: occupied / unknown
+        cells" and the outlines "map boxes" for legends.
+    """
+    x, y, yaw = (float(v) for v in grid.origin)
+    height, width = grid.shape[0] * grid.resolution, grid.shape[1] * grid.resolution
+    image = ax.imshow(map_rgba(grid), origin="lower", extent=(0.0, width, 0.0, height), interpolation="nearest",
+                      zorder=1, label="map: occupied / unknown cells")
+    image.set_transform(Affine2D().rotate(yaw).translate(x, y) + ax.transData)
+    outlines = PolyCollection(list(corners), closed=True, facecolors="none", edgecolors=MAP_BOX_EDGE,
+                              linewidths=0.4, zorder=2, label="map boxes")
+    ax.add_collection(outlines)
+    return [image, outlines]
 
 
 def field_resolution(bounds: Sequence[float], max_cells: int = FIELD_MAX_CELLS) -> float:

@@ -6,6 +6,9 @@ import dataclasses as dc
 
 import numpy as np
 
+from drake_social.maps import OccupancyMap
+from drake_social.scenario.map_rules import obstacle_arrays, world_map
+
 __all__ = ["Boxes", "WALL_NAMES", "WorldGeometry", "world_model"]
 
 #: Names of the boundary walls, in the order of :attr:`WorldGeometry.walls`.
@@ -84,7 +87,11 @@ class WorldGeometry:
             (read-only).
         wall_thickness: thickness of the four boundary walls, metres; they
             stand outside the bounds.
-        boxes: the obstacles, in the scenario's order.
+        boxes: the obstacles: the scenario's ``world.obstacles`` in order,
+            then the boxes of its map (the last :attr:`map_box_count`).
+        map: the scenario's occupancy-grid map
+            (:class:`drake_social.maps.OccupancyMap`), None without one.
+        map_box_count: how many of :attr:`boxes` (the last ones) are the map's.
         walls: the boundary walls, in the order of :data:`WALL_NAMES`. South
             and north span x in [x_min - t, x_max + t] so the corners are
             closed; west and east span y in [y_min, y_max] (t the thickness).
@@ -94,6 +101,8 @@ class WorldGeometry:
     bounds: np.ndarray
     wall_thickness: float
     boxes: Boxes
+    map: OccupancyMap | None = None
+    map_box_count: int = 0
     walls: Boxes = dc.field(init=False)
     wall_names: tuple[str, ...] = dc.field(init=False, default=WALL_NAMES)
 
@@ -102,6 +111,9 @@ class WorldGeometry:
         object.__setattr__(self, "wall_thickness", float(self.wall_thickness))
         if not isinstance(self.boxes, Boxes):
             raise TypeError(f"WorldGeometry.boxes must be Boxes, got {type(self.boxes).__name__}")
+        if not 0 <= int(self.map_box_count) <= len(self.boxes):
+            raise ValueError(f"WorldGeometry.map_box_count must be in [0, {len(self.boxes)}], got {self.map_box_count}")
+        object.__setattr__(self, "map_box_count", int(self.map_box_count))
         x_min, y_min, x_max, y_max = (float(v) for v in self.bounds)
         t = self.wall_thickness
         cx, cy = (x_min + x_max) / 2, (y_min + y_max) / 2
@@ -110,15 +122,23 @@ class WorldGeometry:
                       sizes=[[w + 2 * t, t], [w + 2 * t, t], [t, h], [t, h]], yaws=np.zeros(4))
         object.__setattr__(self, "walls", walls)
 
+    @property
+    def box_names(self) -> list[str]:
+        """The obstacles' names: ``obstacle[i]`` for ``world.obstacles[i]``,
+        ``map[j]`` for the map's box j."""
+        n = len(self.boxes) - self.map_box_count
+        return [f"obstacle[{i}]" for i in range(n)] + [f"map[{j}]" for j in range(self.map_box_count)]
+
 
 def world_model(scenario) -> WorldGeometry:
-    """The room of a scenario (its ``world``: bounds, wall thickness, obstacles)."""
+    """The room of a scenario (its ``world``: bounds, wall thickness, obstacles
+    and the boxes of its map, :func:`drake_social.scenario.map_rules.world_map_boxes`)."""
     w = scenario.world
-    boxes = w.obstacles
+    centers, sizes, yaws = obstacle_arrays(w)
     return WorldGeometry(
         bounds=w.bounds,
         wall_thickness=w.wall_thickness,
-        boxes=Boxes(centers=np.array([b.center for b in boxes], float).reshape(-1, 2),
-                    sizes=np.array([b.size for b in boxes], float).reshape(-1, 2),
-                    yaws=np.array([b.yaw for b in boxes], float)),
+        boxes=Boxes(centers=centers, sizes=sizes, yaws=yaws),
+        map=world_map(w),
+        map_box_count=len(yaws) - len(w.obstacles),
     )

@@ -266,7 +266,7 @@ def test_each_person_problem_names_its_field(change, field, message):
 def test_obstacles_people_and_crowd_overlaps():
     box = Box(center=[5.0, 5.0], size=[1.0, 1.0])
     (f, m), = problems_of([ok_person(x=5.6)], obstacles=[box])
-    assert f == "crowd.people[0]" and "start (5.6, 5) puts the body (radius 0.25 m) inside an obstacle" in m
+    assert f == "crowd.people[0]" and "start (5.6, 5) puts the body (radius 0.25 m) inside world.obstacles[0]" in m
     assert "0.1 m from it; must be >= 0.25" in m
     (f, m), = problems_of([ok_person(x=3.0, goals=[[5.2, 4.4]])], obstacles=[box])
     assert f == "crowd.people[0].goals[0]" and "goal (5.2, 4.4)" in m and "inside an obstacle" in m
