@@ -269,7 +269,7 @@ def test_obstacles_people_and_crowd_overlaps():
     assert f == "crowd.people[0]" and "start (5.6, 5) puts the body (radius 0.25 m) inside world.obstacles[0]" in m
     assert "0.1 m from it; must be >= 0.25" in m
     (f, m), = problems_of([ok_person(x=3.0, goals=[[5.2, 4.4]])], obstacles=[box])
-    assert f == "crowd.people[0].goals[0]" and "goal (5.2, 4.4)" in m and "inside an obstacle" in m
+    assert f == "crowd.people[0].goals[0]" and "goal (5.2, 4.4)" in m and "inside world.obstacles[0]" in m
     # Touching is allowed: 0.25 m from the face.
     assert problems_of([ok_person(x=5.75)], obstacles=[box]) == []
     (f, m), = problems_of([ok_person(), ok_person(x=5.4)])
