@@ -21,7 +21,7 @@ from __future__ import annotations
 import dataclasses as dc
 import math
 import os
-import tempfile
+import secrets
 from pathlib import Path
 
 import numpy as np
@@ -290,8 +290,13 @@ def write_map(directory: str | Path, name: str, image_u8: np.ndarray, resolution
 
 
 def _replace(path: Path, write) -> None:
-    """Writes ``path`` through a temporary file in its folder, moved into place."""
-    fd, temporary = tempfile.mkstemp(prefix=f".{path.name}.", dir=path.parent)
+    """Writes ``path`` through a new temporary file in its folder, moved into place.
+
+    The temporary file is created with mode 0o666 less the umask (as ``open``
+    would create ``path``), so the map is readable as any file written there.
+    """
+    temporary = path.with_name(f".{path.name}.{secrets.token_hex(8)}.tmp")
+    fd = os.open(temporary, os.O_WRONLY | os.O_CREAT | os.O_EXCL | getattr(os, "O_CLOEXEC", 0), 0o666)
     try:
         with os.fdopen(fd, "wb") as f:
             write(f)

@@ -431,8 +431,9 @@ def _yaml_fields(text: str, source: str) -> dict:
                 self.depth -= 1
             return node
 
-    loader = Loader(text)
+    loader = None
     try:
+        loader = Loader(text)  # its reader refuses control characters and NULs at once
         root = loader.get_single_node()
         if root is None:
             raise _fail(source, f"empty; a map YAML is a mapping of {_allowed_keys()}")
@@ -456,7 +457,8 @@ def _yaml_fields(text: str, source: str) -> dict:
     except yaml.YAMLError as e:
         raise _fail(source, f"not valid YAML: {shorten(str(e), 400)}") from None
     finally:
-        loader.dispose()
+        if loader is not None:
+            loader.dispose()
 
 
 def _read_image(image_path: Path, named: str, source: str, **parameters) -> np.ndarray:
@@ -478,7 +480,8 @@ def _read_image(image_path: Path, named: str, source: str, **parameters) -> np.n
     not_image = f"image: {shown} is not {_FORMATS} Pillow can read"
     try:
         with open(image_path, "rb") as f:
-            magic = f.read(2)
+            head = f.read(8)
+            magic = head[:2]
             f.seek(0)
             with warnings.catch_warnings():
                 # Pillow warns from 89 million pixels and refuses from 179
@@ -486,6 +489,9 @@ def _read_image(image_path: Path, named: str, source: str, **parameters) -> np.n
                 warnings.simplefilter("ignore", Image.DecompressionBombWarning)
                 try:
                     image = Image.open(f, formats=("PPM", "PNG", "BMP"))
+                except Image.UnidentifiedImageError:
+                    raise _fail(source, f"{not_image}: its content is none of them (it starts with {head!r})") \
+                        from None
                 except Image.DecompressionBombError as e:
                     count = re.search(r"\((\d+) pixels\)", str(e))
                     pixels = f"{int(count.group(1)):,} pixels" if count else "more pixels than Pillow opens"
