@@ -15,6 +15,7 @@ pure-numpy core may import the scenario package without Drake.
 
 import dataclasses as dc
 import functools
+import os
 import typing
 from pathlib import Path
 from typing import Sequence, Union
@@ -136,13 +137,13 @@ def _sets(root, *keys: str) -> bool:
 
 def _resolve_map(scenario: Scenario, base_dir: str | Path | None, bounds_given: bool, where: str) -> None:
     """Makes a relative ``world.map`` absolute, relative to ``base_dir`` (None:
-    the working directory), and sets ``world.bounds`` to the map's extent
+    the working directory; ``..`` taken lexically), and sets ``world.bounds`` to the map's extent
     when no source has given them."""
     name = scenario.world.map
     if name is None or not name.strip():
         return  # an empty name is refused by the validation
     if not Path(name).is_absolute():
-        scenario.world.map = str((Path.cwd() if base_dir is None else Path(base_dir)).absolute() / name)
+        scenario.world.map = os.path.normpath((Path.cwd() if base_dir is None else Path(base_dir)).absolute() / name)
     if not bounds_given:
         try:
             scenario.world.bounds = map_extent(scenario.world)
