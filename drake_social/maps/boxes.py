@@ -47,8 +47,10 @@ def row_rectangles(mask: np.ndarray) -> np.ndarray:
     padded = np.zeros((h, w + 2), np.int8)
     padded[:, 1:-1] = mask
     # A run starts where a cell is selected and its left neighbour is not, and ends after its last cell.
-    rows, starts = np.nonzero(np.diff(padded, axis=1) == 1)
-    _, ends = np.nonzero(np.diff(padded, axis=1) == -1)  # the same rows, in the same order
+    change = np.diff(padded, axis=1)
+    rows, starts = np.nonzero(change == 1)
+    _, ends = np.nonzero(change == -1)  # the same rows, in the same order
+    del change
     if rows.size == 0:
         return np.zeros((0, 4), np.int64)
     order = np.lexsort((rows, ends, starts))  # by start column, end column, then row
