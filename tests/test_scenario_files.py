@@ -20,6 +20,7 @@ import pytest
 from drake_social.cost import SocialCost
 from drake_social.kinematics import ArmGeometry
 from drake_social.collision.geometric import GeometricChecker
+from drake_social.maps import FREE, read_map
 from drake_social.scenario import Bar, LShape, load_scenario, validate_scenario
 
 SCENARIO_DIR = Path(__file__).resolve().parent.parent / "scenarios"
@@ -66,6 +67,11 @@ def test_people_stand_in_free_space(path):
         centre = np.array([[p.x, p.y]])
         for k, box in enumerate(dut.world.obstacles):
             assert _box_signed_distance(centre, box)[0] > p.radius, f"person {i} overlaps obstacle {k}"
+        if dut.world.map is not None:  # the body's cells in the map are free
+            grid = read_map(dut.world.map)
+            offsets = np.stack(np.meshgrid(*[np.linspace(-p.radius, p.radius, 21)] * 2), -1).reshape(-1, 2)
+            disc = centre + offsets[np.hypot(*offsets.T) <= p.radius]
+            assert (grid.class_at(disc) == FREE).all(), f"person {i} stands on an obstacle cell of the map"
         for j, other in enumerate(dut.people[:i]):
             assert math.hypot(p.x - other.x, p.y - other.y) > p.radius + other.radius, f"people {j}, {i} overlap"
 

@@ -12,7 +12,9 @@ walls and from each other, shelves stand against the wall facing the door
 1 m from the side walls, and nothing stands within 2 m of a door.
 
 :func:`office_floor_image` rasterises it as map_saver writes a trinary map
-(255 free, 0 occupied, 205 unknown; image row 0 at the top), and
+(255 free, 0 occupied, 205 unknown; image row 0 at the top),
+:func:`ragged_edges` roughens its walls' edges as a SLAM map's are (a clean
+floor decomposes into a hundred boxes, a ragged one into thousands), and
 :func:`write_map` writes an image and its YAML.
 """
 
@@ -28,7 +30,8 @@ import numpy as np
 
 from drake_social.maps.read import check_map_field
 
-__all__ = ["MAP_IMAGE_FORMATS", "OfficeFloorLayout", "office_floor_image", "office_floor_layout", "write_map"]
+__all__ = ["MAP_IMAGE_FORMATS", "OfficeFloorLayout", "office_floor_image", "office_floor_layout", "ragged_edges",
+           "write_map"]
 
 #: Image formats :func:`write_map` writes (file suffixes).
 MAP_IMAGE_FORMATS = ("pgm", "png", "bmp")
@@ -217,6 +220,43 @@ def office_floor_image(width_m: float, height_m: float, resolution: float, rng: 
         0 occupied, 205 unknown; row 0 is the image's top row.
     """
     return office_floor_layout(width_m, height_m, resolution, rng).image()
+
+
+def ragged_edges(image: np.ndarray, rng: np.random.Generator, p: float = 0.3) -> np.ndarray:
+    """``image`` with the ragged wall edges of a SLAM map: each free cell
+    beside an occupied one (4-neighbours) turns occupied, and each occupied
+    cell beside a free one turns free, with probability ``p`` (one draw per
+    cell, all from ``rng``). Walls at least 3 cells thick stay closed; a
+    door narrows by at most a cell on each side.
+
+    Args:
+        image: (H, W) ``uint8`` trinary image (255 free, 0 occupied, 205 unknown).
+        rng: the random stream.
+        p: the probability, in [0, 1].
+
+    Returns:
+        A new image of the same shape.
+    """
+    image = np.asarray(image)
+    if image.ndim != 2 or image.dtype != np.uint8:
+        raise ValueError(f"image: must be a (H, W) uint8 array, got {image.dtype} {image.shape}")
+    if not 0.0 <= p <= 1.0:
+        raise ValueError(f"p: must be in [0, 1], got {p}")
+    occupied, free = image == BLACK, image == WHITE
+
+    def beside(mask: np.ndarray) -> np.ndarray:
+        out = np.zeros_like(mask)
+        out[1:] |= mask[:-1]
+        out[:-1] |= mask[1:]
+        out[:, 1:] |= mask[:, :-1]
+        out[:, :-1] |= mask[:, 1:]
+        return out
+
+    flip = rng.random(image.shape) < p
+    out = image.copy()
+    out[free & beside(occupied) & flip] = BLACK
+    out[occupied & beside(free) & flip] = WHITE
+    return out
 
 
 def _format_number(value: float) -> str:

@@ -148,7 +148,7 @@ def environment_discs(scenario: Scenario) -> np.ndarray:
 
 
 def add_environment(plant: MultibodyPlant, scenario: Scenario, only: Sequence[int] | None = None, *,
-                    people: bool = True) -> list[str]:
+                    people: bool = True, map_boxes: bool = True) -> list[str]:
     """Anchors the obstacles, people and walls of ``scenario`` to the world.
 
     Must be called before ``plant.Finalize()``.
@@ -160,6 +160,10 @@ def add_environment(plant: MultibodyPlant, scenario: Scenario, only: Sequence[in
             default: the planning checkers' room); False leaves them out (the simulation
             diagram of walking people moves them in SceneGraph itself,
             :class:`drake_social.control.people_geometry.PeopleGeometry`).
+        map_boxes: anchor the boxes of the scenario's map (the default);
+            False leaves them out (the kinematic simulation diagram, whose
+            SceneGraph would otherwise keep a filter state for every pair of
+            its thousands of shapes; see :func:`build_robot_diagram`).
 
     Returns:
         The registered shape names, in the order of :func:`environment_names`.
@@ -169,9 +173,11 @@ def add_environment(plant: MultibodyPlant, scenario: Scenario, only: Sequence[in
     world, people = world_model(scenario), people_at_start(scenario)[1]
     n_obstacles, n_people = len(world.boxes), people.count
     wanted = set(range(len(names))) if only is None else {int(i) for i in only}
+    first_map = n_obstacles - world.map_box_count
     if not with_people:
         wanted -= set(range(n_obstacles, n_obstacles + n_people))
-    first_map = n_obstacles - world.map_box_count
+    if not map_boxes:
+        wanted -= set(range(first_map, n_obstacles))
     shapes = [(i, world.boxes, i, "obstacle" if i < first_map else "map") for i in range(n_obstacles)]
     shapes += [(n_obstacles + n_people + k, world.walls, k, "wall") for k in range(len(world.walls))]
     for i, boxes, k, kind in shapes:
@@ -184,7 +190,7 @@ def add_environment(plant: MultibodyPlant, scenario: Scenario, only: Sequence[in
         if n_obstacles + k in wanted:
             X_WG = RigidTransform([*people.positions[k], COLLISION_HEIGHT / 2])
             _register(plant, names[n_obstacles + k], X_WG, Cylinder(people.radii[k], COLLISION_HEIGHT), "person")
-    return [names[i] for i in sorted(wanted)] if only is not None or not with_people else names
+    return [names[i] for i in sorted(wanted)] if only is not None or not with_people or not map_boxes else names
 
 
 def add_robot(plant: MultibodyPlant, scenario: Scenario, parser: Parser | None = None) -> ModelInstanceIndex:

@@ -194,8 +194,9 @@ from drake_social.collision.validity import ValidityChecker
 from drake_social.scenario import (EXECUTIONS, SIM_MODES, SERVO_BANDWIDTH, SERVO_BASE_TIME_CONSTANT, Scenario,
                                     ScenarioError, plant_time_step_problem, validate_scenario)
 from drake_social.waypoints import check_waypoints
+from drake_social.world import world_model
 
-__all__ = ["DiagramArguments", "TransportDiagram", "build_diagram", "check_diagram_arguments", "check_diagram_options",
+__all__ = ["MAX_DYNAMIC_MAP_BOXES", "DiagramArguments", "TransportDiagram", "build_diagram", "check_diagram_arguments", "check_diagram_options",
            "check_diagram_waypoints", "resolve_replan", "scenario_plant_config", "servo_gains"]
 
 
@@ -268,9 +269,15 @@ def servo_gains(*, bandwidth: float = SERVO_BANDWIDTH,
     return np.array([0.0, 0.0, w * w, w * w]), np.array([1.0 / tau, 1.0 / tau, 2.0 * w, 2.0 * w])
 
 
-def _populate(plant: MultibodyPlant, scenario: Scenario, people: bool = True) -> ModelInstanceIndex:
+#: Most map boxes a dynamic run's SceneGraph holds: it keeps a filter state
+#: for every pair of shapes (about 60 N^2 bytes, 240 MB at 2,000).
+MAX_DYNAMIC_MAP_BOXES = 2_000
+
+
+def _populate(plant: MultibodyPlant, scenario: Scenario, people: bool = True, *,
+              map_boxes: bool = True) -> ModelInstanceIndex:
     robot = add_robot(plant, scenario)
-    add_environment(plant, scenario, people=people)
+    add_environment(plant, scenario, people=people, map_boxes=map_boxes)
     plant.Finalize()
     # The model's joints each have an actuator (Drake's SDFormat parser adds one
     # per joint of unlimited effort): the actuation input is [u_x, u_y, u_1, u_2].
@@ -517,14 +524,23 @@ def build_checked(
     builder = DiagramBuilder()
     scenario_people = people_model(scenario) if people is None else people  # static people are anchored in the plant, moving ones move in SceneGraph
     if mode == "dynamic":
+        count = world_model(scenario).map_box_count
+        if count > MAX_DYNAMIC_MAP_BOXES:
+            raise ScenarioError(
+                f"world.map: {count:,} boxes are too many for a dynamic run (execution.mode dynamic), whose "
+                f"SceneGraph keeps a filter state for every pair of shapes; at most {MAX_DYNAMIC_MAP_BOXES:,}: "
+                f"run it kinematic, or coarsen or clean the map")
         plant, scene_graph = AddMultibodyPlant(config, builder)
         robot = _populate(plant, scenario, scenario_people.static)
         plant.SetDefaultPositions(robot, start)
     else:
+        # The kinematic plant only places the shapes: the map's boxes (the
+        # replay draws them as one mesh; the analysis checks the executed
+        # trajectory against them) are left out of its SceneGraph.
         scene_graph = builder.AddNamedSystem("scene_graph", SceneGraph())
         plant = MultibodyPlant(time_step=0.0)
         plant.RegisterAsSourceForSceneGraph(scene_graph)
-        robot = _populate(plant, scenario, scenario_people.static)
+        robot = _populate(plant, scenario, scenario_people.static, map_boxes=False)
 
     # ---- which target ---------------------------------------------------------
     replanning: ReplanningPlannerSystem | None = None

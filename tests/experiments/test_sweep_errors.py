@@ -251,7 +251,7 @@ def test_a_nul_or_control_character_in_a_sweep_file_is_refused(tmp_path):
                                   "execution, random_seed) "
                               "or nulls without a tag, got !!set a mapping"),
     ("variants: {a: {world: !Bar {}}}\n", "line 4: variants.a.world: must be a mapping (World: bounds, obstacles, "
-                                          "wall_thickness) without a tag, got !Bar a mapping"),
+                                          "wall_thickness, map, unknown) without a tag, got !Bar a mapping"),
 ])
 def test_unusual_yaml_in_a_sweep_is_named(tmp_path, body, message):
     dut = _sweep(tmp_path, body)
