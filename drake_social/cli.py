@@ -156,7 +156,8 @@ def _run_bench(args: argparse.Namespace) -> int:
               algorithms=list(args.algorithms), iterations=args.iterations, seeds=args.seeds, checker=args.checker,
               ompl_checker=args.ompl_checker, include_ompl=not args.no_ompl,
               include_checker=not args.no_checker_bench, sim_runs=args.sim_runs, scaling=args.scaling,
-              repeats=args.repeats, replan_runs=args.replan_runs, replan_count=args.replan_count)
+              repeats=args.repeats, replan_runs=args.replan_runs, replan_count=args.replan_count,
+              map_bench=args.map_bench)
     table = args.out / "bench.md"
     if table.is_file():
         print(table.read_text().rstrip())

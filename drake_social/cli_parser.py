@@ -191,6 +191,10 @@ def _add_bench(subparsers) -> None:
                    help="also the replanning benchmark on scenarios/office_walkers.yaml: replan times over a "
                         "kinematic rollout (--replan-count replans) and the realtime factor of N simulated "
                         "kinematic runs with 10 Hz replanning (default 0: left out)")
+    p.add_argument("--map", dest="map_bench", action="store_true",
+                   help="also the building-map benchmark: a generated 30 x 50 m floor at 0.03 m (ragged walls, "
+                        "thousands of boxes): loading, the checker, K plans against scenarios/office_bar.yaml, "
+                        "and the replay of the executed path")
     p.add_argument("--replan-count", type=_positive_int, default=200, metavar="R",
                    help="replans of the replanning benchmark's rollout (default 200)")
     p.add_argument("--out", type=Path, default=Path("out/bench"), metavar="DIR",

@@ -215,6 +215,7 @@ def run_bench(
     replan_runs: int = 0,
     replan_count: int = 200,
     replan_scenario: str | Path | None = None,
+    map_bench: bool = False,
     out_dir: str | Path,
     progress: Callable[[int, int, str], None] | None = None,
 ) -> dict:
@@ -253,12 +254,15 @@ def run_bench(
         replan_scenario: its scenario file (None:
             :data:`~drake_social.experiments.bench.replanning.REPLAN_SCENARIO`,
             the office with walkers).
+        map_bench: also :func:`~drake_social.experiments.bench.maps.run_map_bench`:
+            a generated 30 x 50 m floor map at 0.03 m against
+            ``scenarios/office_bar.yaml`` (``map_bench``).
         out_dir: where the two files go (created).
         progress: optional ``progress(done, total, label)`` after each run.
 
     Returns:
         ``{"settings", "machine", "ompl", "scenarios", "checker_bench", "sim_bench",
-        "scaling_bench", "replan_bench"}`` (the last three None when not run);
+        "scaling_bench", "replan_bench", "map_bench"}`` (the last four None when not run);
         ``scenarios[file name]`` has ``algorithms[name] = {"runs": [...],
         "summary": {...}, "vs_ompl": {...}}`` and ``ompl[objective] =
         {"settings", "runs", "summary"}``. Per run: a run record
@@ -293,6 +297,7 @@ def run_bench(
     total += len(paths) * len(SIM_MODES) * len(EXECUTIONS) * (sim_runs + 1) if sim_runs > 0 else 0
     total += len(paths) * (4 + 2 + 5 + 3) if scaling else 0  # run_scaling_bench's defaults
     total += 1 + replan_runs if replan_runs > 0 else 0  # the rollout and the runs
+    total += 3 + 3 + 1 if map_bench else 0  # run_map_bench's defaults
     done = 0
 
     def tick(label: str) -> None:
@@ -376,6 +381,12 @@ def run_bench(
         replan_bench = run_replan_bench(REPLAN_SCENARIO if replan_scenario is None else replan_scenario,
                                         count=replan_count, runs=replan_runs, progress=tick)
 
+    map_out = None
+    if map_bench:
+        from drake_social.experiments.bench.maps import MAP_BENCH_OFFICE, run_map_bench
+
+        map_out = run_map_bench(MAP_BENCH_OFFICE, iterations=iterations, progress=tick)
+
     out = {
         "settings": {"scenario_paths": [str(p) for p in paths], "algorithms": algorithms, "iterations": iterations,
                      "seeds": list(range(seeds)), "checker": checker, "ompl_checker": ompl_checker,
@@ -387,6 +398,7 @@ def run_bench(
         "sim_bench": sim_bench,
         "scaling_bench": scaling_bench,
         "replan_bench": replan_bench,
+        "map_bench": map_out,
     }
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
@@ -505,4 +517,8 @@ def _markdown(out: dict) -> str:
         from drake_social.experiments.bench.replanning import replan_markdown
 
         lines += replan_markdown(out["replan_bench"])
+    if out.get("map_bench"):
+        from drake_social.experiments.bench.maps import markdown as map_markdown
+
+        lines += map_markdown(out["map_bench"])
     return "\n".join(lines) + "\n"
