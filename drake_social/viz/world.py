@@ -172,8 +172,9 @@ def draw_map(ax: Axes, grid: OccupancyMap, corners: np.ndarray) -> list:
     image = ax.imshow(map_rgba(grid), origin="lower", extent=(0.0, width, 0.0, height), interpolation="nearest",
                       zorder=1, label="map: occupied / unknown cells")
     image.set_transform(Affine2D().rotate(yaw).translate(x, y) + ax.transData)
+    # Thinner outlines when there are many boxes, so that ragged walls stay readable.
     outlines = PolyCollection(list(corners), closed=True, facecolors="none", edgecolors=MAP_BOX_EDGE,
-                              linewidths=0.4, zorder=2, label="map boxes")
+                              linewidths=0.4 if len(corners) <= 500 else 0.15, zorder=2, label="map boxes")
     ax.add_collection(outlines)
     return [image, outlines]
 
