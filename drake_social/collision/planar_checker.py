@@ -28,9 +28,16 @@ from typing import Iterable
 
 import numpy as np
 from pydrake.geometry import Box as DrakeBox
-from pydrake.geometry import Cylinder, Role
+from pydrake.geometry import Cylinder, Role, SceneGraph
+from pydrake.multibody.plant import MultibodyPlant
 
-from drake_social.model.plant import ScenarioDiagram, build_robot_diagram, environment_parts, registration_order
+from drake_social.model.plant import (
+    ScenarioDiagram,
+    build_environment_geometry,
+    build_robot_diagram,
+    environment_shapes,
+    registration_order,
+)
 from drake_social.collision import planar_kernel as kernel
 from drake_social.collision.geometric import CheckerBase
 from drake_social.collision.validity import Contact, PlanarScene
@@ -41,6 +48,11 @@ __all__ = ["PlanarChecker"]
 # The planar chain: body, parent, joint (position index, -1 = weld).
 _CHAIN = (("base", None, -1), ("link1", "base", 2), ("link2", "link1", 3), ("object", "link2", -1))
 _TOL = 1e-9  # metres: what counts as "the same" when matching shapes and checking planarity
+#: Shapes per SceneGraph when reading a room in parts (at most
+#: ENVIRONMENT_PART): registering a proximity shape costs about 0.4 us per shape already
+#: in its SceneGraph on top of a fixed ~0.14 ms, and a part costs little
+#: else, so parts of 64 keep 10,000 boxes at about 1.4 s.
+READ_PART = 64
 
 
 def _planar(X, what: str) -> tuple[float, float, float, float, float]:
@@ -60,9 +72,11 @@ class PlanarChecker(CheckerBase):
             serves Drake's second opinion
             (:func:`~drake_social.collision.drake_checker.verify_path`).
         model: a built :func:`build_robot_diagram` of ``scenario``, read
-            whole; None = the room is built and read in parts of at most
-            :data:`~drake_social.model.plant.ENVIRONMENT_PART` shapes (the
-            memory of one SceneGraph grows with the square of its shapes).
+            whole; None = the room is built and read in parts of
+            :data:`READ_PART` shapes (at most
+            :data:`~drake_social.model.plant.ENVIRONMENT_PART`), the robot
+            with the first (the memory of one SceneGraph grows with the
+            square of its shapes).
 
     Attributes:
         model: the given :class:`ScenarioDiagram`, or the first part's
@@ -84,12 +98,16 @@ class PlanarChecker(CheckerBase):
             self.model = model
             self._read_geometry()
         else:
-            # The room is read in parts of at most ENVIRONMENT_PART shapes, each
-            # from its own small diagram (SceneGraph's memory grows with the
-            # square of its shapes); the robot from the first.
-            parts = environment_parts(registration_order(scenario))
-            self.model = build_robot_diagram(scenario, environment=parts[0])
-            self._read_geometry((build_robot_diagram(scenario, environment=p) for p in parts[1:]))
+            # The room is read in parts, each from its own small SceneGraph
+            # (SceneGraph's memory, and the time to register a proximity shape,
+            # grow with the shapes already in it): the robot and the first
+            # READ_PART shapes from a RobotDiagram, the rest from SceneGraphs
+            # of READ_PART shapes each, collision geometry only.
+            order = registration_order(scenario)
+            self.model = build_robot_diagram(scenario, environment=order[:READ_PART])
+            rest = environment_shapes(scenario, order[READ_PART:])
+            self._read_geometry(build_environment_geometry(rest[k : k + READ_PART])
+                                for k in range(0, len(rest), READ_PART))
         # numba initialises itself and loads cached machine code at the first
         # compiled call of a process (about 0.5 s): here, with the model,
         # rather than inside the first plan's timing.
@@ -97,10 +115,11 @@ class PlanarChecker(CheckerBase):
 
     # ---- reading the SceneGraph ---------------------------------------------
 
-    def _read_geometry(self, more_environment: Iterable[ScenarioDiagram] = ()) -> None:
+    def _read_geometry(self, more_environment: Iterable[tuple[MultibodyPlant, SceneGraph]] = ()) -> None:
         """Reads the chain, the robot's shapes and the environment's from
         :attr:`model`, and further environment shapes from the diagrams of
-        ``more_environment`` (built and dropped one at a time)."""
+        ``more_environment`` (``(plant, scene_graph)`` pairs of
+        :func:`build_environment_geometry`, built and dropped one at a time)."""
         diagram = self.model.diagram
         plant = diagram.plant()
         context = diagram.CreateDefaultContext()
@@ -122,15 +141,17 @@ class PlanarChecker(CheckerBase):
         shapes: dict[str, list] = {}
         z_ranges = set()
 
-        def read(model: ScenarioDiagram, world_only: bool) -> None:
-            plant = model.diagram.plant()
-            inspector = model.diagram.scene_graph().model_inspector()
-            world = plant.world_body().index()
+        def read(plant: MultibodyPlant, scene_graph: SceneGraph, world_only: bool) -> None:
+            inspector = scene_graph.model_inspector()
+            world = inspector.world_frame_id()
             for g in inspector.GetAllGeometryIds(Role.kProximity):
-                body = plant.GetBodyFromFrameId(inspector.GetFrameId(g))
-                key = "world" if body.index() == world else body.name()
-                if world_only and key != "world":
+                frame = inspector.GetFrameId(g)
+                if frame == world:
+                    key = "world"
+                elif world_only:
                     continue
+                else:
+                    key = plant.GetBodyFromFrameId(frame).name()
                 name = inspector.GetName(g)
                 shape = inspector.GetShape(g)
                 x, y, c, s, z = _planar(inspector.GetPoseInFrame(g), name)
@@ -145,9 +166,9 @@ class PlanarChecker(CheckerBase):
                 z_ranges.add((round(z - height / 2, 9), round(z + height / 2, 9)))
                 shapes.setdefault(key, []).append(entry)
 
-        read(self.model, world_only=False)
-        for model in more_environment:
-            read(model, world_only=True)
+        read(diagram.plant(), diagram.scene_graph(), world_only=False)
+        for plant_, scene_graph in more_environment:
+            read(plant_, scene_graph, world_only=True)
         if len(z_ranges) > 1:
             raise ValueError(f"collision shapes span different z slabs {sorted(z_ranges)}: not planar")
         self.slab = next(iter(z_ranges), (0.0, 0.0))
