@@ -39,6 +39,7 @@ from drake_social.model.plant import (
     registration_order,
 )
 from drake_social.collision import planar_kernel as kernel
+from drake_social.collision.broadphase import build_grid
 from drake_social.collision.geometric import CheckerBase
 from drake_social.collision.validity import Contact, PlanarScene
 from drake_social.scenario import Scenario
@@ -84,6 +85,7 @@ class PlanarChecker(CheckerBase):
         bodies: (B, 6) the planar chain, body names :attr:`body_names`.
         robot: (S, 6) the robot's capsules in their body frames.
         env: (K, 8) the environment's boxes and discs, names :attr:`env_names`.
+        grid: the broadphase over env (:func:`~drake_social.collision.broadphase.build_grid`).
         levers: (S, 2) lever arms ``(c_shoulder, c_gripper)`` of each capsule, metres
             (:meth:`_levers`); motion checks advance each capsule by its own bound.
         lever: (2,) the largest of them (and the elbow's distance from the
@@ -189,6 +191,7 @@ class PlanarChecker(CheckerBase):
             env.append([kind, x, y, c, s, a, b, rho])
             self.env_names.append(name)
         self.env = np.array(env, float).reshape(-1, 8)
+        self.grid = build_grid(self.env)
         self.levers = self._levers()
         self.lever = np.array([max(self.levers[:, 0].max(initial=0.0), float(np.hypot(*self.bodies[2, 1:3]))),
                                self.levers[:, 1].max(initial=0.0)])
@@ -236,28 +239,28 @@ class PlanarChecker(CheckerBase):
         Exact when positive; when negative, only its sign is meaningful.
         Ignores the limits (see :meth:`in_limits`).
         """
-        return float(kernel.clearance(np.asarray(q, float), self.bodies, self.robot, self.env))
+        return float(kernel.clearance(np.asarray(q, float), self.bodies, self.robot, self.env, self.grid))
 
     def clearances(self, qs: np.ndarray) -> np.ndarray:
         """:meth:`clearance` of configurations (N, 4) -> (N,)."""
         qs = np.ascontiguousarray(qs, float).reshape(-1, 4)
-        return kernel.clearances(qs, self.bodies, self.robot, self.env)
+        return kernel.clearances(qs, self.bodies, self.robot, self.env, self.grid)
 
     def is_valid(self, q: np.ndarray) -> bool:
         """One configuration (4,): within the limits, clearance > 0."""
         q = np.asarray(q, float).reshape(1, 4)
-        return bool(kernel.valid(q, self.lower, self.upper, self.bodies, self.robot, self.env)[0])
+        return bool(kernel.valid(q, self.lower, self.upper, self.bodies, self.robot, self.env, self.grid)[0])
 
     def are_valid(self, qs: np.ndarray) -> np.ndarray:
         """Many configurations (N, 4) -> (N,) bool."""
         qs = np.ascontiguousarray(qs, float).reshape(-1, 4)
-        return kernel.valid(qs, self.lower, self.upper, self.bodies, self.robot, self.env)
+        return kernel.valid(qs, self.lower, self.upper, self.bodies, self.robot, self.env, self.grid)
 
     def is_motion_valid(self, q_a: np.ndarray, q_b: np.ndarray) -> bool:
         """The straight motion from q_a to q_b (4,), ends included; sound
         (conservative advancement, :func:`planar_kernel.motion_valid`)."""
         return bool(kernel.motion_valid(np.asarray(q_a, float), np.asarray(q_b, float), self.lower, self.upper,
-                                        self.bodies, self.robot, self.env, self.levers))
+                                        self.bodies, self.robot, self.env, self.grid, self.levers))
 
     @property
     def motion_check(self) -> str:
@@ -269,14 +272,14 @@ class PlanarChecker(CheckerBase):
         """Many motions (E, 4), (E, 4) -> (E,) bool."""
         q_a = np.ascontiguousarray(q_a, float).reshape(-1, 4)
         q_b = np.ascontiguousarray(q_b, float).reshape(-1, 4)
-        return kernel.motions_valid(q_a, q_b, self.lower, self.upper, self.bodies, self.robot, self.env, self.levers)
+        return kernel.motions_valid(q_a, q_b, self.lower, self.upper, self.bodies, self.robot, self.env, self.grid, self.levers)
 
     def compiled_scene(self) -> PlanarScene:
         """The scene as the kernel's arrays (the validity protocol's
         :class:`~drake_social.collision.validity.CompiledSceneChecker` capability)."""
         f = np.ascontiguousarray
         return PlanarScene(f(self.lower, float), f(self.upper, float), f(self.bodies, float), f(self.robot, float),
-                           f(self.env, float), f(self.levers, float))
+                           f(self.env, float), f(self.levers, float), self.grid)
 
     # ---- reports and the second opinion ----------------------------------------
 
@@ -284,7 +287,7 @@ class PlanarChecker(CheckerBase):
         """The (robot body, environment shape) pairs at signed distance <= 0,
         deepest first, from the exact planar distances (see
         :meth:`~drake_social.collision.drake_checker.SceneGraphChecker.contacts` for Drake's)."""
-        d = kernel.pair_distances(np.asarray(q, float), self.bodies, self.robot, self.env)
+        d = kernel.pair_distances(np.asarray(q, float), self.bodies, self.robot, self.env, self.grid)
         deepest: dict[tuple[str, str], float] = {}
         for j, k in zip(*np.nonzero(d <= 0.0)):
             key = (self.capsule_names[j][0], self.env_names[k])
