@@ -118,3 +118,27 @@ def test_the_cell_side_doubles_for_huge_shapes():
     env = np.array([[0, 0.0, 0.0, 1.0, 0.0, 5000.0, 5000.0, 5000.0 * math.sqrt(2)]])
     grid = build_grid(env)
     assert grid.dims.prod() <= (1 << 20) + 1 and grid.header[2] > 1.0
+
+
+def test_the_numpy_checker_answers_as_without_its_grid(tmp_path):
+    """GeometricChecker on a 60 x 60 m room of 800 boxes: with its grid and
+    with the (N, K) arrays over every box, the same clearances (==),
+    validity and motion answers."""
+    from crowd_scenarios import crowd_scenario_text
+    from drake_social.collision.geometric import GRID_MIN_BOXES, GeometricChecker
+    from drake_social.scenario import load_scenario
+
+    path = tmp_path / "boxes.yaml"
+    path.write_text(crowd_scenario_text(60.0, people=20, obstacles=800, seed=4, clearance=1.0))
+    scenario = load_scenario(path)
+    fast, plain = GeometricChecker(scenario), GeometricChecker(scenario)
+    assert len(scenario.world.obstacles) >= GRID_MIN_BOXES and fast.grid is not None
+    plain.grid = None
+    rng = np.random.default_rng(5)
+    qs = rng.uniform(fast.lower, fast.upper, (3000, 4))
+    got, ref = fast.clearances(qs), plain.clearances(qs)
+    assert np.array_equal(got, ref)
+    assert 0.05 < np.mean(ref > 0) < 0.95
+    assert np.array_equal(fast.are_valid(qs), plain.are_valid(qs))
+    q_b = np.clip(qs[:300] + rng.uniform(-0.5, 0.5, (300, 4)), fast.lower, fast.upper)
+    assert np.array_equal(fast.are_motions_valid(qs[:300], q_b), plain.are_motions_valid(qs[:300], q_b))
