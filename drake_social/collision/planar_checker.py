@@ -287,7 +287,7 @@ class PlanarChecker(CheckerBase):
         """The (robot body, environment shape) pairs at signed distance <= 0,
         deepest first, from the exact planar distances (see
         :meth:`~drake_social.collision.drake_checker.SceneGraphChecker.contacts` for Drake's)."""
-        d = kernel.pair_distances(np.asarray(q, float), self.bodies, self.robot, self.env, self.grid)
+        d = kernel.pair_distances(np.asarray(q, float), self.bodies, self.robot, self.env)
         deepest: dict[tuple[str, str], float] = {}
         for j, k in zip(*np.nonzero(d <= 0.0)):
             key = (self.capsule_names[j][0], self.env_names[k])
