@@ -272,7 +272,8 @@ class PlanarChecker(CheckerBase):
         """Many motions (E, 4), (E, 4) -> (E,) bool."""
         q_a = np.ascontiguousarray(q_a, float).reshape(-1, 4)
         q_b = np.ascontiguousarray(q_b, float).reshape(-1, 4)
-        return kernel.motions_valid(q_a, q_b, self.lower, self.upper, self.bodies, self.robot, self.env, self.grid, self.levers)
+        return kernel.motions_valid(q_a, q_b, self.lower, self.upper, self.bodies, self.robot, self.env, self.grid,
+                                    self.levers)
 
     def compiled_scene(self) -> PlanarScene:
         """The scene as the kernel's arrays (the validity protocol's

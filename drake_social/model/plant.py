@@ -158,9 +158,12 @@ def environment_shapes(scenario: Scenario, only: Sequence[int] | None = None) ->
             k = i - n_obstacles
             return EnvironmentShape(names[i], "person", RigidTransform([*people.positions[k], COLLISION_HEIGHT / 2]),
                                     Cylinder(people.radii[k], COLLISION_HEIGHT))
-        boxes, k, kind = (world.boxes, i, "obstacle") if i < n_obstacles else (world.walls, i - n_obstacles - n_people,
-                                                                                 "wall")
-        X_WG = RigidTransform(RotationMatrix.MakeZRotation(float(boxes.yaws[k])), [*boxes.centers[k], COLLISION_HEIGHT / 2])
+        if i < n_obstacles:
+            boxes, k, kind = world.boxes, i, "obstacle"
+        else:
+            boxes, k, kind = world.walls, i - n_obstacles - n_people, "wall"
+        X_WG = RigidTransform(RotationMatrix.MakeZRotation(float(boxes.yaws[k])),
+                              [*boxes.centers[k], COLLISION_HEIGHT / 2])
         size = boxes.sizes[k]
         return EnvironmentShape(names[i], kind, X_WG, DrakeBox(size[0], size[1], COLLISION_HEIGHT))
 

@@ -807,8 +807,8 @@ def seed_chain(seed, params, state):
             ta[0] = tnode[prev]
             tb[0] = ta[0] + _duration(q[prev], qk, tp.base_speed, tp.arm_speed)
         counts[1] += 1
-        ok = planar_kernel.motion_valid_ends(q[prev], qk, clear[prev], caps, c_lower, c_upper, bodies, robot, env, env_grid,
-                                             levers)
+        ok = planar_kernel.motion_valid_ends(q[prev], qk, clear[prev], caps, c_lower, c_upper, bodies, robot, env,
+                                             env_grid, levers)
         if ok and timed:
             ok = _people_ok(q[prev], qk, ta[0], tb[0], params.scene, tp)
         if not ok:
