@@ -27,10 +27,13 @@ from drake_social.collision.validity import Grid
 
 __all__ = ["CELL", "MAX_CELLS", "MAX_ITEMS_PER_SHAPE", "PAD", "bounding_boxes", "build_grid", "cell_ranges"]
 
-#: The grid's cell side, metres, unless the map is too large for it: about
-#: the reach of one robot capsule, so a configuration check reads a few
-#: cells per capsule.
-CELL = 1.0
+#: The grid's cell side, metres, unless the map is too large for it. A
+#: clearance search reads every cell within its answer plus the capsule's
+#: reach, so in open space small cells cost more than their shapes: on
+#: office_bar.yaml one clearance took 10 us with 0.5 m cells, 3.2 us with
+#: 1 m, 1.8 us with 2 m, 1.3 us with 4 m (docs/broadphase.md); 2 m keeps
+#: the cells of a dense map short too.
+CELL = 2.0
 #: At most this many cells (plus one per shape): the cell side doubles until
 #: the map fits.
 MAX_CELLS = 1 << 20

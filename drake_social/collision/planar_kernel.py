@@ -74,6 +74,7 @@ __all__ = [
     "BOX",
     "DISC",
     "FAR",
+    "GRID_MIN_SHAPES",
     "MAX_STEPS",
     "STEP_MARGIN",
     "TOLERANCE",
@@ -111,6 +112,13 @@ MAX_STEPS = 100_000
 #: Motion checks measure only the shapes that can come within this of the
 #: robot during the motion, metres; each step then clears at most FAR / D_j.
 FAR = 1.0
+#: With fewer environment shapes than this, the kernels loop over all of them
+#: (the same answers; cheaper than reading grid cells in a room of a few
+#: dozen shapes).
+GRID_MIN_SHAPES = 64
+#: A clearance search remembers this many shapes it measured, so that a long
+#: shape listed in many grid cells is measured once per capsule.
+SEEN = 8
 
 
 @njit(cache=True)
@@ -279,18 +287,45 @@ def _cell_of(grid, x, y):
 
 
 @njit(cache=True)
-def _visit(cap, j, mx, my, reach, env, grid, c, best):
-    """best after the shapes of cell c (the plain loop's broad and narrow phase)."""
+def _visit(cap, j, mx, my, reach, env, grid, c, best, seen):
+    """best after the shapes of cell c (the plain loop's broad and narrow
+    phase). ``seen[:SEEN]`` holds the last shapes measured for this capsule
+    (``seen[SEEN]`` counts them): a long shape listed in many cells is
+    measured once (measuring it again would give the same value)."""
     for e in range(grid.start[c], grid.start[c + 1]):
         k = grid.items[e]
+        again = False
+        for t in range(SEEN):
+            if seen[t] == k:
+                again = True
+                break
+        if again:
+            continue
         if _coarse_bound(mx, my, reach, env, k) >= best or _pair_bound(mx, my, reach, env, k) >= best:
             continue
         best = min(best, _pair(cap, j, env, k))
+        seen[seen[SEEN] % SEEN] = k
+        seen[SEEN] += 1
     return best
 
 
 @njit(cache=True)
-def _capsule_best(cap, j, env, grid, best):
+def _cell_far(grid, ii, jj, mx, my, reach, best):
+    """Whether cell (ii, jj) can be skipped: best > 0 and every point of it
+    is at least best + reach from m. A shape nearer than best has a point
+    within best + reach of m (its nearest point, or one inside the capsule),
+    whose cell the search reads. (Not when best <= 0: a shape overlapping
+    the capsule has a signed distance down to minus its penetration depth.)"""
+    if not best > 0.0:
+        return False
+    x0, y0, cell = grid.header[0], grid.header[1], grid.header[2]
+    dx = max(x0 + ii * cell - mx, mx - (x0 + (ii + 1) * cell), 0.0)
+    dy = max(y0 + jj * cell - my, my - (y0 + (jj + 1) * cell), 0.0)
+    return math.sqrt(dx * dx + dy * dy) - reach >= best
+
+
+@njit(cache=True)
+def _capsule_best(cap, j, env, grid, best, seen):
     """min(best, the least signed distance of capsule j to the environment),
     exactly the value of the plain loop over all shapes.
 
@@ -300,11 +335,17 @@ def _capsule_best(cap, j, env, grid, best):
     :mod:`~drake_social.collision.broadphase`), so its distance from the
     capsule is at least m's distance to the block's boundary minus the
     capsule's reach; the search stops once that lower bound reaches best,
-    as the plain loop skips such a pair. The nearest shape is always found,
-    so the minimum is over the same exact pair distances."""
+    as the plain loop skips such a pair. (Also when negative: a convex shape
+    outside the block lies beyond a line at least that far from m, so its
+    penetration depth is at most reach minus that distance.) The nearest
+    shape is always found, so the minimum is over the same exact pair
+    distances. Cells are skipped where :func:`_cell_far` allows. ``seen`` (SEEN + 1,) int64 is scratch."""
     mx, my, reach = _capsule_reach(cap, j)
+    for t in range(SEEN):
+        seen[t] = -1
+    seen[SEEN] = 0
     ix, iy, ok = _cell_of(grid, mx, my)
-    if not ok:  # far off or NaN: every shape, as the plain loop
+    if not ok or env.shape[0] < GRID_MIN_SHAPES:  # far off, NaN or a small room: every shape
         for k in range(env.shape[0]):
             if _coarse_bound(mx, my, reach, env, k) >= best or _pair_bound(mx, my, reach, env, k) >= best:
                 continue
@@ -324,7 +365,8 @@ def _capsule_best(cap, j, env, grid, best):
             jj = iy - r if side == 0 else iy + r
             if 0 <= jj < ny:
                 for ii in range(max(0, ix - r), min(nx - 1, ix + r) + 1):
-                    best = _visit(cap, j, mx, my, reach, env, grid, ii + jj * nx, best)
+                    if not _cell_far(grid, ii, jj, mx, my, reach, best):
+                        best = _visit(cap, j, mx, my, reach, env, grid, ii + jj * nx, best, seen)
             if r == 0:
                 break
         if r > 0:
@@ -332,23 +374,26 @@ def _capsule_best(cap, j, env, grid, best):
                 ii = ix - r if side == 0 else ix + r
                 if 0 <= ii < nx:
                     for jj in range(max(0, iy - r + 1), min(ny - 1, iy + r - 1) + 1):
-                        best = _visit(cap, j, mx, my, reach, env, grid, ii + jj * nx, best)
+                        if not _cell_far(grid, ii, jj, mx, my, reach, best):
+                            best = _visit(cap, j, mx, my, reach, env, grid, ii + jj * nx, best, seen)
     return best
 
 
 @njit(cache=True)
 def _capsule_clearances(cap, env, grid, out):
     """Per capsule j, the least signed distance to the environment, into out (S,)."""
+    seen = np.empty(SEEN + 1, dtype=np.int64)
     for j in range(cap.shape[0]):
-        out[j] = _capsule_best(cap, j, env, grid, np.inf)
+        out[j] = _capsule_best(cap, j, env, grid, np.inf, seen)
 
 
 @njit(cache=True)
 def _clearance(q, bodies, robot, env, grid):
     cap = world_capsules(q, bodies, robot)
     best = np.inf
+    seen = np.empty(SEEN + 1, dtype=np.int64)
     for j in range(cap.shape[0]):
-        best = _capsule_best(cap, j, env, grid, best)
+        best = _capsule_best(cap, j, env, grid, best, seen)
     return best
 
 
@@ -402,6 +447,8 @@ def _free(q, bodies, robot, env, grid):
     can; only the shapes listed in the cells that meet a capsule's bounding
     square (grown by the grid's pad) are looked at: every other one is
     apart from the capsule."""
+    if env.shape[0] < GRID_MIN_SHAPES:
+        return _free_plain(q, bodies, robot, env)
     cap = world_capsules(q, bodies, robot)
     pad = grid.header[3]
     nx = grid.dims[0]
@@ -623,7 +670,7 @@ def _motion_valid_ends(q_a, q_b, c_a, c_b, lower, upper, bodies, robot, env, gri
     for j in range(s_count):
         radius = max(radius, math.hypot(cap[j, 0] - q_a[0], cap[j, 1] - q_a[1]) + cap[j, 4],
                      math.hypot(cap[j, 2] - q_a[0], cap[j, 3] - q_a[1]) + cap[j, 4])
-    if plain:
+    if plain or env.shape[0] < GRID_MIN_SHAPES:
         keep, n_keep = _keep_plain(env, q_a[0], q_a[1], radius, span)
     else:
         keep, n_keep = _keep_grid(env, grid, q_a[0], q_a[1], radius, span)
