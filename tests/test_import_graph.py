@@ -22,7 +22,7 @@ The rules, each checked over the whole graph:
    2     ``scenario`` (schema, load, validate), ``arguments``
    3     ``people``, ``world``, ``cost``, ``collision`` (the package),
          ``collision.validity``, ``collision.geometric``,
-         ``collision.planar_kernel``, ``collision.people_kernel``,
+         ``collision.planar_kernel``, ``collision.broadphase``, ``collision.people_kernel``,
          ``collision.people_safety``, ``planning``, ``waypoints``
    4     ``model``, ``collision.planar_checker``, ``collision.drake_checker``
          (Drake: the plant and Drake's checker)
@@ -76,6 +76,7 @@ LAYERS: dict[str, int] = {
     "drake_social.collision.validity": 3,
     "drake_social.collision.geometric": 3,
     "drake_social.collision.planar_kernel": 3,
+    "drake_social.collision.broadphase": 3,
     "drake_social.collision.people_kernel": 3,
     "drake_social.collision.people_safety": 3,
     "drake_social.planning": 3,

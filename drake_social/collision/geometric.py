@@ -40,12 +40,19 @@ import numpy as np
 
 from drake_social.arguments import require_scenario
 from drake_social.kinematics import ArmGeometry, configuration_limits
+from drake_social.collision.broadphase import build_grid, cell_ranges
 from drake_social.collision.planar_kernel import MAX_STEPS, STEP_MARGIN, TOLERANCE
 from drake_social.people import people_model
 from drake_social.scenario import Scenario
 from drake_social.world import world_model
 
-__all__ = ["CheckerBase", "GeometricChecker"]
+__all__ = ["CheckerBase", "GRID_MIN_BOXES", "GeometricChecker"]
+
+#: From this many boxes on, a configuration's candidate boxes come from a
+#: broadphase grid (:mod:`drake_social.collision.broadphase`) rather than
+#: from all of them (below it, the (N, K) arrays are cheaper than the grid's
+#: bookkeeping).
+GRID_MIN_BOXES = 64
 
 
 def _box_sdf_xy(px: np.ndarray, py: np.ndarray, hx: np.ndarray, hy: np.ndarray) -> np.ndarray:
@@ -152,6 +159,10 @@ class GeometricChecker(CheckerBase):
         boxes = world.boxes
         self._box_center, self._box_half = boxes.centers, boxes.halves
         self._box_cos, self._box_sin = boxes.cos, boxes.sin
+        rows = np.column_stack([np.zeros(len(boxes)), boxes.centers, boxes.cos, boxes.sin, boxes.halves,
+                                np.hypot(*boxes.halves.T)])
+        #: The broadphase over the boxes (None below GRID_MIN_BOXES boxes).
+        self.grid = build_grid(rows) if len(boxes) >= GRID_MIN_BOXES else None
         # The people present at t = 0 (a recorded id entering later is no obstacle).
         people = people_model(scenario).state_at(0.0).visible()
         self._people, self._people_r = people.positions, people.radii
@@ -207,11 +218,20 @@ class GeometricChecker(CheckerBase):
         """
         hx, hy = self._box_half[:, 0], self._box_half[:, 1]
         c, s = self._box_cos, self._box_sin
-        dx = x[:, :1] - self._box_center[:, 0]  # the base centre in every box frame: (N, K)
-        dy = y[:, :1] - self._box_center[:, 1]
-        d0 = _box_sdf_xy(c * dx + s * dy, c * dy - s * dx, hx, hy)
-        best = np.minimum(best, d0.min(-1) - self.geometry.base_radius)
-        n, k = np.nonzero(d0 - self._reach < best[:, None])  # (configuration, box) pairs kept
+        if self.grid is None:
+            dx = x[:, :1] - self._box_center[:, 0]  # the base centre in every box frame: (N, K)
+            dy = y[:, :1] - self._box_center[:, 1]
+            d0 = _box_sdf_xy(c * dx + s * dy, c * dy - s * dx, hx, hy)
+            best = np.minimum(best, d0.min(-1) - self.geometry.base_radius)
+            n, k = np.nonzero(d0 - self._reach < best[:, None])  # (configuration, box) pairs kept
+        else:
+            n, k = self._candidates(x[:, 0], y[:, 0], best + self._reach)
+            dx, dy = x[n, 0] - self._box_center[k, 0], y[n, 0] - self._box_center[k, 1]
+            d0 = _box_sdf_xy(c[k] * dx + s[k] * dy, c[k] * dy - s[k] * dx, hx[k], hy[k])
+            best = best.copy()
+            np.minimum.at(best, n, d0 - self.geometry.base_radius)
+            keep = d0 - self._reach < best[n]
+            n, k = n[keep], k[keep]
         if len(n) == 0:
             return best
         # Every vertex of the kept pairs in the box frame: (M, V).
@@ -233,6 +253,30 @@ class GeometricChecker(CheckerBase):
             ) - r[j]
             np.minimum.at(best, n[m], exact)
         return best
+
+    def _candidates(self, x: np.ndarray, y: np.ndarray, radius: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The (configuration, box) pairs (M,), (M,), sorted, each once, of
+        the boxes listed in the grid's cells that meet the square of half
+        side ``radius`` (N,) about the base centres (x, y) (N,).
+
+        With ``radius`` = the clearance known from the walls and people plus
+        the reach, every box left out has a base-centre distance above it:
+        it can neither be the nearest nor pass :meth:`_box_terms`' broad
+        phase, so the answers are those over all boxes (tested)."""
+        grid = self.grid
+        i0, j0, i1, j1 = cell_ranges(grid, np.column_stack([x - radius, y - radius]),
+                                     np.column_stack([x + radius, y + radius]))
+        ni, nj = np.maximum(i1 - i0 + 1, 0), np.maximum(j1 - j0 + 1, 0)
+        per = ni * nj
+        conf = np.repeat(np.arange(len(x)), per)
+        r = np.arange(len(conf)) - np.repeat(np.cumsum(per) - per, per)
+        cells = (i0[conf] + r % np.maximum(ni[conf], 1)) + (j0[conf] + r // np.maximum(ni[conf], 1)) * int(grid.dims[0])
+        first, count = grid.start[cells], grid.start[cells + 1] - grid.start[cells]
+        conf = np.repeat(conf, count)
+        e = np.arange(len(conf)) - np.repeat(np.cumsum(count) - count, count) + np.repeat(first, count)
+        k_total = len(self._box_half)
+        key = np.unique(conf * k_total + grid.items[e])
+        return key // k_total, key % k_total
 
     def clearances(self, qs: np.ndarray) -> np.ndarray:
         """Signed distances (N,) from the robot and object to the environment.

@@ -28,10 +28,18 @@ from typing import Iterable
 
 import numpy as np
 from pydrake.geometry import Box as DrakeBox
-from pydrake.geometry import Cylinder, Role
+from pydrake.geometry import Cylinder, Role, SceneGraph
+from pydrake.multibody.plant import MultibodyPlant
 
-from drake_social.model.plant import ScenarioDiagram, build_robot_diagram, environment_parts, registration_order
+from drake_social.model.plant import (
+    ScenarioDiagram,
+    build_environment_geometry,
+    build_robot_diagram,
+    environment_shapes,
+    registration_order,
+)
 from drake_social.collision import planar_kernel as kernel
+from drake_social.collision.broadphase import build_grid
 from drake_social.collision.geometric import CheckerBase
 from drake_social.collision.validity import Contact, PlanarScene
 from drake_social.scenario import Scenario
@@ -41,6 +49,11 @@ __all__ = ["PlanarChecker"]
 # The planar chain: body, parent, joint (position index, -1 = weld).
 _CHAIN = (("base", None, -1), ("link1", "base", 2), ("link2", "link1", 3), ("object", "link2", -1))
 _TOL = 1e-9  # metres: what counts as "the same" when matching shapes and checking planarity
+#: Shapes per SceneGraph when reading a room in parts (at most
+#: ENVIRONMENT_PART): registering a proximity shape costs about 0.4 us per shape already
+#: in its SceneGraph on top of a fixed ~0.14 ms, and a part costs little
+#: else, so parts of 64 keep 10,000 boxes at about 1.4 s.
+READ_PART = 64
 
 
 def _planar(X, what: str) -> tuple[float, float, float, float, float]:
@@ -60,9 +73,11 @@ class PlanarChecker(CheckerBase):
             serves Drake's second opinion
             (:func:`~drake_social.collision.drake_checker.verify_path`).
         model: a built :func:`build_robot_diagram` of ``scenario``, read
-            whole; None = the room is built and read in parts of at most
-            :data:`~drake_social.model.plant.ENVIRONMENT_PART` shapes (the
-            memory of one SceneGraph grows with the square of its shapes).
+            whole; None = the room is built and read in parts of
+            :data:`READ_PART` shapes (at most
+            :data:`~drake_social.model.plant.ENVIRONMENT_PART`), the robot
+            with the first (the memory of one SceneGraph grows with the
+            square of its shapes).
 
     Attributes:
         model: the given :class:`ScenarioDiagram`, or the first part's
@@ -70,6 +85,7 @@ class PlanarChecker(CheckerBase):
         bodies: (B, 6) the planar chain, body names :attr:`body_names`.
         robot: (S, 6) the robot's capsules in their body frames.
         env: (K, 8) the environment's boxes and discs, names :attr:`env_names`.
+        grid: the broadphase over env (:func:`~drake_social.collision.broadphase.build_grid`).
         levers: (S, 2) lever arms ``(c_shoulder, c_gripper)`` of each capsule, metres
             (:meth:`_levers`); motion checks advance each capsule by its own bound.
         lever: (2,) the largest of them (and the elbow's distance from the
@@ -84,12 +100,16 @@ class PlanarChecker(CheckerBase):
             self.model = model
             self._read_geometry()
         else:
-            # The room is read in parts of at most ENVIRONMENT_PART shapes, each
-            # from its own small diagram (SceneGraph's memory grows with the
-            # square of its shapes); the robot from the first.
-            parts = environment_parts(registration_order(scenario))
-            self.model = build_robot_diagram(scenario, environment=parts[0])
-            self._read_geometry((build_robot_diagram(scenario, environment=p) for p in parts[1:]))
+            # The room is read in parts, each from its own small SceneGraph
+            # (SceneGraph's memory, and the time to register a proximity shape,
+            # grow with the shapes already in it): the robot and the first
+            # READ_PART shapes from a RobotDiagram, the rest from SceneGraphs
+            # of READ_PART shapes each, collision geometry only.
+            order = registration_order(scenario)
+            self.model = build_robot_diagram(scenario, environment=order[:READ_PART])
+            rest = environment_shapes(scenario, order[READ_PART:])
+            self._read_geometry(build_environment_geometry(rest[k : k + READ_PART])
+                                for k in range(0, len(rest), READ_PART))
         # numba initialises itself and loads cached machine code at the first
         # compiled call of a process (about 0.5 s): here, with the model,
         # rather than inside the first plan's timing.
@@ -97,10 +117,11 @@ class PlanarChecker(CheckerBase):
 
     # ---- reading the SceneGraph ---------------------------------------------
 
-    def _read_geometry(self, more_environment: Iterable[ScenarioDiagram] = ()) -> None:
+    def _read_geometry(self, more_environment: Iterable[tuple[MultibodyPlant, SceneGraph]] = ()) -> None:
         """Reads the chain, the robot's shapes and the environment's from
         :attr:`model`, and further environment shapes from the diagrams of
-        ``more_environment`` (built and dropped one at a time)."""
+        ``more_environment`` (``(plant, scene_graph)`` pairs of
+        :func:`build_environment_geometry`, built and dropped one at a time)."""
         diagram = self.model.diagram
         plant = diagram.plant()
         context = diagram.CreateDefaultContext()
@@ -122,15 +143,17 @@ class PlanarChecker(CheckerBase):
         shapes: dict[str, list] = {}
         z_ranges = set()
 
-        def read(model: ScenarioDiagram, world_only: bool) -> None:
-            plant = model.diagram.plant()
-            inspector = model.diagram.scene_graph().model_inspector()
-            world = plant.world_body().index()
+        def read(plant: MultibodyPlant, scene_graph: SceneGraph, world_only: bool) -> None:
+            inspector = scene_graph.model_inspector()
+            world = inspector.world_frame_id()
             for g in inspector.GetAllGeometryIds(Role.kProximity):
-                body = plant.GetBodyFromFrameId(inspector.GetFrameId(g))
-                key = "world" if body.index() == world else body.name()
-                if world_only and key != "world":
+                frame = inspector.GetFrameId(g)
+                if frame == world:
+                    key = "world"
+                elif world_only:
                     continue
+                else:
+                    key = plant.GetBodyFromFrameId(frame).name()
                 name = inspector.GetName(g)
                 shape = inspector.GetShape(g)
                 x, y, c, s, z = _planar(inspector.GetPoseInFrame(g), name)
@@ -145,9 +168,9 @@ class PlanarChecker(CheckerBase):
                 z_ranges.add((round(z - height / 2, 9), round(z + height / 2, 9)))
                 shapes.setdefault(key, []).append(entry)
 
-        read(self.model, world_only=False)
-        for model in more_environment:
-            read(model, world_only=True)
+        read(diagram.plant(), diagram.scene_graph(), world_only=False)
+        for plant_, scene_graph in more_environment:
+            read(plant_, scene_graph, world_only=True)
         if len(z_ranges) > 1:
             raise ValueError(f"collision shapes span different z slabs {sorted(z_ranges)}: not planar")
         self.slab = next(iter(z_ranges), (0.0, 0.0))
@@ -168,6 +191,7 @@ class PlanarChecker(CheckerBase):
             env.append([kind, x, y, c, s, a, b, rho])
             self.env_names.append(name)
         self.env = np.array(env, float).reshape(-1, 8)
+        self.grid = build_grid(self.env)
         self.levers = self._levers()
         self.lever = np.array([max(self.levers[:, 0].max(initial=0.0), float(np.hypot(*self.bodies[2, 1:3]))),
                                self.levers[:, 1].max(initial=0.0)])
@@ -215,28 +239,28 @@ class PlanarChecker(CheckerBase):
         Exact when positive; when negative, only its sign is meaningful.
         Ignores the limits (see :meth:`in_limits`).
         """
-        return float(kernel.clearance(np.asarray(q, float), self.bodies, self.robot, self.env))
+        return float(kernel.clearance(np.asarray(q, float), self.bodies, self.robot, self.env, self.grid))
 
     def clearances(self, qs: np.ndarray) -> np.ndarray:
         """:meth:`clearance` of configurations (N, 4) -> (N,)."""
         qs = np.ascontiguousarray(qs, float).reshape(-1, 4)
-        return kernel.clearances(qs, self.bodies, self.robot, self.env)
+        return kernel.clearances(qs, self.bodies, self.robot, self.env, self.grid)
 
     def is_valid(self, q: np.ndarray) -> bool:
         """One configuration (4,): within the limits, clearance > 0."""
         q = np.asarray(q, float).reshape(1, 4)
-        return bool(kernel.valid(q, self.lower, self.upper, self.bodies, self.robot, self.env)[0])
+        return bool(kernel.valid(q, self.lower, self.upper, self.bodies, self.robot, self.env, self.grid)[0])
 
     def are_valid(self, qs: np.ndarray) -> np.ndarray:
         """Many configurations (N, 4) -> (N,) bool."""
         qs = np.ascontiguousarray(qs, float).reshape(-1, 4)
-        return kernel.valid(qs, self.lower, self.upper, self.bodies, self.robot, self.env)
+        return kernel.valid(qs, self.lower, self.upper, self.bodies, self.robot, self.env, self.grid)
 
     def is_motion_valid(self, q_a: np.ndarray, q_b: np.ndarray) -> bool:
         """The straight motion from q_a to q_b (4,), ends included; sound
         (conservative advancement, :func:`planar_kernel.motion_valid`)."""
         return bool(kernel.motion_valid(np.asarray(q_a, float), np.asarray(q_b, float), self.lower, self.upper,
-                                        self.bodies, self.robot, self.env, self.levers))
+                                        self.bodies, self.robot, self.env, self.grid, self.levers))
 
     @property
     def motion_check(self) -> str:
@@ -248,14 +272,15 @@ class PlanarChecker(CheckerBase):
         """Many motions (E, 4), (E, 4) -> (E,) bool."""
         q_a = np.ascontiguousarray(q_a, float).reshape(-1, 4)
         q_b = np.ascontiguousarray(q_b, float).reshape(-1, 4)
-        return kernel.motions_valid(q_a, q_b, self.lower, self.upper, self.bodies, self.robot, self.env, self.levers)
+        return kernel.motions_valid(q_a, q_b, self.lower, self.upper, self.bodies, self.robot, self.env, self.grid,
+                                    self.levers)
 
     def compiled_scene(self) -> PlanarScene:
         """The scene as the kernel's arrays (the validity protocol's
         :class:`~drake_social.collision.validity.CompiledSceneChecker` capability)."""
         f = np.ascontiguousarray
         return PlanarScene(f(self.lower, float), f(self.upper, float), f(self.bodies, float), f(self.robot, float),
-                           f(self.env, float), f(self.levers, float))
+                           f(self.env, float), f(self.levers, float), self.grid)
 
     # ---- reports and the second opinion ----------------------------------------
 

@@ -37,9 +37,13 @@ Distances. Signed distances are **exact when positive**:
   never below minus the penetration depth (only the sign is meaningful).
 
 The clearance of a configuration is the least signed distance over all
-(capsule, shape) pairs. A broad phase skips pairs whose bounding circles are
-already further apart than the best value found (``|m - c| - rho_a - rho_b``
-is a lower bound of their distance), which never changes the result.
+(capsule, shape) pairs. A broad phase reads only the shapes listed in the
+grid's cells near each capsule (:mod:`drake_social.collision.broadphase`;
+a ring search outward for the nearest) and skips pairs whose bounding
+circles are already further apart than the best value found
+(``|m - c| - rho_a - rho_b`` is a lower bound of their distance), which never
+changes the result: the ``*_plain`` functions loop over every shape and
+answer the same (tested).
 
 Motions: :func:`motion_valid` by conservative advancement, see there.
 """
@@ -70,22 +74,27 @@ __all__ = [
     "BOX",
     "DISC",
     "FAR",
+    "GRID_MIN_SHAPES",
     "MAX_STEPS",
     "STEP_MARGIN",
     "TOLERANCE",
     "body_poses",
     "capsule_clearances",
+    "capsule_clearances_plain",
     "capsule_spans",
     "clearance",
     "clearances",
+    "clearances_plain",
     "displacement",
     "motion_valid",
     "motion_valid_ends",
     "motions_valid",
+    "motions_valid_plain",
     "pair_distances",
     "segment_box_distance",
     "segment_disc_distance",
     "valid",
+    "valid_plain",
     "world_capsules",
 ]
 
@@ -103,6 +112,13 @@ MAX_STEPS = 100_000
 #: Motion checks measure only the shapes that can come within this of the
 #: robot during the motion, metres; each step then clears at most FAR / D_j.
 FAR = 1.0
+#: With fewer environment shapes than this, the kernels loop over all of them
+#: (the same answers; cheaper than reading grid cells in a room of a few
+#: dozen shapes).
+GRID_MIN_SHAPES = 64
+#: A clearance search remembers this many shapes it measured, so that a long
+#: shape listed in many grid cells is measured once per capsule.
+SEEN = 8
 
 
 @njit(cache=True)
@@ -245,8 +261,9 @@ def _capsule_reach(cap, j):
 
 
 @njit(cache=True)
-def _capsule_clearances(cap, env, out):
-    """Per capsule j, the least signed distance to the environment, into out (S,)."""
+def _capsule_clearances_plain(cap, env, out):
+    """Per capsule j, the least signed distance to the environment, into out
+    (S,): every shape (the reference of the grid's :func:`_capsule_best`)."""
     for j in range(cap.shape[0]):
         mx, my, reach = _capsule_reach(cap, j)
         best = np.inf
@@ -259,7 +276,129 @@ def _capsule_clearances(cap, env, out):
 
 
 @njit(cache=True)
-def _clearance(q, bodies, robot, env):
+def _cell_of(grid, x, y):
+    """The cell ``(i, j)`` of the point (x, y) on the grid's infinite
+    lattice, or (-1, -1, False) where it is too far (or NaN) for int64."""
+    x0, y0, cell = grid.header[0], grid.header[1], grid.header[2]
+    u, v = (x - x0) / cell, (y - y0) / cell
+    if not (abs(u) < 1e15 and abs(v) < 1e15):
+        return -1, -1, False
+    return int(math.floor(u)), int(math.floor(v)), True
+
+
+@njit(cache=True)
+def _visit(cap, j, mx, my, reach, env, grid, c, best, seen):
+    """best after the shapes of cell c (the plain loop's broad and narrow
+    phase). ``seen[:SEEN]`` holds the last shapes measured for this capsule
+    (``seen[SEEN]`` counts them): a long shape listed in many cells is
+    measured once (measuring it again would give the same value)."""
+    for e in range(grid.start[c], grid.start[c + 1]):
+        k = grid.items[e]
+        again = False
+        for t in range(SEEN):
+            if seen[t] == k:
+                again = True
+                break
+        if again:
+            continue
+        if _coarse_bound(mx, my, reach, env, k) >= best or _pair_bound(mx, my, reach, env, k) >= best:
+            continue
+        best = min(best, _pair(cap, j, env, k))
+        seen[seen[SEEN] % SEEN] = k
+        seen[SEEN] += 1
+    return best
+
+
+@njit(cache=True)
+def _cell_far(grid, ii, jj, mx, my, reach, best):
+    """Whether cell (ii, jj) can be skipped: best > 0 and every point of it
+    is at least best + reach from m. A shape nearer than best has a point
+    within best + reach of m (its nearest point, or one inside the capsule),
+    whose cell the search reads. (Not when best <= 0: a shape overlapping
+    the capsule has a signed distance down to minus its penetration depth.)"""
+    if not best > 0.0:
+        return False
+    x0, y0, cell = grid.header[0], grid.header[1], grid.header[2]
+    dx = max(x0 + ii * cell - mx, mx - (x0 + (ii + 1) * cell), 0.0)
+    dy = max(y0 + jj * cell - my, my - (y0 + (jj + 1) * cell), 0.0)
+    return math.sqrt(dx * dx + dy * dy) - reach >= best
+
+
+@njit(cache=True)
+def _capsule_best(cap, j, env, grid, best, seen):
+    """min(best, the least signed distance of capsule j to the environment),
+    exactly the value of the plain loop over all shapes.
+
+    Ring search on the grid: rings of cells at Chebyshev distance r = 0, 1,
+    ... from the cell of the capsule's midpoint m. A shape not listed in the
+    rings before r lies outside their block of cells (see
+    :mod:`~drake_social.collision.broadphase`), so its distance from the
+    capsule is at least m's distance to the block's boundary minus the
+    capsule's reach; the search stops once that lower bound reaches best,
+    as the plain loop skips such a pair. (Also when negative: a convex shape
+    outside the block lies beyond a line at least that far from m, so its
+    penetration depth is at most reach minus that distance.) The nearest
+    shape is always found, so the minimum is over the same exact pair
+    distances. Cells are skipped where :func:`_cell_far` allows. ``seen`` (SEEN + 1,) int64 is scratch."""
+    mx, my, reach = _capsule_reach(cap, j)
+    for t in range(SEEN):
+        seen[t] = -1
+    seen[SEEN] = 0
+    ix, iy, ok = _cell_of(grid, mx, my)
+    if not ok or env.shape[0] < GRID_MIN_SHAPES:  # far off, NaN or a small room: every shape
+        for k in range(env.shape[0]):
+            if _coarse_bound(mx, my, reach, env, k) >= best or _pair_bound(mx, my, reach, env, k) >= best:
+                continue
+            best = min(best, _pair(cap, j, env, k))
+        return best
+    x0, y0, cell = grid.header[0], grid.header[1], grid.header[2]
+    nx, ny = grid.dims[0], grid.dims[1]
+    r0 = max(0, -ix, ix - (nx - 1), -iy, iy - (ny - 1))  # the first ring that meets the grid
+    r1 = max(ix, nx - 1 - ix, iy, ny - 1 - iy)  # the last
+    for r in range(r0, r1 + 1):
+        if r > 0:
+            lb = min(mx - (x0 + (ix - r + 1) * cell), (x0 + (ix + r) * cell) - mx,
+                     my - (y0 + (iy - r + 1) * cell), (y0 + (iy + r) * cell) - my) - reach
+            if lb >= best:
+                break
+        for side in range(2):  # the ring's bottom and top rows
+            jj = iy - r if side == 0 else iy + r
+            if 0 <= jj < ny:
+                for ii in range(max(0, ix - r), min(nx - 1, ix + r) + 1):
+                    if not _cell_far(grid, ii, jj, mx, my, reach, best):
+                        best = _visit(cap, j, mx, my, reach, env, grid, ii + jj * nx, best, seen)
+            if r == 0:
+                break
+        if r > 0:
+            for side in range(2):  # its left and right columns, corners done
+                ii = ix - r if side == 0 else ix + r
+                if 0 <= ii < nx:
+                    for jj in range(max(0, iy - r + 1), min(ny - 1, iy + r - 1) + 1):
+                        if not _cell_far(grid, ii, jj, mx, my, reach, best):
+                            best = _visit(cap, j, mx, my, reach, env, grid, ii + jj * nx, best, seen)
+    return best
+
+
+@njit(cache=True)
+def _capsule_clearances(cap, env, grid, out):
+    """Per capsule j, the least signed distance to the environment, into out (S,)."""
+    seen = np.empty(SEEN + 1, dtype=np.int64)
+    for j in range(cap.shape[0]):
+        out[j] = _capsule_best(cap, j, env, grid, np.inf, seen)
+
+
+@njit(cache=True)
+def _clearance(q, bodies, robot, env, grid):
+    cap = world_capsules(q, bodies, robot)
+    best = np.inf
+    seen = np.empty(SEEN + 1, dtype=np.int64)
+    for j in range(cap.shape[0]):
+        best = _capsule_best(cap, j, env, grid, best, seen)
+    return best
+
+
+@njit(cache=True)
+def _clearance_plain(q, bodies, robot, env):
     cap = world_capsules(q, bodies, robot)
     best = np.inf
     for j in range(cap.shape[0]):
@@ -273,17 +412,64 @@ def _clearance(q, bodies, robot, env):
 
 
 @njit(cache=True)
-def capsule_clearances(q, bodies, robot, env):
+def capsule_clearances(q, bodies, robot, env, grid):
     """Per robot capsule (S,), its least signed distance to the environment at
     q (4,); :func:`clearance` is their minimum. Exact when positive."""
     out = np.empty(robot.shape[0])
-    _capsule_clearances(world_capsules(q, bodies, robot), env, out)
+    _capsule_clearances(world_capsules(q, bodies, robot), env, grid, out)
     return out
 
 
 @njit(cache=True)
-def _free(q, bodies, robot, env):
-    """clearance(q) > 0, deciding each pair by its broad-phase bound where it can."""
+def capsule_clearances_plain(q, bodies, robot, env):
+    """:func:`capsule_clearances` from every shape, without the grid (the reference)."""
+    out = np.empty(robot.shape[0])
+    _capsule_clearances_plain(world_capsules(q, bodies, robot), env, out)
+    return out
+
+
+@njit(cache=True)
+def _cell_block(grid, lo_x, lo_y, hi_x, hi_y):
+    """``(i0, j0, i1, j1)``: the grid's cells meeting the box [lo, hi], clipped
+    (i0 > i1 or j0 > j1 when it misses the grid); the whole grid for a
+    box too far off or NaN."""
+    a, b, ok_a = _cell_of(grid, lo_x, lo_y)
+    c, d, ok_b = _cell_of(grid, hi_x, hi_y)
+    nx, ny = grid.dims[0], grid.dims[1]
+    if not (ok_a and ok_b):
+        return 0, 0, nx - 1, ny - 1
+    return max(a, 0), max(b, 0), min(c, nx - 1), min(d, ny - 1)
+
+
+@njit(cache=True)
+def _free(q, bodies, robot, env, grid):
+    """clearance(q) > 0, deciding each pair by its broad-phase bound where it
+    can; only the shapes listed in the cells that meet a capsule's bounding
+    square (grown by the grid's pad) are looked at: every other one is
+    apart from the capsule."""
+    if env.shape[0] < GRID_MIN_SHAPES:
+        return _free_plain(q, bodies, robot, env)
+    cap = world_capsules(q, bodies, robot)
+    pad = grid.header[3]
+    nx = grid.dims[0]
+    for j in range(cap.shape[0]):
+        mx, my, reach = _capsule_reach(cap, j)
+        i0, j0, i1, j1 = _cell_block(grid, mx - reach - pad, my - reach - pad, mx + reach + pad, my + reach + pad)
+        for jj in range(j0, j1 + 1):
+            for ii in range(i0, i1 + 1):
+                c = ii + jj * nx
+                for e in range(grid.start[c], grid.start[c + 1]):
+                    k = grid.items[e]
+                    if _coarse_bound(mx, my, reach, env, k) > 0.0 or _pair_bound(mx, my, reach, env, k) > 0.0:
+                        continue
+                    if not _pair(cap, j, env, k) > 0.0:
+                        return False
+    return True
+
+
+@njit(cache=True)
+def _free_plain(q, bodies, robot, env):
+    """:func:`_free` over every shape (the reference)."""
     cap = world_capsules(q, bodies, robot)
     for j in range(cap.shape[0]):
         mx, my, reach = _capsule_reach(cap, j)
@@ -296,18 +482,29 @@ def _free(q, bodies, robot, env):
 
 
 @njit(cache=True)
-def clearance(q, bodies, robot, env):
+def clearance(q, bodies, robot, env, grid):
     """The least signed distance (metres) from the robot to the environment
-    at q (4,); exact when positive, inf without environment shapes."""
-    return _clearance(q, bodies, robot, env)
+    at q (4,); exact when positive, inf without environment shapes.
+    ``grid`` is the broadphase over ``env``
+    (:func:`drake_social.collision.broadphase.build_grid`)."""
+    return _clearance(q, bodies, robot, env, grid)
 
 
 @njit(cache=True)
-def clearances(qs, bodies, robot, env):
+def clearances(qs, bodies, robot, env, grid):
     """:func:`clearance` of configurations (N, 4) -> (N,)."""
     out = np.empty(qs.shape[0])
     for i in range(qs.shape[0]):
-        out[i] = _clearance(qs[i], bodies, robot, env)
+        out[i] = _clearance(qs[i], bodies, robot, env, grid)
+    return out
+
+
+@njit(cache=True)
+def clearances_plain(qs, bodies, robot, env):
+    """:func:`clearances` from every shape, without the grid (the reference)."""
+    out = np.empty(qs.shape[0])
+    for i in range(qs.shape[0]):
+        out[i] = _clearance_plain(qs[i], bodies, robot, env)
     return out
 
 
@@ -331,11 +528,20 @@ def _in_limits(q, lower, upper):
 
 
 @njit(cache=True)
-def valid(qs, lower, upper, bodies, robot, env):
+def valid(qs, lower, upper, bodies, robot, env, grid):
     """(N,) bool: configurations (N, 4) within the limits at clearance > 0."""
     out = np.zeros(qs.shape[0], dtype=np.bool_)
     for i in range(qs.shape[0]):
-        out[i] = _in_limits(qs[i], lower, upper) and _free(qs[i], bodies, robot, env)
+        out[i] = _in_limits(qs[i], lower, upper) and _free(qs[i], bodies, robot, env, grid)
+    return out
+
+
+@njit(cache=True)
+def valid_plain(qs, lower, upper, bodies, robot, env):
+    """:func:`valid` from every shape, without the grid (the reference)."""
+    out = np.zeros(qs.shape[0], dtype=np.bool_)
+    for i in range(qs.shape[0]):
+        out[i] = _in_limits(qs[i], lower, upper) and _free_plain(qs[i], bodies, robot, env)
     return out
 
 
@@ -384,7 +590,59 @@ def capsule_spans(dq, levers):
 
 
 @njit(cache=True)
-def _motion_valid_ends(q_a, q_b, c_a, c_b, lower, upper, bodies, robot, env, levers):
+def _keep_plain(env, x, y, radius, span):
+    """The shapes (ascending) whose bounding circle comes within FAR of the
+    disc of ``radius + span`` about (x, y), from every shape."""
+    keep = np.empty(env.shape[0], dtype=np.int64)
+    n_keep = 0
+    for k in range(env.shape[0]):
+        dx, dy = env[k, 1] - x, env[k, 2] - y
+        lb = math.sqrt(dx * dx + dy * dy) - env[k, 7] - radius - span
+        if not lb >= FAR:
+            keep[n_keep] = k
+            n_keep += 1
+    return keep, n_keep
+
+
+@njit(cache=True)
+def _keep_grid(env, grid, x, y, radius, span):
+    """:func:`_keep_plain` among the shapes listed in the cells that meet the
+    square of half side ``radius + span + FAR`` (+ pad) about (x, y), ascending,
+    each once. A shape of the plain list left out lies, grown by the pad,
+    outside that square, so it stays more than FAR from the robot: measured,
+    it would allow a step longer than FAR allows, which changes nothing
+    (:func:`_probe` caps each step at FAR's)."""
+    half = radius + span + FAR + grid.header[3]
+    i0, j0, i1, j1 = _cell_block(grid, x - half, y - half, x + half, y + half)
+    nx = grid.dims[0]
+    n = 0
+    for jj in range(j0, j1 + 1):
+        n += grid.start[i1 + 1 + jj * nx] - grid.start[i0 + jj * nx] if i0 <= i1 else 0
+    found = np.empty(n, dtype=np.int64)
+    n = 0
+    for jj in range(j0, j1 + 1):
+        for ii in range(i0, i1 + 1):
+            c = ii + jj * nx
+            for e in range(grid.start[c], grid.start[c + 1]):
+                found[n] = grid.items[e]
+                n += 1
+    found = np.sort(found)
+    keep = np.empty(n, dtype=np.int64)
+    n_keep = 0
+    for i in range(n):
+        k = found[i]
+        if i > 0 and k == found[i - 1]:
+            continue
+        dx, dy = env[k, 1] - x, env[k, 2] - y
+        lb = math.sqrt(dx * dx + dy * dy) - env[k, 7] - radius - span
+        if not lb >= FAR:
+            keep[n_keep] = k
+            n_keep += 1
+    return keep, n_keep
+
+
+@njit(cache=True)
+def _motion_valid_ends(q_a, q_b, c_a, c_b, lower, upper, bodies, robot, env, grid, levers, plain):
     if not (_in_limits(q_a, lower, upper) and _in_limits(q_b, lower, upper)):
         return False
     s_count = robot.shape[0]
@@ -412,14 +670,10 @@ def _motion_valid_ends(q_a, q_b, c_a, c_b, lower, upper, bodies, robot, env, lev
     for j in range(s_count):
         radius = max(radius, math.hypot(cap[j, 0] - q_a[0], cap[j, 1] - q_a[1]) + cap[j, 4],
                      math.hypot(cap[j, 2] - q_a[0], cap[j, 3] - q_a[1]) + cap[j, 4])
-    keep = np.empty(env.shape[0], dtype=np.int64)
-    n_keep = 0
-    for k in range(env.shape[0]):
-        dx, dy = env[k, 1] - q_a[0], env[k, 2] - q_a[1]
-        lb = math.sqrt(dx * dx + dy * dy) - env[k, 7] - radius - span
-        if not lb >= FAR:
-            keep[n_keep] = k
-            n_keep += 1
+    if plain or env.shape[0] < GRID_MIN_SHAPES:
+        keep, n_keep = _keep_plain(env, q_a[0], q_a[1], radius, span)
+    else:
+        keep, n_keep = _keep_grid(env, grid, q_a[0], q_a[1], radius, span)
     tau_far = np.inf
     for j in range(s_count):
         if spans[j] > 0.0:
@@ -457,21 +711,33 @@ def _motion_valid_ends(q_a, q_b, c_a, c_b, lower, upper, bodies, robot, env, lev
 
 
 @njit(cache=True)
-def motion_valid_ends(q_a, q_b, c_a, c_b, lower, upper, bodies, robot, env, levers):
+def motion_valid_ends(q_a, q_b, c_a, c_b, lower, upper, bodies, robot, env, grid, levers):
     """:func:`motion_valid` given :func:`capsule_clearances` ``c_a``, ``c_b``
     of both ends (the tree loop keeps them for every node)."""
-    return _motion_valid_ends(q_a, q_b, c_a, c_b, lower, upper, bodies, robot, env, levers)
+    return _motion_valid_ends(q_a, q_b, c_a, c_b, lower, upper, bodies, robot, env, grid, levers, False)
 
 
 @njit(cache=True)
-def _motion_valid(q_a, q_b, lower, upper, bodies, robot, env, levers):
-    c_a = capsule_clearances(q_a, bodies, robot, env)
-    c_b = capsule_clearances(q_b, bodies, robot, env)
-    return _motion_valid_ends(q_a, q_b, c_a, c_b, lower, upper, bodies, robot, env, levers)
+def _motion_valid(q_a, q_b, lower, upper, bodies, robot, env, grid, levers):
+    c_a = capsule_clearances(q_a, bodies, robot, env, grid)
+    c_b = capsule_clearances(q_b, bodies, robot, env, grid)
+    return _motion_valid_ends(q_a, q_b, c_a, c_b, lower, upper, bodies, robot, env, grid, levers, False)
 
 
 @njit(cache=True)
-def motion_valid(q_a, q_b, lower, upper, bodies, robot, env, levers):
+def motions_valid_plain(q_a, q_b, lower, upper, bodies, robot, env, grid, levers):
+    """:func:`motions_valid` from every shape, without the grid (the
+    reference; ``grid`` is not read)."""
+    out = np.zeros(q_a.shape[0], dtype=np.bool_)
+    for e in range(q_a.shape[0]):
+        c_a = capsule_clearances_plain(q_a[e], bodies, robot, env)
+        c_b = capsule_clearances_plain(q_b[e], bodies, robot, env)
+        out[e] = _motion_valid_ends(q_a[e], q_b[e], c_a, c_b, lower, upper, bodies, robot, env, grid, levers, True)
+    return out
+
+
+@njit(cache=True)
+def motion_valid(q_a, q_b, lower, upper, bodies, robot, env, grid, levers):
     """Whether the straight motion ``q_a + t (q_b - q_a)``, t in [0, 1], is free.
 
     Conservative advancement per capsule, coarse to fine.
@@ -505,15 +771,19 @@ def motion_valid(q_a, q_b, lower, upper, bodies, robot, env, levers):
         lower, upper: limits (4,); the limits are a box, so a motion between
             two configurations within them stays within them.
         bodies, robot, env: the scene (module docstring).
+        grid: the broadphase over env
+            (:func:`drake_social.collision.broadphase.build_grid`): the
+            clearances and the list of shapes within FAR read only the
+            cells near the robot, with the same answers.
         levers: (S, 2) per capsule ``(c_shoulder, c_gripper)`` lever arms, metres.
     """
-    return _motion_valid(q_a, q_b, lower, upper, bodies, robot, env, levers)
+    return _motion_valid(q_a, q_b, lower, upper, bodies, robot, env, grid, levers)
 
 
 @njit(cache=True)
-def motions_valid(q_a, q_b, lower, upper, bodies, robot, env, levers):
+def motions_valid(q_a, q_b, lower, upper, bodies, robot, env, grid, levers):
     """:func:`motion_valid` of motions (E, 4), (E, 4) -> (E,) bool."""
     out = np.zeros(q_a.shape[0], dtype=np.bool_)
     for e in range(q_a.shape[0]):
-        out[e] = _motion_valid(q_a[e], q_b[e], lower, upper, bodies, robot, env, levers)
+        out[e] = _motion_valid(q_a[e], q_b[e], lower, upper, bodies, robot, env, grid, levers)
     return out

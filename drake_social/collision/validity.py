@@ -8,7 +8,7 @@ from typing import NamedTuple, Protocol, runtime_checkable
 
 import numpy as np
 
-__all__ = ["CompiledSceneChecker", "Contact", "PlanarScene", "ValidityChecker"]
+__all__ = ["CompiledSceneChecker", "Contact", "Grid", "PlanarScene", "ValidityChecker"]
 
 
 @runtime_checkable
@@ -57,6 +57,17 @@ class Contact:
         return f"{self.robot_body} with {self.other} ({self.distance:+.3f} m)"
 
 
+class Grid(NamedTuple):
+    """A uniform grid over the environment's shapes (built by
+    :func:`drake_social.collision.broadphase.build_grid`, which describes it):
+    cell ``c = i + j nx`` lists the shapes ``items[start[c] : start[c + 1]]``."""
+
+    header: np.ndarray  #: (4,) float ``[x0, y0, cell, pad]``: the lower corner, the cell side and the padding, metres
+    dims: np.ndarray  #: (2,) int64 ``[nx, ny]`` cells
+    start: np.ndarray  #: (nx ny + 1,) int64 each cell's first entry in items
+    items: np.ndarray  #: (M,) int64 environment row indices, ascending within each cell
+
+
 class PlanarScene(NamedTuple):
     """A checker's geometry as the arrays of :mod:`drake_social.collision.planar_kernel`
     (formats there), which compiled planners call directly."""
@@ -67,6 +78,7 @@ class PlanarScene(NamedTuple):
     robot: np.ndarray  #: (S, 6) float the robot's capsules in their body frames
     env: np.ndarray  #: (K, 8) float the environment's boxes and discs
     levers: np.ndarray  #: (S, 2) float each capsule's lever arms, metres
+    grid: Grid  #: the broadphase over env
 
 
 @runtime_checkable

@@ -19,7 +19,7 @@ from typing import Sequence
 
 import numpy as np
 from pydrake.geometry import Box as DrakeBox
-from pydrake.geometry import Cylinder
+from pydrake.geometry import Cylinder, SceneGraph
 from pydrake.math import RigidTransform, RotationMatrix
 from pydrake.multibody.parsing import Parser
 from pydrake.multibody.plant import CoulombFriction, MultibodyPlant
@@ -33,6 +33,7 @@ from drake_social.world import WALL_NAMES, world_model
 
 __all__ = [
     "ACTUATED_JOINTS",
+    "EnvironmentShape",
     "ScenarioDiagram",
     "add_environment",
     "add_robot",
@@ -40,10 +41,13 @@ __all__ = [
     "PERSON_RGBA",
     "people_at_start",
     "person_geometry_names",
+    "build_environment_geometry",
     "build_robot_diagram",
     "environment_discs",
     "environment_names",
     "environment_parts",
+    "environment_shapes",
+    "register_environment",
     "registration_order",
     "wall_boxes",
 ]
@@ -125,14 +129,61 @@ def environment_parts(indices: Sequence[int], size: int | None = None) -> list[l
     return [indices[k : k + size] for k in range(0, len(indices), size)] or [[]]
 
 
-def _register(plant: MultibodyPlant, name: str, X_WG: RigidTransform, shape, kind: str) -> None:
-    """Registers an anchored shape: collision geometry, and visual geometry
-    except for the map's boxes (the replay draws the map as one mesh,
+@dc.dataclass(frozen=True)
+class EnvironmentShape:
+    """One anchored shape of the room, as it is registered on the world body.
+
+    Attributes:
+        name: its name (:func:`environment_names`).
+        kind: ``obstacle``, ``map`` (a box of the scenario's map), ``person`` or ``wall``.
+        X_WG: its pose in the world.
+        shape: a Drake Box (obstacles, walls) or Cylinder (people).
+    """
+
+    name: str
+    kind: str
+    X_WG: RigidTransform
+    shape: DrakeBox | Cylinder
+
+
+def environment_shapes(scenario: Scenario, only: Sequence[int] | None = None) -> list[EnvironmentShape]:
+    """The environment's shapes ``only`` (indices into :func:`environment_names`,
+    in that order; None = all, in the order of :func:`environment_names`:
+    obstacles, the people present at t = 0, walls)."""
+    names = environment_names(scenario)
+    world, people = world_model(scenario), people_at_start(scenario)[1]
+    n_obstacles, n_people = len(world.boxes), people.count
+    first_map = n_obstacles - world.map_box_count
+
+    def shape(i: int) -> EnvironmentShape:
+        if n_obstacles <= i < n_obstacles + n_people:
+            k = i - n_obstacles
+            return EnvironmentShape(names[i], "person", RigidTransform([*people.positions[k], COLLISION_HEIGHT / 2]),
+                                    Cylinder(people.radii[k], COLLISION_HEIGHT))
+        if i < n_obstacles:
+            boxes, k, kind = world.boxes, i, "obstacle" if i < first_map else "map"
+        else:
+            boxes, k, kind = world.walls, i - n_obstacles - n_people, "wall"
+        X_WG = RigidTransform(RotationMatrix.MakeZRotation(float(boxes.yaws[k])),
+                              [*boxes.centers[k], COLLISION_HEIGHT / 2])
+        size = boxes.sizes[k]
+        return EnvironmentShape(names[i], kind, X_WG, DrakeBox(size[0], size[1], COLLISION_HEIGHT))
+
+    return [shape(int(i)) for i in (range(len(names)) if only is None else only)]
+
+
+def register_environment(plant: MultibodyPlant, shapes: Sequence[EnvironmentShape], *, visual: bool = True) -> None:
+    """Anchors ``shapes`` to the world body of ``plant`` (before
+    ``plant.Finalize()``) as collision geometry, and as visual geometry
+    unless ``visual`` is False (a checker reading the room needs only the
+    collision shapes; each registration costs about 0.1 ms in Drake) or the
+    shape is a box of the map (the replay draws the map as one mesh,
     :mod:`drake_social.sim.replay_map`)."""
     world = plant.world_body()
-    plant.RegisterCollisionGeometry(world, X_WG, shape, name, _FRICTION)
-    if kind != "map":
-        plant.RegisterVisualGeometry(world, X_WG, shape, name, np.array(_ENV_COLOURS[kind]))
+    for g in shapes:
+        plant.RegisterCollisionGeometry(world, g.X_WG, g.shape, g.name, _FRICTION)
+        if visual and g.kind != "map":
+            plant.RegisterVisualGeometry(world, g.X_WG, g.shape, g.name, np.array(_ENV_COLOURS[g.kind]))
 
 
 def environment_discs(scenario: Scenario) -> np.ndarray:
@@ -168,29 +219,29 @@ def add_environment(plant: MultibodyPlant, scenario: Scenario, only: Sequence[in
     Returns:
         The registered shape names, in the order of :func:`environment_names`.
     """
-    with_people = bool(people)
-    names = environment_names(scenario)
-    world, people = world_model(scenario), people_at_start(scenario)[1]
-    n_obstacles, n_people = len(world.boxes), people.count
-    wanted = set(range(len(names))) if only is None else {int(i) for i in only}
-    first_map = n_obstacles - world.map_box_count
-    if not with_people:
+    world = world_model(scenario)
+    n_obstacles, n_people = len(world.boxes), len(people_at_start(scenario)[0])
+    wanted = set(range(len(environment_names(scenario)))) if only is None else {int(i) for i in only}
+    if not people:
         wanted -= set(range(n_obstacles, n_obstacles + n_people))
     if not map_boxes:
-        wanted -= set(range(first_map, n_obstacles))
-    shapes = [(i, world.boxes, i, "obstacle" if i < first_map else "map") for i in range(n_obstacles)]
-    shapes += [(n_obstacles + n_people + k, world.walls, k, "wall") for k in range(len(world.walls))]
-    for i, boxes, k, kind in shapes:
-        if i in wanted:
-            X_WG = RigidTransform(RotationMatrix.MakeZRotation(float(boxes.yaws[k])),
-                                  [*boxes.centers[k], COLLISION_HEIGHT / 2])
-            size = boxes.sizes[k]
-            _register(plant, names[i], X_WG, DrakeBox(size[0], size[1], COLLISION_HEIGHT), kind)
-    for k in range(n_people):
-        if n_obstacles + k in wanted:
-            X_WG = RigidTransform([*people.positions[k], COLLISION_HEIGHT / 2])
-            _register(plant, names[n_obstacles + k], X_WG, Cylinder(people.radii[k], COLLISION_HEIGHT), "person")
-    return [names[i] for i in sorted(wanted)] if only is not None or not with_people or not map_boxes else names
+        wanted -= set(range(n_obstacles - world.map_box_count, n_obstacles))
+    # Registration order: obstacles, walls, then people (:func:`registration_order`).
+    register_environment(plant, environment_shapes(scenario, [i for i in registration_order(scenario) if i in wanted]))
+    names = environment_names(scenario)
+    return [names[i] for i in sorted(wanted)]
+
+
+def build_environment_geometry(shapes: Sequence[EnvironmentShape]) -> tuple[MultibodyPlant, SceneGraph]:
+    """A SceneGraph holding only ``shapes``, anchored as collision geometry
+    through a MultibodyPlant (not finalized: nothing moves), for reading a
+    large room in parts: no robot, no visual geometry. Returns the plant and
+    its SceneGraph (keep both alive while reading)."""
+    scene_graph = SceneGraph()
+    plant = MultibodyPlant(0.0)
+    plant.RegisterAsSourceForSceneGraph(scene_graph)
+    register_environment(plant, shapes, visual=False)
+    return plant, scene_graph
 
 
 def add_robot(plant: MultibodyPlant, scenario: Scenario, parser: Parser | None = None) -> ModelInstanceIndex:

@@ -9,6 +9,7 @@ import pytest
 
 from drake_social.kinematics import displacement_bound
 from drake_social.collision import planar_kernel as dut
+from drake_social.collision.broadphase import build_grid
 
 
 def golden_min(f, n_iter: int = 120):
@@ -85,46 +86,46 @@ def _scene(obstacles):
 def test_clearance_of_the_hand_made_scene():
     bodies, robot, env, *_ = _scene([(3.0, 0.0, math.pi / 4, 0.1, 0.1)])  # a diamond, corner at x = 3 - 0.1 sqrt 2
     q = np.array([0.0, 0.0, 0.0, 0.0])
-    assert dut.clearance(q, bodies, robot, env) == pytest.approx(3 - 0.1 * math.sqrt(2) - 2.05, abs=1e-12)
+    assert dut.clearance(q, bodies, robot, env, build_grid(env)) == pytest.approx(3 - 0.1 * math.sqrt(2) - 2.05, abs=1e-12)
     q = np.array([0.0, 0.0, math.pi / 2, 0.0])  # the link points up: the base is nearest
-    assert dut.clearance(q, bodies, robot, env) == pytest.approx(3 - 0.1 * math.sqrt(2) - 0.3, abs=1e-12)
-    assert dut.clearance(q, bodies, robot, env[:0]) == math.inf  # an empty room
+    assert dut.clearance(q, bodies, robot, env, build_grid(env)) == pytest.approx(3 - 0.1 * math.sqrt(2) - 0.3, abs=1e-12)
+    assert dut.clearance(q, bodies, robot, env[:0], build_grid(env[:0])) == math.inf  # an empty room
 
 
 def test_a_thin_wall_swept_by_the_link_tip_is_caught_at_any_speed():
     # Link tip at radius 2.05 sweeps psi1 from -0.5 to 0.5 past a 2 cm wall at x = 1.95..2.0 (radially).
     bodies, robot, env, lever, lower, upper = _scene([(1.975, 0.0, 0.0, 0.01, 0.1)])
     q_a, q_b = np.array([0.0, 0.0, -0.5, 0.0]), np.array([0.0, 0.0, 0.5, 0.0])
-    assert dut.clearance(q_a, bodies, robot, env) > 0.0 and dut.clearance(q_b, bodies, robot, env) > 0.0
-    assert not dut.motion_valid(q_a, q_b, lower, upper, bodies, robot, env, lever)
-    assert not dut.motion_valid(q_b, q_a, lower, upper, bodies, robot, env, lever)
+    assert dut.clearance(q_a, bodies, robot, env, build_grid(env)) > 0.0 and dut.clearance(q_b, bodies, robot, env, build_grid(env)) > 0.0
+    assert not dut.motion_valid(q_a, q_b, lower, upper, bodies, robot, env, build_grid(env), lever)
+    assert not dut.motion_valid(q_b, q_a, lower, upper, bodies, robot, env, build_grid(env), lever)
     # Turning the other way round the wall (through pi) is free.
     q_c = np.array([0.0, 0.0, math.pi - 0.01, 0.0])
-    assert dut.motion_valid(q_b, q_c, lower, upper, bodies, robot, env, lever)
+    assert dut.motion_valid(q_b, q_c, lower, upper, bodies, robot, env, build_grid(env), lever)
     # Limits: an end outside them rejects the motion.
-    assert not dut.motion_valid(q_b, np.array([0.0, 0.0, 4.0, 0.0]), lower, upper, bodies, robot, env, lever)
+    assert not dut.motion_valid(q_b, np.array([0.0, 0.0, 4.0, 0.0]), lower, upper, bodies, robot, env, build_grid(env), lever)
 
 
 def test_zero_length_and_grazing_motions(rng):
     bodies, robot, env, lever, lower, upper = _scene([(0.0, 1.0, 0.0, 1.0, 0.2)])  # a slab above, y 0.8..1.2
     q = np.array([0.0, 0.5 - 1e-10, -math.pi / 2, 0.0])  # base 1e-10 below the slab
-    assert dut.valid(q[None], lower, upper, bodies, robot, env)[0]
-    assert not dut.motion_valid(q, q, lower, upper, bodies, robot, env, lever)  # within TOLERANCE
+    assert dut.valid(q[None], lower, upper, bodies, robot, env, build_grid(env))[0]
+    assert not dut.motion_valid(q, q, lower, upper, bodies, robot, env, build_grid(env), lever)  # within TOLERANCE
     q = np.array([0.0, 0.4, -math.pi / 2, 0.0])
-    assert dut.motion_valid(q, q, lower, upper, bodies, robot, env, lever)
+    assert dut.motion_valid(q, q, lower, upper, bodies, robot, env, build_grid(env), lever)
     # Passing under the slab 1 mm clear (valid) or 1 mm into it (invalid), both ends clear of it.
     for y, free in ((0.499, True), (0.501, False)):
         q_a, q_b = np.array([-3.0, y, -math.pi / 2, 0.0]), np.array([3.0, y, -math.pi / 2, 0.0])
-        assert dut.clearance(q_a, bodies, robot, env) > 0.5 and dut.clearance(q_b, bodies, robot, env) > 0.5
-        assert dut.motion_valid(q_a, q_b, lower, upper, bodies, robot, env, lever) == free
+        assert dut.clearance(q_a, bodies, robot, env, build_grid(env)) > 0.5 and dut.clearance(q_b, bodies, robot, env, build_grid(env)) > 0.5
+        assert dut.motion_valid(q_a, q_b, lower, upper, bodies, robot, env, build_grid(env), lever) == free
 
 
 def test_batched_calls_equal_single_calls(rng):
     bodies, robot, env, lever, lower, upper = _scene([(2.0, 1.0, 0.3, 0.4, 0.2), (-1.0, -2.0, 1.0, 0.3, 0.6)])
     q_a = rng.uniform([-4, -4, -3, -3], [4, 4, 3, 3], (400, 4))
     q_b = q_a + rng.normal(scale=0.7, size=q_a.shape)
-    np.testing.assert_array_equal(dut.motions_valid(q_a, q_b, lower, upper, bodies, robot, env, lever),
-                                  [dut.motion_valid(a, b, lower, upper, bodies, robot, env, lever)
+    np.testing.assert_array_equal(dut.motions_valid(q_a, q_b, lower, upper, bodies, robot, env, build_grid(env), lever),
+                                  [dut.motion_valid(a, b, lower, upper, bodies, robot, env, build_grid(env), lever)
                                    for a, b in zip(q_a, q_b)])
-    np.testing.assert_array_equal(dut.clearances(q_a, bodies, robot, env),
-                                  [dut.clearance(q, bodies, robot, env) for q in q_a])
+    np.testing.assert_array_equal(dut.clearances(q_a, bodies, robot, env, build_grid(env)),
+                                  [dut.clearance(q, bodies, robot, env, build_grid(env)) for q in q_a])

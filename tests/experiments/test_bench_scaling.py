@@ -25,10 +25,21 @@ def test_far_people_stand_outside_the_room_and_are_in_the_checker(tiny_scenario)
     assert len(b.env) == len(a.env) + 7
 
 
+def test_far_boxes_stand_outside_the_room_and_are_in_the_checker(tiny_scenario):
+    far = dut.far_boxes_scenario(tiny_scenario, 30)
+    x0, y0, x1, y1 = tiny_scenario.world.bounds
+    extra = far.world.obstacles[len(tiny_scenario.world.obstacles):]
+    assert len(extra) == 30 and all(b.center[0] >= x1 + 10.0 and y0 <= b.center[1] <= y1 for b in extra)
+    assert len(tiny_scenario.world.obstacles) + 30 == len(far.world.obstacles)  # the input is not changed
+    a, b = make_checker(tiny_scenario, "planar"), make_checker(far, "planar")
+    assert len(b.env) == len(a.env) + 30
+
+
 @pytest.mark.slow
 def test_small_scaling_bench(tiny_scenario_path):
     out = dut.run_scaling_bench(scenario_paths=[tiny_scenario_path], ks=(100, 200), reference_k=200,
-                                reference_seeds=2, seeds=2, far_people=5, far_repeats=1)
+                                reference_seeds=2, seeds=2, far_people=5, far_repeats=1,
+                                obstacle_counts=(10, 300), obstacle_iterations=300)
     e = out["scenarios"]["tiny.yaml"]
     runs = e["scaling"]["runs"]
     assert [r["iterations"] for r in runs] == [100, 200]
@@ -43,5 +54,9 @@ def test_small_scaling_bench(tiny_scenario_path):
     f = e["far_people"]
     assert f["same_trees"] and len(f["times_with"]) == 2
     assert f["time_ratio"] == pytest.approx(np.median(f["times_with"]) / np.median(f["times_without"]))
+    ob = e["obstacles"]
+    assert ob["same_trees"] and [r["extra_boxes"] for r in ob["rows"]] == [10, 300]
+    assert ob["rows"][1]["environment_shapes"] == ob["rows"][0]["environment_shapes"] + 290
+    assert ob["rows"][0]["time_ratio"] == 1.0 and len(ob["rows"][1]["times"]) == 2
     md = "\n".join(dut.markdown(out))
-    assert "| tiny |" in md and "same trees" in md
+    assert "| tiny |" in md and "same trees" in md and "| tiny | 300 |" in md

@@ -20,6 +20,14 @@ the compiled loop:
   social cost. The same K = 2000 plans with and without them, alternating,
   ``far_repeats`` times over the seeds: the trees must be identical, and
   the ratio of the median times is what the far people cost.
+* **Obstacle count**: the scenario with ``n`` extra boxes in a field 10 m
+  beyond its east wall (:func:`far_boxes_scenario`; in the checker, read from
+  the SceneGraph like every shape, but out of every sample's and motion's
+  reach), per ``n`` in ``obstacle_counts``: the checker's construction time
+  and the median time of ``seeds`` K = ``obstacle_iterations`` plans (the
+  counts alternating, ``obstacle_repeats`` times), their ratios to the first
+  count, and whether every tree is the one of the first count (the
+  broadphase must change no answer).
 
 Wall times are of the search in ``RrtStar.solve`` (with ``planner.optimize``
 the optimiser's time is ``optimize_time``); ratios are of medians in the same run.
@@ -31,6 +39,7 @@ from __future__ import annotations
 import copy
 import dataclasses as dc
 import math
+import time
 from pathlib import Path
 from typing import Callable, Sequence
 
@@ -39,9 +48,9 @@ import numpy as np
 from drake_social.collision.drake_checker import make_checker
 from drake_social.people import with_people
 from drake_social.planning.algorithms import make_planner, plan
-from drake_social.scenario import Person, Scenario, load_scenario
+from drake_social.scenario import Box, Person, Scenario, load_scenario
 
-__all__ = ["far_people_scenario", "fit_exponent", "run_scaling_bench"]
+__all__ = ["far_boxes_scenario", "far_people_scenario", "fit_exponent", "run_scaling_bench"]
 
 
 def fit_exponent(ks: Sequence[int], times: Sequence[float]) -> float | None:
@@ -62,6 +71,57 @@ def far_people_scenario(scenario: Scenario, count: int, gap: float = 10.0) -> Sc
     extra = [Person(x=x1 + gap + (i // rows), y=y0 + 0.5 + (i % rows), theta=math.pi * (i % 3) / 3,
                     radius=0.25, name=f"far {i}") for i in range(count)]
     return with_people(scenario, extra)
+
+
+def far_boxes_scenario(scenario: Scenario, count: int, gap: float = 10.0) -> Scenario:
+    """``scenario`` with ``count`` extra obstacles, 0.4 x 0.3 m boxes at five
+    yaws, in a field of 1 m pitch starting ``gap`` metres beyond its east
+    wall (outside the planner's bounds, as many rows as the room is high).
+    Built in Python (10,000 boxes exceed the YAML loader's node limit); not
+    validated (obstacles outside the bounds); for measurements only."""
+    x0, y0, x1, y1 = scenario.world.bounds
+    rows = max(1, int(y1 - y0))
+    extra = [Box(center=[x1 + gap + (i // rows), y0 + 0.5 + (i % rows)], size=[0.4, 0.3], yaw=0.3 * (i % 5))
+             for i in range(count)]
+    out = copy.deepcopy(scenario)
+    out.world = dc.replace(out.world, obstacles=[*out.world.obstacles, *extra])
+    return out
+
+
+def _obstacle_scaling(scenario: Scenario, checker: str, algorithm: str, counts: Sequence[int], iterations: int,
+                      seeds: int, repeats: int, tick: Callable[[str], None], label: str) -> dict:
+    """The obstacle-count measurement of the module docstring."""
+    start, goal = np.asarray(scenario.start, float), np.asarray(scenario.goal, float)
+    rows, planners = [], []
+    for n in counts:
+        s = far_boxes_scenario(scenario, n)
+        s.planner = dc.replace(s.planner, iterations=iterations)
+        t0 = time.perf_counter()
+        c = make_checker(s, checker, parallelism=1)
+        build = time.perf_counter() - t0
+        planners.append(make_planner(s, c, algorithm))
+        planners[-1].solve(start, goal, np.random.default_rng(0))  # warm-up, untimed
+        rows.append({"extra_boxes": int(n), "environment_shapes": int(len(getattr(c, "env", ()))),
+                     "construction_time": build, "times": []})
+        tick(f"{label} {n} extra boxes: checker built in {build:.2f} s")
+    same = True
+    for _ in range(repeats):
+        for seed in range(seeds):
+            first = None
+            for row, p in zip(rows, planners):
+                r = p.solve(start, goal, np.random.default_rng(seed))
+                row["times"].append(r.wall_time)
+                if first is None:
+                    first = r
+                else:
+                    same &= bool(np.array_equal(first.tree_nodes, r.tree_nodes)
+                                 and np.array_equal(first.tree_parents, r.tree_parents) and first.cost == r.cost)
+        tick(f"{label} obstacle counts, {seeds} seeds")
+    for row in rows:
+        row["median_time"] = _median(row["times"])
+        row["time_ratio"] = row["median_time"] / rows[0]["median_time"] if rows[0]["median_time"] else None
+        row["construction_ratio"] = row["construction_time"] / rows[0]["construction_time"]
+    return {"iterations": iterations, "seeds": seeds, "repeats": repeats, "rows": rows, "same_trees": same}
 
 
 def _plan(scenario: Scenario, checker_kind: str, algorithm: str, iterations: int, seed: int, **planner) -> dict:
@@ -92,18 +152,23 @@ def run_scaling_bench(
     seeds: int = 5,
     far_people: int = 50,
     far_repeats: int = 3,
+    obstacle_counts: Sequence[int] = (10, 100, 1000, 10000),
+    obstacle_iterations: int = 2000,
+    obstacle_repeats: int = 1,
     progress: Callable[[str], None] | None = None,
 ) -> dict:
-    """The three measurements of the module docstring, per scenario.
+    """The four measurements of the module docstring, per scenario.
 
     Returns:
         ``{"settings", "scenarios": {file name: {"scaling", "optimized",
-        "far_people"}}}``; see the module docstring.
+        "far_people", "obstacles"}}}``; see the module docstring
+        (``"obstacles"`` is left out when ``obstacle_counts`` is empty).
     """
     tick = progress or (lambda label: None)
     out = {"settings": {"algorithm": algorithm, "checker": checker, "ks": list(ks), "reference_k": reference_k,
                         "reference_seeds": reference_seeds, "seeds": seeds, "far_people": far_people,
-                        "far_repeats": far_repeats},
+                        "far_repeats": far_repeats, "obstacle_counts": list(obstacle_counts),
+                        "obstacle_iterations": obstacle_iterations, "obstacle_repeats": obstacle_repeats},
            "scenarios": {}}
     for path in map(Path, scenario_paths):
         scenario = load_scenario(path)
@@ -161,6 +226,10 @@ def run_scaling_bench(
         entry["far_people"] = {"count": far_people, "repeats": far_repeats, "times_without": times[0],
                                "times_with": times[1], "same_trees": same, "median_time_without": t0,
                                "median_time_with": t1, "time_ratio": t1 / t0 if t0 else None}
+        # ---- obstacle count: the same plans with more and more far boxes
+        if len(obstacle_counts):
+            entry["obstacles"] = _obstacle_scaling(scenario, checker, algorithm, obstacle_counts, obstacle_iterations,
+                                                   seeds, obstacle_repeats, tick, path.stem)
         out["scenarios"][path.name] = entry
     return out
 
@@ -196,4 +265,19 @@ def markdown(out: dict) -> list[str]:
         lines.append(f"| {Path(name).stem} | {fmt(f_['median_time_without'], '.3g')} "
                      f"| {fmt(f_['median_time_with'], '.3g')} | {fmt(f_['time_ratio'], '.3f')} "
                      f"| {'yes' if f_['same_trees'] else 'no'} |")
+    if any("obstacles" in e for e in out["scenarios"].values()):
+        lines += ["", f"Extra boxes 10 m beyond the east wall, in the checker (construction time, and the median of "
+                      f"{s['seeds']} seeds x {s.get('obstacle_repeats', 1)} K = {s.get('obstacle_iterations', 2000)} "
+                      f"plans; ratios to the first row):", "",
+                  "| scenario | extra boxes | shapes | construction s | plan s | plan ratio | construction ratio "
+                  "| same trees |", "|---|---:|---:|---:|---:|---:|---:|---|"]
+        for name, e in out["scenarios"].items():
+            if "obstacles" not in e:
+                continue
+            o = e["obstacles"]
+            for row in o["rows"]:
+                lines.append(f"| {Path(name).stem} | {row['extra_boxes']} | {row['environment_shapes']} "
+                             f"| {row['construction_time']:.3g} | {fmt(row['median_time'], '.3g')} "
+                             f"| {fmt(row['time_ratio'], '.3f')} | {row['construction_ratio']:.3g} "
+                             f"| {'yes' if o['same_trees'] else 'no'} |")
     return lines

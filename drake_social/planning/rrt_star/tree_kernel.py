@@ -274,7 +274,7 @@ def grow(rng, it_start, it_stop, params, state):
     delta, r_near, goal_bias = params.planning_range, params.near_radius, params.goal_bias
     shrinking, gamma, lazy = params.shrinking, params.gamma, params.lazy
     kind, lam, dw, soc, grid = params.kind, params.length_weight, params.distance_weights, params.social, params.grid
-    c_lower, c_upper, bodies, robot, env, levers = params.scene
+    c_lower, c_upper, bodies, robot, env, levers, env_grid = params.scene
     (informed, mode, f1, f2, centre, rot, focal, xy_scale) = params.informed
     tp = params.timed
     timed = tp.enabled
@@ -314,7 +314,7 @@ def grow(rng, it_start, it_stop, params, state):
                 else:
                     q_new = q[i_near] + (q_rand - q[i_near]) * (delta / d_best)
                 counts[0] += 1
-                c_new_caps = planar_kernel.capsule_clearances(q_new, bodies, robot, env)
+                c_new_caps = planar_kernel.capsule_clearances(q_new, bodies, robot, env, env_grid)
                 if _valid(q_new, c_new_caps, c_lower, c_upper):
                     # ---- near set
                     r = r_near
@@ -389,7 +389,7 @@ def grow(rng, it_start, it_stop, params, state):
                             n_open -= 1
                             counts[1] += 1
                             ok = planar_kernel.motion_valid_ends(q_a[slot], q_new, clear[near[slot]], c_new_caps,
-                                                                 c_lower, c_upper, bodies, robot, env, levers)
+                                                                 c_lower, c_upper, bodies, robot, env, env_grid, levers)
                             checked[slot] = 1 if ok else 2
                             if ok and timed:
                                 ok = _people_ok(q_a[slot], q_new, t_a[slot], t_b[slot], params.scene, tp)
@@ -408,7 +408,7 @@ def grow(rng, it_start, it_stop, params, state):
                             s = order[o]
                             counts[1] += 1
                             ok = planar_kernel.motion_valid_ends(q_a[s], q_new, clear[near[s]], c_new_caps, c_lower,
-                                                                 c_upper, bodies, robot, env, levers)
+                                                                 c_upper, bodies, robot, env, env_grid, levers)
                             checked[s] = 1 if ok else 2
                             if ok and timed:
                                 ok = _people_ok(q_a[s], q_new, t_a[s], t_b[s], params.scene, tp)
@@ -475,7 +475,7 @@ def grow(rng, it_start, it_stop, params, state):
                                 if checked[s] == 0:
                                     counts[1] += 1
                                     ok = planar_kernel.motion_valid_ends(q_new, q[j], c_new_caps, clear[j], c_lower,
-                                                                         c_upper, bodies, robot, env, levers)
+                                                                         c_upper, bodies, robot, env, env_grid, levers)
                                 else:
                                     ok = checked[s] == 1
                                 if ok:
@@ -518,7 +518,7 @@ def grow(rng, it_start, it_stop, params, state):
                         c_goal = _costs(one, gq, kind, lam, dw, soc, grid)[0]
                     counts[1] += 1
                     ok = planar_kernel.motion_valid_ends(q[i_new], goal, clear[i_new], goal_clear, c_lower, c_upper,
-                                                         bodies, robot, env, levers)
+                                                         bodies, robot, env, env_grid, levers)
                     if ok and timed:
                         ok = _people_ok(q[i_new], goal, tg_a[0], tg_b[0], params.scene, tp)
                 if ok:
@@ -599,7 +599,7 @@ def _rewire_timed(i_new, m, near_idx, q_a, q_b, bound, checked, c_new_caps, q, p
     node of finite cost has a tree path valid at its current times."""
     tp = params.timed
     kind, lam, dw, soc, grid = params.kind, params.length_weight, params.distance_weights, params.social, params.grid
-    c_lower, c_upper, bodies, robot, env, levers = params.scene
+    c_lower, c_upper, bodies, robot, env, levers, env_grid = params.scene
     q_new = q[i_new]
     c_new = cost[i_new]
     t_new = tnode[i_new]
@@ -631,7 +631,7 @@ def _rewire_timed(i_new, m, near_idx, q_a, q_b, bound, checked, c_new_caps, q, p
         counts[1] += 1
         if checked[s] == 0:
             ok = planar_kernel.motion_valid_ends(q_new, q[j], c_new_caps, clear[j], c_lower, c_upper, bodies, robot,
-                                                 env, levers)
+                                                 env, env_grid, levers)
         else:
             ok = checked[s] == 1
         if ok:
@@ -668,7 +668,7 @@ def _goal_edge(i, q, clear, tnode, goal_clear, counts, params):
     """The timed mode's goal connection of node i redone at ``tnode[i]``: its
     cost, or inf when the motion is not valid then (0 for a node at the goal)."""
     goal, tp = params.goal, params.timed
-    c_lower, c_upper, bodies, robot, env, levers = params.scene
+    c_lower, c_upper, bodies, robot, env, levers, env_grid = params.scene
     if _d2(goal, q[i], params.weights) == 0.0:
         return 0.0
     a = np.empty((1, 4))
@@ -712,7 +712,7 @@ def init_state(start, iterations, params):
     start alone."""
     goal, lower, upper, w, r_near = params.goal, params.lower, params.upper, params.weights, params.near_radius
     informed = params.informed.informed
-    bodies, robot, env = params.scene.bodies, params.scene.robot, params.scene.env
+    bodies, robot, env, env_grid = params.scene.bodies, params.scene.robot, params.scene.env, params.scene.grid
     s_count = robot.shape[0]
     cap = 256
     q = np.empty((cap, 4))
@@ -735,8 +735,8 @@ def init_state(start, iterations, params):
     g_next = np.full(cap, -1, dtype=np.int64)
     q[0] = start
     _insert(0, q, w, g_head, g_next, g_geom)
-    clear[0] = planar_kernel.capsule_clearances(start, bodies, robot, env)
-    goal_clear = planar_kernel.capsule_clearances(goal, bodies, robot, env)
+    clear[0] = planar_kernel.capsule_clearances(start, bodies, robot, env, env_grid)
+    goal_clear = planar_kernel.capsule_clearances(goal, bodies, robot, env, env_grid)
     ints = np.array([1, 0, -1, -1], dtype=np.int64)  # n, goal nodes, best node, first solution iteration
     floats = np.array([np.inf, np.inf])  # best cost, ellipse diameter
     tnode = np.zeros(cap)
@@ -780,7 +780,7 @@ def seed_chain(seed, params, state):
     node's. Counted in ``counts`` as the loop counts. Returns the new state."""
     goal, w, r_near = params.goal, params.weights, params.near_radius
     kind, lam, dw, soc, grid = params.kind, params.length_weight, params.distance_weights, params.social, params.grid
-    c_lower, c_upper, bodies, robot, env, levers = params.scene
+    c_lower, c_upper, bodies, robot, env, levers, env_grid = params.scene
     tp = params.timed
     timed = tp.enabled
     if state.ints[0] + seed.shape[0] > state.q.shape[0]:
@@ -798,7 +798,7 @@ def seed_chain(seed, params, state):
         if _d2(qk, q[prev], w) == 0.0:
             continue
         counts[0] += 1
-        caps = planar_kernel.capsule_clearances(qk, bodies, robot, env)
+        caps = planar_kernel.capsule_clearances(qk, bodies, robot, env, env_grid)
         if not _valid(qk, caps, c_lower, c_upper):
             break
         a[0] = q[prev]
@@ -808,7 +808,7 @@ def seed_chain(seed, params, state):
             tb[0] = ta[0] + _duration(q[prev], qk, tp.base_speed, tp.arm_speed)
         counts[1] += 1
         ok = planar_kernel.motion_valid_ends(q[prev], qk, clear[prev], caps, c_lower, c_upper, bodies, robot, env,
-                                             levers)
+                                             env_grid, levers)
         if ok and timed:
             ok = _people_ok(q[prev], qk, ta[0], tb[0], params.scene, tp)
         if not ok:
@@ -846,7 +846,7 @@ def seed_chain(seed, params, state):
                     c_goal = _costs(a, b, kind, lam, dw, soc, grid)[0]
                 counts[1] += 1
                 ok = planar_kernel.motion_valid_ends(q[prev], goal, clear[prev], goal_clear, c_lower, c_upper, bodies,
-                                                     robot, env, levers)
+                                                     robot, env, env_grid, levers)
                 if ok and timed:
                     ok = _people_ok(q[prev], goal, ta[0], tb[0], params.scene, tp)
             if ok:
