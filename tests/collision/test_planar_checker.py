@@ -18,6 +18,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from drake_social.maps import map_boxes, read_map
 from drake_social.people import people_model
 from drake_social.collision.drake_checker import CHECKERS, SceneGraphChecker, make_checker, verify_path
 from drake_social.collision.planar_checker import PlanarChecker
@@ -76,6 +77,10 @@ def exact_clearances(scenario: Scenario, geometry, qs: np.ndarray) -> np.ndarray
     radii = np.concatenate([[geometry.base_radius], geometry.segment_radii])
     a, d = seg[:, :, None, 0], seg[:, :, None, 1] - seg[:, :, None, 0]  # (N, S, 1, 2)
     boxes = list(scenario.world.obstacles) + list(wall_boxes(scenario).values())
+    if scenario.world.map is not None:  # the map's boxes (their union: exactly its cells, tests/maps)
+        grid = map_boxes(read_map(scenario.world.map), scenario.world.unknown)
+        boxes += [Box(center=list(c), size=list(z), yaw=float(y)) for c, z, y in zip(grid.centers, grid.sizes,
+                                                                                      grid.yaws)]
     best = np.full(len(qs), np.inf)
     if boxes:
         c = np.array([b.center for b in boxes], float)
