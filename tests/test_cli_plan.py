@@ -218,7 +218,8 @@ def test_bench_parses_and_calls_run_bench_with_keywords(tmp_path, monkeypatch, c
     assert staging.parent == tmp_path and staging.name.startswith(".staging-bench-") and not staging.exists()
     assert calls == [dict(scenario_paths=[TINY], algorithms=["rrt_star", "social_rrt_star"], iterations=50, seeds=3,
                           checker="numpy", ompl_checker="drake", include_ompl=False, include_checker=True,
-                          sim_runs=3, scaling=False, repeats=2, replan_runs=0, replan_count=200, progress=None)]
+                          sim_runs=3, scaling=False, repeats=2, replan_runs=0, replan_count=200, map_bench=False,
+                          progress=None)]
     assert (tmp_path / "bench.md").read_text() == "| table |\n" and "| table |" in capsys.readouterr().out
     defaults = build_parser().parse_args(["bench"])
     assert [str(p) for p in defaults.scenarios] == ["scenarios/office_bar.yaml", "scenarios/generic_L.yaml"]

@@ -63,8 +63,15 @@ from drake_social.collision.planar_checker import PlanarChecker
 from drake_social.collision.validity import Contact
 from drake_social.scenario import CHECKERS, Scenario, ScenarioError
 
-__all__ = ["CHECKERS", "Contact", "SceneGraphChecker", "check_start_goal", "local_checkers", "make_checker",
+__all__ = ["CHECKERS", "MAX_DRAKE_CHECKER_SHAPES", "Contact", "SceneGraphChecker", "check_start_goal", "local_checkers", "make_checker",
            "near_environment", "valid_configurations", "verify_path"]
+
+
+#: Most environment shapes of a :class:`SceneGraphChecker` of the whole room
+#: (its one SceneGraph keeps a filter state for every pair of shapes, about
+#: 60 N^2 bytes: 240 MB at 2,000, per context). Parts (:func:`local_checkers`)
+#: have no such bound.
+MAX_DRAKE_CHECKER_SHAPES = 2_000
 
 
 class SceneGraphChecker(CheckerBase):
@@ -100,6 +107,14 @@ class SceneGraphChecker(CheckerBase):
         super().__init__(scenario, resolution)
         self.parallelism = Parallelism(parallelism)
         b = scenario.world.bounds
+        if environment is None:
+            count = len(registration_order(scenario))
+            if count > MAX_DRAKE_CHECKER_SHAPES:
+                raise ScenarioError(
+                    f"world: {count:,} shapes (obstacles, the boxes of world.map, people, walls) are too many for "
+                    f"Drake's SceneGraphCollisionChecker, which holds them in one SceneGraph (a filter state for "
+                    f"every pair: about {60 * count**2 / 1e9:.1f} GB); at most {MAX_DRAKE_CHECKER_SHAPES:,}: use the "
+                    f"planar checker (--checker planar), which reads the room in parts")
         self.model: ScenarioDiagram = build_robot_diagram(scenario, environment=environment)
         plant = self.model.diagram.plant()
         provider = LinearDistanceAndInterpolationProvider(plant, self.geometry.reach(include_body=True))

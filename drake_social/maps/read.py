@@ -525,6 +525,9 @@ def _channel_sums(image, shown: str, source: str, mode: str):
     per-pixel sum of red, green, blue (and alpha in trinary mode), decoded."""
     if image.mode == "P":  # a palette: its colours, and alpha where it has a transparent entry
         image = image.convert("RGBA" if "transparency" in image.info else "RGB")
+    elif image.mode in ("L", "RGB") and "transparency" in image.info:
+        # A PNG's tRNS chunk (one grey level or colour transparent): an alpha channel, as map_server reads it.
+        image = image.convert("LA" if image.mode == "L" else "RGBA")
     elif image.mode in _MODES:
         if _MODES[image.mode]:
             image = image.convert(_MODES[image.mode])

@@ -3,11 +3,14 @@
 The map is a ROS ``map_server`` YAML file and its image
 (:func:`drake_social.maps.read_map`); its occupied cells, and its unknown
 cells unless ``world.unknown`` is ``free``, become obstacle boxes
-(:func:`drake_social.maps.map_boxes`) that follow ``world.obstacles`` in
+(:func:`drake_social.maps.map_boxes`; and :func:`outside_boxes` where the
+room reaches beyond the map's rectangle, since nothing is known there) that
+follow ``world.obstacles`` in
 every list of the room's boxes (:func:`obstacle_arrays`,
 :func:`drake_social.world.world_model`). A map and its boxes are read once per
 process and file state: the cache is keyed by the YAML's and the image's
-path, size and modification time, so an edited map is read again.
+path, inode, size and modification and change times, so an edited map is
+read again.
 
 Rules (:func:`check_map`, called by
 :func:`~drake_social.scenario.validate.validate_scenario`): ``world.unknown``
@@ -21,6 +24,7 @@ checked against the boxes by the checkers, with the other obstacles.
 from __future__ import annotations
 
 import functools
+import math
 import os
 from pathlib import Path
 from typing import Callable
@@ -31,29 +35,57 @@ from drake_social.errors import ScenarioError
 from drake_social.maps import OCCUPIED, UNKNOWN, MapBoxes, OccupancyMap, map_boxes, read_map
 from drake_social.scenario.schema import MAP_UNKNOWN
 
-__all__ = ["check_map", "map_extent", "obstacle_arrays", "obstacle_label", "world_map", "world_map_boxes"]
+__all__ = ["check_map", "map_extent", "obstacle_arrays", "obstacle_label", "outside_boxes", "world_map",
+           "world_map_boxes", "world_map_file"]
 
 Fail = Callable[[str, str], None]
 
 
-def _stamp(path: Path) -> tuple[int, int] | None:
+def _stamp(path: Path) -> tuple[int, ...] | None:
+    """The file's state: replaced (a new inode), rewritten (size, modification
+    and change times) or gone (None) each change it."""
     try:
         st = os.stat(path)
     except OSError:
         return None
-    return st.st_size, st.st_mtime_ns
+    return st.st_ino, st.st_size, st.st_mtime_ns, st.st_ctime_ns
 
 
 @functools.lru_cache(maxsize=4)
-def _read(path: str, stamp: tuple[int, int] | None) -> tuple[OccupancyMap, tuple[int, int] | None]:
+def _read(path: str, stamp: tuple[int, ...] | None) -> tuple[OccupancyMap, tuple[int, ...] | None]:
     grid = read_map(path)
     return grid, _stamp(grid.image_path)
 
 
 @functools.lru_cache(maxsize=4)
-def _boxes(path: str, stamp: tuple[int, int] | None, image_stamp: tuple[int, int] | None,
+def _boxes(path: str, stamp: tuple[int, ...] | None, image_stamp: tuple[int, ...] | None,
            unknown: str) -> MapBoxes:
     return map_boxes(world_map_file(path), unknown)
+
+
+def _inside(grid: OccupancyMap, points: np.ndarray) -> np.ndarray:
+    """Whether world points lie in the map's rectangle (to 1e-9 m)."""
+    u, v = grid.to_map(points).T
+    tol = 1e-9
+    return (u >= -tol) & (u <= grid.width_m + tol) & (v >= -tol) & (v <= grid.height_m + tol)
+
+
+def outside_boxes(grid: OccupancyMap, bounds) -> MapBoxes | None:
+    """Four boxes covering what of ``bounds`` (and beyond) lies outside the
+    map's rectangle: there nothing is known, so with ``world.unknown:
+    obstacle`` it is an obstacle too. None when the rectangle covers the
+    bounds (a map not turned, with the default bounds). Their ``cells`` are
+    -1 (no cells of the map)."""
+    x0, y0, x1, y1 = (float(v) for v in bounds)
+    if _inside(grid, np.array([[x0, y0], [x1, y0], [x1, y1], [x0, y1]])).all():
+        return None
+    w, h = grid.width_m, grid.height_m
+    # Every point of the bounds is within this of the map's origin, so within it of the rectangle.
+    t = float(np.max(np.hypot(*(np.array([[x0, y0], [x1, y0], [x1, y1], [x0, y1]]) - grid.origin[:2]).T))) + math.hypot(w, h)
+    rects = np.array([[-t, -t, w + t, 0.0], [-t, h, w + t, h + t], [-t, 0.0, 0.0, h], [w, 0.0, w + t, h]])
+    centers = grid.to_world(0.5 * (rects[:, :2] + rects[:, 2:]))
+    return MapBoxes(centers=centers, sizes=rects[:, 2:] - rects[:, :2], yaws=np.full(4, float(grid.origin[2])),
+                    cells=np.full((4, 4), -1, np.int64))
 
 
 def world_map_file(path: str | os.PathLike) -> OccupancyMap:
@@ -76,13 +108,20 @@ def world_map(world) -> OccupancyMap | None:
 
 
 def world_map_boxes(world) -> MapBoxes | None:
-    """The obstacle boxes of ``world``'s map (``world.unknown`` decides the
-    unknown cells), None without a map."""
+    """The obstacle boxes of ``world``'s map, None without a map:
+    its obstacle cells (``world.unknown`` decides the unknown ones), and,
+    when unknown cells are obstacles, :func:`outside_boxes` after them (a
+    turned map, or bounds beyond the map)."""
     grid = world_map(world)
     if grid is None:
         return None
     path = str(grid.path)
-    return _boxes(path, _stamp(grid.path), _stamp(grid.image_path), str(world.unknown))
+    boxes = _boxes(path, _stamp(grid.path), _stamp(grid.image_path), str(world.unknown))
+    extra = outside_boxes(grid, world.bounds) if world.unknown == "obstacle" else None
+    if extra is None:
+        return boxes
+    return MapBoxes(*(np.concatenate([getattr(boxes, f), getattr(extra, f)])
+                      for f in ("centers", "sizes", "yaws", "cells")))
 
 
 def map_extent(world) -> list[float]:
@@ -116,6 +155,8 @@ def obstacle_label(world, k: int) -> str:
     boxes = world_map_boxes(world)
     grid = world_map(world)
     r0, c0, r1, c1 = (int(v) for v in boxes.cells[k - n])
+    if r0 < 0:
+        return f"the outside of world.map {grid.path.name} (unknown: world.unknown is obstacle)"
     # Grid rows count from the image's bottom row.
     top, bottom = grid.shape[0] - r1, grid.shape[0] - 1 - r0
     return (f"the box of world.map {grid.path.name} over image rows {top}-{bottom}, columns {c0}-{c1 - 1}"
@@ -147,7 +188,10 @@ def check_map(scenario, fail: Fail) -> None:
         rows, cols = grid.cell_at(xy)
         row, col = int(rows[0]), int(cols[0])
         if row < 0:
-            continue  # outside the map's rectangle: the room there is free
+            if w.unknown == "obstacle":
+                fail(name, f"the base centre ({q[0]:g}, {q[1]:g}) lies outside world.map {grid.path} (unknown there, "
+                           f"and world.unknown is obstacle); the robot must start and end in free cells")
+            continue  # outside the map's rectangle, with unknown cells free: the room there is free
         kind = int(grid.classes[row, col])
         if kind in blocked:
             i, j = grid.image_pixel(row, col)

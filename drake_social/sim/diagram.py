@@ -129,7 +129,9 @@ script can wire another planner, controller or people model around it
              stop            1: 1.0 while the safety monitor holds the robot (only when people move)
              waiting         1: 1.0 while the replanner finds no safe path (only with replan)
              path_version    1: the replanner's path version (only with replan)
-             query_object    SceneGraph's QueryObject (distances, collisions)
+             query_object    SceneGraph's QueryObject (distances, collisions); a kinematic
+                             diagram's SceneGraph has no boxes of world.map (see build_diagram):
+                             measure against them with the planar checker
 
 A base controller outside the diagram reads ``robot_state`` and
 ``reference`` (and ``reference_feedforward``) and writes ``wheel_speeds``;

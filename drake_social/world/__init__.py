@@ -6,6 +6,6 @@ The checkers, the plant, the figures and the replay read a
 half sizes, bounding radii) are computed once there.
 """
 
-from drake_social.world.model import WALL_NAMES, Boxes, WorldGeometry, world_model
+from drake_social.world.model import WALL_NAMES, Boxes, WorldGeometry, with_obstacles, world_model
 
-__all__ = ["Boxes", "WALL_NAMES", "WorldGeometry", "world_model"]
+__all__ = ["Boxes", "WALL_NAMES", "WorldGeometry", "with_obstacles", "world_model"]

@@ -9,7 +9,7 @@ import numpy as np
 from drake_social.maps import OccupancyMap
 from drake_social.scenario.map_rules import obstacle_arrays, world_map
 
-__all__ = ["Boxes", "WALL_NAMES", "WorldGeometry", "world_model"]
+__all__ = ["Boxes", "WALL_NAMES", "WorldGeometry", "with_obstacles", "world_model"]
 
 #: Names of the boundary walls, in the order of :attr:`WorldGeometry.walls`.
 WALL_NAMES = ("wall_south", "wall_north", "wall_west", "wall_east")
@@ -142,3 +142,14 @@ def world_model(scenario) -> WorldGeometry:
         map=world_map(w),
         map_box_count=len(yaws) - len(w.obstacles),
     )
+
+
+def with_obstacles(scenario, extra):
+    """A deep copy of ``scenario`` whose ``world.obstacles`` are its own
+    followed by ``extra`` (scenario ``Box`` records); not validated again
+    (for measurements: e.g. more boxes than a YAML file may hold)."""
+    import copy
+
+    out = copy.deepcopy(scenario)
+    out.world = dc.replace(out.world, obstacles=[*out.world.obstacles, *extra])
+    return out

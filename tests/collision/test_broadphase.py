@@ -105,13 +105,23 @@ def test_odd_scenes():
     """An empty room, one shape, a configuration far off and a NaN one."""
     rng = np.random.default_rng(3)
     q = np.array([[0.0, 0.0, 0.5, 0.5], [1e6, -1e6, 0.0, 0.0], [1e18, 0.0, 0.0, 0.0], [np.nan, 0.0, 0.0, 0.0]])
-    for env in (np.zeros((0, 8)), random_env(rng, 1), random_env(rng, 5, span=0.5)):
+    # Under GRID_MIN_SHAPES the plain loop runs; 200 and 2,000 shapes take the grid's paths.
+    for env in (np.zeros((0, 8)), random_env(rng, 1), random_env(rng, 5, span=0.5), random_env(rng, 200, span=3.0),
+                random_env(rng, 2000)):
         grid = build_grid(env)
         assert np.array_equal(pk.clearances(q, BODIES, ROBOT, env, grid), pk.clearances_plain(q, BODIES, ROBOT, env),
                               equal_nan=True)
         assert np.array_equal(pk.valid(q, LOWER, UPPER, BODIES, ROBOT, env, grid),
                               pk.valid_plain(q, LOWER, UPPER, BODIES, ROBOT, env))
     assert pk.clearance(q[0], BODIES, ROBOT, np.zeros((0, 8)), build_grid(np.zeros((0, 8)))) == math.inf
+    # Motions that start or end far off, or in NaN.
+    env = random_env(rng, 2000)
+    grid = build_grid(env)
+    a = np.array([[0.0, 0.0, 0.5, 0.5], [1e6, 0.0, 0.0, 0.0], [np.nan, 0.0, 0.0, 0.0], [35.0, 35.0, 0.0, 0.0]])
+    b = np.array([[0.5, 0.2, 0.5, 0.6], [1e6, 1.0, 0.0, 0.0], [0.0, 0.0, 0.0, 0.0], [39.0, 39.0, 1.0, 0.0]])
+    lo, hi = np.full(4, -1e7), np.full(4, 1e7)
+    assert np.array_equal(pk.motions_valid(a, b, lo, hi, BODIES, ROBOT, env, grid, LEVERS),
+                          pk.motions_valid_plain(a, b, lo, hi, BODIES, ROBOT, env, grid, LEVERS))
 
 
 def test_the_cell_side_doubles_for_huge_shapes():

@@ -12,12 +12,14 @@ from __future__ import annotations
 
 import functools
 import math
+import tempfile
 import zlib
 from pathlib import Path
 
 import numpy as np
 import pytest
 
+from drake_social.experiments.bench.maps import map_bench_scenario
 from drake_social.maps import map_boxes, read_map
 from drake_social.people import people_model
 from drake_social.collision.drake_checker import CHECKERS, SceneGraphChecker, make_checker, verify_path
@@ -41,9 +43,18 @@ def rotated_room(seed: int) -> Scenario:
                     object=LShape(lengths=[1.6, 0.8], thickness=0.05), start=[1, 1, 0, 0], goal=[2, 2, 0, 0])
 
 
+_MAP_FOLDER = tempfile.TemporaryDirectory(prefix="test_planar_checker_map_")
+
+
+def ragged_floor() -> Scenario:
+    """A generated 16 x 14 m floor map with ragged walls (hundreds of boxes,
+    so the grid's paths and the room read in several parts), 4 people."""
+    return load_scenario(map_bench_scenario(_MAP_FOLDER.name, width=16.0, height=14.0, resolution=0.05))
+
+
 CASES = [(p.name, lambda p=p: load_scenario(p)) for p in SCENARIOS] + [
     (f"rotated_room_{s}", lambda s=s: rotated_room(s)) for s in (1, 2, 3)
-]
+] + [("ragged_floor", ragged_floor)]
 
 
 @functools.lru_cache(maxsize=None)
@@ -318,3 +329,11 @@ def test_verify_path(tiny_scenario):
     assert verify_path(dut, through[-1:]) == 0
     with pytest.raises(TypeError):
         verify_path("tiny.yaml", free)
+
+
+def test_the_ragged_floor_goes_through_the_grid_and_parts():
+    scenario, dut, numpy_ = _case("ragged_floor")
+    from drake_social.collision.planar_checker import READ_PART
+    from drake_social.collision.planar_kernel import GRID_MIN_SHAPES
+
+    assert len(dut.env) > max(GRID_MIN_SHAPES, 2 * READ_PART)

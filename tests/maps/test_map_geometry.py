@@ -109,3 +109,28 @@ def test_a_plan_on_a_generated_office_floor_passes_drakes_check(tmp_path):
     assert verify_path(scenario, result.waypoints) is None
     world = world_model(scenario)
     assert world.map_box_count > 10 and math.isclose(world.bounds[2], 20.0)
+
+
+def test_drakes_whole_room_checker_refuses_a_room_too_large_for_one_scene_graph(tiny_scenario):
+    from drake_social.collision.drake_checker import MAX_DRAKE_CHECKER_SHAPES, SceneGraphChecker
+    from drake_social.scenario import Box
+    from drake_social.world import with_obstacles
+
+    big = with_obstacles(tiny_scenario, [Box(center=[100.0 + i, 0.0], size=[0.2, 0.2])
+                                         for i in range(MAX_DRAKE_CHECKER_SHAPES)])
+    with pytest.raises(ScenarioError, match=r"world: 2,00\d shapes .* at most 2,000: use the planar checker"):
+        SceneGraphChecker(big)
+    with pytest.raises(ScenarioError, match="use the planar checker"):
+        make_checker(big, "drake")
+
+
+def test_the_map_picture_is_four_bytes_a_cell(room):
+    from drake_social.maps import OCCUPIED, UNKNOWN
+    from drake_social.viz.world import MAP_OCCUPIED_RGBA, map_rgba
+
+    grid = world_model(room).map
+    rgba = map_rgba(grid)
+    assert rgba.dtype == np.uint8 and rgba.shape == (*grid.shape, 4)
+    np.testing.assert_array_equal(rgba[grid.classes == OCCUPIED][0], np.round(np.multiply(MAP_OCCUPIED_RGBA, 255)))
+    assert (rgba[grid.classes == UNKNOWN][:, 3] > 0).all() and (rgba[(grid.classes != OCCUPIED) &
+                                                                    (grid.classes != UNKNOWN)] == 0).all()

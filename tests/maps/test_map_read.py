@@ -172,3 +172,16 @@ def test_cell_at_inverts_cell_centers_and_is_minus_one_outside(tmp_path):
     r, c = flat.cell_at(np.array([[1.0, 2.0], [2.5, 3.0], [3.0, 2.0], [1.0, 3.5], [2.999, 3.499]]))
     np.testing.assert_array_equal(r, [0, 2, -1, -1, 2])
     np.testing.assert_array_equal(c, [0, 3, -1, -1, 3])
+
+
+def test_a_png_transparency_chunk_is_read_as_alpha(tmp_path):
+    # Grey PNG whose tRNS chunk makes level 255 transparent: white becomes (255, alpha 0).
+    Image.fromarray(np.array([[255, 0, 128]], np.uint8), "L").save(tmp_path / "t.png", format="PNG",
+                                                                    transparency=255)
+    # trinary averages alpha in: (3 * 255 + 0) / 4 / 255 = 0.75 -> occ 0.25: unknown, not free;
+    # black opaque: (0 + 255) / 4 / 255 = 0.25 -> occ 0.75 > 0.65: occupied; 128: occ 0.374: unknown.
+    dut = read_map(_yaml(tmp_path / "t.yaml", "t.png", mode="trinary"))
+    np.testing.assert_array_equal(dut.values, [[-1, 100, -1]])
+    # scale: a pixel that is not opaque is unknown; the others as without alpha.
+    dut = read_map(_yaml(tmp_path / "s.yaml", "t.png", mode="scale"))
+    assert dut.values[0, 0] == -1 and dut.values[0, 1] == 100

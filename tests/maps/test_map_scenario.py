@@ -101,9 +101,11 @@ def test_an_edited_map_is_read_again(tmp_path):
     before = world_model(load_scenario(path)).map_box_count
     image = room_image()
     image[10, 2] = 0  # one more occupied cell (grid row 1, column 2)
-    write_map(tmp_path / "maps", "room", image, RESOLUTION)
     stat = os.stat(tmp_path / "maps" / "room.pgm")
-    os.utime(tmp_path / "maps" / "room.pgm", ns=(stat.st_atime_ns, stat.st_mtime_ns + 1_000_000_000))
+    write_map(tmp_path / "maps", "room", image, RESOLUTION)
+    # The same size and modification time (a coarse clock): the new file is still told apart.
+    os.utime(tmp_path / "maps" / "room.pgm", ns=(stat.st_atime_ns, stat.st_mtime_ns))
+    assert os.stat(tmp_path / "maps" / "room.pgm").st_size == stat.st_size
     after = world_model(load_scenario(path))
     assert after.map_box_count == before + 1
     assert after.map.classes[1, 2] == OCCUPIED
@@ -166,3 +168,39 @@ def test_unknown_classes_count_as_obstacles_only_when_asked(tmp_path):
     scenario = load_scenario(write_scenario(tmp_path))
     grid = world_model(scenario).map
     assert (grid.classes[-1] == UNKNOWN).all()  # the image's top row is the grid's last
+
+
+def test_a_turned_map_is_closed_outside_its_rectangle(tmp_path):
+    # Turned by 30 degrees: the default bounds (the extent) reach beyond the rectangle at its corners.
+    path = write_scenario(tmp_path, origin=(0.0, 0.0, np.pi / 6), start="1.0, 3.0", goal="3.0, 5.0")
+    scenario = load_scenario(path)
+    world = world_model(scenario)
+    grid = read_map(tmp_path / "maps" / "room.yaml")
+    cells = map_boxes(grid)
+    assert world.map_box_count == len(cells.yaws) + 4
+    # Points of the bounds outside the rectangle lie in an outside box; points inside the rectangle in none.
+    rng = np.random.default_rng(3)
+    x0, y0, x1, y1 = scenario.world.bounds
+    points = rng.uniform([x0, y0], [x1, y1], (4000, 2))
+    u, v = grid.to_map(points).T
+    outside = (u < 0) | (u > grid.width_m) | (v < 0) | (v > grid.height_m)
+    extra = world.boxes.corners[-4:]
+    c, s = np.cos(world.boxes.yaws[-4:]), np.sin(world.boxes.yaws[-4:])
+    rel = points[:, None, :] - world.boxes.centers[-4:]
+    lu, lv = c * rel[..., 0] + s * rel[..., 1], -s * rel[..., 0] + c * rel[..., 1]
+    inside_box = (np.abs(lu) <= world.boxes.halves[-4:, 0]) & (np.abs(lv) <= world.boxes.halves[-4:, 1])
+    assert outside.any() and inside_box[outside].any(1).all()
+    assert not inside_box[~outside & (u > 1e-6) & (v > 1e-6)].any()
+    assert extra.shape == (4, 4, 2)
+    # A start outside the rectangle is refused; with unknown cells free the outside is free.
+    with pytest.raises(ScenarioError, match=r"start: the base centre \(6.5, 0.5\) lies outside world.map"):
+        load_scenario(write_scenario(tmp_path, origin=(0.0, 0.0, np.pi / 6), start="6.5, 0.5", goal="3.0, 5.0"))
+    free = load_scenario(write_scenario(tmp_path, origin=(0.0, 0.0, np.pi / 6), start="1.0, 3.0", goal="3.0, 5.0",
+                                        extra="  unknown: free\n"))
+    assert world_model(free).map_box_count == len(map_boxes(grid, "free").yaws)
+    # A person in the outside is named so.
+    path = write_scenario(tmp_path, origin=(0.0, 0.0, np.pi / 6), start="1.0, 3.0", goal="3.0, 5.0")
+    text = path.read_text().replace("people: []\n", "people: [{x: 6.5, y: 0.5, theta: 0.0}]\n")
+    path.write_text(text)
+    with pytest.raises(ScenarioError, match=r"people\[0\]: .*the outside of world.map room.yaml"):
+        load_scenario(path)

@@ -102,6 +102,7 @@ def run_map_bench(office_path: str | Path, *, iterations: int = 2000, seeds: int
         "plan": {"map": runs, "office": runs, "ratio"}, "replay": {...} or None}``.
     """
     from drake_social.collision.drake_checker import make_checker
+    from drake_social.people import people_model
     from drake_social.world import world_model
 
     tick = progress or (lambda label: None)
@@ -141,7 +142,7 @@ def run_map_bench(office_path: str | Path, *, iterations: int = 2000, seeds: int
                     "boxes_in_world": world_model(scenario).map_box_count,
                     "load_seconds": {"median": float(np.median(loads)), "max": float(np.max(loads)),
                                      "n": len(loads)},
-                    "people": len(scenario.people)},
+                    "people": people_model(scenario).state_at(0.0).count},
             "checker_seconds": checker_seconds,
             "plan": {"iterations": iterations, "map": runs["map"], "office": runs["office"],
                      "median_map": median["map"], "median_office": median["office"],

@@ -297,7 +297,7 @@ def run_bench(
     total += len(paths) * len(SIM_MODES) * len(EXECUTIONS) * (sim_runs + 1) if sim_runs > 0 else 0
     total += len(paths) * (4 + 2 + 5 + 3) if scaling else 0  # run_scaling_bench's defaults
     total += 1 + replan_runs if replan_runs > 0 else 0  # the rollout and the runs
-    total += 3 + 3 + 1 if map_bench else 0  # run_map_bench's defaults
+    total += 1 + 1 + 3 + 1 if map_bench else 0  # run_map_bench's defaults: load, checkers, 3 seeds, replay
     done = 0
 
     def tick(label: str) -> None:

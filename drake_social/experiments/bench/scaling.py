@@ -49,6 +49,7 @@ from drake_social.collision.drake_checker import make_checker
 from drake_social.people import with_people
 from drake_social.planning.algorithms import make_planner, plan
 from drake_social.scenario import Box, Person, Scenario, load_scenario
+from drake_social.world import with_obstacles
 
 __all__ = ["far_boxes_scenario", "far_people_scenario", "fit_exponent", "run_scaling_bench"]
 
@@ -83,9 +84,7 @@ def far_boxes_scenario(scenario: Scenario, count: int, gap: float = 10.0) -> Sce
     rows = max(1, int(y1 - y0))
     extra = [Box(center=[x1 + gap + (i // rows), y0 + 0.5 + (i % rows)], size=[0.4, 0.3], yaw=0.3 * (i % 5))
              for i in range(count)]
-    out = copy.deepcopy(scenario)
-    out.world = dc.replace(out.world, obstacles=[*out.world.obstacles, *extra])
-    return out
+    return with_obstacles(scenario, extra)
 
 
 def _obstacle_scaling(scenario: Scenario, checker: str, algorithm: str, counts: Sequence[int], iterations: int,
