@@ -175,8 +175,10 @@ def markdown(out: dict) -> list[str]:
              "| measurement | value | target |", "|---|---|---|",
              f"| read + boxes (median of {m['load_seconds']['n']}) | {m['load_seconds']['median']:.3f} s | < 2 s |",
              f"| planar checker built | {out['checker_seconds']:.2f} s | |",
-             f"| plan K = {p['iterations']}, map (median of {len(p['map'])}) | {p['median_map']:.3f} s | |",
-             f"| plan K = {p['iterations']}, office_bar (median of {len(p['office'])}) | {p['median_office']:.3f} s | |",
+             f"| plan K = {p['iterations']}, map (median of {len(p['map'])}; paths found "
+             f"{sum(r['success'] for r in p['map'])}) | {p['median_map']:.3f} s | |",
+             f"| plan K = {p['iterations']}, office_bar (median of {len(p['office'])}; paths found "
+             f"{sum(r['success'] for r in p['office'])}) | {p['median_office']:.3f} s | |",
              f"| ratio map / office | {p['ratio']:.2f} | < 2 |"]
     if r is not None:
         secs = "not reached" if r["simulated_seconds"] is None else f"{r['simulated_seconds']:.0f} s run"
