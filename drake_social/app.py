@@ -637,10 +637,7 @@ def run_people_import(*, file: str | Path, out: str | Path, layout: str = "xy", 
             names the file and the line).
         OSError: ``out`` could not be written.
     """
-    import os
-    import secrets
-
-    from drake_social.io.textfile import read_text_file
+    from drake_social.io.textfile import read_text_file, replace_file
     from drake_social.people import eth_ucy
 
     text = read_text_file(file, "recording", limit=eth_ucy.MAX_RECORDING_BYTES)
@@ -649,17 +646,7 @@ def run_people_import(*, file: str | Path, out: str | Path, layout: str = "xy", 
     data = eth_ucy.people_csv_text(rows, theta=theta).encode()
     out = Path(out)
     out.parent.mkdir(parents=True, exist_ok=True)
-    tmp = out.parent / f".{out.name}.{secrets.token_hex(6)}.tmp"
-    fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666)  # the umask's permissions, as a plain file
-    try:
-        with os.fdopen(fd, "wb") as f:
-            f.write(data)
-            f.flush()
-            os.fsync(f.fileno())
-        os.replace(tmp, out)
-    except BaseException:
-        tmp.unlink(missing_ok=True)
-        raise
+    replace_file(out, lambda f: f.write(data))
     first, last = rows[0][0], rows[-1][0]  # the rows are sorted by time
     return PeopleImport(out, len(rows), len({r[1] for r in rows}), last - first, first, last)
 

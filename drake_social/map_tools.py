@@ -18,7 +18,6 @@ from __future__ import annotations
 import dataclasses as dc
 import math
 import os
-import secrets
 import time
 from pathlib import Path
 from typing import Sequence
@@ -26,6 +25,7 @@ from typing import Sequence
 import numpy as np
 
 from drake_social.errors import ScenarioError
+from drake_social.io.textfile import replace_file
 from drake_social.maps import FREE, OCCUPIED, UNKNOWN, map_boxes, read_map
 from drake_social.scenario import MAP_UNKNOWN, load_scenario_text
 
@@ -215,15 +215,4 @@ def write_map_scenario(map_path: str | Path, out: str | Path, start: Sequence[fl
             message += " (move it, or turn the bar with --arm PSI1 PSI2)"
         raise ScenarioError(message) from None
     folder.mkdir(parents=True, exist_ok=True)
-    tmp = folder / f".{out.name}.{secrets.token_hex(6)}.tmp"
-    fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666)
-    try:
-        with os.fdopen(fd, "w", encoding="utf-8") as f:
-            f.write(text)
-            f.flush()
-            os.fsync(f.fileno())
-        os.replace(tmp, out)
-    except BaseException:
-        tmp.unlink(missing_ok=True)
-        raise
-    return out
+    return replace_file(out, lambda f: f.write(text.encode("utf-8")))

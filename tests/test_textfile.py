@@ -176,3 +176,29 @@ def test_a_nul_or_empty_file_name_is_refused_by_name():
     with pytest.raises(ScenarioError) as info:
         load_scenario("")
     assert str(info.value) == "'': an empty file name; a scenario file is needed"
+
+
+def test_replace_file_leaves_the_old_file_or_the_whole_new_one(tmp_path):
+    from drake_social.io.textfile import replace_file
+
+    path = tmp_path / "a.txt"
+    path.write_text("old")
+
+    def fail(f):
+        f.write(b"half")
+        raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt):
+        replace_file(path, fail)
+    assert path.read_text() == "old" and sorted(p.name for p in tmp_path.iterdir()) == ["a.txt"]
+    assert replace_file(path, lambda f: f.write(b"new")) == path
+    assert path.read_text() == "new" and sorted(p.name for p in tmp_path.iterdir()) == ["a.txt"]
+    assert path.stat().st_mode & 0o777 == 0o666 & ~_umask()
+
+
+def _umask() -> int:
+    import os
+
+    mask = os.umask(0)
+    os.umask(mask)
+    return mask

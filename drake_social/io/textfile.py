@@ -20,6 +20,7 @@ option that named it (``--path``).
 from __future__ import annotations
 
 import os
+import secrets
 import stat
 from pathlib import Path
 
@@ -27,7 +28,7 @@ from drake_social.errors import ScenarioError
 from drake_social.limits import MAX_WAYPOINTS
 
 __all__ = ["MAX_PATH_FILE_BYTES", "MAX_YAML_FILE_BYTES", "check_regular_file", "read_text_file", "read_yaml_file",
-           "describe_mode", "shorten"]
+           "describe_mode", "replace_file", "shorten"]
 
 #: Bytes allowed per row of a path CSV: four numbers of 17 significant digits
 #: with exponent and sign take at most 4 x 24 + 3 commas + CRLF = 101 bytes;
@@ -184,3 +185,28 @@ def read_yaml_file(path: str | Path, what: str, option: str | None = None) -> st
         option: the command-line option that named it, or None.
     """
     return read_text_file(path, what, option, limit=MAX_YAML_FILE_BYTES)
+
+
+def replace_file(path: str | Path, write) -> Path:
+    """Writes ``path`` atomically: ``write(f)`` fills a new temporary file
+    (binary) beside it, which is flushed to disk and renamed over ``path``,
+    so a reader sees the old file or the whole new one; on any error or
+    interrupt the temporary file is removed. It is created with mode 0o666
+    less the umask, as ``open`` would create ``path``.
+
+    Returns:
+        ``path``.
+    """
+    path = Path(path)
+    temporary = path.with_name(f".{path.name}.{secrets.token_hex(6)}.tmp")
+    fd = os.open(temporary, os.O_WRONLY | os.O_CREAT | os.O_EXCL | getattr(os, "O_CLOEXEC", 0), 0o666)
+    try:
+        with os.fdopen(fd, "wb") as f:
+            write(f)
+            f.flush()
+            os.fsync(f.fileno())
+        os.replace(temporary, path)
+    except BaseException:
+        temporary.unlink(missing_ok=True)
+        raise
+    return path

@@ -23,11 +23,11 @@ from __future__ import annotations
 import dataclasses as dc
 import math
 import os
-import secrets
 from pathlib import Path
 
 import numpy as np
 
+from drake_social.io.textfile import replace_file
 from drake_social.maps.read import check_map_field
 
 __all__ = ["MAP_IMAGE_FORMATS", "OfficeFloorLayout", "office_floor_image", "office_floor_layout", "ragged_edges",
@@ -323,24 +323,7 @@ def write_map(directory: str | Path, name: str, image_u8: np.ndarray, resolution
                  f"origin: [{_format_number(x)}, {_format_number(y)}, {_format_number(yaw)}]\n"
                  f"negate: {int(checked['negate'])}\noccupied_thresh: {_format_number(occupied_thresh)}\n"
                  f"free_thresh: {_format_number(free_thresh)}\n")
-    _replace(directory / image_name, lambda f: image.save(f, format={"pgm": "PPM", "png": "PNG", "bmp": "BMP"}[fmt]))
+    replace_file(directory / image_name, lambda f: image.save(f, format={"pgm": "PPM", "png": "PNG", "bmp": "BMP"}[fmt]))
     yaml_path = directory / f"{name}.yaml"
-    _replace(yaml_path, lambda f: f.write(yaml_text.encode("utf-8")))
+    replace_file(yaml_path, lambda f: f.write(yaml_text.encode("utf-8")))
     return yaml_path
-
-
-def _replace(path: Path, write) -> None:
-    """Writes ``path`` through a new temporary file in its folder, moved into place.
-
-    The temporary file is created with mode 0o666 less the umask (as ``open``
-    would create ``path``), so the map is readable as any file written there.
-    """
-    temporary = path.with_name(f".{path.name}.{secrets.token_hex(8)}.tmp")
-    fd = os.open(temporary, os.O_WRONLY | os.O_CREAT | os.O_EXCL | getattr(os, "O_CLOEXEC", 0), 0o666)
-    try:
-        with os.fdopen(fd, "wb") as f:
-            write(f)
-        os.replace(temporary, path)
-    except BaseException:
-        os.unlink(temporary)
-        raise
