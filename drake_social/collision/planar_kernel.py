@@ -590,15 +590,21 @@ def capsule_spans(dq, levers):
 
 
 @njit(cache=True)
+def _near_motion(env, k, x, y, radius, span):
+    """Whether shape k's bounding circle comes within FAR of the disc of
+    ``radius + span`` about (x, y)."""
+    dx, dy = env[k, 1] - x, env[k, 2] - y
+    return not math.sqrt(dx * dx + dy * dy) - env[k, 7] - radius - span >= FAR
+
+
+@njit(cache=True)
 def _keep_plain(env, x, y, radius, span):
     """The shapes (ascending) whose bounding circle comes within FAR of the
     disc of ``radius + span`` about (x, y), from every shape."""
     keep = np.empty(env.shape[0], dtype=np.int64)
     n_keep = 0
     for k in range(env.shape[0]):
-        dx, dy = env[k, 1] - x, env[k, 2] - y
-        lb = math.sqrt(dx * dx + dy * dy) - env[k, 7] - radius - span
-        if not lb >= FAR:
+        if _near_motion(env, k, x, y, radius, span):
             keep[n_keep] = k
             n_keep += 1
     return keep, n_keep
@@ -633,9 +639,7 @@ def _keep_grid(env, grid, x, y, radius, span):
         k = found[i]
         if i > 0 and k == found[i - 1]:
             continue
-        dx, dy = env[k, 1] - x, env[k, 2] - y
-        lb = math.sqrt(dx * dx + dy * dy) - env[k, 7] - radius - span
-        if not lb >= FAR:
+        if _near_motion(env, k, x, y, radius, span):
             keep[n_keep] = k
             n_keep += 1
     return keep, n_keep
