@@ -459,10 +459,7 @@ def _free(q, bodies, robot, env, grid):
             for ii in range(i0, i1 + 1):
                 c = ii + jj * nx
                 for e in range(grid.start[c], grid.start[c + 1]):
-                    k = grid.items[e]
-                    if _coarse_bound(mx, my, reach, env, k) > 0.0 or _pair_bound(mx, my, reach, env, k) > 0.0:
-                        continue
-                    if not _pair(cap, j, env, k) > 0.0:
+                    if not _apart(cap, j, mx, my, reach, env, grid.items[e]):
                         return False
     return True
 
@@ -474,11 +471,19 @@ def _free_plain(q, bodies, robot, env):
     for j in range(cap.shape[0]):
         mx, my, reach = _capsule_reach(cap, j)
         for k in range(env.shape[0]):
-            if _coarse_bound(mx, my, reach, env, k) > 0.0 or _pair_bound(mx, my, reach, env, k) > 0.0:
-                continue
-            if not _pair(cap, j, env, k) > 0.0:
+            if not _apart(cap, j, mx, my, reach, env, k):
                 return False
     return True
+
+
+@njit(cache=True)
+def _apart(cap, j, mx, my, reach, env, k):
+    """Whether world capsule j (midpoint m, all of it within ``reach`` of m)
+    and shape k are apart: by a broad-phase bound where it decides, else by
+    their distance."""
+    if _coarse_bound(mx, my, reach, env, k) > 0.0 or _pair_bound(mx, my, reach, env, k) > 0.0:
+        return True
+    return _pair(cap, j, env, k) > 0.0
 
 
 @njit(cache=True)
