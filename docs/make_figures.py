@@ -29,7 +29,7 @@ DOCS = Path(__file__).resolve().parent
 # The layers, top to bottom: (title, colour, [(package, what it holds), ...]).
 LAYERS = [
     ("front end", "#d9d2e9", [("cli.py", "argparse and printing only")]),
-    ("application", "#c9daf8", [("app.py", "run_show, run_plan, run_simulate, run_study"),
+    ("application", "#c9daf8", [("app.py", "run_show, run_plan, run_simulate, run_study; map_tools.py"),
                                 ("experiments/", "bench/, study/, metrics")]),
     ("execution and figures", "#d0e0e3", [("sim/", "station diagram, simulate, analysis, replay"),
                                           ("viz/", "matplotlib figures")]),
@@ -38,11 +38,11 @@ LAYERS = [
                                             ("collision/", "planar_checker, drake_checker")]),
     ("pure numpy core: never imports pydrake", "#fff2cc", [
         ("planning/", "algorithms, rrt_star/, optimize, sampling"),
-        ("cost/", "AGF, S(q), motion integral"), ("collision/", "validity, geometric, planar_kernel"),
+        ("cost/", "AGF, S(q), motion integral"), ("collision/", "validity, geometric, planar_kernel, broadphase"),
         ("kinematics.py", "batched forward kinematics"), ("people/", "who is where at time t"),
-        ("world/", "obstacles")]),
-    ("foundation", "#f4cccc", [("scenario/", "schema, load, validate"), ("limits.py", "bounds and names"),
-                               ("io/", "path CSV, records, output sets, text files")]),
+        ("world/", "obstacles: boxes, the map's, walls")]),
+    ("foundation", "#f4cccc", [("scenario/", "schema, load, validate"), ("maps/", "map_server maps, cells to boxes"),
+                               ("limits.py", "bounds and names"), ("io/", "path CSV, records, output sets, text files")]),
 ]
 
 
