@@ -229,20 +229,23 @@ def check_people(scenario, fail: Fail) -> None:
 
 def _check_starts(scenario, geometry: ArmGeometry, boxes, starts, fail: Fail) -> None:
     start = scenario.start
-    # Every start at once: the body against every obstacle, and at t = 0 against the robot.
+    # The starts in batches: each body against every obstacle, and at t = 0 against the robot.
     centres = np.array([c for _, _, c, _, _ in starts])
     radii = np.array([r for _, _, _, r, _ in starts])
     centers, sizes, yaws = boxes
     c, sn = np.cos(yaws), np.sin(yaws)
-    rel = centres[:, None, :] - centers  # (N, K, 2)
-    local = np.stack([c * rel[..., 0] + sn * rel[..., 1], -sn * rel[..., 0] + c * rel[..., 1]], -1)
-    gaps = np.hypot(*np.moveaxis(np.maximum(np.abs(local) - sizes / 2, 0.0), -1, 0))  # (N, K)
     clearance, parts = robot_clearance(geometry, start, centres, radii)
+    step = max(1, _SEGMENT_BATCH // max(len(yaws), 1))
     for n, (field, what, centre, radius, at_zero) in enumerate(starts):
-        hit = _first_hit(gaps[n], radius)
+        if n % step == 0:  # the gaps (m, K) of the next batch of starts
+            rel = centres[n:n + step, None, :] - centers
+            local = np.stack([c * rel[..., 0] + sn * rel[..., 1], -sn * rel[..., 0] + c * rel[..., 1]], -1)
+            gaps = np.hypot(*np.moveaxis(np.maximum(np.abs(local) - sizes / 2, 0.0), -1, 0))
+        hit = _first_hit(gaps[n % step], radius)
         if hit is not None:
-            fail(field, f"{what} {_fmt(centre)} puts the body (radius {radius:g} m) inside {obstacle_label(scenario.world, hit[0])} "
-                        f"(its centre is {hit[1]:.3g} m from the box); a person must start clear of the obstacles")
+            fail(field, f"{what} {_fmt(centre)} puts the body (radius {radius:g} m) inside "
+                        f"{obstacle_label(scenario.world, hit[0])} (its centre is {hit[1]:.3g} m from the box); a "
+                        f"person must start clear of the obstacles")
         if at_zero and clearance[n] < 0:
             fail(field, f"{what} {_fmt(centre)} puts the body (radius {radius:g} m) into the robot's {parts[n]} at "
                         f"its start configuration {list(start)} (overlap {-clearance[n]:.3g} m); a person must "

@@ -121,3 +121,13 @@ def test_robot_clearance_is_the_proximity_modules_robot_distance():
             d = part_distances(geometry, q[None], centres[k][None], radii[k:k + 1])
             assert values[k] == pytest.approx(d["robot"][0], abs=1e-12)
             assert d[parts[k]][0] == pytest.approx(values[k], abs=1e-12)
+
+
+def test_starts_checked_in_batches_still_name_the_person_inside_a_box(tiny_scenario_path, monkeypatch):
+    from drake_social.scenario import people_rules
+
+    monkeypatch.setattr(people_rules, "_SEGMENT_BATCH", 2)  # one start per batch
+    people = ", ".join(f"{{x: {1.0 + 0.7 * i}, y: 4.3}}" for i in range(4)) + ", {x: 4.0, y: 0.9}"
+    with pytest.raises(ScenarioError, match=r"people\[4\]: the position \(4, 0.9\) puts the body .* inside "
+                                            r"world.obstacles\[0\]"):
+        load_scenario(tiny_scenario_path, [f"people: [{people}]"])
