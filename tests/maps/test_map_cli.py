@@ -82,3 +82,21 @@ def test_scenario_refuses_a_bad_map_naming_its_field(tmp_path, capsys):
 def test_scenario_text_quotes_names():
     text = map_scenario_text('my "lab".yaml', (1, 2), (3, 4))
     assert 'map: "my \\"lab\\".yaml"' in text and "start: [1.0, 2.0, -1.2292, 2.8]" in text
+
+
+@pytest.mark.parametrize("argv, words", [
+    (["map", "inspect", "{tmp}/none.yaml"], ["none.yaml", "no such"]),
+    (["map", "scenario", "{map}", "--start", "2.5", "0", "--goal", "9", "0", "--out", "{tmp}/s.txt"],
+     ["--out: the scenario file must end in .yaml or .yml"]),
+    (["map", "scenario", "{map}", "--start", "nan", "0", "--goal", "9", "0", "--out", "{tmp}/s.yaml"],
+     ["--start", "nan"]),
+    (["map", "inspect", "{map}", "--unknown", "wall"], ["--unknown", "wall"]),
+])
+def test_bad_map_commands_exit_2_naming_the_input(room_map, tmp_path, capsys, argv, words):
+    argv = [a.format(tmp=tmp_path, map=room_map) for a in argv]
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert "Traceback" not in err
+    for word in words:
+        assert word in err
+    assert not (tmp_path / "s.txt").exists() and not (tmp_path / "s.yaml").exists()

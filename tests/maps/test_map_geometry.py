@@ -134,3 +134,18 @@ def test_the_map_picture_is_four_bytes_a_cell(room):
     np.testing.assert_array_equal(rgba[grid.classes == OCCUPIED][0], np.round(np.multiply(MAP_OCCUPIED_RGBA, 255)))
     assert (rgba[grid.classes == UNKNOWN][:, 3] > 0).all() and (rgba[(grid.classes != OCCUPIED) &
                                                                     (grid.classes != UNKNOWN)] == 0).all()
+
+
+def test_the_map_mesh_costs_a_replay_under_0_3_kb_a_box(tmp_path):
+    """replay_map's stated cost: the page grows by at most 0.3 kB per box of
+    the map (vertices and faces packed once, whatever the run's length)."""
+    from drake_social.experiments.bench.maps import map_bench_scenario
+    from drake_social.sim.replay_map import draw_map_mesh
+    from drake_social.sim.replay_pack import compact_page
+
+    world = world_model(load_scenario(map_bench_scenario(tmp_path, width=16.0, height=14.0, resolution=0.05)))
+    meshcat = replay.make_meshcat()
+    before = len(compact_page(meshcat.StaticHtml()))
+    assert draw_map_mesh(meshcat, world, "/drake_social/map") == world.map_box_count > 300
+    grown = len(compact_page(meshcat.StaticHtml())) - before
+    assert 0.2e3 * world.map_box_count < grown < 0.3e3 * world.map_box_count

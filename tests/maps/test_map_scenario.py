@@ -164,12 +164,6 @@ def test_a_person_inside_a_map_box_is_refused_naming_the_cells(tmp_path):
     assert f"{path}: people[0]: " in message and "world.map room.yaml over image rows 3-11, columns 8-9" in message
 
 
-def test_unknown_classes_count_as_obstacles_only_when_asked(tmp_path):
-    scenario = load_scenario(write_scenario(tmp_path))
-    grid = world_model(scenario).map
-    assert (grid.classes[-1] == UNKNOWN).all()  # the image's top row is the grid's last
-
-
 def test_a_turned_map_is_closed_outside_its_rectangle(tmp_path):
     # Turned by 30 degrees: the default bounds (the extent) reach beyond the rectangle at its corners.
     path = write_scenario(tmp_path, origin=(0.0, 0.0, np.pi / 6), start="1.0, 3.0", goal="3.0, 5.0")
