@@ -204,6 +204,9 @@ class GeometricChecker(CheckerBase):
             best = self._box_terms(x, y, best)
         return best
 
+    #: Metres about the base whose boxes are measured first (grid branch of :meth:`_box_terms`).
+    NEAR_BOXES = 1.0
+
     def _box_terms(self, x: np.ndarray, y: np.ndarray, best: np.ndarray) -> np.ndarray:
         """The clearances (N,) after the boxes, given ``best`` (N,) from the rest.
 
@@ -225,11 +228,16 @@ class GeometricChecker(CheckerBase):
             best = np.minimum(best, d0.min(-1) - self.geometry.base_radius)
             n, k = np.nonzero(d0 - self._reach < best[:, None])  # (configuration, box) pairs kept
         else:
-            n, k = self._candidates(x[:, 0], y[:, 0], best + self._reach)
-            dx, dy = x[n, 0] - self._box_center[k, 0], y[n, 0] - self._box_center[k, 1]
-            d0 = _box_sdf_xy(c[k] * dx + s[k] * dy, c[k] * dy - s[k] * dx, hx[k], hy[k])
+            # The boxes within NEAR_BOXES of the base first: their base terms
+            # shrink the known clearance (on a map the walls' is metres), so
+            # the search below reads fewer cells. It still reaches every box
+            # whose base term beats the result, so the answers are unchanged.
             best = best.copy()
-            np.minimum.at(best, n, d0 - self.geometry.base_radius)
+            for radius in (np.minimum(best, self.NEAR_BOXES), None):
+                n, k = self._candidates(x[:, 0], y[:, 0], best + self._reach if radius is None else radius)
+                dx, dy = x[n, 0] - self._box_center[k, 0], y[n, 0] - self._box_center[k, 1]
+                d0 = _box_sdf_xy(c[k] * dx + s[k] * dy, c[k] * dy - s[k] * dx, hx[k], hy[k])
+                np.minimum.at(best, n, d0 - self.geometry.base_radius)
             keep = d0 - self._reach < best[n]
             n, k = n[keep], k[keep]
         if len(n) == 0:

@@ -261,18 +261,29 @@ def _capsule_reach(cap, j):
 
 
 @njit(cache=True)
+def _measure(cap, j, mx, my, reach, env, k, best):
+    """min(best, the signed distance of capsule j and shape k), measured only
+    when the pair's broad-phase lower bounds are below best (else best)."""
+    if _coarse_bound(mx, my, reach, env, k) >= best or _pair_bound(mx, my, reach, env, k) >= best:
+        return best
+    return min(best, _pair(cap, j, env, k))
+
+
+@njit(cache=True)
+def _capsule_best_plain(cap, j, env, best):
+    """min(best, the least signed distance of capsule j to the environment)
+    over every shape (the reference of the grid's :func:`_capsule_best`)."""
+    mx, my, reach = _capsule_reach(cap, j)
+    for k in range(env.shape[0]):
+        best = _measure(cap, j, mx, my, reach, env, k, best)
+    return best
+
+
+@njit(cache=True)
 def _capsule_clearances_plain(cap, env, out):
-    """Per capsule j, the least signed distance to the environment, into out
-    (S,): every shape (the reference of the grid's :func:`_capsule_best`)."""
+    """Per capsule j, the least signed distance to the environment, into out (S,): every shape."""
     for j in range(cap.shape[0]):
-        mx, my, reach = _capsule_reach(cap, j)
-        best = np.inf
-        for k in range(env.shape[0]):
-            # Broad phase: lower bounds of the pair's distance.
-            if _coarse_bound(mx, my, reach, env, k) >= best or _pair_bound(mx, my, reach, env, k) >= best:
-                continue
-            best = min(best, _pair(cap, j, env, k))
-        out[j] = best
+        out[j] = _capsule_best_plain(cap, j, env, np.inf)
 
 
 @njit(cache=True)
@@ -346,11 +357,7 @@ def _capsule_best(cap, j, env, grid, best, seen):
     seen[SEEN] = 0
     ix, iy, ok = _cell_of(grid, mx, my)
     if not ok or env.shape[0] < GRID_MIN_SHAPES:  # far off, NaN or a small room: every shape
-        for k in range(env.shape[0]):
-            if _coarse_bound(mx, my, reach, env, k) >= best or _pair_bound(mx, my, reach, env, k) >= best:
-                continue
-            best = min(best, _pair(cap, j, env, k))
-        return best
+        return _capsule_best_plain(cap, j, env, best)
     x0, y0, cell = grid.header[0], grid.header[1], grid.header[2]
     nx, ny = grid.dims[0], grid.dims[1]
     r0 = max(0, -ix, ix - (nx - 1), -iy, iy - (ny - 1))  # the first ring that meets the grid
@@ -402,12 +409,7 @@ def _clearance_plain(q, bodies, robot, env):
     cap = world_capsules(q, bodies, robot)
     best = np.inf
     for j in range(cap.shape[0]):
-        mx, my, reach = _capsule_reach(cap, j)
-        for k in range(env.shape[0]):
-            # Broad phase: lower bounds of the pair's distance.
-            if _coarse_bound(mx, my, reach, env, k) >= best or _pair_bound(mx, my, reach, env, k) >= best:
-                continue
-            best = min(best, _pair(cap, j, env, k))
+        best = _capsule_best_plain(cap, j, env, best)
     return best
 
 
@@ -629,23 +631,21 @@ def _keep_grid(env, grid, x, y, radius, span):
     n = 0
     for jj in range(j0, j1 + 1):
         n += grid.start[i1 + 1 + jj * nx] - grid.start[i0 + jj * nx] if i0 <= i1 else 0
-    found = np.empty(n, dtype=np.int64)
+    keep = np.empty(n, dtype=np.int64)
     n = 0
     for jj in range(j0, j1 + 1):
         for ii in range(i0, i1 + 1):
             c = ii + jj * nx
             for e in range(grid.start[c], grid.start[c + 1]):
-                found[n] = grid.items[e]
-                n += 1
-    found = np.sort(found)
-    keep = np.empty(n, dtype=np.int64)
+                k = grid.items[e]
+                if _near_motion(env, k, x, y, radius, span):
+                    keep[n] = k
+                    n += 1
+    keep[:n].sort()
     n_keep = 0
     for i in range(n):
-        k = found[i]
-        if i > 0 and k == found[i - 1]:
-            continue
-        if _near_motion(env, k, x, y, radius, span):
-            keep[n_keep] = k
+        if i == 0 or keep[i] != keep[i - 1]:
+            keep[n_keep] = keep[i]
             n_keep += 1
     return keep, n_keep
 

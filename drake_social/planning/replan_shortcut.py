@@ -43,17 +43,17 @@ def shortcut(judge, path: np.ndarray, t0: float, evaluation):
     keep, i, t = [0], 0, float(t0)
     ex_speed, arm_speed = judge.max_base_speed, judge.arm_max_velocity
     while i < n - 1:
-        ends = np.arange(min(n - 1, i + WINDOW), i + 1, -1)  # farthest first, i + 1 excluded (always there)
-        j = i + 1
-        if len(ends):
-            ok = np.asarray(judge.checker.are_motions_valid(np.repeat(wp[i][None], len(ends), axis=0), wp[ends]),
-                            bool)
-            durations = nominal_durations(np.repeat(wp[i][None], len(ends), axis=0), wp[ends], ex_speed, arm_speed)
-            for end, valid, duration in zip(ends, ok, durations):
-                if valid and judge.people_safety.motion_clear(wp[i], wp[end], t, t + float(duration)):
-                    j = int(end)
+        ends = np.arange(min(n - 1, i + WINDOW), i, -1)  # farthest first; i + 1, the path's own motion, last
+        starts = np.repeat(wp[i][None], len(ends), axis=0)
+        durations = nominal_durations(starts, wp[ends], ex_speed, arm_speed)
+        j, duration = i + 1, float(durations[-1])
+        if len(ends) > 1:
+            ok = np.asarray(judge.checker.are_motions_valid(starts[:-1], wp[ends[:-1]]), bool)
+            for end, valid, d in zip(ends[:-1], ok, durations[:-1]):
+                if valid and judge.people_safety.motion_clear(wp[i], wp[end], t, t + float(d)):
+                    j, duration = int(end), float(d)
                     break
-        t += float(nominal_durations(wp[i][None], wp[j][None], ex_speed, arm_speed)[0])
+        t += duration
         keep.append(j)
         i = j
     if len(keep) == n:

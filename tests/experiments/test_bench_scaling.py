@@ -60,3 +60,11 @@ def test_small_scaling_bench(tiny_scenario_path):
     assert ob["rows"][0]["time_ratio"] == 1.0 and len(ob["rows"][1]["times"]) == 2
     md = "\n".join(dut.markdown(out))
     assert "| tiny |" in md and "same trees" in md and "| tiny | 300 |" in md
+
+
+def test_kernel_times_compare_the_grid_with_every_shape(tiny_scenario):
+    far = dut.far_boxes_scenario(tiny_scenario, 200)
+    out = dut.kernel_times(make_checker(far, "planar"), count=200, repeats=1)
+    assert out["same"] is True
+    assert set(out) == {f"{n}_{k}" for n in ("clearance", "valid", "motion") for k in ("grid", "plain")} | {"same"}
+    assert all(v > 0 for k, v in out.items() if k != "same")

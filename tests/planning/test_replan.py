@@ -407,10 +407,11 @@ def test_committed_motion_starts_every_path(corridor, room, first):
     # The margin compares the whole paths from the robot (the committed motion's cost in both).
     whole = rp.evaluate(previous, 2.0, nobody(2.0)).cost
     assert kept.candidate_cost == pytest.approx(whole, rel=1e-9)
+    assert kept.searched  # a replan after the first searches (replan_index=1, no search yet)
     if kept.status == "new":
         assert kept.search_cost < 0.95 * kept.candidate_cost
     else:
-        assert kept.search_cost >= 0.95 * kept.candidate_cost
+        assert 0.95 * kept.candidate_cost <= kept.search_cost < np.inf
 
 
 def test_committed_motion_unsafe_holds(corridor, room, first):

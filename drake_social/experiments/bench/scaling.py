@@ -27,7 +27,9 @@ the compiled loop:
   and the median time of ``seeds`` K = ``obstacle_iterations`` plans (the
   counts alternating, ``obstacle_repeats`` times), their ratios to the first
   count, and whether every tree is the one of the first count (the
-  broadphase must change no answer).
+  broadphase must change no answer); with the planar checker also the
+  kernel's microseconds per clearance, validity and motion check, with its
+  grid and over every shape, and whether they answer alike (:func:`kernel_times`).
 
 Wall times are of the search in ``RrtStar.solve`` (with ``planner.optimize``
 the optimiser's time is ``optimize_time``); ratios are of medians in the same run.
@@ -46,12 +48,13 @@ from typing import Callable, Sequence
 import numpy as np
 
 from drake_social.collision.drake_checker import make_checker
+from drake_social.collision.validity import CompiledSceneChecker
 from drake_social.people import with_people
 from drake_social.planning.algorithms import make_planner, plan
 from drake_social.scenario import Box, Person, Scenario, load_scenario
 from drake_social.world import with_obstacles
 
-__all__ = ["far_boxes_scenario", "far_people_scenario", "fit_exponent", "run_scaling_bench"]
+__all__ = ["far_boxes_scenario", "far_people_scenario", "fit_exponent", "kernel_times", "run_scaling_bench"]
 
 
 def fit_exponent(ks: Sequence[int], times: Sequence[float]) -> float | None:
@@ -87,6 +90,44 @@ def far_boxes_scenario(scenario: Scenario, count: int, gap: float = 10.0) -> Sce
     return with_obstacles(scenario, extra)
 
 
+def kernel_times(checker, count: int = 2000, repeats: int = 3) -> dict:
+    """Microseconds per configuration (per motion) of the planar kernel's
+    clearance, validity and motion checks with the checker's grid and over
+    every shape (``*_plain``), the best of ``repeats``, on ``count`` seeded
+    configurations in the limits and motions to within 0.3 of them; and
+    whether the two give the same answers (``same``)."""
+    from drake_social.collision import planar_kernel as pk
+
+    lower, upper, bodies, robot, env, levers, grid = checker.compiled_scene()
+    rng = np.random.default_rng(0)
+    qa = rng.uniform(lower, upper, (count, 4))
+    qb = np.clip(qa + rng.uniform(-0.3, 0.3, (count, 4)), lower, upper)
+    calls = {
+        "clearance": (lambda: pk.clearances(qa, bodies, robot, env, grid),
+                      lambda: pk.clearances_plain(qa, bodies, robot, env)),
+        "valid": (lambda: pk.valid(qa, lower, upper, bodies, robot, env, grid),
+                  lambda: pk.valid_plain(qa, lower, upper, bodies, robot, env)),
+        "motion": (lambda: pk.motions_valid(qa, qb, lower, upper, bodies, robot, env, grid, levers),
+                   lambda: pk.motions_valid_plain(qa, qb, lower, upper, bodies, robot, env, grid, levers)),
+    }
+    out, same = {}, True
+    for name, (with_grid, plain) in calls.items():
+        answers = []
+        for label, fn in (("grid", with_grid), ("plain", plain)):
+            answers.append(fn())  # also the warm-up
+            best = min(_timed(fn) for _ in range(repeats))
+            out[f"{name}_{label}"] = 1e6 * best / count
+        same &= bool(np.array_equal(answers[0], answers[1]))
+    out["same"] = same
+    return out
+
+
+def _timed(fn) -> float:
+    t0 = time.perf_counter()
+    fn()
+    return time.perf_counter() - t0
+
+
 def _obstacle_scaling(scenario: Scenario, checker: str, algorithm: str, counts: Sequence[int], iterations: int,
                       seeds: int, repeats: int, tick: Callable[[str], None], label: str) -> dict:
     """The obstacle-count measurement of the module docstring."""
@@ -101,7 +142,8 @@ def _obstacle_scaling(scenario: Scenario, checker: str, algorithm: str, counts: 
         planners.append(make_planner(s, c, algorithm))
         planners[-1].solve(start, goal, np.random.default_rng(0))  # warm-up, untimed
         rows.append({"extra_boxes": int(n), "environment_shapes": int(len(getattr(c, "env", ()))),
-                     "construction_time": build, "times": []})
+                     "construction_time": build, "times": [],
+                     "kernel_us": kernel_times(c) if isinstance(c, CompiledSceneChecker) else None})
         tick(f"{label} {n} extra boxes: checker built in {build:.2f} s")
     same = True
     for _ in range(repeats):
@@ -233,6 +275,14 @@ def run_scaling_bench(
     return out
 
 
+def _us(row: dict, name: str) -> str:
+    """A row's kernel time ``grid / all shapes`` (and "differ" when the answers did), "n/a" without."""
+    k = row.get("kernel_us")
+    if not k:
+        return "n/a"
+    return f"{k[name + '_grid']:.3g} / {k[name + '_plain']:.3g}" + ("" if k["same"] else " (answers differ)")
+
+
 def markdown(out: dict) -> list[str]:
     """The scaling section of bench.md."""
     s = out["settings"]
@@ -269,7 +319,8 @@ def markdown(out: dict) -> list[str]:
                       f"{s['seeds']} seeds x {s.get('obstacle_repeats', 1)} K = {s.get('obstacle_iterations', 2000)} "
                       f"plans; ratios to the first row):", "",
                   "| scenario | extra boxes | shapes | construction s | plan s | plan ratio | construction ratio "
-                  "| same trees |", "|---|---:|---:|---:|---:|---:|---:|---|"]
+                  "| same trees | clearance us, grid / all shapes | motion us, grid / all shapes |",
+                  "|---|---:|---:|---:|---:|---:|---:|---|---:|---:|"]
         for name, e in out["scenarios"].items():
             if "obstacles" not in e:
                 continue
@@ -278,5 +329,6 @@ def markdown(out: dict) -> list[str]:
                 lines.append(f"| {Path(name).stem} | {row['extra_boxes']} | {row['environment_shapes']} "
                              f"| {row['construction_time']:.3g} | {fmt(row['median_time'], '.3g')} "
                              f"| {fmt(row['time_ratio'], '.3f')} | {row['construction_ratio']:.3g} "
-                             f"| {'yes' if o['same_trees'] else 'no'} |")
+                             f"| {'yes' if o['same_trees'] else 'no'} | {_us(row, 'clearance')} "
+                             f"| {_us(row, 'motion')} |")
     return lines

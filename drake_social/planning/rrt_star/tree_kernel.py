@@ -544,7 +544,7 @@ def grow(rng, it_start, it_stop, params, state):
                         g_best, g = tot, t
                 if g < 0 or goal_t[g] == tnode[goal_nodes[g]]:
                     break
-                goal_edges[g] = _goal_edge(goal_nodes[g], q, clear, tnode, goal_clear, counts, params)
+                goal_edges[g] = _goal_edge(goal_nodes[g], q, tnode, counts, params)
                 goal_t[g] = tnode[goal_nodes[g]]
             if g < 0:
                 best_cost, best_node = np.inf, -1
@@ -664,11 +664,10 @@ def _rewire_timed(i_new, m, near_idx, q_a, q_b, bound, checked, c_new_caps, q, p
 
 
 @njit(cache=True)
-def _goal_edge(i, q, clear, tnode, goal_clear, counts, params):
+def _goal_edge(i, q, tnode, counts, params):
     """The timed mode's goal connection of node i redone at ``tnode[i]``: its
     cost, or inf when the motion is not valid then (0 for a node at the goal)."""
     goal, tp = params.goal, params.timed
-    c_lower, c_upper, bodies, robot, env, levers, env_grid = params.scene
     if _d2(goal, q[i], params.weights) == 0.0:
         return 0.0
     a = np.empty((1, 4))
