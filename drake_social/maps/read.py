@@ -63,7 +63,7 @@ from pathlib import Path
 import numpy as np
 
 from drake_social.errors import ScenarioError
-from drake_social.io.textfile import SHOWN_PATH_CHARACTERS, describe_mode, read_text_file, shorten
+from drake_social.io.textfile import SHOWN_PATH_CHARACTERS, describe_mode, read_text_file, shorten, yaml_problem
 
 __all__ = ["FREE", "MAP_KEYS", "MAP_MODES", "MAX_MAP_CELLS", "MAX_MAP_IMAGE_BYTES", "MAX_MAP_YAML_BYTES", "OCCUPIED",
            "UNKNOWN", "OccupancyMap", "check_map_field", "classify", "map_values", "read_map"]
@@ -419,8 +419,8 @@ def _yaml_fields(text: str, source: str) -> dict:
         def compose_node(self, parent, index):
             event = self.peek_event()
             if isinstance(event, yaml.AliasEvent):
-                raise _fail(source, f"line {event.start_mark.line + 1}: an alias (*{event.anchor}); a map YAML "
-                                    "gives each value once")
+                raise _fail(source, f"line {event.start_mark.line + 1}, column {event.start_mark.column + 1}: an "
+                                    "alias; a map YAML gives each value once")
             if isinstance(event, (yaml.MappingStartEvent, yaml.SequenceStartEvent)):
                 self.depth += 1
                 if self.depth > _MAX_DEPTH:
@@ -439,6 +439,10 @@ def _yaml_fields(text: str, source: str) -> dict:
             raise _fail(source, f"empty; a map YAML is a mapping of {_allowed_keys()}")
         if not isinstance(root, yaml.MappingNode):
             raise _fail(source, f"line {root.start_mark.line + 1}: a map YAML is a mapping of {_allowed_keys()}")
+        if root.value and not any(isinstance(k, yaml.ScalarNode) and k.value in MAP_KEYS for k, _ in root.value):
+            # Not a map YAML (any file may be named as one): its keys are not repeated.
+            raise _fail(source, f"line {root.value[0][0].start_mark.line + 1}: not a map YAML: none of its "
+                                f"{len(root.value)} keys is one of {_allowed_keys()}")
         first_line = {}
         for key_node, _ in root.value:
             line = key_node.start_mark.line + 1
@@ -455,7 +459,7 @@ def _yaml_fields(text: str, source: str) -> dict:
             raise _fail(source, f"no {', '.join(missing)}; a map YAML needs {_allowed_keys()}")
         return loader.construct_document(root)
     except yaml.YAMLError as e:
-        raise _fail(source, f"not valid YAML: {shorten(str(e), 400)}") from None
+        raise _fail(source, f"not valid YAML: {yaml_problem(e, text)}") from None
     finally:
         if loader is not None:
             loader.dispose()
@@ -478,10 +482,13 @@ def _read_image(image_path: Path, named: str, source: str, **parameters) -> np.n
         raise _fail(source, f"image: {shown} has {st.st_size:,} bytes; a map image may have at most "
                             f"MAX_MAP_IMAGE_BYTES ({MAX_MAP_IMAGE_BYTES:,}) bytes")
     not_image = f"image: {shown} is not {_FORMATS} Pillow can read"
+    kind = "image"
     try:
         with open(image_path, "rb") as f:
             head = f.read(8)
             magic = head[:2]
+            kind = ("PNG" if head.startswith(b"\x89PNG") else "BMP" if magic == b"BM"
+                    else "PGM/PPM" if magic[:1] == b"P" else "image")
             f.seek(0)
             with warnings.catch_warnings():
                 # Pillow warns from 89 million pixels and refuses from 179
@@ -489,17 +496,17 @@ def _read_image(image_path: Path, named: str, source: str, **parameters) -> np.n
                 warnings.simplefilter("ignore", Image.DecompressionBombWarning)
                 try:
                     image = Image.open(f, formats=("PPM", "PNG", "BMP"))
-                except Image.UnidentifiedImageError:
-                    raise _fail(source, f"{not_image}: its content is none of them (it starts with {head!r})") \
-                        from None
+                except Image.UnidentifiedImageError:  # its bytes are not repeated: it may be any file
+                    raise _fail(source, f"{not_image}: its content is none of them") from None
                 except Image.DecompressionBombError as e:
                     count = re.search(r"\((\d+) pixels\)", str(e))
                     pixels = f"{int(count.group(1)):,} pixels" if count else "more pixels than Pillow opens"
                     raise _fail(source, f"image: {shown} has {pixels} (from its header); a map may have at most "
                                         f"MAX_MAP_CELLS ({MAX_MAP_CELLS:,}) cells") from None
             with image:
-                if image.format == "PPM" and magic not in (b"P2", b"P5"):
-                    raise _fail(source, f"{not_image}: a PPM/PBM file (magic {magic!r}), not a PGM (P2 or P5)")
+                if image.format == "PPM" and magic not in (b"P2", b"P5"):  # magic: one of Pillow's PPM kinds
+                    raise _fail(source, f"{not_image}: a PPM/PBM file (magic {magic.decode('latin-1')}), not a PGM "
+                                        "(P2 or P5)")
                 w, h = image.size
                 if w * h > MAX_MAP_CELLS:
                     raise _fail(source, f"image: {shown} is {w} x {h} pixels = {w * h:,} cells; a map may have at "
@@ -510,8 +517,10 @@ def _read_image(image_path: Path, named: str, source: str, **parameters) -> np.n
     except ScenarioError:
         raise
     except (OSError, ValueError, SyntaxError, EOFError, IndexError, TypeError) as e:
-        # Pillow's ways of saying a file is not an image it reads, or is truncated or corrupt.
-        raise _fail(source, f"{not_image}: {shorten(str(e) or type(e).__name__, 200)}") from None
+        # Pillow's ways of saying a file is not an image it reads, or is truncated or corrupt. Its
+        # message is not repeated: some quote the file's bytes (an ASCII PGM's tokens).
+        damage = "truncated" if isinstance(e, EOFError) or "truncated" in str(e) else "corrupt or unsupported"
+        raise _fail(source, f"{not_image}: its {kind} data is {damage} ({type(e).__name__})") from None
     values = map_values(sums, channels, alpha, **parameters)
     return np.ascontiguousarray(values[::-1])  # the image's top row is the grid's last row
 

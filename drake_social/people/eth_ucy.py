@@ -129,10 +129,10 @@ def parse_eth_ucy(text: str, source: str, layout: str = "xy") -> Recording:
         for k, field in enumerate(fields):
             try:
                 value = float(field)
-            except ValueError:
-                raise ScenarioError(f"{where}, column {k + 1}: {field[:40]!r} is not a number") from None
+            except ValueError:  # the field is not repeated: any file may be named (io.textfile)
+                raise ScenarioError(f"{where}, column {k + 1}: not a number; a recording has numbers only") from None
             if not math.isfinite(value):
-                raise ScenarioError(f"{where}, column {k + 1}: {field[:40]!r}; values must be finite numbers")
+                raise ScenarioError(f"{where}, column {k + 1}: {value} is not finite; values must be finite numbers")
             values.append(value)
         frame, person = values[0], _id_text(values[1])
         if frame < 0:

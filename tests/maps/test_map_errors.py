@@ -175,7 +175,7 @@ def test_a_repeated_key(folder):
     ("", "empty; a map YAML is a mapping of"),
     ("- image: m.pgm\n", "line 1: a map YAML is a mapping of"),
     ("image: [m.pgm\n", "not valid YAML: "),
-    ("image: m.pgm\nresolution: &r 0.05\norigin: [*r, 0, 0]\n", "line 3: an alias (*r)"),
+    ("image: m.pgm\nresolution: &r 0.05\norigin: [*r, 0, 0]\n", "line 3, column 10: an alias; a map YAML gives each value once"),
     ("origin: [[0], 0, 0]\n", "line 1: nested too deeply"),
     ("image: !!python/name:os.system m\n" + "".join(f"{k}: {v}\n" for k, v in GOOD.items() if k != "image"),
      "not valid YAML: "),

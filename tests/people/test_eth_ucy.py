@@ -87,8 +87,8 @@ def test_csv_text_exact_numbers_and_optional_theta():
     ("\n  \n", "no rows"),
     ("0 1 2.0 3.0\n10 1 2.0\n", "line 2: 3 columns"),
     ("0 1 2.0 3.0\n10 1 2.0 3.0 0.1 0.1\n", "line 2: 6 columns, the rows before have 4"),
-    ("0 1 2.0 3.0\n10 1 2.0 abc\n", "line 2, column 4: 'abc' is not a number"),
-    ("0 1 2.0 nan\n", "line 1, column 4: 'nan'; values must be finite"),
+    ("0 1 2.0 3.0\n10 1 2.0 abc\n", "line 2, column 4: not a number; a recording has numbers only"),
+    ("0 1 2.0 nan\n", "line 1, column 4: nan is not finite; values must be finite"),
     ("0 1 2.0 3.0\n10 2 2.0 3.0\n0 1 1.0 3.0\n", "line 3: frame 0 of id 1 does not come after its frame 0 on line 1"),
     ("10 1 2.0 3.0\n10 1 2.5 3.0\n", "line 2: frame 10 of id 1 does not come after"),
     ("-10 1 2.0 3.0\n", "frame -10 is negative"),
@@ -139,7 +139,7 @@ def test_cli_end_to_end(tmp_path, capsys):
     bad.write_text("0 1 2.0 3.0\n10 1 x 3.0\n")
     assert main(["people", "import", str(bad), "--out", str(out)]) == 2
     err = capsys.readouterr().err
-    assert "bad.txt, line 2, column 3: 'x' is not a number" in err
+    assert "bad.txt, line 2, column 3: not a number" in err
     assert out.read_text() == before
     assert main(["people", "import", str(tmp_path / "missing.txt"), "--out", str(out)]) == 2
     assert "no such recording file" in capsys.readouterr().err
