@@ -38,8 +38,8 @@ from pathlib import Path
 from drake_social.errors import ScenarioError
 from drake_social.limits import MAX_WAYPOINTS
 
-__all__ = ["MAX_PATH_FILE_BYTES", "MAX_YAML_FILE_BYTES", "check_regular_file", "read_text_file", "read_yaml_file",
-           "describe_mode", "replace_file", "shorten", "yaml_problem"]
+__all__ = ["MAX_PATH_FILE_BYTES", "MAX_YAML_FILE_BYTES", "check_out_file", "check_regular_file", "read_text_file",
+           "read_yaml_file", "describe_mode", "replace_file", "shorten", "yaml_problem"]
 
 #: Bytes allowed per row of a path CSV: four numbers of 17 significant digits
 #: with exponent and sign take at most 4 x 24 + 3 commas + CRLF = 101 bytes;
@@ -245,17 +245,59 @@ def read_yaml_file(path: str | Path, what: str, option: str | None = None) -> st
     return read_text_file(path, what, option, limit=MAX_YAML_FILE_BYTES)
 
 
-def replace_file(path: str | Path, write) -> Path:
+def check_out_file(path: str | Path, option: str | None = None) -> None:
+    """Refuses a file name to write where something other than a regular file
+    stands (a directory, a FIFO, a device, a socket, or a link to one): the
+    atomic rename of :func:`replace_file` would put a regular file in its
+    place. A new name, or an existing regular file (replaced), is accepted.
+
+    Args:
+        path: the file to write.
+        option: the command-line option that named it (``--out``), or None.
+
+    Raises:
+        ScenarioError: ``<path>: --out: must name a regular file (it is
+            replaced) or a new file, got a FIFO``.
+    """
+    if str(path) == "":
+        raise ScenarioError(f"{repr('')}: {option or 'the file to write'}: must name a file, got an empty name")
+    where = f"{shorten(str(path), SHOWN_PATH_CHARACTERS)}: {option + ': ' if option else ''}"
+    try:
+        mode = os.stat(path).st_mode
+    except (FileNotFoundError, NotADirectoryError):
+        return  # a new file (a missing or blocked folder is the writer's error)
+    except OSError as e:
+        raise ScenarioError(f"{where}cannot be used ({e.strerror or e})") from None
+    except ValueError as e:  # a NUL in the name
+        raise ScenarioError(f"{where}not a valid file name ({e})") from None
+    if not stat.S_ISREG(mode):
+        raise ScenarioError(f"{where}must name a regular file (it is replaced) or a new file, got {_kind(mode)}")
+
+
+def replace_file(path: str | Path, write, option: str | None = None) -> Path:
     """Writes ``path`` atomically: ``write(f)`` fills a new temporary file
     (binary) beside it, which is flushed to disk and renamed over ``path``,
     so a reader sees the old file or the whole new one; on any error or
     interrupt the temporary file is removed. It is created with mode 0o666
     less the umask, as ``open`` would create ``path``.
 
+    ``path`` is checked with :func:`check_out_file` before the temporary
+    file is made and again just before the rename: a directory, FIFO or
+    device there is never replaced.
+
+    Args:
+        path: the file to write.
+        write: fills the open binary file.
+        option: the command-line option that named ``path``, for messages.
+
     Returns:
         ``path``.
+
+    Raises:
+        ScenarioError: ``path`` names something other than a regular file.
     """
     path = Path(path)
+    check_out_file(path, option)
     temporary = path.with_name(f".{path.name}.{secrets.token_hex(6)}.tmp")
     fd = os.open(temporary, os.O_WRONLY | os.O_CREAT | os.O_EXCL | getattr(os, "O_CLOEXEC", 0), 0o666)
     try:
@@ -263,6 +305,7 @@ def replace_file(path: str | Path, write) -> Path:
             write(f)
             f.flush()
             os.fsync(f.fileno())
+        check_out_file(path, option)
         os.replace(temporary, path)
     except BaseException:
         temporary.unlink(missing_ok=True)
