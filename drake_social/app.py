@@ -473,6 +473,10 @@ def run_bench(*, scenario_paths: Sequence[str | Path], out: str | Path, progress
     """
     for path in scenario_paths:
         check_regular_file(path, "scenario", "--scenarios")
+    if options.get("replan_runs", 0) > 0 and options.get("replan_scenario") is None:
+        from drake_social.experiments.bench.replanning import REPLAN_SCENARIO
+
+        check_regular_file(REPLAN_SCENARIO, "scenario", "--replan-runs")  # shipped: absent from a wheel install
     from drake_social.experiments.bench.planners import run_bench as bench
     from drake_social.io.outputs import OutputSet
 
