@@ -460,7 +460,8 @@ def run_bench(*, scenario_paths: Sequence[str | Path], out: str | Path, progress
     and writes ``out/bench.json`` and ``out/bench.md`` as one output set.
 
     Args:
-        scenario_paths: scenario YAML files (each checked to be a regular file first).
+        scenario_paths: scenario YAML files (each checked to be a regular file
+            first; ``map_bench`` compares the floor with the first).
         out: the output folder.
         progress: optional :data:`Progress` over the runs.
         **options: the other keyword arguments of the bench's ``run_bench``
