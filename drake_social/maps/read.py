@@ -42,8 +42,16 @@ image that is not PGM (P2/P5), PNG or BMP, has 16-bit or floating-point
 pixels, or has more than :data:`MAX_MAP_CELLS` pixels (checked from the
 header, before the pixels are decoded); a YAML file over
 :data:`MAX_MAP_YAML_BYTES`, with aliases, repeated keys or nesting.
-Quoted numbers (``resolution: "0.05"``) are refused: a number must be
-written as one.
+Numbers are read as map_server reads them (yaml-cpp converting the text
+with a C++ stream): a decimal with an exponent (``resolution: 5e-2``,
+``origin: [0, 0, 1e300]``) is a number, as it is in a scenario, although
+YAML 1.1 (PyYAML) would read it as text; a value beyond the floats
+(``1e400``) is refused as not finite, as map_server refuses it. Quoted
+numbers (``resolution: "0.05"``) are refused: a number must be written as
+one. A value may be finite and still put the map beyond the floats (a
+resolution of ``1e307`` m, an origin of ``1e308`` m): the map's size and
+corners must be finite too. Any finite yaw turns the map (``1e300`` rad by
+``cos(1e300)``, ``sin(1e300)``).
 
 The values are computed as map_server does, in float64 from the channels'
 sum (a table over the possible sums, so a 25-million-pixel image costs its
@@ -87,6 +95,10 @@ MAX_MAP_IMAGE_BYTES = 128 * 1024 * 1024
 MAX_MAP_YAML_BYTES = 64 * 1024
 #: Deepest YAML nesting accepted: the document's mapping and ``origin``'s list.
 _MAX_DEPTH = 2
+#: A decimal number with an exponent, as a C++ stream reads a double
+#: (yaml-cpp's ``as<double>``): the forms YAML 1.1 leaves as text (it needs
+#: a point and a signed exponent) that map_server reads as numbers.
+_EXPONENT_NUMBER = re.compile(r"^[-+]?(?:[0-9]+\.?[0-9]*|\.[0-9]+)[eE][-+]?[0-9]+$")
 _FORMATS = "a PGM, PNG or BMP image"
 
 
@@ -403,9 +415,25 @@ def read_map(path: str | Path, *, source: str | None = None) -> OccupancyMap:
     classes = classify(grid)
     grid.flags.writeable = False
     classes.flags.writeable = False
-    return OccupancyMap(path=yaml_path, image_path=image_path, resolution=values["resolution"],
-                        origin=values["origin"], negate=values["negate"], occupied_thresh=values["occupied_thresh"],
-                        free_thresh=values["free_thresh"], mode=mode, values=grid, classes=classes)
+    out = OccupancyMap(path=yaml_path, image_path=image_path, resolution=values["resolution"],
+                       origin=values["origin"], negate=values["negate"], occupied_thresh=values["occupied_thresh"],
+                       free_thresh=values["free_thresh"], mode=mode, values=grid, classes=classes)
+    _check_extent(out, source)
+    return out
+
+
+def _check_extent(grid: OccupancyMap, source: str) -> None:
+    """Refuses a map whose size or corners are beyond the floats, though each value is finite."""
+    h, w = grid.shape
+    with np.errstate(over="ignore", invalid="ignore"):
+        size = (grid.width_m, grid.height_m)
+        corners = grid.corners()
+    if not all(math.isfinite(v) for v in size):
+        raise _fail(source, f"resolution: {grid.resolution!r} m per cell makes the map's {w} x {h} cells "
+                            f"{size[0]:g} x {size[1]:g} m; the map's size must be finite")
+    if not np.isfinite(corners).all():
+        raise _fail(source, f"origin: {list(grid.origin)!r} puts the map's corners beyond the floats; they must be "
+                            "finite")
 
 
 def _yaml_fields(text: str, source: str) -> dict:
@@ -431,6 +459,8 @@ def _yaml_fields(text: str, source: str) -> dict:
                 self.depth -= 1
             return node
 
+    # A plain scalar in exponent form is a float (a quoted one stays text).
+    Loader.add_implicit_resolver("tag:yaml.org,2002:float", _EXPONENT_NUMBER, list("-+0123456789."))
     loader = None
     try:
         loader = Loader(text)  # its reader refuses control characters and NULs at once
