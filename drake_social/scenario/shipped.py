@@ -19,5 +19,6 @@ SHIPPED_SCENARIOS = Path(__file__).resolve().parents[2] / "scenarios"
 
 
 def shipped_scenario(name: str) -> Path:
-    """The shipped scenario file ``name`` (e.g. ``"office_bar.yaml"``): an absolute path, whatever the working folder."""
+    """The shipped scenario file ``name`` (e.g. ``"office_bar.yaml"``): an
+    absolute path, whatever the working folder."""
     return SHIPPED_SCENARIOS / name
