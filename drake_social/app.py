@@ -460,7 +460,8 @@ def run_bench(*, scenario_paths: Sequence[str | Path], out: str | Path, progress
     and writes ``out/bench.json`` and ``out/bench.md`` as one output set.
 
     Args:
-        scenario_paths: scenario YAML files (each checked to be a regular file first).
+        scenario_paths: scenario YAML files (each checked to be a regular file
+            first; ``map_bench`` compares the floor with the first).
         out: the output folder.
         progress: optional :data:`Progress` over the runs.
         **options: the other keyword arguments of the bench's ``run_bench``
@@ -473,6 +474,10 @@ def run_bench(*, scenario_paths: Sequence[str | Path], out: str | Path, progress
     """
     for path in scenario_paths:
         check_regular_file(path, "scenario", "--scenarios")
+    if options.get("replan_runs", 0) > 0 and options.get("replan_scenario") is None:
+        from drake_social.experiments.bench.replanning import REPLAN_SCENARIO
+
+        check_regular_file(REPLAN_SCENARIO, "scenario", "--replan-runs")  # shipped: absent from a wheel install
     from drake_social.experiments.bench.planners import run_bench as bench
     from drake_social.io.outputs import OutputSet
 
@@ -634,19 +639,21 @@ def run_people_import(*, file: str | Path, out: str | Path, layout: str = "xy", 
 
     Raises:
         ScenarioError: the recording or an option is invalid (the message
-            names the file and the line).
+            names the file and the line), or ``out`` exists and is not a
+            regular file (a directory, FIFO, device: never replaced).
         OSError: ``out`` could not be written.
     """
-    from drake_social.io.textfile import read_text_file, replace_file
+    from drake_social.io.textfile import check_out_file, read_text_file, replace_file
     from drake_social.people import eth_ucy
 
+    check_out_file(out, "--out")  # before any work: a directory, FIFO or device there is not replaced
     text = read_text_file(file, "recording", limit=eth_ucy.MAX_RECORDING_BYTES)
     recording = eth_ucy.parse_eth_ucy(text, str(file), layout)
     rows = eth_ucy.convert(recording, fps=fps, offset=offset, rotate=rotate, start=start, end=end, ids=ids)
     data = eth_ucy.people_csv_text(rows, theta=theta).encode()
     out = Path(out)
     out.parent.mkdir(parents=True, exist_ok=True)
-    replace_file(out, lambda f: f.write(data))
+    replace_file(out, lambda f: f.write(data), "--out")
     first, last = rows[0][0], rows[-1][0]  # the rows are sorted by time
     return PeopleImport(out, len(rows), len({r[1] for r in rows}), last - first, first, last)
 

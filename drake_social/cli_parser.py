@@ -13,6 +13,7 @@ from typing import Callable
 from drake_social import __version__
 from drake_social.io.textfile import shorten
 from drake_social.scenario import ALGORITHMS, CHECKERS
+from drake_social.scenario.shipped import SHIPPED_SCENARIOS, shipped_scenario
 
 __all__ = ["MAX_BENCH_REPEATS", "MAX_BENCH_SEEDS", "MAX_WORKERS", "build_parser"]
 
@@ -151,8 +152,8 @@ def _add_simulate(subparsers) -> None:
     _add_output_arguments(p)
 
 
-#: Scenarios of ``drake-social bench`` (relative to the working directory: the repository).
-BENCH_SCENARIOS = ("scenarios/office_bar.yaml", "scenarios/generic_L.yaml")
+#: Scenarios of ``drake-social bench``: shipped files, found beside the package whatever the working folder.
+BENCH_SCENARIOS = ("office_bar.yaml", "generic_L.yaml")
 
 
 def _add_bench(subparsers) -> None:
@@ -163,8 +164,10 @@ def _add_bench(subparsers) -> None:
         "of wall time and final social cost; with the ompl package importable, also OMPL's RRTstar on "
         "the same problem (same checks, same cost). Writes JSON and a Markdown table into DIR.",
     )
-    p.add_argument("--scenarios", nargs="+", type=Path, metavar="YAML", default=[Path(s) for s in BENCH_SCENARIOS],
-                   help=f"scenario files (default: {' '.join(BENCH_SCENARIOS)})")
+    p.add_argument("--scenarios", nargs="+", type=Path, metavar="YAML",
+                   default=[shipped_scenario(s) for s in BENCH_SCENARIOS],
+                   help=f"scenario files; --map compares its floor with the first (default: the shipped "
+                        f"{' '.join(BENCH_SCENARIOS)} in {SHIPPED_SCENARIOS})")
     p.add_argument("--algorithms", nargs="+", choices=ALGORITHMS, default=list(ALGORITHMS), metavar="A",
                    help=f"planners (default: all of {', '.join(ALGORITHMS)})")
     p.add_argument("--iterations", type=_positive_int, default=2000, metavar="K", help="samples per run (default 2000)")
@@ -188,12 +191,12 @@ def _add_bench(subparsers) -> None:
                         "with the shrinking radius and the fitted exponent of time ~ K^b, K = 2000 with "
                         "planner.optimize against the median of three K = 50,000 runs, and 50 people far away")
     p.add_argument("--replan-runs", type=_nonnegative_int, default=0, metavar="N",
-                   help="also the replanning benchmark on scenarios/office_walkers.yaml: replan times over a "
+                   help="also the replanning benchmark on the shipped office_walkers.yaml: replan times over a "
                         "kinematic rollout (--replan-count replans) and the realtime factor of N simulated "
                         "kinematic runs with 10 Hz replanning (default 0: left out)")
     p.add_argument("--map", dest="map_bench", action="store_true",
                    help="also the building-map benchmark: a generated 30 x 50 m floor at 0.03 m (ragged walls, "
-                        "thousands of boxes): loading, the checker, K plans against scenarios/office_bar.yaml, "
+                        "thousands of boxes): loading, the checker, K plans against the first --scenarios file, "
                         "and the replay of the executed path")
     p.add_argument("--replan-count", type=_positive_int, default=200, metavar="R",
                    help="replans of the replanning benchmark's rollout (default 200)")

@@ -25,7 +25,7 @@ from typing import Sequence
 import numpy as np
 
 from drake_social.errors import ScenarioError
-from drake_social.io.textfile import replace_file
+from drake_social.io.textfile import check_out_file, replace_file
 from drake_social.maps import FREE, OCCUPIED, UNKNOWN, map_boxes, read_map
 from drake_social.scenario import MAP_UNKNOWN, load_scenario_text
 
@@ -183,12 +183,14 @@ def write_map_scenario(map_path: str | Path, out: str | Path, start: Sequence[fl
         ScenarioError: the map, ``start``, ``goal`` or ``unknown`` is
             invalid (a base position in an occupied or unknown cell, out of
             the map, ...): the message names the option and the map; or
-            ``out`` exists and ``force`` is not set.
+            ``out`` exists and ``force`` is not set, or is not a regular
+            file (a directory, FIFO, device: never replaced).
         OSError: ``out`` could not be written.
     """
     out = Path(out)
     if out.suffix not in (".yaml", ".yml"):
         raise ScenarioError(f"--out: the scenario file must end in .yaml or .yml, got {out}")
+    check_out_file(out, "--out")  # a directory, FIFO or device there is never replaced, even with --force
     if out.exists() and not force:
         raise ScenarioError(f"--out: {out} exists; pass --force to replace it")
     for name, xy in (("--start", start), ("--goal", goal), ("--arm", arm)):
@@ -215,4 +217,4 @@ def write_map_scenario(map_path: str | Path, out: str | Path, start: Sequence[fl
             message += " (move it, or turn the bar with --arm PSI1 PSI2)"
         raise ScenarioError(message) from None
     folder.mkdir(parents=True, exist_ok=True)
-    return replace_file(out, lambda f: f.write(text.encode("utf-8")))
+    return replace_file(out, lambda f: f.write(text.encode("utf-8")), "--out")

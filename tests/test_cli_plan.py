@@ -222,7 +222,7 @@ def test_bench_parses_and_calls_run_bench_with_keywords(tmp_path, monkeypatch, c
                           progress=None)]
     assert (tmp_path / "bench.md").read_text() == "| table |\n" and "| table |" in capsys.readouterr().out
     defaults = build_parser().parse_args(["bench"])
-    assert [str(p) for p in defaults.scenarios] == ["scenarios/office_bar.yaml", "scenarios/generic_L.yaml"]
+    assert defaults.scenarios == [SCENARIO_DIR / "office_bar.yaml", SCENARIO_DIR / "generic_L.yaml"]
     assert defaults.algorithms == list(ALGORITHMS) and defaults.iterations == 2000 and defaults.seeds == 10
     assert defaults.checker == "planar" and defaults.ompl_checker == "drake" and defaults.scaling is False
     assert defaults.no_ompl is False and defaults.out == Path("out/bench") and defaults.repeats == 1

@@ -315,13 +315,13 @@ def test_a_control_character_or_nul_is_refused_in_a_file_and_a_set(tmp_path, cap
     if char != "\udcff":
         dut.write_text(f"description: a{char}b\n")
         assert main(["show", str(dut), "--out", str(tmp_path / "o")]) == 2
-        assert capsys.readouterr().err == (f"drake-social: error: {dut}: not valid YAML: unacceptable character "
-                                           f"{code}: special characters are not allowed\n  in \"<unicode string>\", "
-                                           f"position 14\n")
+        assert capsys.readouterr().err == (f"drake-social: error: {dut}: not valid YAML: line 1, column 15: "
+                                           f"unacceptable character {code}: special characters are not allowed\n")
     # a --set as the shell passes it (an invalid byte arrives as a lone surrogate)
     assert main(["show", str(TINY), "--set", f"description: {char}", "--out", str(tmp_path / "o")]) == 2
     err = capsys.readouterr().err
-    assert err.startswith(f"drake-social: error: {TINY} (--set ") and f"not valid YAML: unacceptable character {code}" in err
+    assert err.startswith(f"drake-social: error: {TINY} (--set ")
+    assert f"not valid YAML: line 1, column 14: unacceptable character {code}" in err
     assert "Traceback" not in err
 
 
@@ -332,8 +332,8 @@ def test_a_sparse_file_of_nuls_at_the_size_limit_is_refused(tmp_path, capsys):
     with open(dut, "wb") as f:
         f.truncate(MAX_YAML_FILE_BYTES)
     assert main(["show", str(dut), "--out", str(tmp_path / "o")]) == 2
-    assert capsys.readouterr().err.startswith(f"drake-social: error: {dut}: not valid YAML: unacceptable character "
-                                              f"#x0000")
+    assert capsys.readouterr().err == (f"drake-social: error: {dut}: not valid YAML: line 1, column 1: unacceptable "
+                                       f"character #x0000: special characters are not allowed\n")
 
 
 @pytest.mark.parametrize("override, message", [
@@ -418,7 +418,7 @@ def test_a_long_path_line_is_cut_short(tmp_path, tiny_scenario, capsys):
     dut.write_text("x" * 1_000_000 + "\n")
     with pytest.raises(ScenarioError) as info:
         read_path_csv(dut, tiny_scenario)
-    _short(str(info.value), 1_000_002)
+    assert len(str(info.value)) < 700 and "xx" not in str(info.value)  # a line that is not the header: not repeated
     assert str(info.value).endswith(" (--path)")
     dut.write_text("x,y,psi1,psi2\n" + "1," * 100_000 + "\n")
     with pytest.raises(ScenarioError) as info:
@@ -462,7 +462,8 @@ def test_a_byte_order_mark_is_skipped_and_the_header_error_names_the_option(tmp_
     dut.write_text("x;y;psi1;psi2\n")
     with pytest.raises(ScenarioError) as info:
         read_path_csv(dut, tiny_scenario)
-    assert str(info.value) == f"{dut}: line 1: the header must be 'x,y,psi1,psi2', got 'x;y;psi1;psi2' (--path)"
+    assert str(info.value) == (f"{dut}: line 1: the header must be 'x,y,psi1,psi2' (as plan writes it); this is not "
+                               f"a path CSV (--path)")
 
 
 def test_an_alias_error_names_the_aliass_line():

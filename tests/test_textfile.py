@@ -13,6 +13,7 @@ import socket
 import stat
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from drake_social.cli import main
@@ -202,3 +203,87 @@ def _umask() -> int:
     mask = os.umask(0)
     os.umask(mask)
     return mask
+
+
+# ---- a single file written is never put in place of a directory, FIFO or device (issue 29, item 10)
+
+
+def _in_the_way(tmp_path, kind: str):
+    """A ``kind`` ("directory", "fifo", "device", "link to fifo") at ``tmp_path / "out.yaml"``, and its description."""
+    import os
+    import stat
+
+    path = tmp_path / "out.yaml"
+    if kind == "directory":
+        path.mkdir()
+        return path, "a directory", stat.S_ISDIR
+    if kind == "device":
+        try:
+            os.mknod(path, 0o600 | stat.S_IFCHR, os.makedev(1, 3))  # /dev/null's numbers, in the test's folder
+        except PermissionError:
+            pytest.skip("making a device node needs privileges")
+        return path, "a character device", stat.S_ISCHR
+    fifo = tmp_path / "fifo" if kind == "link to fifo" else path
+    os.mkfifo(fifo)
+    if kind == "link to fifo":
+        path.symlink_to(fifo)
+    return path, "a FIFO", stat.S_ISFIFO
+
+
+NOT_REGULAR = ["directory", "fifo", "device", "link to fifo"]
+
+
+@pytest.mark.parametrize("kind", NOT_REGULAR)
+def test_replace_file_refuses_what_is_not_a_regular_file(tmp_path, kind):
+    import os
+
+    from drake_social.io.textfile import replace_file
+
+    dut, what, is_kind = _in_the_way(tmp_path, kind)
+    before = sorted(os.listdir(tmp_path))
+    written = []
+    with pytest.raises(ScenarioError) as info:
+        replace_file(dut, written.append, "--out")
+    assert str(info.value) == f"{dut}: --out: must name a regular file (it is replaced) or a new file, got {what}"
+    assert written == [] and is_kind(os.stat(dut).st_mode) and sorted(os.listdir(tmp_path)) == before
+
+
+def test_replace_file_refuses_a_fifo_put_in_place_while_it_writes(tmp_path):
+    import os
+    import stat
+
+    from drake_social.io.textfile import replace_file
+
+    dut = tmp_path / "a.csv"
+
+    def swap(f):
+        f.write(b"new")
+        os.mkfifo(dut)
+
+    with pytest.raises(ScenarioError, match="got a FIFO$"):
+        replace_file(dut, swap)
+    assert stat.S_ISFIFO(os.stat(dut).st_mode) and sorted(os.listdir(tmp_path)) == ["a.csv"]
+
+
+@pytest.mark.parametrize("kind", NOT_REGULAR)
+def test_people_import_and_map_scenario_refuse_an_out_that_is_not_a_regular_file(tmp_path, capsys, kind):
+    import os
+
+    from drake_social.cli import main
+    from drake_social.maps import write_map
+
+    dut, what, is_kind = _in_the_way(tmp_path, kind)
+    recording = tmp_path / "rec.txt"
+    recording.write_text("0 1 1.0 1.0\n10 1 2.0 1.0\n")
+    grid = np.full((20, 20), 254, np.uint8)  # all free
+    (tmp_path / "map").mkdir()
+    room = write_map(tmp_path / "map", "room", grid, 0.5, (0.0, 0.0, 0.0))
+    before = sorted(os.listdir(tmp_path))
+    for argv in (["people", "import", str(recording), "--out", str(dut)],
+                 ["map", "scenario", str(room), "--start", "2", "5", "--goal", "8", "5", "--out", str(dut)],
+                 ["map", "scenario", str(room), "--start", "2", "5", "--goal", "8", "5", "--out", str(dut), "--force"]):
+        assert main(argv) == 2, argv
+        err = capsys.readouterr().err
+        assert err == (f"drake-social: error: {dut}: --out: must name a regular file (it is replaced) or a new file, "
+                       f"got {what}\n"), argv
+        assert is_kind(os.stat(dut).st_mode) and sorted(os.listdir(tmp_path)) == before

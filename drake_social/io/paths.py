@@ -132,9 +132,9 @@ def parse_path_csv(path: str | Path, option: str = "--path") -> tuple[np.ndarray
     path = Path(path)
     text = read_text_file(path, "path", option, limit=MAX_PATH_FILE_BYTES).removeprefix("\ufeff")
     lines = [line.removesuffix("\r") for line in text.split("\n")]
-    if lines[0].replace(" ", "") != PATH_HEADER:
-        raise ScenarioError(f"{path}: line 1: the header must be '{PATH_HEADER}', got {shorten(repr(lines[0]))} "
-                            f"({option})")
+    if lines[0].replace(" ", "") != PATH_HEADER:  # not repeated: any file may be named (io.textfile)
+        raise ScenarioError(f"{path}: line 1: the header must be '{PATH_HEADER}' (as plan writes it); this is not "
+                            f"a path CSV ({option})")
     rows = []
     numbers = []  # the file line of each row
     for i, line in enumerate(lines[1:], start=2):

@@ -15,11 +15,22 @@ through :func:`read_text_file`, so all of them are refused the same way:
 Errors are :class:`~drake_social.errors.ScenarioError` (invalid input: the
 command line prints it and exits 2), naming the file and, when given, the
 option that named it (``--path``).
+
+A file may be named by another file (a scenario's ``world.map`` and
+``people_file``, a map's ``image``, a sweep's ``scenarios``), so the file
+read may be any file the process can read (a password file, a key). The
+readers therefore never repeat a file's text until it has shown to be of
+its kind (a YAML mapping with one of the schema's keys at its top, a CSV
+whose first line names the columns, an image Pillow decodes): before that
+an error names the file, the line and what the file is not, and describes
+what it found (``a list``, ``text``) without quoting it. :func:`yaml_problem`
+is PyYAML's error in that form.
 """
 
 from __future__ import annotations
 
 import os
+import re
 import secrets
 import stat
 from pathlib import Path
@@ -27,8 +38,8 @@ from pathlib import Path
 from drake_social.errors import ScenarioError
 from drake_social.limits import MAX_WAYPOINTS
 
-__all__ = ["MAX_PATH_FILE_BYTES", "MAX_YAML_FILE_BYTES", "check_regular_file", "read_text_file", "read_yaml_file",
-           "describe_mode", "replace_file", "shorten"]
+__all__ = ["MAX_PATH_FILE_BYTES", "MAX_YAML_FILE_BYTES", "check_out_file", "check_regular_file", "read_text_file",
+           "read_yaml_file", "describe_mode", "replace_file", "shorten", "yaml_problem"]
 
 #: Bytes allowed per row of a path CSV: four numbers of 17 significant digits
 #: with exponent and sign take at most 4 x 24 + 3 commas + CRLF = 101 bytes;
@@ -72,6 +83,53 @@ def shorten(text: str, limit: int = SHOWN_CHARACTERS) -> str:
     if len(text) <= limit:
         return text
     return f"{text[:limit]}... ({len(text):,} characters)"
+
+
+#: The names PyYAML's messages quote from the text (an anchor, an alias, a
+#: tag or tag handle), a quoted string after the word that introduces it.
+_YAML_QUOTED_NAME = re.compile(r"""\b(tag handle|alias|anchor|the tag) (?:'(?:[^'\\]|\\.)*'|"(?:[^"\\]|\\.)*")""")
+
+
+def yaml_problem(error, text: str) -> str:
+    """PyYAML's error as one line that quotes none of the text: ``line <n>,
+    column <c>: <problem> (<context> at line <n>, column <c>)``.
+
+    PyYAML's own message adds the lines at fault (an excerpt of the text) and
+    quotes the names of anchors, aliases and tags; both are left out (the
+    text may be any file's, see the module docstring). The single characters
+    it quotes (``found character '\\t'``) are kept.
+
+    Args:
+        error: a ``yaml.YAMLError`` (a marked error, or a reader error of an
+            unacceptable character).
+        text: the text PyYAML read (to turn a reader error's position into a line).
+
+    Returns:
+        e.g. ``"line 2, column 1: found unexpected end of stream (while
+        scanning a quoted scalar at line 1, column 1)"``.
+    """
+    def where(mark) -> str:
+        return f"line {mark.line + 1}, column {mark.column + 1}"
+
+    def scrub(message: str) -> str:
+        return _YAML_QUOTED_NAME.sub(r"\1", message)
+
+    problem, mark = getattr(error, "problem", None), getattr(error, "problem_mark", None)
+    context, context_mark = getattr(error, "context", None), getattr(error, "context_mark", None)
+    if problem is None and context is None:  # a reader error: an unacceptable character at a position
+        position = getattr(error, "position", None)
+        first = str(error).splitlines()[0] if str(error) else type(error).__name__
+        if not isinstance(position, int):
+            return scrub(first)
+        line = text.count("\n", 0, position)
+        column = position - (text.rfind("\n", 0, position) + 1)
+        return f"line {line + 1}, column {column + 1}: {scrub(first)}"
+    if problem is None:
+        problem, mark, context, context_mark = context, context_mark, None, None
+    out = f"{where(mark)}: {scrub(problem)}" if mark is not None else scrub(problem)
+    if context:
+        out += f" ({scrub(context)}" + (f" at {where(context_mark)})" if context_mark is not None else ")")
+    return out
 
 
 def _error(path: Path | str, message: str, option: str | None):
@@ -187,17 +245,59 @@ def read_yaml_file(path: str | Path, what: str, option: str | None = None) -> st
     return read_text_file(path, what, option, limit=MAX_YAML_FILE_BYTES)
 
 
-def replace_file(path: str | Path, write) -> Path:
+def check_out_file(path: str | Path, option: str | None = None) -> None:
+    """Refuses a file name to write where something other than a regular file
+    stands (a directory, a FIFO, a device, a socket, or a link to one): the
+    atomic rename of :func:`replace_file` would put a regular file in its
+    place. A new name, or an existing regular file (replaced), is accepted.
+
+    Args:
+        path: the file to write.
+        option: the command-line option that named it (``--out``), or None.
+
+    Raises:
+        ScenarioError: ``<path>: --out: must name a regular file (it is
+            replaced) or a new file, got a FIFO``.
+    """
+    if str(path) == "":
+        raise ScenarioError(f"{repr('')}: {option or 'the file to write'}: must name a file, got an empty name")
+    where = f"{shorten(str(path), SHOWN_PATH_CHARACTERS)}: {option + ': ' if option else ''}"
+    try:
+        mode = os.stat(path).st_mode
+    except (FileNotFoundError, NotADirectoryError):
+        return  # a new file (a missing or blocked folder is the writer's error)
+    except OSError as e:
+        raise ScenarioError(f"{where}cannot be used ({e.strerror or e})") from None
+    except ValueError as e:  # a NUL in the name
+        raise ScenarioError(f"{where}not a valid file name ({e})") from None
+    if not stat.S_ISREG(mode):
+        raise ScenarioError(f"{where}must name a regular file (it is replaced) or a new file, got {_kind(mode)}")
+
+
+def replace_file(path: str | Path, write, option: str | None = None) -> Path:
     """Writes ``path`` atomically: ``write(f)`` fills a new temporary file
     (binary) beside it, which is flushed to disk and renamed over ``path``,
     so a reader sees the old file or the whole new one; on any error or
     interrupt the temporary file is removed. It is created with mode 0o666
     less the umask, as ``open`` would create ``path``.
 
+    ``path`` is checked with :func:`check_out_file` before the temporary
+    file is made and again just before the rename: a directory, FIFO or
+    device there is never replaced.
+
+    Args:
+        path: the file to write.
+        write: fills the open binary file.
+        option: the command-line option that named ``path``, for messages.
+
     Returns:
         ``path``.
+
+    Raises:
+        ScenarioError: ``path`` names something other than a regular file.
     """
     path = Path(path)
+    check_out_file(path, option)
     temporary = path.with_name(f".{path.name}.{secrets.token_hex(6)}.tmp")
     fd = os.open(temporary, os.O_WRONLY | os.O_CREAT | os.O_EXCL | getattr(os, "O_CLOEXEC", 0), 0o666)
     try:
@@ -205,6 +305,7 @@ def replace_file(path: str | Path, write) -> Path:
             write(f)
             f.flush()
             os.fsync(f.fileno())
+        check_out_file(path, option)
         os.replace(temporary, path)
     except BaseException:
         temporary.unlink(missing_ok=True)

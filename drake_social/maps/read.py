@@ -42,8 +42,16 @@ image that is not PGM (P2/P5), PNG or BMP, has 16-bit or floating-point
 pixels, or has more than :data:`MAX_MAP_CELLS` pixels (checked from the
 header, before the pixels are decoded); a YAML file over
 :data:`MAX_MAP_YAML_BYTES`, with aliases, repeated keys or nesting.
-Quoted numbers (``resolution: "0.05"``) are refused: a number must be
-written as one.
+Numbers are read as map_server reads them (yaml-cpp converting the text
+with a C++ stream): a decimal with an exponent (``resolution: 5e-2``,
+``origin: [0, 0, 1e300]``) is a number, as it is in a scenario, although
+YAML 1.1 (PyYAML) would read it as text; a value beyond the floats
+(``1e400``) is refused as not finite, as map_server refuses it. Quoted
+numbers (``resolution: "0.05"``) are refused: a number must be written as
+one. A value may be finite and still put the map beyond the floats (a
+resolution of ``1e307`` m, an origin of ``1e308`` m): the map's size and
+corners must be finite too. Any finite yaw turns the map (``1e300`` rad by
+``cos(1e300)``, ``sin(1e300)``).
 
 The values are computed as map_server does, in float64 from the channels'
 sum (a table over the possible sums, so a 25-million-pixel image costs its
@@ -63,7 +71,7 @@ from pathlib import Path
 import numpy as np
 
 from drake_social.errors import ScenarioError
-from drake_social.io.textfile import SHOWN_PATH_CHARACTERS, describe_mode, read_text_file, shorten
+from drake_social.io.textfile import SHOWN_PATH_CHARACTERS, describe_mode, read_text_file, shorten, yaml_problem
 
 __all__ = ["FREE", "MAP_KEYS", "MAP_MODES", "MAX_MAP_CELLS", "MAX_MAP_IMAGE_BYTES", "MAX_MAP_YAML_BYTES", "OCCUPIED",
            "UNKNOWN", "OccupancyMap", "check_map_field", "classify", "map_values", "read_map"]
@@ -87,6 +95,10 @@ MAX_MAP_IMAGE_BYTES = 128 * 1024 * 1024
 MAX_MAP_YAML_BYTES = 64 * 1024
 #: Deepest YAML nesting accepted: the document's mapping and ``origin``'s list.
 _MAX_DEPTH = 2
+#: A decimal number with an exponent, as a C++ stream reads a double
+#: (yaml-cpp's ``as<double>``): the forms YAML 1.1 leaves as text (it needs
+#: a point and a signed exponent) that map_server reads as numbers.
+_EXPONENT_NUMBER = re.compile(r"^[-+]?(?:[0-9]+\.?[0-9]*|\.[0-9]+)[eE][-+]?[0-9]+$")
 _FORMATS = "a PGM, PNG or BMP image"
 
 
@@ -403,9 +415,25 @@ def read_map(path: str | Path, *, source: str | None = None) -> OccupancyMap:
     classes = classify(grid)
     grid.flags.writeable = False
     classes.flags.writeable = False
-    return OccupancyMap(path=yaml_path, image_path=image_path, resolution=values["resolution"],
-                        origin=values["origin"], negate=values["negate"], occupied_thresh=values["occupied_thresh"],
-                        free_thresh=values["free_thresh"], mode=mode, values=grid, classes=classes)
+    out = OccupancyMap(path=yaml_path, image_path=image_path, resolution=values["resolution"],
+                       origin=values["origin"], negate=values["negate"], occupied_thresh=values["occupied_thresh"],
+                       free_thresh=values["free_thresh"], mode=mode, values=grid, classes=classes)
+    _check_extent(out, source)
+    return out
+
+
+def _check_extent(grid: OccupancyMap, source: str) -> None:
+    """Refuses a map whose size or corners are beyond the floats, though each value is finite."""
+    h, w = grid.shape
+    with np.errstate(over="ignore", invalid="ignore"):
+        size = (grid.width_m, grid.height_m)
+        corners = grid.corners()
+    if not all(math.isfinite(v) for v in size):
+        raise _fail(source, f"resolution: {grid.resolution!r} m per cell makes the map's {w} x {h} cells "
+                            f"{size[0]:g} x {size[1]:g} m; the map's size must be finite")
+    if not np.isfinite(corners).all():
+        raise _fail(source, f"origin: {list(grid.origin)!r} puts the map's corners beyond the floats; they must be "
+                            "finite")
 
 
 def _yaml_fields(text: str, source: str) -> dict:
@@ -419,8 +447,8 @@ def _yaml_fields(text: str, source: str) -> dict:
         def compose_node(self, parent, index):
             event = self.peek_event()
             if isinstance(event, yaml.AliasEvent):
-                raise _fail(source, f"line {event.start_mark.line + 1}: an alias (*{event.anchor}); a map YAML "
-                                    "gives each value once")
+                raise _fail(source, f"line {event.start_mark.line + 1}, column {event.start_mark.column + 1}: an "
+                                    "alias; a map YAML gives each value once")
             if isinstance(event, (yaml.MappingStartEvent, yaml.SequenceStartEvent)):
                 self.depth += 1
                 if self.depth > _MAX_DEPTH:
@@ -431,6 +459,8 @@ def _yaml_fields(text: str, source: str) -> dict:
                 self.depth -= 1
             return node
 
+    # A plain scalar in exponent form is a float (a quoted one stays text).
+    Loader.add_implicit_resolver("tag:yaml.org,2002:float", _EXPONENT_NUMBER, list("-+0123456789."))
     loader = None
     try:
         loader = Loader(text)  # its reader refuses control characters and NULs at once
@@ -439,6 +469,10 @@ def _yaml_fields(text: str, source: str) -> dict:
             raise _fail(source, f"empty; a map YAML is a mapping of {_allowed_keys()}")
         if not isinstance(root, yaml.MappingNode):
             raise _fail(source, f"line {root.start_mark.line + 1}: a map YAML is a mapping of {_allowed_keys()}")
+        if root.value and not any(isinstance(k, yaml.ScalarNode) and k.value in MAP_KEYS for k, _ in root.value):
+            # Not a map YAML (any file may be named as one): its keys are not repeated.
+            raise _fail(source, f"line {root.value[0][0].start_mark.line + 1}: not a map YAML: none of its "
+                                f"{len(root.value)} keys is one of {_allowed_keys()}")
         first_line = {}
         for key_node, _ in root.value:
             line = key_node.start_mark.line + 1
@@ -455,7 +489,7 @@ def _yaml_fields(text: str, source: str) -> dict:
             raise _fail(source, f"no {', '.join(missing)}; a map YAML needs {_allowed_keys()}")
         return loader.construct_document(root)
     except yaml.YAMLError as e:
-        raise _fail(source, f"not valid YAML: {shorten(str(e), 400)}") from None
+        raise _fail(source, f"not valid YAML: {yaml_problem(e, text)}") from None
     finally:
         if loader is not None:
             loader.dispose()
@@ -478,10 +512,13 @@ def _read_image(image_path: Path, named: str, source: str, **parameters) -> np.n
         raise _fail(source, f"image: {shown} has {st.st_size:,} bytes; a map image may have at most "
                             f"MAX_MAP_IMAGE_BYTES ({MAX_MAP_IMAGE_BYTES:,}) bytes")
     not_image = f"image: {shown} is not {_FORMATS} Pillow can read"
+    kind = "image"
     try:
         with open(image_path, "rb") as f:
             head = f.read(8)
             magic = head[:2]
+            kind = ("PNG" if head.startswith(b"\x89PNG") else "BMP" if magic == b"BM"
+                    else "PGM/PPM" if magic[:1] == b"P" else "image")
             f.seek(0)
             with warnings.catch_warnings():
                 # Pillow warns from 89 million pixels and refuses from 179
@@ -489,17 +526,17 @@ def _read_image(image_path: Path, named: str, source: str, **parameters) -> np.n
                 warnings.simplefilter("ignore", Image.DecompressionBombWarning)
                 try:
                     image = Image.open(f, formats=("PPM", "PNG", "BMP"))
-                except Image.UnidentifiedImageError:
-                    raise _fail(source, f"{not_image}: its content is none of them (it starts with {head!r})") \
-                        from None
+                except Image.UnidentifiedImageError:  # its bytes are not repeated: it may be any file
+                    raise _fail(source, f"{not_image}: its content is none of them") from None
                 except Image.DecompressionBombError as e:
                     count = re.search(r"\((\d+) pixels\)", str(e))
                     pixels = f"{int(count.group(1)):,} pixels" if count else "more pixels than Pillow opens"
                     raise _fail(source, f"image: {shown} has {pixels} (from its header); a map may have at most "
                                         f"MAX_MAP_CELLS ({MAX_MAP_CELLS:,}) cells") from None
             with image:
-                if image.format == "PPM" and magic not in (b"P2", b"P5"):
-                    raise _fail(source, f"{not_image}: a PPM/PBM file (magic {magic!r}), not a PGM (P2 or P5)")
+                if image.format == "PPM" and magic not in (b"P2", b"P5"):  # magic: one of Pillow's PPM kinds
+                    raise _fail(source, f"{not_image}: a PPM/PBM file (magic {magic.decode('latin-1')}), not a PGM "
+                                        "(P2 or P5)")
                 w, h = image.size
                 if w * h > MAX_MAP_CELLS:
                     raise _fail(source, f"image: {shown} is {w} x {h} pixels = {w * h:,} cells; a map may have at "
@@ -510,8 +547,10 @@ def _read_image(image_path: Path, named: str, source: str, **parameters) -> np.n
     except ScenarioError:
         raise
     except (OSError, ValueError, SyntaxError, EOFError, IndexError, TypeError) as e:
-        # Pillow's ways of saying a file is not an image it reads, or is truncated or corrupt.
-        raise _fail(source, f"{not_image}: {shorten(str(e) or type(e).__name__, 200)}") from None
+        # Pillow's ways of saying a file is not an image it reads, or is truncated or corrupt. Its
+        # message is not repeated: some quote the file's bytes (an ASCII PGM's tokens).
+        damage = "truncated" if isinstance(e, EOFError) or "truncated" in str(e) else "corrupt or unsupported"
+        raise _fail(source, f"{not_image}: its {kind} data is {damage} ({type(e).__name__})") from None
     values = map_values(sums, channels, alpha, **parameters)
     return np.ascontiguousarray(values[::-1])  # the image's top row is the grid's last row
 

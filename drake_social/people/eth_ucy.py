@@ -28,6 +28,10 @@ track's ends); where the person does not move it keeps the previous
 heading (the next one at the start of a track), and a person who never
 moves faces +x (0).
 
+Every time and position written is a finite number: options that would
+overflow one (an ``fps`` so small that ``frame / fps`` is infinite, a
+``start`` or ``offset`` beyond the floats' range) are refused.
+
 Nothing here reads or writes files (the ``people import`` command does,
 :func:`drake_social.app.run_people_import`); errors are
 :class:`~drake_social.errors.ScenarioError` naming the file and the line.
@@ -37,6 +41,7 @@ from __future__ import annotations
 
 import dataclasses as dc
 import math
+import sys
 from typing import Sequence
 
 import numpy as np
@@ -129,10 +134,10 @@ def parse_eth_ucy(text: str, source: str, layout: str = "xy") -> Recording:
         for k, field in enumerate(fields):
             try:
                 value = float(field)
-            except ValueError:
-                raise ScenarioError(f"{where}, column {k + 1}: {field[:40]!r} is not a number") from None
+            except ValueError:  # the field is not repeated: any file may be named (io.textfile)
+                raise ScenarioError(f"{where}, column {k + 1}: not a number; a recording has numbers only") from None
             if not math.isfinite(value):
-                raise ScenarioError(f"{where}, column {k + 1}: {field[:40]!r}; values must be finite numbers")
+                raise ScenarioError(f"{where}, column {k + 1}: {value} is not finite; values must be finite numbers")
             values.append(value)
         frame, person = values[0], _id_text(values[1])
         if frame < 0:
@@ -173,6 +178,17 @@ def _headings(xy: np.ndarray) -> np.ndarray:
     return out
 
 
+def _smallest_fps(frame: float) -> float:
+    """The smallest fps for which ``frame / fps`` is finite (``frame`` > 0)."""
+    fps = frame / sys.float_info.max
+    with np.errstate(over="ignore"):
+        while not math.isfinite(frame / fps):
+            fps = math.nextafter(fps, math.inf)
+        while math.isfinite(frame / math.nextafter(fps, 0.0)):
+            fps = math.nextafter(fps, 0.0)
+    return fps
+
+
 def convert(recording: Recording, *, fps: float = ETH_UCY_FPS, offset: Sequence[float] = (0.0, 0.0),
             rotate: float = 0.0, start: float | None = None, end: float | None = None,
             ids: Sequence[str] | None = None) -> list[tuple[float, str, float, float, float]]:
@@ -192,7 +208,8 @@ def convert(recording: Recording, *, fps: float = ETH_UCY_FPS, offset: Sequence[
 
     Raises:
         ScenarioError: a bad option, an id not in the file, a selected id
-            without rows in the window, or an empty window.
+            without rows in the window, an empty window, or options that
+            make a time or a position infinite.
     """
     src = recording.source
     offset = tuple(float(v) for v in offset)
@@ -216,7 +233,12 @@ def convert(recording: Recording, *, fps: float = ETH_UCY_FPS, offset: Sequence[
             raise ScenarioError(f"{src}: id {unknown[0]} is not in the recording (its ids: {known})")
         chosen_ids = set(wanted)
         keep = np.array([i in chosen_ids for i in recording.ids], dtype=bool)
-    times = recording.frames / fps
+    with np.errstate(over="ignore"):
+        times = recording.frames / fps
+    if not np.isfinite(times).all():  # a tiny fps: frame / fps overflows
+        last = float(recording.frames.max())
+        raise ScenarioError(f"{src}: --fps {fps!r} makes frame {last:g} at t = frame / fps = inf s; times must be "
+                            f"finite: --fps must be at least {_smallest_fps(last)!r} for this recording")
     if start is not None:
         keep &= times >= start
     if end is not None:
@@ -236,10 +258,17 @@ def convert(recording: Recording, *, fps: float = ETH_UCY_FPS, offset: Sequence[
     # Whole frames from the window's start where it falls on a frame: t = 0.4, not 0.40000000000000213.
     f0 = t0 * fps
     on_frame = abs(f0 - round(f0)) < 1e-9
-    t = (recording.frames - round(f0)) / fps if on_frame else times - t0
     c, s = math.cos(rotate), math.sin(rotate)
-    x = c * recording.xy[:, 0] - s * recording.xy[:, 1] + offset[0]
-    y = s * recording.xy[:, 0] + c * recording.xy[:, 1] + offset[1]
+    with np.errstate(over="ignore", invalid="ignore"):
+        t = (recording.frames - round(f0)) / fps if on_frame else times - t0
+        x = c * recording.xy[:, 0] - s * recording.xy[:, 1] + offset[0]
+        y = s * recording.xy[:, 0] + c * recording.xy[:, 1] + offset[1]
+    if not np.isfinite(t[keep]).all():  # frame / fps and the start finite, their difference not
+        raise ScenarioError(f"{src}: --start {t0:g} s puts the rows at t = frame / fps - start beyond the finite "
+                            "numbers; times must be finite")
+    if not (np.isfinite(x[keep]).all() and np.isfinite(y[keep]).all()):
+        raise ScenarioError(f"{src}: --offset {offset[0]:g} {offset[1]:g} and --rotate {rotate:g} put positions "
+                            "beyond the finite numbers; positions must be finite")
     theta = np.zeros(len(t))
     person = np.array(recording.ids, dtype=object)
     for i in kept_ids:

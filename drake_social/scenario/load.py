@@ -21,7 +21,7 @@ from pathlib import Path
 from typing import Sequence, Union
 
 from drake_social.errors import ScenarioError
-from drake_social.io.textfile import read_yaml_file, shorten
+from drake_social.io.textfile import read_yaml_file, shorten, yaml_problem
 from drake_social.scenario.map_rules import map_extent
 from drake_social.scenario.schema import Scenario
 from drake_social.scenario.validate import validate_scenario
@@ -93,8 +93,8 @@ def load_scenario_text(text: str, source: str, overrides: str | Sequence[str] | 
     stages = []
     scenario = None
     bounds_given = False
-    for where, data in sources:
-        bounds_given |= _sets(check_yaml(data, where), "world", "bounds")
+    for k, (where, data) in enumerate(sources):
+        bounds_given |= _sets(check_yaml(data, where, file=k == 0), "world", "bounds")
         try:
             scenario = yaml_load_typed(schema=Scenario, data=data, **({} if scenario is None else
                                                                         {"defaults": scenario}))
@@ -285,7 +285,7 @@ def compose_yaml(text: str, source: str):
         loader = _limited_loader(yaml)(text)  # its reader refuses control characters and NULs at once
         return loader.get_single_node()
     except yaml.YAMLError as e:
-        raise ScenarioError(f"{source}: not valid YAML: {e}") from None
+        raise ScenarioError(f"{source}: not valid YAML: {yaml_problem(e, text)}") from None
     except _YamlLimit as e:
         raise ScenarioError(f"{source}: line {e.mark.line + 1}: {e}") from None
     finally:
@@ -293,7 +293,7 @@ def compose_yaml(text: str, source: str):
             loader.dispose()
 
 
-def check_yaml(text: str, source: str, schema: type = Scenario):
+def check_yaml(text: str, source: str, schema: type = Scenario, *, file: bool = True):
     """Checks YAML ``text`` against the dataclass ``schema`` before it is loaded.
 
     Parses it with :func:`compose_yaml` (its nesting and size limits), then
@@ -301,6 +301,19 @@ def check_yaml(text: str, source: str, schema: type = Scenario):
     keys the schema does not have and values of the wrong type (a word for a
     number, null or a mapping for a list, an unknown ``!Tag``). Values are
     not range-checked here (see :func:`validate_scenario`).
+
+    A file's text (``file``) must first show that it is a document of its
+    kind: a mapping whose top-level keys include a field of ``schema`` (or
+    none at all). Until then an error describes what the file holds without
+    quoting it, since a scenario or sweep may name any file the process can
+    read (:mod:`drake_social.io.textfile`).
+
+    Args:
+        text: the YAML document.
+        source: how errors name it.
+        schema: the dataclass it follows.
+        file: whether ``text`` is a file's (False: an override, ``--set``,
+            whose text the user typed: its unknown keys are quoted at once).
 
     Returns:
         The document's root node (:func:`compose_yaml`).
@@ -312,8 +325,41 @@ def check_yaml(text: str, source: str, schema: type = Scenario):
     if root is None:
         raise ScenarioError(f"{source}: empty; a {schema.__name__.lower()} is a mapping "
                             f"({', '.join(f.name for f in dc.fields(schema))})")
+    if file:
+        _check_kind(schema, root, source)
     check_node(schema, root, source)
     return root
+
+
+def _check_kind(schema: type, root, source: str) -> None:
+    """Refuses a file that is not a document of ``schema``'s kind (see
+    :func:`check_yaml`), describing what it holds without quoting it."""
+    import yaml
+
+    kind = schema.__name__.lower()
+    fields = [f.name for f in dc.fields(schema)]
+    line = root.start_mark.line + 1
+    if not isinstance(root, yaml.MappingNode) or root.tag != _MAP_TAG:
+        raise ScenarioError(f"{source}: line {line}: not a {kind} file: a {kind} is a mapping ({', '.join(fields)}), "
+                            f"got {_kind_of(root, yaml)}")
+    keys = [k for k, _ in root.value]
+    if keys and not any(isinstance(k, yaml.ScalarNode) and k.tag == _STR_TAG and k.value in fields for k in keys):
+        raise ScenarioError(f"{source}: line {keys[0].start_mark.line + 1}: not a {kind} file: none of its "
+                            f"{len(keys)} top-level keys is a field of a {kind} ({', '.join(fields)})")
+
+
+#: What a YAML node of a standard tag is, for messages that do not quote it.
+_KINDS = {"str": "text", "int": "a number", "float": "a number", "bool": "true or false", "null": "null",
+          "timestamp": "a date", "seq": "a list", "map": "a mapping"}
+
+
+def _kind_of(node, yaml) -> str:
+    """What ``node`` is (``a list``, ``text``, ``a number`` ...), without its value or its tag's name."""
+    if node.tag.startswith(_YAML_TAG) and node.tag[len(_YAML_TAG):] in _KINDS:
+        return _KINDS[node.tag[len(_YAML_TAG):]]
+    shape = ("a mapping" if isinstance(node, yaml.MappingNode) else "a list" if isinstance(node, yaml.SequenceNode)
+             else "a value")
+    return f"{shape} with a tag"
 
 
 def check_node(schema: type, node, source: str, field: str = "") -> None:

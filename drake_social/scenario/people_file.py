@@ -15,7 +15,9 @@ and time, in any order. Columns (the header may give them in any order):
 
 Refused, each with the file, the line and what is allowed: a missing, empty or
 oversized file (at most :data:`MAX_PEOPLE_FILE_BYTES`), a first line that is
-not a header or names an unknown or repeated column or lacks a required one,
+not a header or names an unknown or repeated column or lacks a required one
+(a first line that names none of the columns is not repeated in the message:
+the file may be any file, :mod:`drake_social.io.textfile`),
 a row with another number of fields than the header (ragged), a value that is
 not a number, NaN or infinite, an empty id, two rows of one id at one time,
 a radius <= 0 or changing within an id.
@@ -129,6 +131,10 @@ def _read_cached(path: str, size: int, mtime_ns: int, inode: int) -> PeopleRecor
     names = [c.strip() for c in header]
     if all(_is_number(c) for c in names):
         raise _fail(path, header_line, f"no header; the first line must name the columns: {_header_text()}")
+    if not any(c in PEOPLE_FILE_COLUMNS for c in names):
+        # Not a people file (a scenario may name any file): its line is not repeated.
+        raise _fail(path, header_line, f"not a people file: the first line must name the columns ({_header_text()}); "
+                                       f"none of its {len(names)} fields is one")
     seen: set[str] = set()
     for c in names:
         if c not in PEOPLE_FILE_COLUMNS:

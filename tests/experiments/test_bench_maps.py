@@ -37,3 +37,39 @@ def test_a_small_map_bench(tiny_scenario_path):
     assert out["replay"] is None
     md = "\n".join(dut.markdown(out))
     assert "| ratio map / office |" in md and f"{m['boxes']:,} boxes" in md
+
+
+@pytest.mark.slow
+def test_bench_map_from_another_folder_compares_with_the_first_scenario(tiny_scenario_path, tmp_path, monkeypatch):
+    """bench --map from a folder that is not the checkout's root: the floor's
+    plans are compared with the first of --scenarios (here tiny), whose name
+    the table gives; nothing is looked up in the working folder."""
+    import functools
+    import json
+
+    from drake_social.app import run_bench
+
+    elsewhere = tmp_path / "elsewhere"
+    elsewhere.mkdir()
+    monkeypatch.chdir(elsewhere)
+    small = functools.partial(dut.run_map_bench, seeds=1, load_repeats=1, replay=False, size=(16.0, 14.0),
+                              resolution=0.05)
+    monkeypatch.setattr(dut, "run_map_bench", small)
+    run_bench(scenario_paths=[tiny_scenario_path], out=tmp_path / "out", algorithms=["social_rrt_star"],
+              iterations=50, seeds=1, include_ompl=False, include_checker=False, map_bench=True)
+    bench = json.loads((tmp_path / "out" / "bench.json").read_text())
+    plan = bench["map_bench"]["plan"]
+    assert plan["office_scenario"] == "tiny.yaml" and len(plan["office"]) == 1
+    assert "| plan K = 50, tiny (median of 1;" in (tmp_path / "out" / "bench.md").read_text()
+    assert sorted(p.name for p in elsewhere.iterdir()) == []
+
+
+def test_the_bench_defaults_are_the_shipped_scenarios_whatever_the_folder(tmp_path, monkeypatch, repo_root):
+    from drake_social.cli_parser import build_parser
+    from drake_social.experiments.bench.replanning import REPLAN_SCENARIO
+
+    monkeypatch.chdir(tmp_path)
+    shipped = repo_root / "scenarios"
+    assert build_parser().parse_args(["bench", "--map"]).scenarios == [shipped / "office_bar.yaml",
+                                                                       shipped / "generic_L.yaml"]
+    assert REPLAN_SCENARIO == shipped / "office_walkers.yaml" and REPLAN_SCENARIO.is_file()

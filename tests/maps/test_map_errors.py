@@ -175,7 +175,8 @@ def test_a_repeated_key(folder):
     ("", "empty; a map YAML is a mapping of"),
     ("- image: m.pgm\n", "line 1: a map YAML is a mapping of"),
     ("image: [m.pgm\n", "not valid YAML: "),
-    ("image: m.pgm\nresolution: &r 0.05\norigin: [*r, 0, 0]\n", "line 3: an alias (*r)"),
+    ("image: m.pgm\nresolution: &r 0.05\norigin: [*r, 0, 0]\n",
+     "line 3, column 10: an alias; a map YAML gives each value once"),
     ("origin: [[0], 0, 0]\n", "line 1: nested too deeply"),
     ("image: !!python/name:os.system m\n" + "".join(f"{k}: {v}\n" for k, v in GOOD.items() if k != "image"),
      "not valid YAML: "),
@@ -209,3 +210,54 @@ def test_write_map_refuses_what_read_map_would(tmp_path):
     with pytest.raises(ValueError, match="name: must be a file name stem"):
         write_map(tmp_path, "a/b", image, 0.1)
     assert list(tmp_path.iterdir()) == []  # nothing written
+
+
+# ---- numbers in exponent form are numbers, as map_server (yaml-cpp) reads them (issue 29, item 13)
+
+
+@pytest.mark.parametrize("field, text, value", [
+    ("resolution", "5e-2", 0.05), ("resolution", "5E-2", 0.05), ("resolution", "+5.0e-2", 0.05),
+    ("resolution", ".5e-1", 0.05), ("resolution", "1e0", 1.0), ("resolution", "5.e-2", 0.05),
+    ("occupied_thresh", "6.5e-1", 0.65), ("free_thresh", "1.96e-1", 0.196), ("free_thresh", "0e0", 0.0),
+])
+def test_a_number_in_exponent_form_is_a_number(folder, field, text, value):
+    dut = read_map(_yaml(folder, **{field: text}))
+    assert getattr(dut, field) == value  # the text's float, exactly as float() reads it
+    assert getattr(dut, field) == float(text)
+
+
+def test_an_origin_in_exponent_form_is_read_and_a_huge_yaw_turns_the_map(folder):
+    dut = read_map(_yaml(folder, origin="[1e1, -2.5E+0, 1e300]"))
+    assert dut.origin == (10.0, -2.5, 1e300)
+    c, s = np.cos(1e300), np.sin(1e300)  # any finite yaw is a turn
+    np.testing.assert_allclose(dut.rotation(), [[c, -s], [s, c]], rtol=0, atol=0)
+    np.testing.assert_allclose(dut.corners()[1], [10.0 + 0.1 * c, -2.5 + 0.1 * s], rtol=0, atol=1e-15)
+    assert np.isfinite(dut.extent()).all()
+
+
+@pytest.mark.parametrize("changes, message", [
+    (dict(resolution="1e400"), "resolution: must be a finite number > 0 metres per cell, got inf"),
+    (dict(resolution="-5e-2"), "resolution: must be a finite number > 0 metres per cell, got -0.05"),
+    (dict(resolution='"5e-2"'), "resolution: must be a finite number > 0 metres per cell, got '5e-2'"),
+    (dict(resolution="5e"), "resolution: must be a finite number > 0 metres per cell, got '5e'"),
+    (dict(resolution="1_0e-2"), "resolution: must be a finite number > 0 metres per cell, got '1_0e-2'"),
+    (dict(origin="[0, 0, 1e400]"), "origin: must be 3 finite numbers [x, y, yaw] (metres, metres, radians), got "
+                                   "[0, 0, inf]"),
+    (dict(occupied_thresh="1.5e0"), "occupied_thresh: must be in [0, 1], got 1.5"),
+    (dict(negate="1e0"), "negate: must be 0, 1, true or false, got 1.0"),  # map_server reads negate as an integer
+])
+def test_exponent_forms_out_of_range_are_refused_naming_the_field(folder, changes, message):
+    _refused(_yaml(folder, **changes), message)
+
+
+def test_the_maps_size_and_corners_must_be_finite_too(folder):
+    """The 2 x 2 map: its size is 2 * resolution, finite up to the largest float (at half of it and below)."""
+    top = float(np.finfo(float).max)
+    for resolution in (top / 2, float(np.nextafter(top / 2, 0.0))):
+        assert read_map(_yaml(folder, resolution=repr(resolution))).width_m == 2 * resolution <= top
+    over = np.nextafter(top / 2, np.inf)
+    _refused(_yaml(folder, resolution=repr(float(over))), f"resolution: {float(over)!r} m per cell makes the map's "
+                                                          "2 x 2 cells inf x inf m; the map's size must be finite")
+    _refused(_yaml(folder, origin="[1.7976931348623157e308, 0, 0]", resolution="1e300"),
+             "origin: [1.7976931348623157e+308, 0.0, 0.0] puts the map's corners beyond the floats; they must be "
+             "finite")

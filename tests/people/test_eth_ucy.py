@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import sys
 
 import numpy as np
 import pytest
@@ -87,8 +88,8 @@ def test_csv_text_exact_numbers_and_optional_theta():
     ("\n  \n", "no rows"),
     ("0 1 2.0 3.0\n10 1 2.0\n", "line 2: 3 columns"),
     ("0 1 2.0 3.0\n10 1 2.0 3.0 0.1 0.1\n", "line 2: 6 columns, the rows before have 4"),
-    ("0 1 2.0 3.0\n10 1 2.0 abc\n", "line 2, column 4: 'abc' is not a number"),
-    ("0 1 2.0 nan\n", "line 1, column 4: 'nan'; values must be finite"),
+    ("0 1 2.0 3.0\n10 1 2.0 abc\n", "line 2, column 4: not a number; a recording has numbers only"),
+    ("0 1 2.0 nan\n", "line 1, column 4: nan is not finite; values must be finite"),
     ("0 1 2.0 3.0\n10 2 2.0 3.0\n0 1 1.0 3.0\n", "line 3: frame 0 of id 1 does not come after its frame 0 on line 1"),
     ("10 1 2.0 3.0\n10 1 2.5 3.0\n", "line 2: frame 10 of id 1 does not come after"),
     ("-10 1 2.0 3.0\n", "frame -10 is negative"),
@@ -139,7 +140,7 @@ def test_cli_end_to_end(tmp_path, capsys):
     bad.write_text("0 1 2.0 3.0\n10 1 x 3.0\n")
     assert main(["people", "import", str(bad), "--out", str(out)]) == 2
     err = capsys.readouterr().err
-    assert "bad.txt, line 2, column 3: 'x' is not a number" in err
+    assert "bad.txt, line 2, column 3: not a number" in err
     assert out.read_text() == before
     assert main(["people", "import", str(tmp_path / "missing.txt"), "--out", str(out)]) == 2
     assert "no such recording file" in capsys.readouterr().err
@@ -163,3 +164,59 @@ def test_import_reports_the_span_of_the_rows_when_start_is_before_the_first_row(
     assert capsys.readouterr().out.strip().endswith("7 rows, 2 people, 1.2 s (t = 1.2 .. 2.4 s)")
     done = run_people_import(file=src, out=tmp_path / "r.csv")  # no --start: the first row at t = 0
     np.testing.assert_allclose([done.first, done.last, done.duration], [0.0, 1.6, 1.6], atol=1e-12)
+
+
+# ---- times and positions must be finite: a tiny --fps, a far --start or --offset (issue 29, item 9)
+
+
+def _finite_quotient(frame: int, fps: float) -> bool:
+    """Whether the float division frame / fps is finite, from exact arithmetic:
+    the quotient rounds to the largest float below MAX + ulp(MAX) / 2 (at the
+    midpoint it rounds to even, 2**1024: infinite)."""
+    from fractions import Fraction
+
+    top = Fraction(sys.float_info.max) + Fraction(math.ulp(sys.float_info.max)) / 2
+    return Fraction(frame) / Fraction(fps) < top
+
+
+def test_a_fps_that_makes_times_infinite_is_refused_at_its_bound():
+    with pytest.raises(ScenarioError) as info:
+        rows(fps=1e-320)
+    message = str(info.value)
+    assert message.startswith("eth.txt: --fps 1e-320 makes frame 820 at t = frame / fps = inf s; times must be "
+                              "finite: --fps must be at least ")
+    bound = float(message.split("at least ")[1].split(" ")[0])
+    # The bound is the smallest fps at which the last frame's time is finite.
+    assert _finite_quotient(820, bound) and not _finite_quotient(820, math.nextafter(bound, 0.0))
+    dut = rows(fps=bound)
+    times = np.array([r[0] for r in dut])
+    assert np.isfinite(times).all() and times.max() == (820 - 780) / bound
+    with pytest.raises(ScenarioError, match="--fps must be at least"):
+        rows(fps=math.nextafter(bound, 0.0))
+    with pytest.raises(ScenarioError, match="--fps must be at least"):
+        rows(fps=5e-324)
+
+
+def test_a_start_or_offset_that_makes_times_or_positions_infinite_is_refused():
+    huge = parse_eth_ucy("0 1 1e308 0\n10 1 1e308 1\n", "huge.txt")
+    with pytest.raises(ScenarioError, match=r"^huge.txt: --offset 1e\+308 0 and --rotate 0 put positions beyond the "
+                                            r"finite numbers; positions must be finite$"):
+        convert(huge, offset=(1e308, 0.0))
+    late = parse_eth_ucy("0 1 0 0\n790 1 1 0\n", "late.txt")
+    fps = 790 / 1e308
+    with pytest.raises(ScenarioError, match=r"^late.txt: --start -1e\+308 s puts the rows at t = frame / fps - start "
+                                            r"beyond the finite numbers; times must be finite$"):
+        convert(late, fps=fps, start=-1e308)
+
+
+def test_cli_refuses_a_tiny_fps_and_writes_nothing(tmp_path, capsys):
+    from drake_social.cli import main
+
+    src = tmp_path / "biwi.txt"
+    src.write_text(ETH)
+    out = tmp_path / "people.csv"
+    assert main(["people", "import", str(src), "--out", str(out), "--fps", "1e-320"]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith(f"drake-social: error: {src}: --fps 1e-320 makes frame 820 at t = frame / fps = inf s")
+    assert len(err.splitlines()) == 1 and not out.exists()
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["biwi.txt"]

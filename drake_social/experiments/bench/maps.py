@@ -12,8 +12,9 @@ standing in the corridors. Measured, in one run:
   :func:`~drake_social.maps.map_boxes`, the median of ``load_repeats``;
 * **checker**: building the planar checker of the scenario (its shapes read
   from SceneGraph);
-* **plan**: Social Risk-RRT* at K = ``iterations`` on the map and on the
-  office scenario (``scenarios/office_bar.yaml``), ``seeds`` seeds each,
+* **plan**: Social Risk-RRT* at K = ``iterations`` on the map and on a
+  scenario to compare with (``bench --map``: the first ``--scenarios`` file,
+  by default the shipped ``office_bar.yaml``), ``seeds`` seeds each,
   alternating; the ratio of the median times;
 * **replay**: the planned path executed (kinematic, synchronized) and
   recorded; the replay's bytes and the run's simulated seconds.
@@ -34,10 +35,8 @@ import numpy as np
 from drake_social.maps import map_boxes, office_floor_layout, ragged_edges, read_map, write_map
 from drake_social.scenario import load_scenario
 
-__all__ = ["MAP_BENCH_OFFICE", "MAP_BENCH_SEED", "map_bench_scenario", "markdown", "run_map_bench"]
+__all__ = ["MAP_BENCH_SEED", "map_bench_scenario", "markdown", "run_map_bench"]
 
-#: The scenario the map's plan time is compared with.
-MAP_BENCH_OFFICE = "scenarios/office_bar.yaml"
 #: The generated floor's seed.
 MAP_BENCH_SEED = 30
 #: Probability of a wall edge's cell flipping (:func:`ragged_edges`).
@@ -92,14 +91,18 @@ def _plan_time(scenario, checker, iterations: int, seed: int) -> dict:
 def run_map_bench(office_path: str | Path, *, iterations: int = 2000, seeds: int = 3, load_repeats: int = 5,
                   replay: bool = True, size: tuple[float, float] = (30.0, 50.0), resolution: float = 0.03,
                   progress: Callable[[str], None] | None = None) -> dict:
-    """Measures the floor map (module docstring) against the office scenario.
+    """Measures the floor map (module docstring) against the scenario ``office_path``.
 
     ``size`` (width, height, metres) and ``resolution`` make a smaller floor
     for tests; the defaults are the issue's.
 
+    Args:
+        office_path: the scenario file whose plan time the map's is compared with.
+
     Returns:
         ``{"map": {...cells, boxes, load times}, "checker_seconds",
-        "plan": {"map": runs, "office": runs, "ratio"}, "replay": {...} or None}``.
+        "plan": {"map": runs, "office": runs, "office_scenario": its file name, "ratio"},
+        "replay": {...} or None}``.
     """
     from drake_social.collision.drake_checker import make_checker
     from drake_social.people import people_model
@@ -145,6 +148,7 @@ def run_map_bench(office_path: str | Path, *, iterations: int = 2000, seeds: int
                     "people": people_model(scenario).state_at(0.0).count},
             "checker_seconds": checker_seconds,
             "plan": {"iterations": iterations, "map": runs["map"], "office": runs["office"],
+                     "office_scenario": Path(office_path).name,
                      "median_map": median["map"], "median_office": median["office"],
                      "ratio": median["map"] / median["office"] if median["office"] > 0 else None},
             "replay": replay_entry,
@@ -169,6 +173,7 @@ def _replay(scenario, checker, waypoints) -> dict:
 def markdown(out: dict) -> list[str]:
     """The Markdown lines of the map section of ``bench.md``."""
     m, p, r = out["map"], out["plan"], out["replay"]
+    office = Path(p["office_scenario"]).stem
     lines = ["", "## A building map (bench --map)", "",
              f"A generated {m['width_m']:g} x {m['height_m']:g} m office floor at {m['resolution']:g} m "
              f"({m['cells']:,} cells, ragged walls): {m['boxes']:,} boxes, {m['people']} people.", "",
@@ -177,7 +182,7 @@ def markdown(out: dict) -> list[str]:
              f"| planar checker built | {out['checker_seconds']:.2f} s | |",
              f"| plan K = {p['iterations']}, map (median of {len(p['map'])}; paths found "
              f"{sum(r['success'] for r in p['map'])}) | {p['median_map']:.3f} s | |",
-             f"| plan K = {p['iterations']}, office_bar (median of {len(p['office'])}; paths found "
+             f"| plan K = {p['iterations']}, {office} (median of {len(p['office'])}; paths found "
              f"{sum(r['success'] for r in p['office'])}) | {p['median_office']:.3f} s | |",
              f"| ratio map / office | {p['ratio']:.2f} | < 2 |"]
     if r is not None:

@@ -255,8 +255,8 @@ def run_bench(
             :data:`~drake_social.experiments.bench.replanning.REPLAN_SCENARIO`,
             the office with walkers).
         map_bench: also :func:`~drake_social.experiments.bench.maps.run_map_bench`:
-            a generated 30 x 50 m floor map at 0.03 m against
-            ``scenarios/office_bar.yaml`` (``map_bench``).
+            a generated 30 x 50 m floor map at 0.03 m against the first of
+            ``scenario_paths`` (``map_bench``).
         out_dir: where the two files go (created).
         progress: optional ``progress(done, total, label)`` after each run.
 
@@ -383,9 +383,9 @@ def run_bench(
 
     map_out = None
     if map_bench:
-        from drake_social.experiments.bench.maps import MAP_BENCH_OFFICE, run_map_bench
+        from drake_social.experiments.bench.maps import run_map_bench
 
-        map_out = run_map_bench(MAP_BENCH_OFFICE, iterations=iterations, progress=tick)
+        map_out = run_map_bench(paths[0], iterations=iterations, progress=tick)
 
     out = {
         "settings": {"scenario_paths": [str(p) for p in paths], "algorithms": algorithms, "iterations": iterations,

@@ -35,14 +35,15 @@ import numpy as np
 from drake_social.experiments.bench.machine import cpu_model, load_average
 from drake_social.kinematics import nominal_path_times
 from drake_social.scenario import Scenario, load_scenario
+from drake_social.scenario.shipped import shipped_scenario
 
 __all__ = ["REPLAN_SCENARIO", "position_at", "replan_markdown", "replan_time_stats", "rollout_replans",
            "run_replan_bench"]
 
 _log = logging.getLogger(__name__)
 
-#: The scenario of the replanning benchmark (relative to the working directory: the repository).
-REPLAN_SCENARIO = "scenarios/office_walkers.yaml"
+#: The scenario of the replanning benchmark: the shipped office with walkers, found beside the package.
+REPLAN_SCENARIO = shipped_scenario("office_walkers.yaml")
 #: Issue 21's targets: median replan time (s) and the realtime factor of the kinematic mode.
 TARGET_MEDIAN = 0.05
 TARGET_REALTIME_FACTOR = 5.0

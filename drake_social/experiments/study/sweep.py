@@ -17,7 +17,7 @@ from drake_social.experiments.study.scenarios import check_run_settings, load_ca
 from drake_social.experiments.study.spec import (NAME_RULE, PAPER_ALGORITHMS, Group, Study, algorithms_problem,
                                                  check_settings_and_names, settings_problem, valid_name)
 from drake_social.io.textfile import SHOWN_PATH_CHARACTERS, check_regular_file, read_yaml_file, shorten
-from drake_social.scenario.load import check_node, compose_yaml
+from drake_social.scenario.load import check_yaml
 from drake_social.scenario.schema import Scenario
 
 __all__ = ["Sweep", "load_sweep"]
@@ -141,10 +141,7 @@ def load_sweep(path: str | Path) -> Study:
     import yaml  # PyYAML, imported where a file is read, as the scenario loader does
 
     path = Path(path)
-    root = compose_yaml(read_yaml_file(path, "sweep"), str(path))
-    if root is None:
-        raise ScenarioError(f"{path}: empty; a sweep is a mapping ({', '.join(f.name for f in dc.fields(Sweep))})")
-    check_node(Sweep, root, str(path))
+    root = check_yaml(read_yaml_file(path, "sweep"), str(path), Sweep)
     nodes = {k.value: v for k, v in root.value}
 
     def fail(key: str, message: str, node=None):
