@@ -249,7 +249,7 @@ def test_replan_writes_replans_csv_and_the_summary(tmp_path, tiny_scenario_path,
     assert summary["count"] == len(rows) - 1
     assert summary["changed"] == sum(r[3] == "1" for r in rows[1:])
     assert summary["waits"] == sum(r[4] == "wait" for r in rows[1:])
-    assert summary["deadline_hits"] == sum(r[6] == "1" for r in rows[1:])
+    assert summary["deadline_hits"] == sum(r[7] == "1" for r in rows[1:])
     assert summary["plan_time_median"] == pytest.approx(np.median(plan_times))
     assert summary["plan_time_p95"] == pytest.approx(np.percentile(plan_times, 95))
     assert summary["plan_time_max"] == pytest.approx(plan_times.max())
