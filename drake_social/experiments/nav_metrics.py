@@ -66,9 +66,10 @@ key                                unit     definition
                                             recorded track that begins inside the robot)
 ``collisions_moving_<part>``       count    of those, the ones that start at a sample k >= 1,
                                             not by an appearance, with the robot commanded to
-                                            move over [t_{k-1}, t_k): neither ``stopped`` nor
-                                            ``waiting`` at sample k - 1 (the rule below); NaN
-                                            when ``stopped`` is None (not recorded)
+                                            move over [t_{k-1}, t_k): not held (``stopped`` or
+                                            ``waiting``) at both samples k - 1 and max(k - 2, 0)
+                                            (the rule below); NaN when ``stopped`` is None (not
+                                            recorded)
 ``collision_time_<part>``          s        held time with d_k <= 0
 ``space_compliance_<part>``        0..1     personal-space compliance (Francis et al.): the
                                             share of the time outside every present person's
@@ -87,27 +88,31 @@ key                                unit     definition
 
 **Who made a contact.** A contact episode starts at the first sample k of
 its run (``d_k <= 0``, ``d_{k-1} > 0`` or k = 0) and began somewhere in
-(t_{k-1}, t_k]. Over [t_{k-1}, t_k) the robot does what the decisions taken
-at t_{k-1} command: sample k - 1's ``stopped`` (the safety monitor holds it)
-and ``waiting`` (the replanner found no safe path and holds it). Each episode
-is counted in exactly one of three classes:
+(t_{k-1}, t_k]. The robot is *held* at sample j when ``stopped[j]`` (the
+safety monitor's decision at t_j) or ``waiting[j]`` (the replanner's: no safe
+path). Over [t_{k-1}, t_k) the base's command follows the hold decided at
+t_{k-1}, and the arm's trajectory the one decided a period earlier: a
+trajectory source reads the hold one control period after the base's
+command (:func:`~drake_social.control.safety_monitor.braking_travel`; the
+log's samples are the control periods). So the robot was commanded to move
+over that step unless it is held at both samples k - 1 and max(k - 2, 0).
+Each episode is counted in exactly one of three classes:
 
 * *appeared*: a person entering at sample k (present at t_k, absent at
   t_{k-1}, or present at t_0 when k = 0) is in contact with the part at t_k:
   the person came into being there (a recorded pedestrian whose track begins
   inside the robot as they enter the camera's view). Every contact at the
   first sample is one.
-* *moving*: otherwise, when neither flag of sample k - 1 is set: the robot
-  was commanded to drive when the contact began.
-* the rest: the robot was held (stopped or waiting) over [t_{k-1}, t_k): a
+* *moving*: otherwise, when the robot was commanded to move over
+  [t_{k-1}, t_k) (k >= 1): it may have driven into the person.
+* the rest: the robot was held over the step (at k - 1 and at k - 2): a
   person walked into the held robot.
 
 The rule reads the commands, not the motion: a held robot in ``dynamic``
-mode still creeps by the servo's residue, and after a hold decision the
-robot may still travel up to
-:func:`~drake_social.control.safety_monitor.braking_travel`; neither makes a
-contact "moving". A decision taken between two samples (a replan period that
-is not a multiple of the log's) counts from the next sample.
+mode still creeps by the servo's residue for many periods after the hold,
+which does not make a contact "moving". A decision taken between two
+samples (a replan period that is not a multiple of the log's) counts from
+the next sample.
 """
 
 from __future__ import annotations
@@ -254,12 +259,12 @@ def run_metrics(scenario, times: np.ndarray, q: np.ndarray, people: PeopleLog | 
     else:
         dist = proximity.part_distances(g, q, people.positions, people.radii, people.present)
         agf = _agf_over_time(scenario, g, q, people)
-    # Commanded to drive over [t_k, t_{k+1}): neither held flag of sample k (the module docstring's rule).
+    # Commanded to move over [t_{k-1}, t_k) (the module docstring's rule): the base follows the hold of
+    # sample k - 1, the arm's trajectory that of sample k - 2; held over the step only when both hold.
     drives = None
     if stopped is not None:
-        drives = ~np.asarray(stopped, bool)
-        if waiting is not None:
-            drives &= ~np.asarray(waiting, bool)
+        held = np.asarray(stopped, bool) | (False if waiting is None else np.asarray(waiting, bool))
+        drives = ~(held & np.concatenate([held[:1], held[:-1]]))  # index k - 1: samples k - 1 and max(k - 2, 0)
     starts = {part: run_starts(dist[part] <= 0.0) for part in RUN_PARTS}
     every = np.unique(np.concatenate(list(starts.values())))
     appeared = (_appearing_contacts(g, q, people, every) if len(every) else

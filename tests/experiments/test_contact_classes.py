@@ -3,9 +3,10 @@
 The rule (drake_social/experiments/nav_metrics.py): a contact episode starting
 at sample k is *appeared* when a person entering at k (present at t_k, absent
 at t_{k-1} or k = 0) touches the part at t_k; otherwise *moving* when k >= 1
-and neither ``stopped`` nor ``waiting`` is set at sample k - 1 (the decisions
-in force over [t_{k-1}, t_k), when the contact began); otherwise the robot was
-held and a person walked into it.
+and the robot is not held (``stopped`` or ``waiting``) at both samples k - 1
+and max(k - 2, 0) (over [t_{k-1}, t_k), when the contact began, the base
+follows the hold of t_{k-1} and the arm's trajectory that of t_{k-2});
+otherwise the robot was held and a person walked into it.
 
 The robot: base disc radius 0.35 m at (X, 2.5), the arm along +x (psi1 = 0),
 the bar above at y = 3; people are discs of radius 0.25 m, so a person on
@@ -82,7 +83,7 @@ def _classes(dut, part="base"):
 
 def test_a_contact_beginning_while_the_monitor_holds_the_creeping_robot_is_not_moving(scenario):
     people, k0 = _walker()
-    # The monitor held the robot from 9 s on (the walker within its safety distance); the base creeps.
+    # The monitor held the robot from 9 s on (the walker within its safety distance); the robot creeps.
     dut = run_metrics(scenario, _TIMES, _q(_CREEP), people, _TIMES >= 9.0, False, 16.0)
     for part in ("base", "robot"):
         assert _classes(dut, part) == (1.0, 0.0, 0.0), part
@@ -105,12 +106,15 @@ def test_a_contact_beginning_while_commanded_to_move_is_moving_whatever_the_moti
 
 @pytest.mark.parametrize("kind, offset, moving", [
     ("never", 0, 1.0),
-    # A hold decided at the contact's sample k0 came with the contact: over [t_{k0-1}, t_k0) the robot drove.
+    # Held from sample k0 + offset on. Over [t_{k0-1}, t_k0), where the contact began, the base follows
+    # the hold of k0 - 1 and the arm's trajectory that of k0 - 2.
     ("from", 1, 1.0),
-    ("from", 0, 1.0),
-    ("from", -1, 0.0),  # held over the step in which the contact began
-    # Released at sample k0 + offset: held over the step before it, commanded from it on.
-    ("until", -1, 1.0),  # released at k0 - 1: commanded over [t_{k0-1}, t_k0)
+    ("from", 0, 1.0),  # decided with the contact
+    ("from", -1, 1.0),  # the base held, the arm still commanded (it reads the hold a period later)
+    ("from", -2, 0.0),  # both held over the step in which the contact began
+    # Released at sample k0 + offset: commanded from there on.
+    ("until", -2, 1.0),
+    ("until", -1, 1.0),  # released at k0 - 1: the base commanded over [t_{k0-1}, t_k0)
     ("until", 0, 0.0),  # released at k0, the contact's sample: held over the step before it
     ("until", 1, 0.0),
 ])
@@ -122,6 +126,17 @@ def test_the_hold_boundary_is_the_sample_before_the_contact(scenario, kind, offs
         stopped, waiting = (flag, None) if name == "stopped" else (np.zeros(_T, bool), flag)
         dut = run_metrics(scenario, _TIMES, _q(_CREEP), people, stopped, False, 16.0, waiting=waiting)
         assert _classes(dut) == (1.0, 0.0, moving), name
+
+
+def test_a_contact_at_the_second_sample_reads_the_first_samples_hold_alone(scenario):
+    # max(k - 2, 0): for k = 1 both commands of [t_0, t_1) are those decided at t_0.
+    times = _TIMES[:3]
+    people = PeopleLog(times=times, positions=[[[4.3, 2.5]], [[4.5, 2.5]], [[4.5, 2.5]]],
+                       headings=np.zeros((3, 1)), velocities=np.zeros((3, 1, 2)), present=np.ones((3, 1), bool),
+                       radii=[0.25], names=("p0",))  # 0.1 m apart at t_0, 0.1 m overlap from t_1 on
+    for held, moving in (([True, False, False], 0.0), ([False, True, True], 1.0)):
+        dut = run_metrics(scenario, times, _q(np.full(3, 5.0)), people, np.array(held), False, 1.0)
+        assert _classes(dut) == (1.0, 0.0, moving), held
 
 
 def test_a_person_appearing_inside_the_robot_is_counted_apart(scenario):
