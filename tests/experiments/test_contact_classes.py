@@ -118,7 +118,7 @@ def test_a_contact_beginning_while_commanded_to_move_is_moving_whatever_the_moti
     ("until", 0, 0.0),  # released at k0, the contact's sample: held over the step before it
     ("until", 1, 0.0),
 ])
-def test_the_hold_boundary_is_the_sample_before_the_contact(scenario, kind, offset, moving):
+def test_a_contact_is_held_only_when_both_samples_before_it_hold(scenario, kind, offset, moving):
     people, k0 = _walker()
     held = {"never": slice(0, 0), "from": slice(k0 + offset, None), "until": slice(0, k0 + offset)}[kind]
     for name in ("stopped", "waiting"):
