@@ -12,7 +12,10 @@ goal of one that did not arrive, leaves its pair out).
 buys over base-only replanning, replanning over planning once, speed scaling
 over the fixed AGF); :func:`target_lines` checks the issue's targets
 (no collision with people, success >= 95 %, replan time median <= 0.05 s and
-95th percentile <= the budget) on the replanning variants.
+95th percentile <= the budget) on the replanning variants; its contact line
+splits the contacts as ``nav_collisions_moving_robot`` and
+``nav_collisions_appeared_robot`` do (the robot commanded to move, a person
+appearing in contact, the rest: a person walked into the held robot).
 """
 
 from __future__ import annotations
@@ -133,11 +136,14 @@ def target_lines(records: Sequence[dict], scenarios: Sequence[str], variants: Se
             n = len(runs)
             touched = sum(1 for r in runs if (r.get("nav_collisions_robot") or 0) > 0)
             contacts = int(sum(r.get("nav_collisions_robot") or 0 for r in runs))
+            moving, appeared = (_values(runs, f"nav_collisions_{c}_robot") for c in ("moving", "appeared"))
             stops = _values(runs, "nav_stop_count")
             reached = sum(1 for r in runs if r["reached"] == 1.0)
             tag = "target" if v != "plan_once" else "reference"
             lines.append(f"- **{'MET' if touched == 0 else 'MISSED'}** ({tag}): {s}, {_LABEL[v]}: collisions with "
-                         f"people: {contacts} contact(s) in {touched}/{n} episodes (safety stops: "
+                         f"people: {contacts} contact(s) in {touched}/{n} episodes, {int(moving.sum())} begun with "
+                         f"the robot commanded to move, {int(appeared.sum())} by a person appearing in contact, the "
+                         f"rest walked into the held robot (safety stops: "
                          f"{int(stops.sum()) if len(stops) else 0} in all, median {np.median(stops) if len(stops) else 0:g} "
                          f"per episode)")
             lines.append(f"- **{'MET' if reached >= SUCCESS_TARGET * n else 'MISSED'}** ({tag}): {s}, {_LABEL[v]}: "
@@ -210,8 +216,10 @@ def report_markdown(result, figures: Sequence[str], budgets: dict[str, float]) -
              "Variants: " + "; ".join(f"`{v}` ({_LABEL[v]})" for v in variants) + ". Metrics over time against "
              "where the people were (`nav_*` of `records.csv`): surface-to-surface distances of each part (base, "
              "arm, object, the whole robot) to the nearest present person; seconds in Hall's intimate (< 0.45 m) "
-             "and personal (< 1.2 m) zones; contacts (distance <= 0) counted where they start; safety stops of the "
-             "monitor; success = the goal reached within the time limit.", "",
+             "and personal (< 1.2 m) zones; contacts (distance <= 0) counted where they start, and of them those "
+             "begun with the robot commanded to move (neither held by the safety monitor nor waiting for a replan) "
+             "and those of a person appearing in contact; safety stops of the monitor; success = the goal reached "
+             "within the time limit.", "",
              "## Claims", "",
              f"Paired over episodes, one-sided Wilcoxon signed-rank test at {ALPHA} (SUPPORTED: the claimed side wins "
              "the median difference and p < 0.05; NOT SIGNIFICANT: it wins, p >= 0.05; NOT SUPPORTED: it does not "

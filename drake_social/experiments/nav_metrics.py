@@ -59,9 +59,17 @@ key                                unit     definition
                                             NaN when D = 0
 ``collisions_<part>``              count    contact episodes: runs of consecutive samples with
                                             d_k <= 0, each counted where it starts
-``collisions_moving_<part>``       count    of those, the ones that start while the robot moves
-                                            (q_k != q_{k-1}); the others began with the robot
-                                            standing still: a person walked into it
+``collisions_appeared_<part>``     count    of those, the ones that start with a person
+                                            appearing in contact: the part touches (d <= 0) a
+                                            person at the sample k where that person enters
+                                            (present at t_k and k = 0 or absent at t_{k-1}; a
+                                            recorded track that begins inside the robot)
+``collisions_moving_<part>``       count    of those, the ones that start at a sample k >= 1,
+                                            not by an appearance, with the robot commanded to
+                                            move over [t_{k-1}, t_k): not held (``stopped`` or
+                                            ``waiting``) at both samples k - 1 and max(k - 2, 0)
+                                            (the rule below); NaN when ``stopped`` is None (not
+                                            recorded)
 ``collision_time_<part>``          s        held time with d_k <= 0
 ``space_compliance_<part>``        0..1     personal-space compliance (Francis et al.): the
                                             share of the time outside every present person's
@@ -77,6 +85,34 @@ key                                unit     definition
                                             each person's sigma_h = max(2 |v|, 0.5) m at the
                                             logged speed |v| (sigma_s, sigma_r keep their ratios)
 =================================  =======  ==================================================
+
+**Who made a contact.** A contact episode starts at the first sample k of
+its run (``d_k <= 0``, ``d_{k-1} > 0`` or k = 0) and began somewhere in
+(t_{k-1}, t_k]. The robot is *held* at sample j when ``stopped[j]`` (the
+safety monitor's decision at t_j) or ``waiting[j]`` (the replanner's: no safe
+path). Over [t_{k-1}, t_k) the base's command follows the hold decided at
+t_{k-1}, and the arm's trajectory the one decided a period earlier: a
+trajectory source reads the hold one control period after the base's
+command (:func:`~drake_social.control.safety_monitor.braking_travel`; the
+log's samples are the control periods). So the robot was commanded to move
+over that step unless it is held at both samples k - 1 and max(k - 2, 0).
+Each episode is counted in exactly one of three classes:
+
+* *appeared*: a person entering at sample k (present at t_k, absent at
+  t_{k-1}, or present at t_0 when k = 0) is in contact with the part at t_k:
+  the person came into being there (a recorded pedestrian whose track begins
+  inside the robot as they enter the camera's view). Every contact at the
+  first sample is one.
+* *moving*: otherwise, when the robot was commanded to move over
+  [t_{k-1}, t_k) (k >= 1): it may have driven into the person.
+* the rest: the robot was held over the step (at k - 1 and at k - 2): a
+  person walked into the held robot.
+
+The rule reads the commands, not the motion: a held robot in ``dynamic``
+mode still creeps by the servo's residue for many periods after the hold,
+which does not make a contact "moving". A decision taken between two
+samples (a replan period that is not a multiple of the log's) counts from
+the next sample.
 """
 
 from __future__ import annotations
@@ -87,7 +123,7 @@ import numpy as np
 
 from drake_social.cost.agf import PersonalSpace, apply_threshold, gaussian, speed_scaled_sigmas
 from drake_social.experiments.proxemics import ZONES, HallZones, base_irregularity, shape_points
-from drake_social.experiments.time_series import episodes, held_time, motion_stats, trapezoid_mean
+from drake_social.experiments.time_series import episodes, held_time, motion_stats, run_starts, trapezoid_mean
 from drake_social.io.records import NAV_PREFIX
 from drake_social.kinematics import ArmGeometry
 from drake_social.people import people_model, proximity
@@ -140,9 +176,19 @@ def _agf_over_time(scenario, geometry: ArmGeometry, q: np.ndarray, people: Peopl
     return out
 
 
+def _appearing_contacts(geometry: ArmGeometry, q: np.ndarray, people: PeopleLog, starts: np.ndarray) -> dict:
+    """Per part (RUN_PARTS), a (len(starts),) mask: at sample ``starts[i]`` the part
+    touches (d <= 0) a person who enters there (present then, and at the first
+    sample or absent at the one before)."""
+    present = np.asarray(people.present, bool)
+    entering = present & ~np.concatenate([np.zeros((1, present.shape[1]), bool), present[:-1]])
+    d = proximity.part_distances(geometry, q[starts], people.positions[starts], people.radii, entering[starts])
+    return {part: d[part] <= 0.0 for part in RUN_PARTS}
+
+
 def run_metrics(scenario, times: np.ndarray, q: np.ndarray, people: PeopleLog | None, stopped: np.ndarray | None,
                 reached: bool, time_limit: float, *, time_to_goal: float | None = None,
-                zones: HallZones = ZONES) -> dict[str, float]:
+                zones: HallZones = ZONES, waiting: np.ndarray | None = None) -> dict[str, float]:
     """The social-navigation metrics of an executed run against where people
     were (the table of the module docstring).
 
@@ -152,12 +198,16 @@ def run_metrics(scenario, times: np.ndarray, q: np.ndarray, people: PeopleLog | 
         q: (T, 4) executed configurations at ``times``.
         people: the people at the same times (``people.times`` equal to
             ``times``); None = nobody.
-        stopped: (T,) True while the safety monitor held the robot; None =
-            not recorded (the stop metrics are NaN).
+        stopped: (T,) True where the safety monitor holds the robot from
+            sample k on (its decision at t_k); None = not recorded (the stop
+            metrics and ``collisions_moving_<part>`` are NaN).
         reached: the goal was reached.
         time_limit: the run's time limit, seconds (for ``timeout``).
         time_to_goal: the simulator's goal time, seconds; None = ``D``.
         zones: Hall's zone bounds.
+        waiting: (T,) True where the replanner holds the robot from sample k
+            on (no safe path at its latest decision at or before t_k); None =
+            no replanner (never waiting).
 
     Returns:
         A flat dictionary of floats (keys of the module docstring's table).
@@ -175,8 +225,9 @@ def run_metrics(scenario, times: np.ndarray, q: np.ndarray, people: PeopleLog | 
     if people is not None and (len(people.times) != t or not np.allclose(people.times, times, rtol=0, atol=1e-9)):
         raise ValueError(f"run_metrics: the people log has {len(people.times)} samples at other times than the "
                          f"run's {t}; sample it at the run's times (PeopleLog.sample or the simulator's log)")
-    if stopped is not None and np.asarray(stopped).shape != (t,):
-        raise ValueError(f"run_metrics: stopped must be (T,) = ({t},) booleans, got {np.asarray(stopped).shape}")
+    for name, flag in (("stopped", stopped), ("waiting", waiting)):
+        if flag is not None and np.asarray(flag).shape != (t,):
+            raise ValueError(f"run_metrics: {name} must be (T,) = ({t},) booleans, got {np.asarray(flag).shape}")
     g = ArmGeometry.from_scenario(scenario)
     duration = float(times[-1] - times[0])
     steps = np.diff(times)
@@ -208,8 +259,16 @@ def run_metrics(scenario, times: np.ndarray, q: np.ndarray, people: PeopleLog | 
     else:
         dist = proximity.part_distances(g, q, people.positions, people.radii, people.present)
         agf = _agf_over_time(scenario, g, q, people)
-    # The robot moves at sample k when its configuration changed since sample k - 1.
-    moving = np.concatenate([[False], np.any(np.diff(q, axis=0) != 0.0, axis=1)])
+    # Commanded to move over [t_{k-1}, t_k) (the module docstring's rule): the base follows the hold of
+    # sample k - 1, the arm's trajectory that of sample k - 2; held over the step only when both hold.
+    drives = None
+    if stopped is not None:
+        held = np.asarray(stopped, bool) | (False if waiting is None else np.asarray(waiting, bool))
+        drives = ~(held & np.concatenate([held[:1], held[:-1]]))  # index k - 1: samples k - 1 and max(k - 2, 0)
+    starts = {part: run_starts(dist[part] <= 0.0) for part in RUN_PARTS}
+    every = np.unique(np.concatenate(list(starts.values())))
+    appeared = (_appearing_contacts(g, q, people, every) if len(every) else
+                {part: np.zeros(0, bool) for part in RUN_PARTS})
     for part in RUN_PARTS:
         d = dist[part]
         out[f"min_dist_{part}"] = float(d.min())
@@ -221,9 +280,11 @@ def run_metrics(scenario, times: np.ndarray, q: np.ndarray, people: PeopleLog | 
             out[f"share_{name}_{part}"] = share(seconds)
         count, seconds = episodes(d <= 0.0, times)
         out[f"collisions_{part}"] = float(count)
-        touching = d <= 0.0
-        starts = touching & ~np.concatenate([[False], touching[:-1]])
-        out[f"collisions_moving_{part}"] = float(np.sum(starts & moving))
+        k = starts[part]
+        new = appeared[part][np.searchsorted(every, k)]
+        out[f"collisions_appeared_{part}"] = float(np.count_nonzero(new))
+        out[f"collisions_moving_{part}"] = (float("nan") if drives is None else
+                                            float(np.count_nonzero(~new & (k >= 1) & drives[np.maximum(k - 1, 0)])))
         out[f"collision_time_{part}"] = seconds
         out[f"space_compliance_{part}"] = share(held_time(d >= zones.intimate, times))
         out[f"agf_time_{part}"] = float(np.trapezoid(agf[part], times)) if t > 1 else 0.0
@@ -244,7 +305,9 @@ def execution_metrics(scenario, result) -> dict[str, float]:
     logged at others; a result without a ``people`` attribute (a simulator
     that does not log people) is measured against the scenario's open-loop
     people model sampled at the run's times. The stops are
-    ``result.stopped``; without it the stop metrics are NaN (null in JSON).
+    ``result.stopped``; without it the stop metrics and the moving contacts
+    are NaN (null in JSON). The replanner's holds are ``result.waiting``
+    (none without it).
 
     Args:
         scenario: the executed scenario.
@@ -264,8 +327,10 @@ def execution_metrics(scenario, result) -> dict[str, float]:
     elif people is not None and (len(people.times) != len(times) or not np.array_equal(people.times, times)):
         people = PeopleLog.sample(people, times)
     stopped = getattr(result, "stopped", None)
+    waiting = getattr(result, "waiting", None)
     metrics = run_metrics(scenario, times, result.q, people, None if stopped is None else np.asarray(stopped, bool),
                           bool(result.reached), float(scenario.execution.time_limit),
-                          time_to_goal=result.time_to_goal)
+                          time_to_goal=result.time_to_goal,
+                          waiting=None if waiting is None else np.asarray(waiting, bool))
     return {NAV_PREFIX + k: v for k, v in metrics.items()}
 

@@ -21,7 +21,7 @@ import math
 
 import numpy as np
 
-__all__ = ["derivative_magnitudes", "episodes", "held_time", "motion_stats", "trapezoid_mean"]
+__all__ = ["derivative_magnitudes", "episodes", "held_time", "motion_stats", "run_starts", "trapezoid_mean"]
 
 
 def _steps(times: np.ndarray) -> np.ndarray:
@@ -36,6 +36,13 @@ def held_time(mask: np.ndarray, times: np.ndarray) -> float:
     return float(_steps(times)[mask].sum())
 
 
+def run_starts(mask: np.ndarray) -> np.ndarray:
+    """The sample indices (int array) where maximal runs of consecutive True
+    samples of ``mask`` (T,) begin: k with ``mask[k]`` and (k = 0 or not ``mask[k - 1]``)."""
+    mask = np.asarray(mask, bool).reshape(-1)
+    return np.flatnonzero(mask & ~np.concatenate([[False], mask[:-1]]))
+
+
 def episodes(mask: np.ndarray, times: np.ndarray) -> tuple[int, float]:
     """Maximal runs of consecutive True samples of ``mask`` (T,).
 
@@ -44,9 +51,7 @@ def episodes(mask: np.ndarray, times: np.ndarray) -> tuple[int, float]:
         A run that starts at the first sample counts; a run made of the last
         sample alone counts with duration 0.
     """
-    mask = np.asarray(mask, bool).reshape(-1)
-    starts = int(np.count_nonzero(mask[1:] & ~mask[:-1])) + int(bool(len(mask)) and bool(mask[0]))
-    return starts, held_time(mask, times)
+    return len(run_starts(mask)), held_time(mask, times)
 
 
 def trapezoid_mean(values: np.ndarray, times: np.ndarray) -> float:

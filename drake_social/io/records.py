@@ -129,8 +129,13 @@ NAV_FIELDS: dict[str, str] = {
                               "(nobody present: public)",
     "nav_share_<zone>_<part>": "nav_time_<zone>_<part> / nav_duration, 0..1 (the four zones sum to 1)",
     "nav_collisions_<part>": "contact episodes with people (distance <= 0), counted where they start",
-    "nav_collisions_moving_<part>": "of nav_collisions_<part>, those that start while the robot moves (the "
-                                    "others: a person walked into the robot standing still)",
+    "nav_collisions_appeared_<part>": "of nav_collisions_<part>, those that start with a person appearing in "
+                                      "contact (touching the part at the sample where they enter)",
+    "nav_collisions_moving_<part>": "of nav_collisions_<part>, those that start, not by an appearance, while the "
+                                    "robot is commanded to move (not held by the safety monitor or waiting for a "
+                                    "replan over the step the contact began in: the base reads a hold at once, the "
+                                    "arm's trajectory a control period later); the rest: a person walked into the "
+                                    "held robot; null when the run recorded no stop flag",
     "nav_collision_time_<part>": "seconds in contact with a person",
     "nav_space_compliance_<part>": "share of the time the part kept >= 0.45 m from every present person, 0..1",
     "nav_agf_time_<part>": "time integral of the part's thresholded AGF sum over the present people at their "

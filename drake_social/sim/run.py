@@ -199,6 +199,9 @@ class SimulationResult:
             the robot from (its decision at t_k: ``start <= t_k < end`` of a
             stop), all False without people. (The ``stop`` logger, published
             before the updates, shows the decision of t_{k-1} at t_k.)
+        waiting: (T,) True at the sample times t_k the replanner holds the
+            robot from (its latest decision at or before t_k found no safe
+            path: status ``"wait"``), all False without replanning.
         stops: one dict per stop by the safety monitor, in order: ``start``
             and ``end`` (the times of the updates that stopped and released
             the robot, seconds; ``end`` None when still stopped at the end),
@@ -238,6 +241,7 @@ class SimulationResult:
     report: ExecutionReport | None = None
     people: PeopleLog | None = None
     stopped: np.ndarray = dc.field(default_factory=lambda: np.zeros(0, bool))
+    waiting: np.ndarray = dc.field(default_factory=lambda: np.zeros(0, bool))
     stops: list[dict] = dc.field(default_factory=list)
     replans: tuple = ()
     replanning: dict | None = None
@@ -723,6 +727,7 @@ def run_checked(
         stops=_stops(built, root, float(times[-1]) if len(times) else 0.0), replans=replans, replanning=replanning,
     )
     result.stopped = _stopped(times, result.stops)
+    result.waiting = _waiting(times, replans)
     source = built.subsystem("people")
     if source.model.count and len(times):  # the open-loop people sampled; a crowd from its logged state
         result.people = source.people_log(times, data.get("crowd_state"))
@@ -761,6 +766,17 @@ def _stopped(times: np.ndarray, stops: list[dict]) -> np.ndarray:
     for stop in stops:
         held |= (times >= stop["start"]) & (True if stop["end"] is None else times < stop["end"])
     return held
+
+
+def _waiting(times: np.ndarray, replans) -> np.ndarray:
+    """(T,) True where the latest replan at or before t_k (within 1e-9 s: the
+    replan period and the log period are summed apart) found no safe path."""
+    if not replans:
+        return np.zeros(len(times), bool)
+    at = np.array([r.t for r in replans], float)
+    wait = np.array([r.status == "wait" for r in replans], bool)
+    latest = np.searchsorted(at, np.asarray(times, float) + 1e-9, side="right") - 1
+    return (latest >= 0) & wait[np.maximum(latest, 0)]
 
 
 def _empty_result(built: TransportDiagram, path: np.ndarray, planner: PlannerResult, message: str) -> SimulationResult:

@@ -181,7 +181,16 @@ def test_target_lines_on_hand_made_records():
                         "replan_times": [0.01, 0.02, 0.09, 0.1] if k == 0 else [0.03], "replan_deadline_hits": float(k == 0)})
     lines = target_lines(records, ["s"], ["replan_multi"], {"s": 0.08})
     assert lines[0].startswith("- **MET** (target): s, replanning multi-point: collisions with people: 0 contact(s) "
-                               "in 0/20 episodes (safety stops: 10 in all")
+                               "in 0/20 episodes, 0 begun with the robot commanded to move, 0 by a person appearing "
+                               "in contact, the rest walked into the held robot (safety stops: 10 in all")
+    # Contacts in episodes 5 (3: one moving, one appearing) and 7 (1, walked into); a record without
+    # a stop flag (moving null) counts no moving contact.
+    records[5].update(nav_collisions_robot=3.0, nav_collisions_moving_robot=1.0, nav_collisions_appeared_robot=1.0)
+    records[7].update(nav_collisions_robot=1.0, nav_collisions_moving_robot=None, nav_collisions_appeared_robot=0.0)
+    touched = target_lines(records, ["s"], ["replan_multi"], {"s": 0.08})[0]
+    assert touched.startswith("- **MISSED** (target): s, replanning multi-point: collisions with people: 4 "
+                              "contact(s) in 2/20 episodes, 1 begun with the robot commanded to move, 1 by a person "
+                              "appearing in contact, the rest walked into the held robot (safety stops: 10 in all")
     assert lines[1] == ("- **MET** (target): s, replanning multi-point: success 19/20 = 95.0 % (target >= 95 %)")
     # 23 replan times, sorted 0.01, 0.02, 0.03 x 19 (ranks 2..20), 0.09, 0.1: median 0.03; the 95th
     # percentile at rank 0.95 * 22 = 20.9: 0.03 + 0.9 * (0.09 - 0.03) = 0.084 > the budget 0.08.

@@ -159,12 +159,9 @@ def test_two_contact_episodes_of_known_duration(tmp_path):
     x = np.where(times <= 12.0, 0.4 * times, 4.8 - 0.4 * (times - 12.0))
     people = _log(times, np.stack([x, np.full_like(x, 2.5)], -1)[:, None, :])
     dut = run_metrics(scenario, times, q, people, None, False, 16.0)
-    assert dut["collisions_base"] == 1.0 and dut["collisions_moving_base"] == 0.0  # the robot stood still
-    assert dut["collision_time_base"] == pytest.approx(2.0, abs=0.01 + 1e-9)
-    # The same contact with the robot creeping east (1 mm/s) from t = 10 s: it began while the robot moved.
-    creep = _q(5.0 + 0.001 * np.clip(times - 10.0, 0.0, None), 2.5)
-    moving = run_metrics(scenario, times, creep, people, None, False, 16.0)
-    assert moving["collisions_base"] == 1.0 and moving["collisions_moving_base"] == 1.0
+    assert dut["collisions_base"] == 1.0 and dut["collision_time_base"] == pytest.approx(2.0, abs=0.01 + 1e-9)
+    # Who made it needs the commands (tests/experiments/test_contact_classes.py); not recorded here.
+    assert math.isnan(dut["collisions_moving_base"]) and dut["collisions_appeared_base"] == 0.0
     assert dut["min_dist_base"] == pytest.approx(5.0 - 4.8 - _OFFSET, abs=1e-9)
     # Two passes: out and back twice (turns at 4 s, 8 s, 12 s between x = 3.2 and 4.8).
     tri = 3.2 + 1.6 * np.abs(((times / 4.0) % 2.0) - 1.0)  # 4.8 at t = 0, 8, 16; 3.2 at 4, 12

@@ -141,6 +141,19 @@ def test_a_replanning_run_reports_its_replans(tiny):
     assert "replans at 10 Hz: 1 changed the path, 0 waited" in run.summary()
 
 
+def test_a_replanning_run_records_when_the_replanner_held_the_robot(tiny):
+    # Replans 5 .. 14 wait: replan k runs at t = k / 10 s (summed apart from the log's 0.01 s steps).
+    scenario = dc.replace(tiny, people=[])
+    run = run_checked(scenario, "kinematic", "synchronized", None, None, None, 3.0, False, None, None,
+                      replan=True, replanner=Detour(scenario.goal, turn=-1, waits=range(5, 15)))
+    assert [r.status for r in run.replans][5:16] == ["wait"] * 10 + ["kept"]
+    expected = (run.times > 0.5 - 1e-6) & (run.times < 1.5 - 1e-6)
+    np.testing.assert_array_equal(run.waiting, expected)
+    assert expected.sum() == 100 and not run.stopped.any()
+    plain = run_checked(scenario, "kinematic", "synchronized", None, None, None, 1.0, False, None, None)
+    assert len(plain.waiting) == len(plain.times) and not plain.waiting.any()
+
+
 # ---- with the real replanner ---------------------------------------------------
 
 CORRIDOR = """

@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 from drake_social.control import braking_travel
+from drake_social.experiments.nav_metrics import execution_metrics
 from drake_social.kinematics import ArmGeometry
 from drake_social.people import PeopleState
 from drake_social.people.proximity import part_distances
@@ -102,6 +103,26 @@ def test_walker_crossing_stops_the_robot_which_goes_on_after(setting, execution,
     assert record["stops"] == [stop] and record["stopped_time"] == pytest.approx(stop["duration"])
     lines = [r.getMessage() for r in caplog.records if r.getMessage().startswith("safety stop")]
     assert len(lines) == 1 and "walker" in lines[0] and f"{stop['start']:.3f}" in lines[0]
+
+
+@pytest.mark.parametrize("mode", ["kinematic", "dynamic"])
+def test_a_walker_walking_into_the_held_robot_makes_no_moving_contact(setting, mode):
+    # The walker comes head-on along the base's line y = 2.5 and walks on through the robot: the
+    # monitor holds the robot from the walker's first sample within the safety distance (no contact
+    # force in either mode: the walker passes through). The robot did not drive into them.
+    scenario, waypoints, _ = setting
+    walker = Walker([7.5, 2.5], [0.5, 2.5], 0.0, 7.0 / 0.5)
+    run = simulate(scenario, waypoints=waypoints, people=walker, analyze=False, mode=mode, time_limit=8.0)
+    d = _distances(scenario, walker, run)
+    (stop,) = run.stops
+    k0 = int(np.flatnonzero(d <= 0.0)[0])  # the contact's first sample, by hand
+    assert stop["start"] < run.times[k0 - 1] and stop["end"] is None
+    dut = execution_metrics(scenario, run)
+    assert dut["nav_collisions_robot"] == 1.0 and dut["nav_collisions_arm"] == 1.0
+    assert dut["nav_collisions_moving_robot"] == 0.0 and dut["nav_collisions_appeared_robot"] == 0.0
+    assert dut["nav_collisions_moving_arm"] == 0.0 and dut["nav_collisions_moving_base"] == 0.0
+    if mode == "dynamic":  # the held robot still creeps (the servo's residue) as the contact begins
+        assert np.any(run.q[k0] != run.q[k0 - 1])
 
 
 def test_stop_port_and_logger_only_with_people(setting):
