@@ -161,3 +161,26 @@ NEAR_RADIUS_MODES = ("fixed", "shrinking")
 CROWD_VARIANTS = ("plan_once", "replan_base", "replan_multi", "replan_speed")
 CROWD_SCENARIOS = ("scenarios/office_walkers.yaml", "scenarios/lobby_crowd.yaml")
 MAX_EPISODES = 10_000
+#: Largest start delay of a crowd study's scripted walker (``experiment crowd
+#: --jitter``), seconds: a walker delayed longer than the longest run
+#: (MAX_TIME_LIMIT) never walks in it.
+MAX_JITTER = MAX_TIME_LIMIT
+
+#: Most seeds of ``bench --seeds``: as many as a study's runs per planner
+#: (MAX_RUNS); each seed plans every algorithm on every scenario.
+MAX_BENCH_SEEDS = 10_000
+#: Most timings of one run in ``bench --repeats``: the median of 100 already
+#: filters the machine's noise, and each repeat replans the whole path.
+MAX_BENCH_REPEATS = 100
+#: Most simulated runs of ``bench --sim-runs`` (per mode and execution) and
+#: ``bench --replan-runs``: each is a whole run of the scenario (up to
+#: MAX_TIME_LIMIT simulated seconds); as many as ``--repeats``.
+MAX_BENCH_RUNS = MAX_BENCH_REPEATS
+#: Most replans of the replanning benchmark's rollout (``bench
+#: --replan-count``): the most a run can make (one per control period,
+#: MAX_CONTROL_STEPS periods).
+MAX_BENCH_REPLAN_COUNT = MAX_CONTROL_STEPS
+#: Most worker processes of ``experiment --workers``: each holds Drake and a
+#: scenario's checker (a few hundred MB), so 64 already needs tens of GB; a
+#: cluster is the place for more (``--executor dask --scheduler``).
+MAX_WORKERS = 64
