@@ -443,7 +443,7 @@ def run_simulate(*, scenario: Scenario | str | Path, out: str | Path, overrides:
     from drake_social.io.paths import parse_path_csv, write_executed_csv, write_people_csv, write_replans_csv
     from drake_social.io.records import json_lines
     from drake_social.planning.result import PlanningInputError
-    from drake_social.scenario import plant_time_step_problem, validate_scenario
+    from drake_social.scenario import plant_time_step_problem, replan_rate_problem, validate_scenario
     from drake_social.sim.run import run_checked
     from drake_social.kinematics import ArmGeometry
     from drake_social.viz.tracking import tracking_figure
@@ -465,6 +465,10 @@ def run_simulate(*, scenario: Scenario | str | Path, out: str | Path, overrides:
         loaded.planner.algorithm = algorithm or loaded.planner.algorithm
         loaded.random_seed = loaded.random_seed if seed is None else seed
         validate_scenario(loaded, source=f"{source} ({_listed(planning_only)})")
+    if replan and not loaded.planner.replan:  # a scenario that replans was checked as one when it was loaded
+        problem = replan_rate_problem(loaded.planner.replan_rate, loaded.execution)
+        if problem:
+            raise ScenarioError(f"{source} (--replan): planner.replan_rate: {problem}")
     if mode is not None:  # the scenario's own mode was checked when it was loaded
         problem = plant_time_step_problem(loaded.execution, mode)
         if problem:

@@ -155,9 +155,13 @@ def require_number(value: Any, who: str, argument: str, *, positive: bool = Fals
     what = f"a finite number{' ' + ' and '.join(rules) if rules else ''}{unit}"
     if isinstance(value, bool) or not isinstance(value, numbers.Real):
         raise TypeError(f"{who}: {argument} must be {what}{' or None' if optional else ''}, got {_shown(value)}")
-    if not (float(value) == float(value) and abs(float(value)) != float("inf")) or (positive and not value > 0) \
+    try:
+        number = float(value)
+    except OverflowError:  # an integer beyond the floats
+        number = float("inf")
+    if not (number == number and abs(number) != float("inf")) or (positive and not value > 0) \
             or (minimum is not None and not value >= minimum) or (maximum is not None and not value <= maximum):
-        raise ValueError(f"{who}: {argument} must be {what}, got {value}")
+        raise ValueError(f"{who}: {argument} must be {what}, got {shorten(str(value))}")
 
 
 def require_int(value: Any, who: str, argument: str, *, minimum: int | None = None, maximum: int | None = None,

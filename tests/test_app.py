@@ -218,6 +218,8 @@ NONE = "no-such-scenario.yaml"  # never read: the door comes first
      "run_crowd_experiment: jitter must be a finite number >= 0 and <= 600 seconds, got str '1'"),
     ("run_crowd_experiment", dict(time_limit="5"), TypeError,
      "run_crowd_experiment: time_limit must be a finite number > 0 and <= 600 seconds or None, got str '5'"),
+    ("run_crowd_experiment", dict(jitter=10**400), ValueError,
+     "run_crowd_experiment: jitter must be a finite number >= 0 and <= 600 seconds, got 1000000000"),
     ("run_crowd_experiment", dict(episodes=True), TypeError,
      "run_crowd_experiment: episodes must be an integer >= 1 and <= 10,000, got bool True"),
     ("run_crowd_experiment", dict(trace_episode=-1), ValueError,

@@ -62,8 +62,8 @@ from drake_social.people.jitter import JITTER_TAG, delay_walkers, has_people, wa
 from drake_social.scenario import Scenario, time_limit_problem
 
 __all__ = ["CROWD_SETTINGS", "DEFAULT_SCENARIOS", "JITTER_TAG", "MAX_EPISODES", "TRACE_STEP", "VARIANTS", "CrowdResult",
-           "CrowdStudy", "check_crowd_settings", "check_crowd_study", "crowd_tasks", "episode_scenario", "episode_seeds", "perturb", "replan_stats", "replanning_available",
-           "run_crowd", "run_episode", "walker_delays"]
+           "CrowdStudy", "check_crowd_settings", "check_crowd_study", "crowd_tasks", "episode_scenario", "episode_seeds",
+           "perturb", "replan_stats", "replanning_available", "run_crowd", "run_episode", "walker_delays"]
 
 _log = logging.getLogger(__name__)
 

@@ -345,8 +345,8 @@ class PlannerOptions:
     # from the robot's configuration against the people predicted over
     # ``replan_horizon`` (drake_social.control.ReplanningPlannerSystem).
     replan: bool = False
-    # Replans per second of simulated time, Hz (> 0, at most one per
-    # execution.control_period: 1 / replan_rate >= control_period).
+    # Replans per second of simulated time, Hz (> 0; a run that replans makes
+    # at most one per execution.control_period: 1 / replan_rate >= control_period).
     replan_rate: float = 10.0
     # Wall-clock budget of one replan, seconds (in (0, MAX_REPLAN_BUDGET]):
     # the search stops there with the best path found so far.

@@ -199,7 +199,12 @@ def time_limit_problem(time_limit: float, execution: ExecutionOptions, argument:
 def replan_rate_problem(rate: float, execution: ExecutionOptions) -> str | None:
     """What is wrong with replanning ``rate`` times a second (> 0) under
     ``execution`` (at most :data:`MAX_REPLANS_PER_CONTROL_PERIOD` replan per
-    control period: the period ``1 / rate`` at least ``control_period``), or None."""
+    control period: the period ``1 / rate`` at least ``control_period``), or None.
+
+    A rule of a run that replans: :func:`validate_scenario` applies it with
+    ``planner.replan`` on, and whatever turns replanning on for a scenario
+    without it (``simulate --replan``, ``simulate(..., replan=True)``) applies it then.
+    """
     period = execution.control_period / MAX_REPLANS_PER_CONTROL_PERIOD
     if 1.0 / rate < period:
         return (f"must be <= 1 / execution.control_period = {1.0 / period:g} Hz (at most one replan per control "
@@ -422,7 +427,7 @@ def validate_scenario(scenario: Scenario, source: str = "<scenario>") -> None:
                f"{e.kp} * {e.control_period} = {e.kp * e.control_period:.6g}")
     if e.replay_fps > MAX_REPLAY_FPS:
         c.fail("execution.replay_fps", f"must be <= {MAX_REPLAY_FPS:g} frames per second, got {e.replay_fps}")
-    problem = replan_rate_problem(p.replan_rate, e)
+    problem = replan_rate_problem(p.replan_rate, e) if p.replan else None  # --replan checks it when it turns it on
     if problem:
         c.fail("planner.replan_rate", problem)
     if scenario.random_seed < 0:
