@@ -12,7 +12,10 @@ prints; progress goes to an optional callback, errors are exceptions:
   (the message names the file and the field);
 * ``OSError``: an output could not be written (another run writing the same
   ``out`` included: :class:`~drake_social.io.outputs.OutputBusyError`);
-* ``KeyboardInterrupt``: interrupted; no file of the run is left.
+* ``KeyboardInterrupt``: interrupted; no file of the run is left;
+* ``TypeError``, ``ValueError``: an argument of the wrong kind or value,
+  refused before any work (the message names the function, the argument and
+  what is allowed).
 
 A path that is not found, one that Drake's check rejects, or an execution
 that misses the goal, collides or passes a limit are outcomes, not errors:
@@ -35,12 +38,18 @@ import signal
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Callable, Sequence
 
+import numpy as np
+
+from drake_social.arguments import (Rule, check_arguments, real_array, require_callable, require_checker, require_choice,
+                                    require_choices, require_file_name, require_file_names, require_instance,
+                                    require_int, require_number, require_scenario, require_scenario_or_file,
+                                    require_strings)
 from drake_social.io.textfile import check_regular_file, shorten
-from drake_social.scenario import Scenario, ScenarioError, compose_yaml, load_scenario
+from drake_social.limits import (ALGORITHMS, CHECKERS, EXECUTORS, MAX_BENCH_REPEATS, MAX_BENCH_REPLAN_COUNT,
+                                 MAX_BENCH_RUNS, MAX_BENCH_SEEDS, MAX_ITERATIONS, MAX_PAPER_RUNS, MAX_WORKERS)
+from drake_social.scenario import EXECUTIONS, SIM_MODES, Scenario, ScenarioError, compose_yaml, load_scenario
 
 if TYPE_CHECKING:
-    import numpy as np
-
     from drake_social.experiments.study import Study, StudyResult
     from drake_social.planning.result import PlannerResult
     from drake_social.sim.run import SimulationResult
@@ -62,6 +71,95 @@ SIMULATE_OUTPUTS = ("replay.html", "executed.csv", "people.csv", "replans.csv", 
 Progress = Callable[[int, int, str], None]
 
 
+# ---- the arguments: every public function here checks its own at the door --------
+
+
+def _int(minimum: int, maximum: int | None = None, *, optional: bool = False) -> Rule:
+    return lambda v, who, name: require_int(v, who, name, minimum=minimum, maximum=maximum, optional=optional)
+
+
+def _choice(allowed: tuple[str, ...], *, optional: bool = False) -> Rule:
+    return lambda v, who, name: require_choice(v, who, name, allowed, optional=optional)
+
+
+def _flag(*, optional: bool = False) -> Rule:
+    allowed = "True, False" if optional else "True or False"  # the helper adds " or None"
+    return lambda v, who, name: require_instance(v, (bool, np.bool_), who, name, allowed, optional=optional)
+
+
+def _number(**rules) -> Rule:
+    return lambda v, who, name: require_number(v, who, name, **rules)
+
+
+def _file(*, optional: bool = False) -> Rule:
+    return lambda v, who, name: require_file_name(v, who, name, optional=optional)
+
+
+def _study(value, who: str, name: str) -> None:
+    from drake_social.experiments.study import Study
+
+    require_instance(value, Study, who, name, "a drake_social.experiments.study.Study (paper_experiment(...) or "
+                                              "load_sweep(file))")
+
+
+def _layout(value, who: str, name: str) -> None:
+    from drake_social.people.eth_ucy import ETH_UCY_LAYOUTS
+
+    require_choice(value, who, name, tuple(ETH_UCY_LAYOUTS))
+
+
+_RUN = {"out": _file(), "progress": require_callable}
+_SCENARIO = {"scenario": require_scenario_or_file, "overrides": require_strings}
+# iterations: at most MAX_ITERATIONS by the scenario's own rule, checked with the planner
+# (a ScenarioError naming --iterations, as the command line reports it).
+_PLANNER = {"algorithm": _choice(ALGORITHMS, optional=True), "iterations": _int(1, optional=True),
+            "seed": _int(0, optional=True), "checker": _choice(CHECKERS)}
+_WORKERS = {"executor": _choice(EXECUTORS), "workers": _int(1, MAX_WORKERS),
+            "scheduler": lambda v, who, name: require_instance(v, str, who, name, "a scheduler's address, e.g. "
+                                                                                  "'tcp://10.0.0.5:8786'", optional=True)}
+#: The rule of each argument of each public function of this module (its keyword arguments, run_bench's options).
+_ARGUMENTS: dict[str, dict[str, Rule]] = {
+    "load_with_overrides": {"path": _file(), "sets": lambda v, who, name: require_strings(v, who, name, optional=True)},
+    "read_path_csv": {"path": _file(), "scenario": require_scenario,
+                      "checker": lambda v, who, name: require_checker(v, who, name, optional=True),
+                      "option": lambda v, who, name: require_instance(v, str, who, name, "a string such as '--path'")},
+    "run_show": {**_SCENARIO, "out": _file()},
+    "run_plan": {**_SCENARIO, **_RUN, **_PLANNER},
+    "run_simulate": {**_SCENARIO, **_RUN, **_PLANNER, "path": _file(optional=True),
+                     "mode": _choice(SIM_MODES, optional=True), "execution": _choice(EXECUTIONS, optional=True),
+                     "replay": _flag(), "replan": _flag(optional=True)},
+    "run_bench": {
+        "scenario_paths": require_file_names, **_RUN,
+        "algorithms": lambda v, who, name: require_choices(v, who, name, ALGORITHMS, optional=True, distinct=False),
+        "iterations": _int(1, MAX_ITERATIONS), "seeds": _int(1, MAX_BENCH_SEEDS), "checker": _choice(CHECKERS),
+        "ompl_checker": _choice(CHECKERS), "include_ompl": _flag(), "include_checker": _flag(),
+        "sim_runs": _int(0, MAX_BENCH_RUNS), "scaling": _flag(), "repeats": _int(1, MAX_BENCH_REPEATS),
+        "replan_runs": _int(0, MAX_BENCH_RUNS), "replan_count": _int(1, MAX_BENCH_REPLAN_COUNT),
+        "replan_scenario": _file(optional=True), "map_bench": _flag()},
+    "paper_experiment": {"runs": _int(1, MAX_PAPER_RUNS), "iterations": _int(1, MAX_ITERATIONS), "seed": _int(0),
+                         "simulate": _flag(), "scenario_dir": _file()},
+    "check_scheduler": {"executor": _choice(EXECUTORS), "scheduler": _WORKERS["scheduler"]},
+    "run_study": {"study": _study, **_RUN, **_WORKERS},
+    "run_people_import": {
+        "file": _file(), "out": _file(), "layout": _layout, "fps": _number(positive=True, unit="frames per second"),
+        "offset": lambda v, who, name: real_array(v, who, name, (2,), layout="[dx, dy], metres"),
+        "rotate": _number(unit="radians"), "start": _number(optional=True, unit="seconds"),
+        "end": _number(optional=True, unit="seconds"),
+        "ids": lambda v, who, name: require_strings(v, who, name, optional=True), "theta": _flag()},
+    "run_crowd_experiment": {**_RUN, **_WORKERS},
+}
+
+
+def _door(who: str, arguments: dict[str, Any]) -> None:
+    """Checks the arguments of the public function ``who`` by :data:`_ARGUMENTS`
+    (each calls it first, with ``locals()``: its arguments alone).
+
+    Raises:
+        TypeError, ValueError: naming ``who``, the argument and what is allowed.
+    """
+    check_arguments(who, _ARGUMENTS[who], arguments)
+
+
 def load_with_overrides(path: str | Path, sets: Sequence[str] | None = None) -> Scenario:
     """Loads a scenario with overrides, as ``--set`` gives them.
 
@@ -74,6 +172,7 @@ def load_with_overrides(path: str | Path, sets: Sequence[str] | None = None) -> 
         ScenarioError: the file, an override or a value is invalid; the
             message names the ``--set`` at fault.
     """
+    _door("load_with_overrides", locals())
     import yaml  # to name the --set at fault before Drake's loader sees it
 
     texts = list(sets or [])
@@ -106,6 +205,7 @@ def read_path_csv(path: str | Path, scenario: Scenario, checker=None, option: st
             and goal (to ``waypoints.ENDPOINT_TOLERANCE``); the message names
             the file and the line.
     """
+    _door("read_path_csv", locals())
     from drake_social.io.paths import parse_path_csv
 
     return _checked_rows(path, parse_path_csv(path, option), scenario, checker, option)
@@ -162,6 +262,7 @@ def run_show(*, scenario: Scenario | str | Path, out: str | Path, overrides: Seq
         out: the output folder.
         overrides: ``--set`` texts applied over the file.
     """
+    _door("run_show", locals())
     from drake_social.io.outputs import OutputSet
     from drake_social.viz import write_show  # matplotlib figures: only when drawing
 
@@ -232,6 +333,7 @@ def run_plan(*, scenario: Scenario | str | Path, out: str | Path, overrides: Seq
         ScenarioError, PlanningInputError: invalid input, named.
         OSError: an output could not be written.
     """
+    _door("run_plan", locals())
     from drake_social.collision.drake_checker import make_checker, verify_path
     from drake_social.experiments.records import run_record
     from drake_social.io.outputs import OutputSet
@@ -331,6 +433,7 @@ def run_simulate(*, scenario: Scenario | str | Path, out: str | Path, overrides:
         ScenarioError, PlanningInputError: invalid input, named.
         OSError: an output could not be written.
     """
+    _door("run_simulate", locals())
     import numpy as np
 
     from drake_social.collision.drake_checker import make_checker
@@ -340,7 +443,7 @@ def run_simulate(*, scenario: Scenario | str | Path, out: str | Path, overrides:
     from drake_social.io.paths import parse_path_csv, write_executed_csv, write_people_csv, write_replans_csv
     from drake_social.io.records import json_lines
     from drake_social.planning.result import PlanningInputError
-    from drake_social.scenario import plant_time_step_problem, validate_scenario
+    from drake_social.scenario import plant_time_step_problem, replan_rate_problem, validate_scenario
     from drake_social.sim.run import run_checked
     from drake_social.kinematics import ArmGeometry
     from drake_social.viz.tracking import tracking_figure
@@ -362,6 +465,10 @@ def run_simulate(*, scenario: Scenario | str | Path, out: str | Path, overrides:
         loaded.planner.algorithm = algorithm or loaded.planner.algorithm
         loaded.random_seed = loaded.random_seed if seed is None else seed
         validate_scenario(loaded, source=f"{source} ({_listed(planning_only)})")
+    if replan and not loaded.planner.replan:  # a scenario that replans was checked as one when it was loaded
+        problem = replan_rate_problem(loaded.planner.replan_rate, loaded.execution)
+        if problem:
+            raise ScenarioError(f"{source} (--replan): planner.replan_rate: {problem}")
     if mode is not None:  # the scenario's own mode was checked when it was loaded
         problem = plant_time_step_problem(loaded.execution, mode)
         if problem:
@@ -472,6 +579,7 @@ def run_bench(*, scenario_paths: Sequence[str | Path], out: str | Path, progress
         The bench's dictionary (as ``bench.json`` holds it); its runs are run
         records (:data:`drake_social.io.records.RUN_FIELDS`).
     """
+    _door("run_bench", {"scenario_paths": scenario_paths, "out": out, "progress": progress, **options})
     for path in scenario_paths:
         check_regular_file(path, "scenario", "--scenarios")
     if options.get("replan_runs", 0) > 0 and options.get("replan_scenario") is None:
@@ -519,6 +627,7 @@ class StudyRun:
 def paper_experiment(*, runs: int, iterations: int, seed: int, simulate: bool, scenario_dir: str | Path) -> Study:
     """The paper's study (:func:`drake_social.experiments.study.paper_study`),
     its two scenario files checked first."""
+    _door("paper_experiment", locals())
     from drake_social.experiments.study import paper_study
 
     for name in ("office_bar.yaml", "generic_L.yaml"):
@@ -532,6 +641,7 @@ def check_scheduler(executor: str, scheduler: str | None) -> None:
     Raises:
         ScenarioError: ``--scheduler: ...`` naming what is wrong.
     """
+    _door("check_scheduler", locals())
     if scheduler is not None and executor != "dask":
         raise ScenarioError("--scheduler needs --executor dask")
     if scheduler is not None:
@@ -566,6 +676,7 @@ def run_study(*, study: Study, out: str | Path, executor: str = "process", worke
         StudyOutputError: not even the records could be committed into
             ``out`` (the message says where they were saved instead).
     """
+    _door("run_study", locals())
     from drake_social.experiments.study import (StudyOutputError, output_names, rescue_records, write_records,
                                                 write_study)
     from drake_social.experiments.study import run_study as run_tasks
@@ -643,6 +754,7 @@ def run_people_import(*, file: str | Path, out: str | Path, layout: str = "xy", 
             regular file (a directory, FIFO, device: never replaced).
         OSError: ``out`` could not be written.
     """
+    _door("run_people_import", locals())
     from drake_social.io.textfile import check_out_file, read_text_file, replace_file
     from drake_social.people import eth_ucy
 
@@ -671,10 +783,18 @@ def run_crowd_experiment(*, out: str | Path, executor: str = "process", workers:
 
     Returns:
         ``(CrowdResult, names written, the error of an output after the records or None)``.
+
+    Raises:
+        TypeError, ValueError: an argument or setting of the wrong kind or
+            out of range (:data:`~drake_social.experiments.crowd.CROWD_SETTINGS`), named.
+        ScenarioError: a scenario file, or the time limit for it, is invalid.
     """
-    from drake_social.experiments.crowd import CrowdStudy
+    _door("run_crowd_experiment", {"out": out, "executor": executor, "workers": workers, "scheduler": scheduler,
+                                   "progress": progress})
+    from drake_social.experiments.crowd import CrowdStudy, check_crowd_settings
     from drake_social.experiments.crowd_output import run_crowd_study
 
+    check_crowd_settings("run_crowd_experiment", settings)
     check_scheduler(executor, scheduler)
     for i, s in enumerate(settings.get("scenarios", ())):
         check_regular_file(s, "scenario", f"--scenarios[{i}]")

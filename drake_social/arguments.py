@@ -18,8 +18,9 @@ Example::
 from __future__ import annotations
 
 import numbers
+import os
 from decimal import Decimal
-from typing import Any
+from typing import Any, Callable, Mapping
 
 import numpy as np
 
@@ -28,15 +29,22 @@ from drake_social.io.textfile import shorten
 
 __all__ = [
     "CHECKER_METHODS",
+    "Rule",
+    "check_arguments",
     "real_array",
     "require_callable",
     "require_checker",
     "require_choice",
+    "require_choices",
     "require_execution_options",
+    "require_file_name",
+    "require_file_names",
     "require_instance",
     "require_int",
     "require_number",
     "require_scenario",
+    "require_scenario_or_file",
+    "require_strings",
 ]
 
 
@@ -130,21 +138,30 @@ def require_choice(value: Any, who: str, argument: str, allowed: tuple[str, ...]
 
 
 def require_number(value: Any, who: str, argument: str, *, positive: bool = False, optional: bool = False,
-                   unit: str = "") -> None:
-    """Refuses anything but a finite real number (> 0 when ``positive``).
+                   unit: str = "", minimum: float | None = None, maximum: float | None = None) -> None:
+    """Refuses anything but a finite real number (> 0 when ``positive``, in
+    ``[minimum, maximum]`` when they are given).
 
     Raises:
         TypeError: not a real number (booleans are refused); ValueError: not
-            finite, or not > 0 when ``positive``.
+            finite, not > 0 when ``positive``, or out of range.
     """
     if value is None and optional:
         return
     unit = f" {unit}" if unit else ""
-    what = f"a finite number{' > 0' if positive else ''}{unit}"
+    rules = ["> 0"] if positive else []
+    rules += [] if minimum is None else [f">= {minimum:g}"]
+    rules += [] if maximum is None else [f"<= {maximum:g}"]
+    what = f"a finite number{' ' + ' and '.join(rules) if rules else ''}{unit}"
     if isinstance(value, bool) or not isinstance(value, numbers.Real):
         raise TypeError(f"{who}: {argument} must be {what}{' or None' if optional else ''}, got {_shown(value)}")
-    if not (float(value) == float(value) and abs(float(value)) != float("inf")) or (positive and not value > 0):
-        raise ValueError(f"{who}: {argument} must be {what}, got {value}")
+    try:
+        number = float(value)
+    except OverflowError:  # an integer beyond the floats
+        number = float("inf")
+    if not (number == number and abs(number) != float("inf")) or (positive and not value > 0) \
+            or (minimum is not None and not value >= minimum) or (maximum is not None and not value <= maximum):
+        raise ValueError(f"{who}: {argument} must be {what}, got {shorten(str(value))}")
 
 
 def require_int(value: Any, who: str, argument: str, *, minimum: int | None = None, maximum: int | None = None,
@@ -164,6 +181,113 @@ def require_int(value: Any, who: str, argument: str, *, minimum: int | None = No
         raise TypeError(f"{who}: {argument} must be {what}{' or None' if optional else ''}, got {_shown(value)}")
     if (minimum is not None and value < minimum) or (maximum is not None and value > maximum):
         raise ValueError(f"{who}: {argument} must be {what}, got {value}")
+
+
+def require_file_name(value: Any, who: str, argument: str, *, optional: bool = False) -> None:
+    """Refuses anything but a file or folder name: a ``str`` or an
+    ``os.PathLike`` such as :class:`pathlib.Path` (None too when ``optional``).
+
+    Raises:
+        TypeError: naming ``who``, ``argument`` and what was given.
+    """
+    if (value is None and optional) or isinstance(value, (str, os.PathLike)):
+        return
+    raise TypeError(f"{who}: {argument} must be a file name (a str or pathlib.Path){' or None' if optional else ''}, "
+                    f"got {_shown(value)}")
+
+
+def require_scenario_or_file(value: Any, who: str, argument: str = "scenario") -> None:
+    """Refuses anything but a :class:`~drake_social.scenario.Scenario` or
+    the name of its YAML file (a ``str`` or ``os.PathLike``).
+
+    Raises:
+        TypeError: naming ``who``, ``argument`` and what was given.
+    """
+    if not isinstance(value, (Scenario, str, os.PathLike)):
+        raise TypeError(f"{who}: {argument} must be a scenario file name (a str or pathlib.Path) or a "
+                        f"drake_social.scenario.Scenario, got {_shown(value)}")
+
+
+def _sequence(value: Any, who: str, argument: str, what: str, optional: bool, nonempty: bool) -> bool:
+    """Refuses a value that is not a list or tuple (a lone string included),
+    or an empty one when ``nonempty``; True when it is None and ``optional``."""
+    if value is None and optional:
+        return True
+    if not isinstance(value, (list, tuple)):
+        hint = f" (a list of one: [{shorten(repr(value))}])" if isinstance(value, (str, os.PathLike)) else ""
+        raise TypeError(f"{who}: {argument} must be a list or tuple of {what}{' or None' if optional else ''}, "
+                        f"got {_shown(value)}{hint}")
+    if nonempty and not value:
+        raise ValueError(f"{who}: {argument} must be a non-empty list or tuple of {what}, got {_shown(value)}")
+    return False
+
+
+def require_strings(value: Any, who: str, argument: str, *, optional: bool = False, nonempty: bool = False) -> None:
+    """Refuses anything but a list or tuple of strings (never a lone string).
+
+    Raises:
+        TypeError: not a list or tuple, or an item not a string; ValueError:
+            empty when ``nonempty``.
+    """
+    if _sequence(value, who, argument, "strings", optional, nonempty):
+        return
+    for i, item in enumerate(value):
+        if not isinstance(item, str):
+            raise TypeError(f"{who}: {argument}[{i}] must be a string, got {_shown(item)}")
+
+
+def require_choices(value: Any, who: str, argument: str, allowed: tuple[str, ...], *, optional: bool = False,
+                    distinct: bool = True) -> None:
+    """Refuses anything but a non-empty list or tuple of names of ``allowed``
+    (each at most once when ``distinct``).
+
+    Raises:
+        TypeError: not a list or tuple of strings; ValueError: empty, a
+            name not allowed or (``distinct``) a name twice.
+    """
+    if _sequence(value, who, argument, f"names of {', '.join(allowed)}", optional, True):
+        return
+    for i, item in enumerate(value):
+        require_choice(item, who, f"{argument}[{i}]", allowed)
+    if distinct and len(set(value)) != len(value):
+        raise ValueError(f"{who}: {argument} must name each of {', '.join(allowed)} at most once, "
+                         f"got {_shown(list(value))}")
+
+
+def require_file_names(value: Any, who: str, argument: str, *, optional: bool = False) -> None:
+    """Refuses anything but a non-empty list or tuple of file names (``str`` or ``os.PathLike``).
+
+    Raises:
+        TypeError: not a list or tuple, or an item not a file name; ValueError: empty.
+    """
+    if _sequence(value, who, argument, "file names (str or pathlib.Path)", optional, True):
+        return
+    for i, item in enumerate(value):
+        require_file_name(item, who, f"{argument}[{i}]")
+
+
+#: A check of one argument: ``rule(value, who, argument)`` raises a
+#: ``TypeError`` or ``ValueError`` naming ``who`` and ``argument``.
+Rule = Callable[[Any, str, str], None]
+
+
+def check_arguments(who: str, rules: Mapping[str, Rule], values: Mapping[str, Any]) -> None:
+    """Checks each of ``values`` (argument name -> value) by its rule of ``rules``.
+
+    Example::
+
+        RULES = {"seed": lambda v, who, name: require_int(v, who, name, minimum=0, optional=True)}
+        check_arguments("run_plan", RULES, {"seed": seed})
+
+    Raises:
+        TypeError: a name without a rule (``who``'s allowed names listed),
+            or a rule's TypeError; ValueError: a rule's ValueError.
+    """
+    for name, value in values.items():
+        rule = rules.get(name)
+        if rule is None:
+            raise TypeError(f"{who}: unexpected argument {name!r}; allowed: {', '.join(rules)}")
+        rule(value, who, name)
 
 
 def require_callable(value: Any, who: str, argument: str, *, optional: bool = True) -> None:

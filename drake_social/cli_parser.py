@@ -12,21 +12,13 @@ from typing import Callable
 
 from drake_social import __version__
 from drake_social.io.textfile import shorten
+from drake_social.limits import (MAX_BENCH_REPEATS, MAX_BENCH_REPLAN_COUNT, MAX_BENCH_RUNS, MAX_BENCH_SEEDS,
+                                 MAX_ITERATIONS, MAX_JITTER, MAX_TIME_LIMIT, MAX_WORKERS)
 from drake_social.scenario import ALGORITHMS, CHECKERS
 from drake_social.scenario.shipped import SHIPPED_SCENARIOS, shipped_scenario
 
+# The bounds of the options (their home: drake_social.limits), named here too for scripts that read them.
 __all__ = ["MAX_BENCH_REPEATS", "MAX_BENCH_SEEDS", "MAX_WORKERS", "build_parser"]
-
-#: Most seeds of ``bench --seeds``: as many as a study's runs per planner
-#: (``limits.MAX_RUNS``); each seed plans every algorithm on every scenario.
-MAX_BENCH_SEEDS = 10_000
-#: Most timings of one run in ``bench --repeats``: the median of 100 already
-#: filters the machine's noise, and each repeat replans the whole path.
-MAX_BENCH_REPEATS = 100
-#: Most worker processes of ``experiment --workers``: each holds Drake and a
-#: scenario's checker (a few hundred MB), so 64 already needs tens of GB; a
-#: cluster is the place for more (``--executor dask --scheduler``).
-MAX_WORKERS = 64
 
 
 def _add_scenario_arguments(parser: argparse.ArgumentParser) -> None:
@@ -170,7 +162,8 @@ def _add_bench(subparsers) -> None:
                         f"{' '.join(BENCH_SCENARIOS)} in {SHIPPED_SCENARIOS})")
     p.add_argument("--algorithms", nargs="+", choices=ALGORITHMS, default=list(ALGORITHMS), metavar="A",
                    help=f"planners (default: all of {', '.join(ALGORITHMS)})")
-    p.add_argument("--iterations", type=_positive_int, default=2000, metavar="K", help="samples per run (default 2000)")
+    p.add_argument("--iterations", type=_int_at_least(1, MAX_ITERATIONS), default=2000, metavar="K",
+                   help=f"samples per run, at most {MAX_ITERATIONS:,} (default 2000)")
     p.add_argument("--seeds", type=_int_at_least(1, MAX_BENCH_SEEDS), default=10, metavar="N",
                    help=f"seeds 0..N-1 per planner, at most {MAX_BENCH_SEEDS:,} (default 10)")
     p.add_argument("--repeats", type=_int_at_least(1, MAX_BENCH_REPEATS), default=1, metavar="R",
@@ -183,23 +176,24 @@ def _add_bench(subparsers) -> None:
     p.add_argument("--no-ompl", action="store_true", help="leave out OMPL's RRTstar even when ompl is importable")
     p.add_argument("--no-checker-bench", action="store_true",
                    help="leave out the validity-checker throughput measurement")
-    p.add_argument("--sim-runs", type=_nonnegative_int, default=3, metavar="N",
-                   help="timed simulations per (mode, execution) of the execution benchmark, plus one recorded "
-                        "(default 3; 0 leaves it out)")
+    p.add_argument("--sim-runs", type=_int_at_least(0, MAX_BENCH_RUNS), default=3, metavar="N",
+                   help=f"timed simulations per (mode, execution) of the execution benchmark, plus one recorded, "
+                        f"at most {MAX_BENCH_RUNS} (default 3; 0 leaves it out)")
     p.add_argument("--scaling", action="store_true",
                    help="also the scaling benchmark per scenario (minutes): social_rrt_star at K = 2000 .. 50,000 "
                         "with the shrinking radius and the fitted exponent of time ~ K^b, K = 2000 with "
                         "planner.optimize against the median of three K = 50,000 runs, and 50 people far away")
-    p.add_argument("--replan-runs", type=_nonnegative_int, default=0, metavar="N",
+    p.add_argument("--replan-runs", type=_int_at_least(0, MAX_BENCH_RUNS), default=0, metavar="N",
                    help="also the replanning benchmark on the shipped office_walkers.yaml: replan times over a "
                         "kinematic rollout (--replan-count replans) and the realtime factor of N simulated "
-                        "kinematic runs with 10 Hz replanning (default 0: left out)")
+                        f"kinematic runs with 10 Hz replanning, at most {MAX_BENCH_RUNS} (default 0: left out)")
     p.add_argument("--map", dest="map_bench", action="store_true",
                    help="also the building-map benchmark: a generated 30 x 50 m floor at 0.03 m (ragged walls, "
                         "thousands of boxes): loading, the checker, K plans against the first --scenarios file, "
                         "and the replay of the executed path")
-    p.add_argument("--replan-count", type=_positive_int, default=200, metavar="R",
-                   help="replans of the replanning benchmark's rollout (default 200)")
+    p.add_argument("--replan-count", type=_int_at_least(1, MAX_BENCH_REPLAN_COUNT), default=200, metavar="R",
+                   help=f"replans of the replanning benchmark's rollout, at most {MAX_BENCH_REPLAN_COUNT:,} "
+                        "(default 200)")
     p.add_argument("--out", type=Path, default=Path("out/bench"), metavar="DIR",
                    help="output directory (default: out/bench)")
     p.add_argument("--progress", action="store_true",
@@ -266,20 +260,15 @@ def _add_crowd_arguments(crowd: argparse.ArgumentParser) -> None:
     crowd.add_argument("--episodes", type=_int_at_least(1, MAX_EPISODES), default=20, metavar="N",
                        help="seeded episodes per scenario and variant (default 20)")
     crowd.add_argument("--variants", nargs="+", choices=list(VARIANTS), default=list(VARIANTS), metavar="NAME",
+                       action=_Distinct,
                        help=f"variants to run, of {', '.join(VARIANTS)} (default: all)")
     crowd.add_argument("--seed", type=_nonnegative_int, default=0, metavar="S",
                        help="study seed; episode seeds are drawn from it with SeedSequence (default 0)")
-    crowd.add_argument("--jitter", type=_nonnegative_float, default=5.0, metavar="SECONDS",
-                       help="largest start delay of a scripted walker, seconds (default 5)")
-    crowd.add_argument("--time-limit", type=_positive_float, metavar="SECONDS",
-                       help="simulated seconds per episode (default: each scenario's execution.time_limit)")
-
-
-def _nonnegative_float(text: str) -> float:
-    value = _finite_float(text)
-    if not value >= 0:
-        raise argparse.ArgumentTypeError(f"must be a number >= 0, got {shorten(text)}")
-    return value
+    crowd.add_argument("--jitter", type=_float_in(0.0, MAX_JITTER), default=5.0, metavar="SECONDS",
+                       help=f"largest start delay of a scripted walker, seconds, at most {MAX_JITTER:g} (default 5)")
+    crowd.add_argument("--time-limit", type=_float_in(0.0, MAX_TIME_LIMIT, open_low=True), metavar="SECONDS",
+                       help=f"simulated seconds per episode, at most {MAX_TIME_LIMIT:g} (default: each scenario's "
+                            "execution.time_limit)")
 
 
 def _finite_float(text: str) -> float:
@@ -290,6 +279,29 @@ def _finite_float(text: str) -> float:
     if value != value or value in (float("inf"), float("-inf")):
         raise argparse.ArgumentTypeError(f"must be a finite number, got {shorten(text)}")
     return value
+
+
+class _Distinct(argparse.Action):
+    """A list option whose values may each be given once."""
+
+    def __call__(self, parser, namespace, values, option_string=None):
+        twice = [v for i, v in enumerate(values) if v in values[:i]]
+        if twice:
+            raise argparse.ArgumentError(self, f"{shorten(repr(twice[0]))} given twice: each at most once")
+        setattr(namespace, self.dest, values)
+
+
+def _float_in(low: float, high: float, *, open_low: bool = False) -> Callable[[str], float]:
+    """A finite number in [low, high] (or (low, high] when ``open_low``)."""
+    allowed = f"a number in {'(' if open_low else '['}{low:g}, {high:g}]"
+
+    def parse(text: str) -> float:
+        value = _finite_float(text)
+        if not ((value > low if open_low else value >= low) and value <= high):
+            raise argparse.ArgumentTypeError(f"must be {allowed}, got {shorten(text)}")
+        return value
+
+    return parse
 
 
 def _positive_float(text: str) -> float:

@@ -66,6 +66,27 @@ MAX_REPLAY_FPS = 60.0
 #: vertices, 23 s with 300 and 160 s (2.6 GB) with 1,000, for a 0.1 s search.
 MAX_OBJECT_POINTS = 200
 
+#: Replanning while executing (``planner.replan_*``), so that one replan and
+#: one run stay bounded. At most this many replans per control period
+#: (``1 / planner.replan_rate >= execution.control_period``): the sequencer
+#: takes a new path once per period, and a run has at most MAX_CONTROL_STEPS
+#: periods, so at most that many replans.
+MAX_REPLANS_PER_CONTROL_PERIOD = 1
+#: Most samples of one replan's search (``planner.replan_iterations``, the
+#: replanner's ``iterations``): 20 times the default 500. A search of
+#: 10,000 samples on lobby_crowd.yaml takes 1.6 s (2-core AMD EPYC); its
+#: tree and its per-sample history are allocated for the cap at every replan.
+MAX_REPLAN_ITERATIONS = 10_000
+#: Largest wall-clock budget of one replan, seconds (``planner.replan_budget``).
+#: Far above what MAX_REPLAN_ITERATIONS samples take, so that a run whose
+#: every replan stops at the iteration cap (reproducible on any machine;
+#: docs/replanning.md) can still be asked for.
+MAX_REPLAN_BUDGET = 60.0
+#: Longest prediction horizon of a replan, seconds (``planner.replan_horizon``):
+#: no run lasts longer (MAX_TIME_LIMIT). The prediction holds one sample per
+#: 0.1 s per person (6,001 samples here).
+MAX_REPLAN_HORIZON = MAX_TIME_LIMIT
+
 #: Planner names accepted in ``planner.algorithm`` (see ``drake_social.planning``).
 ALGORITHMS = (
     "rrt_star",
@@ -140,3 +161,26 @@ NEAR_RADIUS_MODES = ("fixed", "shrinking")
 CROWD_VARIANTS = ("plan_once", "replan_base", "replan_multi", "replan_speed")
 CROWD_SCENARIOS = ("scenarios/office_walkers.yaml", "scenarios/lobby_crowd.yaml")
 MAX_EPISODES = 10_000
+#: Largest start delay of a crowd study's scripted walker (``experiment crowd
+#: --jitter``), seconds: a walker delayed longer than the longest run
+#: (MAX_TIME_LIMIT) never walks in it.
+MAX_JITTER = MAX_TIME_LIMIT
+
+#: Most seeds of ``bench --seeds``: as many as a study's runs per planner
+#: (MAX_RUNS); each seed plans every algorithm on every scenario.
+MAX_BENCH_SEEDS = 10_000
+#: Most timings of one run in ``bench --repeats``: the median of 100 already
+#: filters the machine's noise, and each repeat replans the whole path.
+MAX_BENCH_REPEATS = 100
+#: Most simulated runs of ``bench --sim-runs`` (per mode and execution) and
+#: ``bench --replan-runs``: each is a whole run of the scenario (up to
+#: MAX_TIME_LIMIT simulated seconds); as many as ``--repeats``.
+MAX_BENCH_RUNS = MAX_BENCH_REPEATS
+#: Most replans of the replanning benchmark's rollout (``bench
+#: --replan-count``): the most a run can make (one per control period,
+#: MAX_CONTROL_STEPS periods).
+MAX_BENCH_REPLAN_COUNT = MAX_CONTROL_STEPS
+#: Most worker processes of ``experiment --workers``: each holds Drake and a
+#: scenario's checker (a few hundred MB), so 64 already needs tens of GB; a
+#: cluster is the place for more (``--executor dask --scheduler``).
+MAX_WORKERS = 64

@@ -178,3 +178,131 @@ def test_run_plan_takes_a_scenario_object_as_it_takes_the_file(tmp_path, tiny_sc
     scenario.planner.iterations = 0
     with pytest.raises(ScenarioError, match=r"run_plan: scenario.*planner\.iterations"):
         app.run_plan(scenario=scenario, out=tmp_path / "y", checker="numpy")
+
+
+# ---- the arguments of every public function are checked at the door (issue 29, item 14)
+
+NONE = "no-such-scenario.yaml"  # never read: the door comes first
+
+
+@pytest.mark.parametrize("function, arguments, error, message", [
+    ("run_simulate", dict(scenario=NONE, replan="no"), TypeError,
+     "run_simulate: replan must be True, False or None, got str 'no'"),
+    ("run_simulate", dict(scenario=NONE, mode="Dynamic"), ValueError,
+     "run_simulate: unknown mode 'Dynamic'; allowed: kinematic, dynamic"),
+    ("run_simulate", dict(scenario=NONE, execution="Paper"), ValueError,
+     "run_simulate: unknown execution 'Paper'; allowed: synchronized, paper"),
+    ("run_simulate", dict(scenario=NONE, iterations=50.5), TypeError,
+     "run_simulate: iterations must be an integer >= 1 or None, got float 50.5"),
+    ("run_simulate", dict(scenario=NONE, replay=1), TypeError, "run_simulate: replay must be True or False, got int 1"),
+    ("run_simulate", dict(scenario=NONE, path=3), TypeError,
+     "run_simulate: path must be a file name (a str or pathlib.Path) or None, got int 3"),
+    ("run_plan", dict(scenario=NONE, iterations=True), TypeError,
+     "run_plan: iterations must be an integer >= 1 or None, got bool True"),
+    ("run_plan", dict(scenario=NONE, iterations=0), ValueError, "run_plan: iterations must be an integer >= 1, got 0"),
+    ("run_plan", dict(scenario=NONE, seed=-1), ValueError, "run_plan: seed must be an integer >= 0, got -1"),
+    ("run_plan", dict(scenario=NONE, checker="Planar"), ValueError,
+     "run_plan: unknown checker 'Planar'; allowed: planar, drake, numpy"),
+    ("run_plan", dict(scenario=NONE, algorithm=1), TypeError, "run_plan: algorithm must be one of rrt_star"),
+    ("run_plan", dict(scenario=NONE, overrides="random_seed: 3"), TypeError,
+     "run_plan: overrides must be a list or tuple of strings, got str 'random_seed: 3' (a list of one: "
+     "['random_seed: 3'])"),
+    ("run_plan", dict(scenario=NONE, overrides=["random_seed: 3", 4]), TypeError,
+     "run_plan: overrides[1] must be a string, got int 4"),
+    ("run_plan", dict(scenario=3), TypeError, "run_plan: scenario must be a scenario file name (a str or "
+                                              "pathlib.Path) or a drake_social.scenario.Scenario, got int 3"),
+    ("run_plan", dict(scenario=NONE, progress=5), TypeError, "run_plan: progress must be a callable or None, got int 5"),
+    ("run_show", dict(scenario=NONE, out=None), TypeError,
+     "run_show: out must be a file name (a str or pathlib.Path), got NoneType None"),
+    ("run_crowd_experiment", dict(jitter="1"), TypeError,
+     "run_crowd_experiment: jitter must be a finite number >= 0 and <= 600 seconds, got str '1'"),
+    ("run_crowd_experiment", dict(time_limit="5"), TypeError,
+     "run_crowd_experiment: time_limit must be a finite number > 0 and <= 600 seconds or None, got str '5'"),
+    ("run_crowd_experiment", dict(jitter=10**400), ValueError,
+     "run_crowd_experiment: jitter must be a finite number >= 0 and <= 600 seconds, got 1000000000"),
+    ("run_crowd_experiment", dict(episodes=True), TypeError,
+     "run_crowd_experiment: episodes must be an integer >= 1 and <= 10,000, got bool True"),
+    ("run_crowd_experiment", dict(trace_episode=-1), ValueError,
+     "run_crowd_experiment: trace_episode must be an integer >= 0, got -1"),
+    ("run_crowd_experiment", dict(workers=0), ValueError,
+     "run_crowd_experiment: workers must be an integer >= 1 and <= 64, got 0"),
+    ("run_crowd_experiment", dict(executor="threads"), ValueError,
+     "run_crowd_experiment: unknown executor 'threads'; allowed: process, dask"),
+    ("run_crowd_experiment", dict(episode=3), TypeError, "run_crowd_experiment: unexpected argument 'episode'; "
+                                                         "allowed: name, scenarios, variants, episodes, seed"),
+    ("run_bench", dict(scenario_paths=[NONE], iterations=10_000_001), ValueError,
+     "run_bench: iterations must be an integer >= 1 and <= 10,000,000, got 10000001"),
+    ("run_bench", dict(scenario_paths=[NONE], sim_runs=101), ValueError,
+     "run_bench: sim_runs must be an integer >= 0 and <= 100, got 101"),
+    ("run_bench", dict(scenario_paths=[NONE], replan_count=60_001), ValueError,
+     "run_bench: replan_count must be an integer >= 1 and <= 60,000, got 60001"),
+    ("run_bench", dict(scenario_paths=NONE), TypeError, "run_bench: scenario_paths must be a list or tuple of file names"),
+    ("run_bench", dict(scenario_paths=[]), ValueError, "run_bench: scenario_paths must be a non-empty list or tuple"),
+    ("run_bench", dict(scenario_paths=[NONE], algorithms=["RRT*"]), ValueError,
+     "run_bench: unknown algorithms[0] 'RRT*'; allowed: rrt_star"),
+    ("run_bench", dict(scenario_paths=[NONE], include_ompl="no"), TypeError,
+     "run_bench: include_ompl must be True or False, got str 'no'"),
+    ("run_bench", dict(scenario_paths=[NONE], ompl=True), TypeError, "run_bench: unexpected argument 'ompl'"),
+    ("run_study", dict(study="sweep.yaml"), TypeError,
+     "run_study: study must be a drake_social.experiments.study.Study (paper_experiment(...) or load_sweep(file)), "
+     "got str 'sweep.yaml'"),
+    ("run_people_import", dict(file=NONE, fps="25"), TypeError,
+     "run_people_import: fps must be a finite number > 0 frames per second, got str '25'"),
+    ("run_people_import", dict(file=NONE, fps=0.0), ValueError,
+     "run_people_import: fps must be a finite number > 0 frames per second, got 0.0"),
+    ("run_people_import", dict(file=NONE, offset=(1.0,)), ValueError,
+     "run_people_import: offset: must be a (2,) array of [dx, dy], metres, got shape (1,)"),
+    ("run_people_import", dict(file=NONE, layout="yx"), ValueError,
+     "run_people_import: unknown layout 'yx'; allowed: xy, xzy"),
+    ("run_people_import", dict(file=NONE, ids="3"), TypeError, "run_people_import: ids must be a list or tuple of "
+                                                               "strings or None, got str '3'"),
+    ("run_people_import", dict(file=NONE, theta="yes"), TypeError,
+     "run_people_import: theta must be True or False, got str 'yes'"),
+    ("paper_experiment", dict(runs=1, iterations=10, seed=0, simulate="yes", scenario_dir="scenarios"), TypeError,
+     "paper_experiment: simulate must be True or False, got str 'yes'"),
+    ("paper_experiment", dict(runs=7693, iterations=10, seed=0, simulate=False, scenario_dir="scenarios"), ValueError,
+     "paper_experiment: runs must be an integer >= 1 and <= 7,692, got 7693"),
+])
+def test_public_functions_refuse_arguments_of_the_wrong_kind_or_value_at_the_door(tmp_path, function, arguments,
+                                                                                  error, message):
+    out = tmp_path / "out"
+    if function not in ("paper_experiment",):
+        arguments = {"out": out, **arguments}
+    if function == "run_crowd_experiment":
+        arguments = {"scenarios": (NONE,), **arguments}
+    with pytest.raises(error) as info:
+        getattr(app, function)(**arguments)
+    assert type(info.value) is error and str(info.value).startswith(message)
+    assert not out.exists()  # refused before anything was read or written
+
+
+def test_the_positional_helpers_check_their_arguments_too(tiny_scenario_path):
+    with pytest.raises(TypeError, match=r"^load_with_overrides: sets must be a list or tuple of strings or None, "
+                                        r"got str 'random_seed: 3'"):
+        app.load_with_overrides(tiny_scenario_path, "random_seed: 3")
+    with pytest.raises(TypeError, match=r"^read_path_csv: scenario must be a drake_social.scenario.Scenario, got "
+                                        r"str .* \(load the file first"):
+        app.read_path_csv("path.csv", str(tiny_scenario_path))
+    with pytest.raises(ValueError, match=r"^check_scheduler: unknown executor 'threads'; allowed: process, dask$"):
+        app.check_scheduler("threads", None)
+
+
+def test_run_bench_passes_its_options_at_their_bounds_and_just_within(tmp_path, monkeypatch, tiny_scenario_path):
+    import sys
+    import types
+
+    calls = []
+    fake = types.ModuleType("drake_social.experiments.bench.planners")
+    fake.run_bench = lambda **kwargs: calls.append(kwargs)
+    monkeypatch.setitem(sys.modules, "drake_social.experiments.bench.planners", fake)
+    at = dict(iterations=10_000_000, seeds=10_000, repeats=100, sim_runs=100, replan_runs=100, replan_count=60_000)
+    within = dict(iterations=9_999_999, seeds=9_999, repeats=99, sim_runs=99, replan_runs=99, replan_count=59_999)
+    floor = dict(iterations=1, seeds=1, repeats=1, sim_runs=0, replan_runs=0, replan_count=1)
+    for i, options in enumerate((at, within, floor)):
+        app.run_bench(scenario_paths=[tiny_scenario_path], out=tmp_path / str(i), algorithms=["rrt_star"],
+                      include_ompl=False, **options)
+        assert {k: calls[-1][k] for k in options} == options
+    for name, below in (("iterations", 0), ("seeds", 0), ("repeats", 0), ("sim_runs", -1), ("replan_runs", -1),
+                        ("replan_count", 0)):
+        with pytest.raises(ValueError, match=rf"^run_bench: {name} must be an integer >= {below + 1}"):
+            app.run_bench(scenario_paths=[tiny_scenario_path], out=tmp_path / "x", **{name: below})

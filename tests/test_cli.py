@@ -8,7 +8,7 @@ from pathlib import Path
 import matplotlib.image
 import pytest
 
-from drake_social.cli import load_with_overrides, main
+from drake_social.cli import build_parser, load_with_overrides, main
 from drake_social.scenario import ScenarioError
 
 SCENARIO_DIR = Path(__file__).resolve().parent.parent / "scenarios"
@@ -181,6 +181,55 @@ _TINY = Path(__file__).resolve().parent.parent / "scenarios" / "tiny.yaml"
 def test_counts_of_the_command_line_are_bounded(capsys, argv, message):
     assert main(argv) == 2
     assert capsys.readouterr().err.endswith(f"error: {message}\n")
+
+
+@pytest.mark.parametrize("argv, message", [
+    (["experiment", "crowd", "--time-limit", "1e9"], "argument --time-limit: must be a number in (0, 600], got 1e9"),
+    (["experiment", "crowd", "--time-limit", "600.0000000000001"],
+     "argument --time-limit: must be a number in (0, 600], got 600.0000000000001"),
+    (["experiment", "crowd", "--time-limit", "0"], "argument --time-limit: must be a number in (0, 600], got 0"),
+    (["experiment", "crowd", "--jitter", "600.0000000000001"],
+     "argument --jitter: must be a number in [0, 600], got 600.0000000000001"),
+    (["experiment", "crowd", "--jitter", "1e300"], "argument --jitter: must be a number in [0, 600], got 1e300"),
+    (["experiment", "crowd", "--jitter=-5e-324"], "argument --jitter: must be a number in [0, 600], got -5e-324"),
+    (["experiment", "crowd", "--variants", "plan_once", "plan_once"],
+     "argument --variants: 'plan_once' given twice: each at most once"),
+    (["bench", "--iterations", "10000001"], "argument --iterations: must be an integer in [1, 10,000,000], got 10000001"),
+    (["bench", "--sim-runs", "101"], "argument --sim-runs: must be an integer in [0, 100], got 101"),
+    (["bench", "--replan-runs", "101"], "argument --replan-runs: must be an integer in [0, 100], got 101"),
+    (["bench", "--replan-count", "60001"], "argument --replan-count: must be an integer in [1, 60,000], got 60001"),
+])
+def test_numbers_of_experiment_crowd_and_bench_are_bounded(capsys, argv, message):
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert err.endswith(f"error: {message}\n") and "Traceback" not in err
+
+
+def test_the_bounds_of_experiment_crowd_and_bench_themselves_parse():
+    parse = build_parser().parse_args
+    args = parse(["experiment", "crowd", "--time-limit", "600", "--jitter", "600"])
+    assert (args.time_limit, args.jitter) == (600.0, 600.0)
+    args = parse(["experiment", "crowd", "--time-limit", "599.9999999999999", "--jitter", "0"])
+    assert (args.time_limit, args.jitter) == (599.9999999999999, 0.0)
+    args = parse(["bench", "--iterations", "10000000", "--sim-runs", "100", "--replan-runs", "100",
+                  "--replan-count", "60000"])
+    assert (args.iterations, args.sim_runs, args.replan_runs, args.replan_count) == (10_000_000, 100, 100, 60_000)
+    args = parse(["bench", "--iterations", "9999999", "--sim-runs", "0", "--replan-runs", "99", "--replan-count", "1"])
+    assert (args.iterations, args.sim_runs, args.replan_runs, args.replan_count) == (9_999_999, 0, 99, 1)
+
+
+def test_a_crowd_time_limit_too_short_for_a_scenario_names_the_option(capsys, tmp_path):
+    """Within (0, 600] but shorter than 10 control periods of tiny.yaml (0.1 s): refused before any
+    episode runs, naming the file and --time-limit; no output."""
+    out = tmp_path / "crowd"
+    argv = ["experiment", "crowd", "--scenarios", str(_TINY), "--episodes", "1", "--variants", "plan_once",
+            "--out", str(out)]
+    assert main([*argv, "--time-limit", "0.05"]) == 2
+    err = capsys.readouterr().err
+    assert err == (f"drake-social: error: {_TINY}: the crowd study's time_limit (--time-limit) must be >= 10 * "
+                   "execution.control_period 0.01 = 0.1 s (a run lasts at least 10 control periods: the sequencer "
+                   "decides once per period), got 0.05\n")
+    assert not out.exists()
 
 
 def test_the_bounds_are_stated_in_the_help(capsys):

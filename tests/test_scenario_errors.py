@@ -305,6 +305,92 @@ def test_simulate_refuses_a_time_limit_beyond_the_bound(tiny_scenario):
         simulate(fine, waypoints=np.array([fine.start, fine.goal]), time_limit=600.0, analyze=False)
 
 
+# ---- replanning: one replan and one run stay bounded
+
+ABOVE_60 = 60.00000000000001  # math.nextafter(60.0, inf)
+ABOVE_100 = 100.00000000000001  # math.nextafter(100.0, inf): its period 1 / rate is below 0.01
+
+
+@pytest.mark.parametrize("override, message", [
+    ("planner: {replan: true, replan_rate: 1e9}",
+     "planner.replan_rate: must be <= 1 / execution.control_period = 100 Hz (at most one replan per control "
+     "period: the sequencer takes a new path once per period), got 1000000000.0"),
+    (f"planner: {{replan: true, replan_rate: {ABOVE_100!r}}}",
+     "planner.replan_rate: must be <= 1 / execution.control_period = 100 Hz (at most one replan per control "
+     "period: the sequencer takes a new path once per period), got 100.00000000000001"),
+    ("{planner: {replan: true, replan_rate: 51}, execution: {control_period: 0.02}}",
+     "planner.replan_rate: must be <= 1 / execution.control_period = 50 Hz (at most one replan per control "
+     "period: the sequencer takes a new path once per period), got 51.0"),
+    ("planner: {replan_rate: 1e-320}", "planner.replan_rate: must have a finite period 1 / replan_rate, got 1e-320"),
+    ("planner: {replan_horizon: 1e9}", "planner.replan_horizon: must be in (0, 600] seconds, got 1000000000.0"),
+    ("planner: {replan_horizon: 600.0000000000001}",
+     "planner.replan_horizon: must be in (0, 600] seconds, got 600.0000000000001"),
+    ("planner: {replan_budget: 1e9}", "planner.replan_budget: must be in (0, 60] seconds, got 1000000000.0"),
+    (f"planner: {{replan_budget: {ABOVE_60!r}}}",
+     "planner.replan_budget: must be in (0, 60] seconds, got 60.00000000000001"),
+    ("planner: {replan_iterations: 10001}",
+     "planner.replan_iterations: must be in [1, 10,000] (samples of one replan's search), got 10001"),
+    ("planner: {replan_iterations: 10000000}",
+     "planner.replan_iterations: must be in [1, 10,000] (samples of one replan's search), got 10000000"),
+    ("planner: {replan_iterations: 0}",
+     "planner.replan_iterations: must be in [1, 10,000] (samples of one replan's search), got 0"),
+])
+def test_replanning_settings_beyond_their_bounds_are_refused_naming_the_field(override, message):
+    assert _message(TINY, [override]) == f"{TINY} (--set {override!r}): {message}"
+
+
+def test_replanning_settings_at_and_just_within_their_bounds_load():
+    import math
+
+    dut = load_scenario(TINY, ["planner: {replan: true, replan_rate: 100, replan_horizon: 600, replan_budget: 60, "
+                               "replan_iterations: 10000}"])
+    p = dut.planner
+    assert (p.replan_rate, p.replan_horizon, p.replan_budget, p.replan_iterations) == (100.0, 600.0, 60.0, 10_000)
+    below = {name: math.nextafter(value, 0.0) for name, value in (("rate", 100.0), ("horizon", 600.0),
+                                                                  ("budget", 60.0))}
+    dut = load_scenario(TINY, [f"planner: {{replan: true, replan_rate: {below['rate']!r}, "
+                               f"replan_horizon: {below['horizon']!r}, "
+                               f"replan_budget: {below['budget']!r}, replan_iterations: 9999}}"])
+    assert dut.planner.replan_rate == below["rate"] and dut.planner.replan_budget == below["budget"]
+    # At most one replan per control period, whatever the period: 1 / 50 Hz is 0.02 s.
+    dut = load_scenario(TINY, ["{planner: {replan: true, replan_rate: 50}, execution: {control_period: 0.02}}"])
+    assert 1.0 / dut.planner.replan_rate == dut.execution.control_period
+    # A scenario that does not replan keeps its rate whatever its control period (10 Hz, 0.5 s) ...
+    slow = "{planner: {replan_rate: 10}, execution: {control_period: 0.5, plant_time_step: 0.5, kp: 1.5}}"
+    assert load_scenario(TINY, [slow]).planner.replan_rate == 10.0
+    # The smallest positive rate whose period is finite: no periodic replan within the run.
+    assert load_scenario(TINY, ["planner: {replan_rate: 1e-300}"]).planner.replan_rate == 1e-300
+
+
+def test_turning_replanning_on_checks_the_rate_against_the_control_period(tmp_path, capsys):
+    """... and turning replanning on checks it then: --replan (exit 2, one line), simulate(replan=True)."""
+    from drake_social.sim.run import simulate
+
+    slow = "{planner: {replan_rate: 10}, execution: {control_period: 0.5, plant_time_step: 0.5, kp: 1.5}}"
+    out = tmp_path / "out"
+    assert main(["simulate", str(TINY), "--replan", "--no-replay", "--set", slow, "--out", str(out)]) == 2
+    assert capsys.readouterr().err == (
+        f"drake-social: error: {TINY} (--replan): planner.replan_rate: must be <= 1 / execution.control_period = "
+        "2 Hz (at most one replan per control period: the sequencer takes a new path once per period), got 10.0\n")
+    assert not out.exists()
+    with pytest.raises(ValueError, match=r"^simulate: replan=True: the scenario's planner.replan_rate must be <= 1 / "
+                                         r"execution.control_period = 2 Hz .*, got 10.0$"):
+        simulate(load_scenario(TINY, [slow]), replan=True, analyze=False)
+
+
+def test_the_replanner_system_refuses_a_rate_beyond_one_per_control_period(tiny_scenario):
+    from drake_social.control import ReplanningPlannerSystem
+
+    class Never:
+        def plan(self, *args, **kwargs):
+            raise AssertionError("not called")
+
+    assert ReplanningPlannerSystem(tiny_scenario, Never(), rate=100.0).period == 0.01
+    with pytest.raises(ValueError, match=r"^ReplanningPlannerSystem: rate must be <= 1 / execution.control_period "
+                                         r"= 100 Hz .*, got 100.00000000000001$"):
+        ReplanningPlannerSystem(tiny_scenario, Never(), rate=ABOVE_100)
+
+
 # ---- review of the loader: characters YAML refuses, unusual keys and tags (exit 2, never a traceback)
 
 

@@ -81,7 +81,7 @@ from pydrake.systems.framework import BasicVector, Context, EventStatus, LeafSys
 
 from drake_social.arguments import require_instance, require_scenario
 from drake_social.people import PeopleModel, PeopleState, people_model, predict
-from drake_social.scenario import Scenario
+from drake_social.scenario import Scenario, replan_rate_problem
 
 __all__ = ["ReplanState", "ReplanningPlannerSystem", "replanning_summary"]
 
@@ -149,7 +149,8 @@ class ReplanningPlannerSystem(LeafSystem):
             ``random_seed``).
         people: the people model (the ``"perfect"`` prediction reads it);
             None = :func:`~drake_social.people.people_model` of the scenario.
-        rate: replans per second; None = ``planner.replan_rate``.
+        rate: replans per second, at most one per ``execution.control_period``;
+            None = ``planner.replan_rate``.
 
     Raises:
         TypeError, ValueError: an argument of the wrong kind or value (named).
@@ -176,9 +177,12 @@ class ReplanningPlannerSystem(LeafSystem):
         require_instance(people, PeopleModel, "ReplanningPlannerSystem", "people",
                          "a drake_social.people.PeopleModel", optional=True)
         rate = float(scenario.planner.replan_rate if rate is None else rate)
-        if not (math.isfinite(rate) and rate > 0):
-            raise ValueError(f"ReplanningPlannerSystem: rate must be a finite number of replans per second > 0, "
-                             f"got {rate!r}")
+        if not (math.isfinite(rate) and rate > 0 and 1 / rate < math.inf):
+            raise ValueError(f"ReplanningPlannerSystem: rate must be a finite number of replans per second > 0 "
+                             f"(with a finite period), got {rate!r}")
+        problem = replan_rate_problem(rate, scenario.execution)
+        if problem:
+            raise ValueError(f"ReplanningPlannerSystem: rate {problem}")
         if replanner is None:  # the scenario's, on the room alone (every person is the prediction's)
             from drake_social.collision.drake_checker import make_checker
             from drake_social.people import without_people

@@ -51,17 +51,19 @@ from typing import Callable, Sequence
 
 import numpy as np
 
+from drake_social.arguments import (Rule, check_arguments, require_choices, require_file_names, require_instance,
+                                    require_int, require_number)
 from drake_social.errors import ScenarioError
 from drake_social.experiments.study.executors import map_tasks
 from drake_social.experiments.study.scenarios import load_cached
 from drake_social.io.textfile import read_yaml_file
-from drake_social.limits import CROWD_SCENARIOS, CROWD_VARIANTS, MAX_EPISODES
+from drake_social.limits import CROWD_SCENARIOS, CROWD_VARIANTS, MAX_EPISODES, MAX_JITTER, MAX_TIME_LIMIT
 from drake_social.people.jitter import JITTER_TAG, delay_walkers, has_people, walker_delays
-from drake_social.scenario.schema import Scenario
+from drake_social.scenario import Scenario, time_limit_problem
 
-__all__ = ["DEFAULT_SCENARIOS", "JITTER_TAG", "MAX_EPISODES", "TRACE_STEP", "VARIANTS", "CrowdResult", "CrowdStudy",
-           "check_crowd_study", "crowd_tasks", "episode_scenario", "episode_seeds", "perturb", "replan_stats", "replanning_available",
-           "run_crowd", "run_episode", "walker_delays"]
+__all__ = ["CROWD_SETTINGS", "DEFAULT_SCENARIOS", "JITTER_TAG", "MAX_EPISODES", "TRACE_STEP", "VARIANTS", "CrowdResult",
+           "CrowdStudy", "check_crowd_settings", "check_crowd_study", "crowd_tasks", "episode_scenario", "episode_seeds",
+           "perturb", "replan_stats", "replanning_available", "run_crowd", "run_episode", "walker_delays"]
 
 _log = logging.getLogger(__name__)
 
@@ -79,6 +81,36 @@ VARIANTS: dict[str, tuple[str, ...]] = {
 TRACE_STEP = 0.25
 
 
+#: The rule of each setting of a crowd study (:class:`CrowdStudy`'s fields,
+#: ``run_crowd_experiment``'s keyword arguments): :func:`check_crowd_settings`.
+CROWD_SETTINGS: dict[str, Rule] = {
+    "name": lambda v, who, name: require_instance(v, str, who, name, "a string"),
+    "scenarios": require_file_names,
+    "variants": lambda v, who, name: require_choices(v, who, name, tuple(VARIANTS)),
+    "episodes": lambda v, who, name: require_int(v, who, name, minimum=1, maximum=MAX_EPISODES),
+    "seed": lambda v, who, name: require_int(v, who, name, minimum=0),
+    "jitter": lambda v, who, name: require_number(v, who, name, minimum=0.0, maximum=MAX_JITTER, unit="seconds"),
+    "time_limit": lambda v, who, name: require_number(v, who, name, positive=True, maximum=MAX_TIME_LIMIT,
+                                                      unit="seconds", optional=True),
+    "trace_episode": lambda v, who, name: require_int(v, who, name, minimum=0, optional=True),
+}
+
+
+def check_crowd_settings(who: str, settings: dict) -> None:
+    """Checks a crowd study's settings (:data:`CROWD_SETTINGS`, and
+    ``trace_episode`` below ``episodes``) as ``who``'s arguments.
+
+    Raises:
+        TypeError: an unknown setting or one of the wrong kind; ValueError: a
+            value out of range; each naming ``who`` and the setting.
+    """
+    check_arguments(who, CROWD_SETTINGS, settings)
+    trace, episodes = settings.get("trace_episode"), settings.get("episodes", CrowdStudy.episodes)
+    if trace is not None and not trace < episodes:
+        raise ValueError(f"{who}: trace_episode must be one of the {episodes} episodes, in [0, {episodes - 1}], or "
+                         f"None, got {trace}")
+
+
 @dc.dataclass(frozen=True)
 class CrowdStudy:
     """What a crowd study runs.
@@ -89,11 +121,19 @@ class CrowdStudy:
         variants: names of :data:`VARIANTS`, in the report's order.
         episodes: episodes per (scenario, variant), in [1, MAX_EPISODES].
         seed: the study seed (>= 0); episode k's seed is ``episode_seeds(seed, episodes)[k]``.
-        jitter: the largest start delay of a scripted walker, seconds (>= 0).
-        time_limit: simulated seconds per episode; None = each scenario's
-            ``execution.time_limit``.
-        trace_episode: the episode whose trace (robot, people and plans over
-            time) every variant keeps for the snapshots; None = none.
+        jitter: the largest start delay of a scripted walker, seconds, in [0, MAX_JITTER].
+        time_limit: simulated seconds per episode, in (0, MAX_TIME_LIMIT]
+            and within each scenario's rules of a run's length
+            (:func:`~drake_social.scenario.time_limit_problem`, checked by
+            :func:`crowd_tasks`); None = each scenario's ``execution.time_limit``.
+        trace_episode: the episode (in [0, episodes)) whose trace (robot,
+            people and plans over time) every variant keeps for the
+            snapshots; None = none.
+
+    Raises:
+        TypeError, ValueError: a setting of the wrong kind or out of range
+            (:func:`check_crowd_settings`); ScenarioError: two scenario
+            files of the same name.
     """
 
     name: str = "crowd"
@@ -106,25 +146,11 @@ class CrowdStudy:
     trace_episode: int | None = 0
 
     def __post_init__(self) -> None:
-        problems = []
-        if not self.scenarios:
-            problems.append("scenarios: needs at least one scenario file")
+        check_crowd_settings("CrowdStudy", dc.asdict(self))
         stems = [Path(s).stem for s in self.scenarios]
         if len({s.casefold() for s in stems}) != len(stems):
-            problems.append(f"scenarios: the file names {stems} must be distinct (records are keyed by them)")
-        unknown = [v for v in self.variants if v not in VARIANTS]
-        if unknown or not self.variants or len(set(self.variants)) != len(self.variants):
-            problems.append(f"variants: {list(self.variants)}: each of {', '.join(VARIANTS)} at most once, at least one")
-        if not (isinstance(self.episodes, int) and 1 <= self.episodes <= MAX_EPISODES):
-            problems.append(f"episodes: must be an integer in [1, {MAX_EPISODES}], got {self.episodes!r}")
-        if not (isinstance(self.seed, int) and self.seed >= 0):
-            problems.append(f"seed: must be an integer >= 0, got {self.seed!r}")
-        if not (math.isfinite(self.jitter) and self.jitter >= 0):
-            problems.append(f"jitter: must be a finite number of seconds >= 0, got {self.jitter!r}")
-        if self.time_limit is not None and not (math.isfinite(self.time_limit) and self.time_limit > 0):
-            problems.append(f"time_limit: must be a number of seconds > 0, got {self.time_limit!r}")
-        if problems:
-            raise ScenarioError("crowd study: " + "; ".join(problems))
+            raise ScenarioError(f"crowd study: scenarios: the file names {stems} must be distinct (records are keyed "
+                                "by them)")
 
     def seeds(self) -> list[int]:
         """Episode k's seed, shared by every scenario and variant."""
@@ -199,7 +225,9 @@ def crowd_tasks(study: CrowdStudy) -> list[dict]:
     """Plain-data tasks, one per (scenario, variant, episode), in that order.
 
     Raises:
-        ScenarioError: a scenario file cannot be read, or with a variant is invalid.
+        ScenarioError: a scenario file cannot be read, or with a variant is
+            invalid, or the study's ``time_limit`` breaks its rules of a run's
+            length (too few or too many control periods or plant steps).
     """
     tasks = []
     seeds = study.seeds()
@@ -209,6 +237,11 @@ def crowd_tasks(study: CrowdStudy) -> list[dict]:
             scenario = load_cached(str(source), text, VARIANTS[variant], f"variant {variant}")  # checked up front
             if not has_people(scenario):
                 raise ScenarioError(f"{source}: has no people: a crowd study needs walking people")
+            # The study's time limit in place of the scenario's: the same rules of a run's length.
+            problem = None if study.time_limit is None else time_limit_problem(study.time_limit, scenario.execution,
+                                                                               "time_limit")
+            if problem:
+                raise ScenarioError(f"{source}: the crowd study's time_limit (--time-limit) {problem[1]}")
             for k, seed in enumerate(seeds):
                 tasks.append({"index": len(tasks), "scenario": Path(source).stem, "source": str(source),
                               "scenario_text": text, "variant": variant, "overrides": list(VARIANTS[variant]),

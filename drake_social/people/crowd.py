@@ -23,7 +23,7 @@ from drake_social.people.model import PeopleState
 from drake_social.people.social_force import (cap_speed, capsule_force, desired_velocities, goal_force,
                                               obstacle_force, pedestrian_force)
 from drake_social.people.social_force_kernel import crowd_step
-from drake_social.scenario.crowd_rules import MIN_WALKING_SPEED, crowd_problems
+from drake_social.scenario.crowd_rules import MAX_WALKING_SPEED, MIN_WALKING_SPEED, crowd_problems
 from drake_social.world import world_model
 
 __all__ = ["CROWD_SEED_TAG", "HEADING_SPEED", "STANDING_SPEED", "SocialForceCrowd", "crowd_model",
@@ -44,14 +44,15 @@ STANDING_SPEED = 0.05
 def draw_speeds(count: int, mean: float, std: float, rng: np.random.Generator) -> np.ndarray:
     """``count`` preferred speeds from ``rng.normal(mean, std)``, m/s.
 
-    A draw not above :data:`MIN_WALKING_SPEED` is drawn again (not clamped),
-    so the speeds follow the normal law truncated to (0.1, inf). Draws are
-    made one person at a time, in order.
+    A draw outside (:data:`MIN_WALKING_SPEED`, :data:`MAX_WALKING_SPEED`],
+    the range of a given ``desired_speed``, is drawn again (not clamped), so
+    the speeds follow the normal law truncated to (0.1, 3]: they are the
+    generator's normals that fall in the range, in order, one person at a time.
     """
     out = np.empty(count)
     for i in range(count):
         v = rng.normal(mean, std)
-        while not v > MIN_WALKING_SPEED:
+        while not MIN_WALKING_SPEED < v <= MAX_WALKING_SPEED:
             v = rng.normal(mean, std)
         out[i] = v
     return out

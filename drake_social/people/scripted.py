@@ -3,8 +3,10 @@
 A person with ``trajectory: [[t, x, y], ...]`` walks straight lines at constant
 speed between the waypoints (seconds, metres): before the first time they stand
 at the first point, after the last time at the last; with ``loop: true`` the
-route repeats every ``t_last - t_first`` seconds (it must be closed). A person
-without a trajectory stands at ``(x, y)`` facing ``theta``, exactly as
+route repeats every ``t_last - t_first`` seconds (it must be closed); a loop
+whose points are all one place (a person pausing there, ``[[0, x, y], [1, x,
+y]]``) is a person standing there facing ``theta``. A person without a
+trajectory stands at ``(x, y)`` facing ``theta``, exactly as
 :class:`~drake_social.people.StaticPeople`.
 
 Velocities are exact: the segment's velocity while walking, 0 while standing.
@@ -69,7 +71,8 @@ class ScriptedPeople:
             times.append(t)
             points.append(x)
             headings.append(knots[:2])
-            loops.append(bool(p.loop) and p.trajectory is not None)
+            # A loop without motion has no heading period (``steady`` is inf): the person stands.
+            loops.append(bool(p.loop) and p.trajectory is not None and math.isfinite(knots[2]))
             steady.append(knots[2])
         self._tracks = Tracks(times, points, headings, loops, steady)
         self._radii = np.array([float(p.radius) for p in people]).reshape(-1)

@@ -43,7 +43,7 @@ from drake_social.arguments import real_array, require_checker, require_instance
     require_scenario
 from drake_social.collision.validity import CompiledSceneChecker
 from drake_social.cost.social import SocialCost
-from drake_social.limits import MAX_ITERATIONS
+from drake_social.limits import MAX_ITERATIONS, MAX_REPLAN_BUDGET, MAX_REPLAN_ITERATIONS
 from drake_social.people import people_model
 from drake_social.people.prediction import Prediction
 from drake_social.planning.algorithms import AlgorithmSpec, algorithm_spec, base_only_weights, make_objective
@@ -161,8 +161,10 @@ class Replanner:
             walking, is the prediction's.
         algorithm: a name of :data:`~drake_social.planning.algorithms.ALGORITHM_SPECS`
             or a spec; None = ``scenario.planner.algorithm``.
-        iterations: samples per replan at most; None = ``planner.replan_iterations``.
-        budget: wall-clock seconds per replan; None = ``planner.replan_budget``.
+        iterations: samples per replan at most (at most
+            :data:`~drake_social.limits.MAX_REPLAN_ITERATIONS`); None = ``planner.replan_iterations``.
+        budget: wall-clock seconds per replan (at most
+            :data:`~drake_social.limits.MAX_REPLAN_BUDGET`); None = ``planner.replan_budget``.
         margin: the fraction by which a search path must be cheaper than the
             candidate to replace it, in [0, 1); None = ``planner.replan_margin``.
         safety: the smallest allowed surface distance from any part of the
@@ -200,9 +202,11 @@ class Replanner:
                              "(make_checker(without_people(scenario), 'planar')): the replanner checks people "
                              "against their prediction, not as static discs")
         p = scenario.planner
-        require_int(iterations, who, "iterations", minimum=1, maximum=MAX_ITERATIONS, optional=True)
+        require_int(iterations, who, "iterations", minimum=1, maximum=MAX_REPLAN_ITERATIONS, optional=True)
         require_int(initial_iterations, who, "initial_iterations", minimum=1, maximum=MAX_ITERATIONS, optional=True)
         require_number(budget, who, "budget", positive=True, optional=True, unit="seconds")
+        if budget is not None and budget > MAX_REPLAN_BUDGET:
+            raise ValueError(f"{who}: budget must be in (0, {MAX_REPLAN_BUDGET:g}] seconds, got {budget}")
         require_number(margin, who, "margin", optional=True)
         require_number(safety, who, "safety", optional=True, unit="metres")
         require_int(seed, who, "seed", minimum=0, optional=True)

@@ -25,7 +25,8 @@ from drake_social.scenario.schema import (EXECUTIONS, INFORMED_MODES, MAP_UNKNOW
                                           CrowdPerson, ExecutionOptions, LShape, Person, PlannerOptions, Polyline, Robot,
                                           Scenario, SocialCostOptions, World, interest_point_count)
 from drake_social.scenario.validate import (drake_config_problem, period_count, plant_time_step_problem,
-                                            time_limit_problem, validate_planner_choice, validate_scenario)
+                                            replan_rate_problem, time_limit_problem, validate_planner_choice,
+                                            validate_scenario)
 
 __all__ = [
     "ALGORITHMS",
@@ -72,6 +73,7 @@ __all__ = [
     "load_scenario_text",
     "period_count",
     "plant_time_step_problem",
+    "replan_rate_problem",
     "time_limit_problem",
     "validate_planner_choice",
     "validate_scenario",

@@ -16,16 +16,28 @@ import numpy as np
 from drake_social.kinematics import ArmGeometry
 from drake_social.scenario.map_rules import obstacle_arrays, obstacle_label
 
-__all__ = ["MAX_CROWD_TIME_STEP", "MAX_WALKING_SPEED", "MIN_WALKING_SPEED", "crowd_problems"]
+__all__ = ["MAX_CROWD_TIME_STEP", "MAX_SPEED_FACTOR", "MAX_SPEED_STD", "MAX_WALKING_SPEED", "MIN_WALKING_SPEED",
+           "crowd_problems"]
 
 #: Smallest preferred speed, m/s: a given one must exceed it, and a drawn one
 #: is drawn again until it does (a crowd person always walks to their goals).
 MIN_WALKING_SPEED = 0.1
-#: Largest preferred speed (given, or the mean of the drawn ones), m/s: people walk.
+#: Largest preferred speed, m/s: people walk. A given one, the mean of the
+#: drawn ones and every drawn one are at most this (a draw above it is drawn again).
 MAX_WALKING_SPEED = 3.0
+#: Largest ``crowd.speed_std``, m/s. The drawn speeds keep to
+#: (MIN_WALKING_SPEED, MAX_WALKING_SPEED], 2.9 m/s wide around the mean: with
+#: a deviation of at most 1 m/s a draw lands there with probability at least
+#: 0.498 (the mean at one end), so a person takes about two draws at most.
+#: Measured walking speeds deviate by about 0.26 m/s (the default).
+MAX_SPEED_STD = 1.0
+#: Largest ``crowd.max_speed_factor``: pushed by the others, a person runs at
+#: most twice their preferred speed (6 m/s at MAX_WALKING_SPEED).
+MAX_SPEED_FACTOR = 2.0
 #: Largest crowd time step, seconds: the explicit integration stays stable
-#: and a person moves at most MAX_WALKING_SPEED * 1.3 * 0.1 < 0.4 m per step,
-#: less than a body's diameter plus the repulsions' range.
+#: and a person moves at most MAX_WALKING_SPEED * MAX_SPEED_FACTOR * 0.1 =
+#: 0.6 m per step, less than a default body's diameter (0.5 m) plus the
+#: obstacles' default repulsion range (0.2 m).
 MAX_CROWD_TIME_STEP = 0.1
 
 
@@ -70,8 +82,11 @@ def _parameter_problems(crowd) -> list[tuple[str, str]]:
                                                               "(explicit integration; smaller is more accurate)"),
         ("speed_mean", lambda v: MIN_WALKING_SPEED < v <= MAX_WALKING_SPEED,
          f"must be in ({MIN_WALKING_SPEED:g}, {MAX_WALKING_SPEED:g}] m/s"),
-        ("speed_std", lambda v: v >= 0, "must be >= 0 m/s"),
-        ("max_speed_factor", lambda v: v >= 1, "must be >= 1 (a multiple of each person's preferred speed)"),
+        ("speed_std", lambda v: 0 <= v <= MAX_SPEED_STD,
+         f"must be in [0, {MAX_SPEED_STD:g}] m/s (the drawn speeds keep to ({MIN_WALKING_SPEED:g}, "
+         f"{MAX_WALKING_SPEED:g}] m/s)"),
+        ("max_speed_factor", lambda v: 1 <= v <= MAX_SPEED_FACTOR,
+         f"must be in [1, {MAX_SPEED_FACTOR:g}] (a multiple of each person's preferred speed)"),
         ("relaxation_time", lambda v: v > 0, "must be > 0 seconds"),
         ("goal_radius", lambda v: v > 0, "must be > 0 metres"),
         ("interaction_lambda", lambda v: v > 0, "must be > 0"),

@@ -345,15 +345,17 @@ class PlannerOptions:
     # from the robot's configuration against the people predicted over
     # ``replan_horizon`` (drake_social.control.ReplanningPlannerSystem).
     replan: bool = False
-    # Replans per second of simulated time, Hz (> 0).
+    # Replans per second of simulated time, Hz (> 0; a run that replans makes
+    # at most one per execution.control_period: 1 / replan_rate >= control_period).
     replan_rate: float = 10.0
-    # Wall-clock budget of one replan, seconds (> 0): the search stops there
-    # with the best path found so far.
+    # Wall-clock budget of one replan, seconds (in (0, MAX_REPLAN_BUDGET]):
+    # the search stops there with the best path found so far.
     replan_budget: float = 0.08
-    # Samples drawn per replan at most (1 .. MAX_ITERATIONS); the budget may stop it earlier.
+    # Samples drawn per replan at most (1 .. MAX_REPLAN_ITERATIONS); the budget may stop it earlier.
     replan_iterations: int = 500
-    # How far ahead people are predicted, seconds (> 0). Beyond it the safety
-    # check ignores them and the cost holds them where they are predicted at the horizon.
+    # How far ahead people are predicted, seconds (in (0, MAX_REPLAN_HORIZON]).
+    # Beyond it the safety check ignores them and the cost holds them where
+    # they are predicted at the horizon.
     replan_horizon: float = 5.0
     # A new path replaces the current one only when its cost is lower by at
     # least this fraction of the current one's (in [0, 1)).

@@ -20,8 +20,10 @@ from drake_social.io.textfile import shorten
 from drake_social.kinematics import ArmGeometry, displacement_bound
 from drake_social.limits import (ALGORITHMS, CONTACT_APPROXIMATIONS, INFORMED_ALGORITHMS, INTEGRATION_SCHEMES,
                                  MAX_CONTROL_STEPS, MAX_DYNAMIC_PLANT_TIME_STEP,
-                                 MAX_ITERATIONS, MAX_MOTION_STEPS, MAX_OBJECT_POINTS, MAX_PLANT_STEPS, MAX_REPLAY_FPS,
-                                 MAX_TIME_LIMIT, MIN_CONTROL_PERIODS, SERVO_BANDWIDTH)
+                                 MAX_ITERATIONS, MAX_MOTION_STEPS, MAX_OBJECT_POINTS, MAX_PLANT_STEPS,
+                                 MAX_REPLAN_BUDGET, MAX_REPLAN_HORIZON, MAX_REPLAN_ITERATIONS,
+                                 MAX_REPLANS_PER_CONTROL_PERIOD, MAX_REPLAY_FPS, MAX_TIME_LIMIT, MIN_CONTROL_PERIODS,
+                                 SERVO_BANDWIDTH)
 from drake_social.scenario.crowd_rules import crowd_problems
 from drake_social.scenario.map_rules import check_map
 from drake_social.scenario.people_rules import check_people
@@ -32,6 +34,7 @@ __all__ = [
     "drake_config_problem",
     "period_count",
     "plant_time_step_problem",
+    "replan_rate_problem",
     "time_limit_problem",
     "validate_planner_choice",
     "validate_scenario",
@@ -190,6 +193,22 @@ def time_limit_problem(time_limit: float, execution: ExecutionOptions, argument:
                 return argument, (f"must be <= {most:,} * {field} {length} = {most * length:.6g} s ({why}), "
                                   f"got {time_limit}")
             return field, f"must be >= execution.time_limit / {most:,} = {limit / most:.3g} s ({why}), got {length}"
+    return None
+
+
+def replan_rate_problem(rate: float, execution: ExecutionOptions) -> str | None:
+    """What is wrong with replanning ``rate`` times a second (> 0) under
+    ``execution`` (at most :data:`MAX_REPLANS_PER_CONTROL_PERIOD` replan per
+    control period: the period ``1 / rate`` at least ``control_period``), or None.
+
+    A rule of a run that replans: :func:`validate_scenario` applies it with
+    ``planner.replan`` on, and whatever turns replanning on for a scenario
+    without it (``simulate --replan``, ``simulate(..., replan=True)``) applies it then.
+    """
+    period = execution.control_period / MAX_REPLANS_PER_CONTROL_PERIOD
+    if 1.0 / rate < period:
+        return (f"must be <= 1 / execution.control_period = {1.0 / period:g} Hz (at most one replan per control "
+                f"period: the sequencer takes a new path once per period), got {rate}")
     return None
 
 
@@ -357,8 +376,14 @@ def validate_scenario(scenario: Scenario, source: str = "<scenario>") -> None:
         c.fail("planner.replan", f"must be true or false, got {_shown(p.replan)}")
     for name in ("replan_rate", "replan_budget", "replan_horizon"):
         c.positive(f"planner.{name}", getattr(p, name))
-    if not 1 <= p.replan_iterations <= MAX_ITERATIONS:
-        c.fail("planner.replan_iterations", f"must be in [1, {MAX_ITERATIONS}], got {p.replan_iterations}")
+    if not 1 / p.replan_rate < math.inf:  # a period of 1e-320 Hz overflows
+        c.fail("planner.replan_rate", f"must have a finite period 1 / replan_rate, got {p.replan_rate}")
+    for name, most in (("replan_budget", MAX_REPLAN_BUDGET), ("replan_horizon", MAX_REPLAN_HORIZON)):
+        if getattr(p, name) > most:
+            c.fail(f"planner.{name}", f"must be in (0, {most:g}] seconds, got {getattr(p, name)}")
+    if not 1 <= p.replan_iterations <= MAX_REPLAN_ITERATIONS:
+        c.fail("planner.replan_iterations", f"must be in [1, {MAX_REPLAN_ITERATIONS:,}] (samples of one replan's "
+                                            f"search), got {p.replan_iterations}")
     c.finite("planner.replan_margin", p.replan_margin)
     if not 0.0 <= p.replan_margin < 1.0:
         c.fail("planner.replan_margin", f"must be in [0, 1), got {p.replan_margin}")
@@ -402,6 +427,9 @@ def validate_scenario(scenario: Scenario, source: str = "<scenario>") -> None:
                f"{e.kp} * {e.control_period} = {e.kp * e.control_period:.6g}")
     if e.replay_fps > MAX_REPLAY_FPS:
         c.fail("execution.replay_fps", f"must be <= {MAX_REPLAY_FPS:g} frames per second, got {e.replay_fps}")
+    problem = replan_rate_problem(p.replan_rate, e) if p.replan else None  # --replan checks it when it turns it on
+    if problem:
+        c.fail("planner.replan_rate", problem)
     if scenario.random_seed < 0:
         c.fail("random_seed", f"must be >= 0, got {scenario.random_seed}")
     for field, message in crowd_problems(scenario):

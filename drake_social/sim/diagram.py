@@ -194,7 +194,7 @@ from drake_social.model.plant import add_environment, add_robot
 from drake_social.people import PeopleModel, people_model
 from drake_social.collision.validity import ValidityChecker
 from drake_social.scenario import (EXECUTIONS, SIM_MODES, SERVO_BANDWIDTH, SERVO_BASE_TIME_CONSTANT, Scenario,
-                                    ScenarioError, plant_time_step_problem, validate_scenario)
+                                    ScenarioError, plant_time_step_problem, replan_rate_problem, validate_scenario)
 from drake_social.waypoints import check_waypoints
 from drake_social.world import world_model
 
@@ -375,7 +375,9 @@ def resolve_replan(scenario: Scenario, replan, given_path: bool, planner: bool, 
 
     Raises:
         TypeError: ``replan`` is not None, True or False.
-        ValueError: ``replan=True`` with given waypoints or without the built-in planner.
+        ValueError: ``replan=True`` with given waypoints or without the
+            built-in planner, or for a scenario whose ``planner.replan_rate``
+            is more than one replan per control period.
     """
     require_instance(replan, (bool, np.bool_), who, "replan", "True, False or None", optional=True)
     if replan is None:
@@ -385,6 +387,9 @@ def resolve_replan(scenario: Scenario, replan, given_path: bool, planner: bool, 
                          "(leave out the waypoints, or replan)")
     if replan and not planner:
         raise ValueError(f"{who}: replan=True needs the built-in planner (planner=True)")
+    problem = replan_rate_problem(scenario.planner.replan_rate, scenario.execution) if replan else None
+    if problem:
+        raise ValueError(f"{who}: replan=True: the scenario's planner.replan_rate {problem}")
     return bool(replan)
 
 

@@ -6,6 +6,7 @@ from __future__ import annotations
 import dataclasses as dc
 import json
 import math
+import re
 import types
 from pathlib import Path
 
@@ -19,6 +20,8 @@ from drake_social.experiments.crowd import (JITTER_TAG, VARIANTS, CrowdStudy, cr
 from drake_social.experiments.crowd_report import claim_line, compare, target_lines
 from drake_social.people import people_model
 from drake_social.scenario import load_scenario
+
+ROOT = Path(__file__).resolve().parents[2]
 
 TINY_WALKER = """\
 description: "tiny with a walker: an 8 x 5 m room, a desk, one person crossing, a 1.5 m bar"
@@ -117,13 +120,60 @@ def test_variants_are_the_issue_s():
     assert list(VARIANTS) == list(CROWD_VARIANTS) == ["plan_once", "replan_base", "replan_multi", "replan_speed"]
 
 
-@pytest.mark.parametrize("settings, field", [
-    ({"episodes": 0}, "episodes"), ({"jitter": -1.0}, "jitter"), ({"variants": ("nope",)}, "variants"),
-    ({"scenarios": ("a/x.yaml", "b/x.yaml")}, "scenarios"), ({"seed": -1}, "seed"), ({"time_limit": 0.0}, "time_limit"),
+@pytest.mark.parametrize("settings, error, message", [
+    ({"episodes": 0}, ValueError, "CrowdStudy: episodes must be an integer >= 1 and <= 10,000, got 0"),
+    ({"episodes": 10_001}, ValueError, "CrowdStudy: episodes must be an integer >= 1 and <= 10,000, got 10001"),
+    ({"episodes": True}, TypeError, "CrowdStudy: episodes must be an integer >= 1 and <= 10,000, got bool True"),
+    ({"jitter": -1.0}, ValueError, "CrowdStudy: jitter must be a finite number >= 0 and <= 600 seconds, got -1.0"),
+    ({"jitter": 600.0000000000001}, ValueError,
+     "CrowdStudy: jitter must be a finite number >= 0 and <= 600 seconds, got 600.0000000000001"),
+    ({"jitter": "1"}, TypeError, "CrowdStudy: jitter must be a finite number >= 0 and <= 600 seconds, got str '1'"),
+    ({"variants": ("nope",)}, ValueError, "CrowdStudy: unknown variants[0] 'nope'; allowed: plan_once, "
+                                          "replan_base, replan_multi, replan_speed"),
+    ({"variants": ("plan_once", "plan_once")}, ValueError, "CrowdStudy: variants must name each of plan_once, "
+                                                           "replan_base, replan_multi, replan_speed at most once"),
+    ({"variants": ()}, ValueError, "CrowdStudy: variants must be a non-empty list or tuple"),
+    ({"scenarios": ("a/x.yaml", "b/x.yaml")}, ScenarioError, "crowd study: scenarios: the file names ['x', 'x'] "
+                                                             "must be distinct"),
+    ({"scenarios": "a.yaml"}, TypeError, "CrowdStudy: scenarios must be a list or tuple of file names"),
+    ({"seed": -1}, ValueError, "CrowdStudy: seed must be an integer >= 0, got -1"),
+    ({"time_limit": 0.0}, ValueError, "CrowdStudy: time_limit must be a finite number > 0 and <= 600 seconds, got 0.0"),
+    ({"time_limit": 600.0000000000001}, ValueError,
+     "CrowdStudy: time_limit must be a finite number > 0 and <= 600 seconds, got 600.0000000000001"),
+    ({"time_limit": "5"}, TypeError,
+     "CrowdStudy: time_limit must be a finite number > 0 and <= 600 seconds or None, got str '5'"),
+    ({"trace_episode": -1}, ValueError, "CrowdStudy: trace_episode must be an integer >= 0, got -1"),
+    ({"trace_episode": 3, "episodes": 3}, ValueError,
+     "CrowdStudy: trace_episode must be one of the 3 episodes, in [0, 2], or None, got 3"),
 ])
-def test_study_settings_are_checked(settings, field):
-    with pytest.raises(ScenarioError, match=f"crowd study: {field}"):
+def test_study_settings_are_checked(settings, error, message):
+    with pytest.raises(error) as info:
         CrowdStudy(**{"scenarios": ("a.yaml",), **settings})
+    assert str(info.value).startswith(message) and type(info.value) is error
+
+
+@pytest.mark.parametrize("time_limit, ok", [(0.05, True), (0.05 * (1 - 2e-9), False), (300.0, True),
+                                            (300.0 * (1 + 2e-9), False)])
+def test_the_study_time_limit_keeps_to_each_scenarios_rules_of_a_run(tmp_path, time_limit, ok):
+    # 10 to 60,000 control periods (and at most 300,000 plant steps): tiny.yaml with a 0.005 s control
+    # period and a 0.001 s plant step runs 0.05 .. 300 s, whole periods up to a relative 1e-9 (period_count).
+    path = tmp_path / "fine.yaml"
+    path.write_text((ROOT / "scenarios" / "tiny.yaml").read_text()
+                    + "execution: {control_period: 0.005, plant_time_step: 0.001}\n")
+    study = CrowdStudy(scenarios=(str(path),), variants=("plan_once",), episodes=1, time_limit=time_limit)
+    if ok:
+        assert [t["time_limit"] for t in crowd_tasks(study)] == [time_limit]
+    else:
+        with pytest.raises(ScenarioError, match=rf"^{re.escape(str(path))}: the crowd study's time_limit "
+                                                rf"\(--time-limit\) must be"):
+            crowd_tasks(study)
+
+
+def test_study_settings_at_their_bounds_are_accepted():
+    dut = CrowdStudy(scenarios=("a.yaml",), episodes=10_000, jitter=600.0, time_limit=600.0, trace_episode=9_999)
+    assert (dut.episodes, dut.jitter, dut.time_limit, dut.trace_episode) == (10_000, 600.0, 600.0, 9_999)
+    dut = CrowdStudy(scenarios=("a.yaml",), episodes=1, jitter=0.0, time_limit=5e-324, trace_episode=None)
+    assert (dut.episodes, dut.jitter, dut.trace_episode) == (1, 0.0, None)
 
 
 def test_replan_stats_by_hand():

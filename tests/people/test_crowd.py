@@ -189,6 +189,69 @@ def test_seeded_speeds_and_trajectories_are_deterministic():
     np.testing.assert_array_equal(c.speeds, [drawn[0], 0.9, drawn[1], drawn[2]])
 
 
+class _Normals:
+    """A generator stand-in whose normals are the given values, in order."""
+
+    def __init__(self, values):
+        self.values = list(values)
+
+    def normal(self, mean, std):
+        return self.values.pop(0)
+
+
+def test_drawn_speeds_keep_to_the_range_of_a_given_speed_at_its_ends():
+    above, below = math.nextafter(3.0, 4.0), math.nextafter(3.0, 0.0)
+    floor = math.nextafter(0.1, 1.0)
+    values = [0.1, floor, above, 3.0, 1e3, -1e3, below]
+    dut = draw_speeds(3, 1.34, 0.26, _Normals(values))
+    np.testing.assert_array_equal(dut, [floor, 3.0, below])  # 0.1, 3.0000000000000004, +-1000 drawn again
+
+
+@pytest.mark.parametrize("std", [0.26, 1.0, 1000.0])
+def test_draws_outside_the_range_are_drawn_again_and_the_rest_is_the_stream(std):
+    dut = draw_speeds(300, 1.34, std, np.random.default_rng(5))
+    raw = np.random.default_rng(5).normal(1.34, std, 2_000_000 if std > 1 else 3000)
+    np.testing.assert_array_equal(dut, raw[(raw > 0.1) & (raw <= 3.0)][:300])
+    assert dut.min() > 0.1 and dut.max() <= 3.0
+
+
+def test_a_crowd_with_a_wide_speed_spread_is_refused_naming_speed_std_and_its_drawn_speeds_are_walks():
+    people = [CrowdPerson(x=4 + i, y=3 + 0.7 * i, goals=[[8 - i, 8]]) for i in range(4)]
+    for std, ok in ((1.0, True), (math.nextafter(1.0, 0.0), True), (math.nextafter(1.0, 2.0), False),
+                    (0.0, True), (-5e-324, False)):
+        fields = [f for f, _ in problems_of(people, speed_std=std)]
+        assert fields == ([] if ok else ["crowd.speed_std"]), std
+    for factor, ok in ((2.0, True), (math.nextafter(2.0, 0.0), True), (math.nextafter(2.0, 3.0), False),
+                       (1.0, True), (math.nextafter(1.0, 0.0), False)):
+        fields = [f for f, _ in problems_of(people, max_speed_factor=factor)]
+        assert fields == ([] if ok else ["crowd.max_speed_factor"]), factor
+    dut = crowd_model(scenario(people, speed_mean=3.0, speed_std=1.0))
+    assert dut.speeds.min() > 0.1 and dut.speeds.max() <= 3.0
+    np.testing.assert_array_equal(dut.max_speeds, 1.3 * dut.speeds)
+
+
+def test_the_shipped_crowds_draw_the_speeds_of_the_floor_alone():
+    # lobby_crowd's draws (its seed and the crowd study's episode seeds) never pass 3 m/s: the
+    # generator's normals above 0.1 m/s, as drawn before the range had an upper end.
+    from pathlib import Path
+
+    from drake_social.experiments.crowd import episode_seeds
+    from drake_social.scenario import load_scenario
+
+    lobby = load_scenario(Path(__file__).resolve().parents[2] / "scenarios" / "lobby_crowd.yaml")
+    drawn = [i for i, p in enumerate(lobby.crowd.people) if p.desired_speed is None]
+    assert len(drawn) == 10
+
+    def floor_only(seed):
+        raw = np.random.default_rng(np.random.SeedSequence([seed, CROWD_SEED_TAG])).normal(1.34, 0.26, 100)
+        return raw[raw > 0.1][:len(drawn)]
+
+    np.testing.assert_array_equal(crowd_model(lobby).speeds[drawn], floor_only(lobby.random_seed))
+    for seed in episode_seeds(0, 50) + episode_seeds(1, 50):
+        rng = np.random.default_rng(np.random.SeedSequence([seed, CROWD_SEED_TAG]))
+        np.testing.assert_array_equal(draw_speeds(len(drawn), 1.34, 0.26, rng), floor_only(seed))
+
+
 def test_draws_below_the_floor_are_drawn_again():
     rng = np.random.default_rng(0)
     speeds = draw_speeds(200, 0.2, 0.5, rng)
@@ -288,8 +351,13 @@ PARAMETER_CASES = [
     (dict(time_step=0.1, relaxation_time=0.1), "crowd.time_step", "must be < crowd.relaxation_time (0.1 s)"),
     (dict(speed_mean=0.1), "crowd.speed_mean", "must be in (0.1, 3] m/s, got 0.1"),
     (dict(speed_mean=4.0), "crowd.speed_mean", "must be in (0.1, 3] m/s, got 4.0"),
-    (dict(speed_std=-0.1), "crowd.speed_std", "must be >= 0 m/s"),
-    (dict(max_speed_factor=0.9), "crowd.max_speed_factor", "must be >= 1"),
+    (dict(speed_std=-0.1), "crowd.speed_std", "must be in [0, 1] m/s (the drawn speeds keep to (0.1, 3] m/s)"),
+    (dict(speed_std=1000.0), "crowd.speed_std", "must be in [0, 1] m/s (the drawn speeds keep to (0.1, 3] m/s), "
+                                                "got 1000.0"),
+    (dict(speed_std=math.inf), "crowd.speed_std", "must be a finite number"),
+    (dict(max_speed_factor=0.9), "crowd.max_speed_factor", "must be in [1, 2]"),
+    (dict(max_speed_factor=1000.0), "crowd.max_speed_factor", "must be in [1, 2] (a multiple of each person's "
+                                                              "preferred speed), got 1000.0"),
     (dict(relaxation_time=0.0), "crowd.relaxation_time", "must be > 0 seconds"),
     (dict(goal_radius=-1.0), "crowd.goal_radius", "must be > 0 metres"),
     (dict(interaction_lambda=0.0), "crowd.interaction_lambda", "must be > 0"),

@@ -11,7 +11,8 @@ import numpy as np
 
 from drake_social.people.crowd import crowd_problems
 from drake_social.scenario import Crowd, CrowdPerson, load_scenario
-from drake_social.scenario.crowd_rules import MAX_CROWD_TIME_STEP, MAX_WALKING_SPEED, MIN_WALKING_SPEED
+from drake_social.scenario.crowd_rules import (MAX_CROWD_TIME_STEP, MAX_SPEED_FACTOR, MAX_SPEED_STD, MAX_WALKING_SPEED,
+                                               MIN_WALKING_SPEED)
 from drake_social.scenario.people_file import DEFAULT_RADIUS
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -27,6 +28,9 @@ def test_the_crowd_table_gives_the_ranges_the_rules_enforce():
     speeds = f"({MIN_WALKING_SPEED:g}, {MAX_WALKING_SPEED:g}]"
     assert speeds in _row("people[].desired_speed")
     assert speeds in _row("speed_mean")
+    assert f"drawn again until in {speeds}" in _row("people[].desired_speed")
+    assert f"std in [0, {MAX_SPEED_STD:g}]" in _row("speed_mean")
+    assert f"in [1, {MAX_SPEED_FACTOR:g}]" in _row("max_speed_factor")
     assert f"(0, {MAX_CROWD_TIME_STEP:g}]" in _row("time_step") and "< `relaxation_time`" in _row("time_step")
 
 

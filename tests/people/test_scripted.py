@@ -107,6 +107,31 @@ def test_heading_knots_of_a_loop_start_repeating_after_the_first_period():
     assert _wrap(np.interp(7.0, t, h) - np.interp(13.0, t, h)) == pytest.approx(0.0, abs=1e-12)
 
 
+@pytest.mark.parametrize("route", [[[0, 4.0, 3.8], [1, 4.0, 3.8]],                  # a pause in place
+                                   [[2.5, 4.0, 3.8], [3, 4.0, 3.8], [7, 4.0, 3.8]]])  # three points, one place
+def test_a_loop_without_motion_is_a_person_standing_there(route):
+    dut = ScriptedPeople([Person(trajectory=route, loop=True, theta=-1.2, radius=0.3, name="p")])
+    static = StaticPeople([[4.0, 3.8, -1.2]], [0.3], ["p"])
+    for t in (0.0, 1.0, 2.75, 1e3, 1e9):
+        a, b = dut.state_at(t), static.state_at(t)
+        for field in ("positions", "headings", "velocities", "radii", "present"):
+            assert np.array_equal(getattr(a, field), getattr(b, field)), (t, field)
+
+
+def test_a_scenario_with_a_pause_in_place_on_a_loop_loads_and_its_person_stands(tmp_path):
+    from drake_social.scenario import load_scenario
+
+    path = tmp_path / "pause.yaml"
+    path.write_text("world: {bounds: [0, 0, 8, 5]}\n"
+                    "people: [{radius: 0.25, theta: 0.5, trajectory: [[0, 4.0, 3.8], [1, 4.0, 3.8]], loop: true}]\n"
+                    "start: [1.0, 2.5, 0.0, 1.5708]\ngoal: [6.5, 2.5, 0.0, 1.5708]\n")
+    dut = people_model(load_scenario(path))
+    for t in (0.0, 0.5, 300.0):
+        s = dut.state_at(t)
+        np.testing.assert_array_equal(s.positions, [[4.0, 3.8]])
+        assert s.headings[0] == 0.5 and not s.velocities.any()
+
+
 def test_standing_people_are_exactly_the_static_model():
     standing = [Person(x=1.25, y=2.5, theta=-1.5708, radius=0.25, name="a"), Person(x=3.0, y=0.7, theta=4.0)]
     mixed = ScriptedPeople(standing + [_walker()])

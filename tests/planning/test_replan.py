@@ -24,6 +24,7 @@ import pytest
 
 from drake_social.collision.drake_checker import make_checker
 from drake_social.kinematics import ArmGeometry, config_distance
+from drake_social.limits import MAX_REPLAN_BUDGET, MAX_REPLAN_ITERATIONS
 from drake_social.people import PeopleState, constant_velocity, people_model, without_people
 from drake_social.people.prediction import Prediction
 from drake_social.people.proximity import part_distances
@@ -321,13 +322,13 @@ def test_same_seed_bit_for_bit(corridor, room):
 def test_over_budget_returns_the_best_found(corridor, room, first):
     """A budget far too small for the iteration cap: the search stops at the
     deadline and the replan returns a safe path (the candidate, or better)."""
-    rp = Replanner(corridor, room, budget=0.002, iterations=100_000)
+    rp = Replanner(corridor, room, budget=0.002, iterations=MAX_REPLAN_ITERATIONS)
     yc = NORTH_Y if route(first.waypoints) == "north" else SOUTH_Y
     script = [(2.0, 6.0, 3.5 + 3 * (yc - 3.5))]  # a person far outside the room: nothing blocked
     prediction = walkers(2.0, [script])
     q_now, previous = along(first, 2.0)
     res = rp.plan(q_now, 2.0, prediction, previous, replan_index=1)
-    assert res.deadline_hit and 0 < res.iterations < 100_000
+    assert res.deadline_hit and 0 < res.iterations < MAX_REPLAN_ITERATIONS
     assert res.status in ("kept", "new")
     assert res.cost <= res.candidate_cost
     assert min_distance(corridor, res.waypoints, 2.0, prediction, [script]) > corridor.execution.safety_distance
@@ -534,6 +535,13 @@ def test_arguments_are_checked(corridor, room, first):
         Replanner(corridor, room, iterations=0)
     with pytest.raises(ValueError, match="budget"):
         Replanner(corridor, room, budget=0.0)
+    # The bounds of planner.replan_iterations and replan_budget, at them and just beyond.
+    dut = Replanner(corridor, room, iterations=MAX_REPLAN_ITERATIONS, budget=MAX_REPLAN_BUDGET)
+    assert (dut.iterations, dut.budget) == (10_000, 60.0)
+    with pytest.raises(ValueError, match=r"^Replanner: iterations must be an integer >= 1 and <= 10,000, got 10001$"):
+        Replanner(corridor, room, iterations=MAX_REPLAN_ITERATIONS + 1)
+    with pytest.raises(ValueError, match=r"^Replanner: budget must be in \(0, 60\] seconds, got 60.00000000000001$"):
+        Replanner(corridor, room, budget=math.nextafter(MAX_REPLAN_BUDGET, math.inf))
     rp = replanner(corridor, room)
     assert (rp.iterations, rp.budget, rp.margin, rp.safety, rp.seed) == (
         corridor.planner.replan_iterations, 60.0, corridor.planner.replan_margin,
