@@ -169,6 +169,33 @@ def map_scenario_text(map_file: str, start: Sequence[float], goal: Sequence[floa
     ])
 
 
+#: The command's option behind each field of the scenario it writes: the
+#: scenario file is not written when it is refused, so an error names the option.
+OPTION_OF_FIELD = {
+    "start": "--start", "start[0]": "--start", "start[1]": "--start", "start[2]": "--arm", "start[3]": "--arm",
+    "goal": "--goal", "goal[0]": "--goal", "goal[1]": "--goal", "goal[2]": "--arm", "goal[3]": "--arm",
+    "world.unknown": "--unknown", "random_seed": "--seed",
+}
+
+
+def _as_option_error(message: str, out: str) -> str:
+    """A refusal of the scenario text (``OUT: field: what``) as the command's:
+    the option the field came from (:data:`OPTION_OF_FIELD`); the map's own
+    message for ``world.map``; else the field, saying that ``OUT`` was not
+    written."""
+    prefix = f"{out}: "
+    if not message.startswith(prefix):
+        return message
+    field, sep, rest = message[len(prefix):].partition(": ")
+    if not sep:
+        return message
+    if field in OPTION_OF_FIELD:
+        return f"{OPTION_OF_FIELD[field]}: {rest}"
+    if field == "world.map":
+        return rest
+    return f"{out} (not written): {field}: {rest}"
+
+
 def _quoted(text: str) -> str:
     return '"' + str(text).replace("\\", "\\\\").replace('"', '\\"') + '"'
 
@@ -209,8 +236,7 @@ def write_map_scenario(map_path: str | Path, out: str | Path, start: Sequence[fl
 
         check_start_goal(scenario, None, str(out))
     except ScenarioError as e:
-        message = str(e).replace(f"{out}: start:", "--start:").replace(f"{out}: goal:", "--goal:")
-        message = message.replace(f"{out}: world.unknown:", "--unknown:")
+        message = _as_option_error(str(e), str(out))
         if "in collision" in message:
             message += " (move it, or turn the bar with --arm PSI1 PSI2)"
         raise ScenarioError(message) from None
