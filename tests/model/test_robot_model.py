@@ -29,7 +29,7 @@ OBJECTS = {
 def test_checked_in_model_is_the_generated_default():
     dut = robot_sdf(Scenario())
     assert default_model_path().read_text() == dut, (
-        "models/mobile_manipulator.sdf is stale; regenerate it with "
+        "drake_social/models/mobile_manipulator.sdf is stale; regenerate it with "
         "default_model_path().write_text(robot_sdf(Scenario()))"
     )
 
