@@ -282,8 +282,9 @@ def _run_map(args: argparse.Namespace) -> int:
         return 0
     written = map_tools.write_map_scenario(args.map, args.scenario_out, args.start, args.goal, unknown=args.unknown,
                                            arm=args.arm, seed=args.seed, force=args.force)
-    print(f"wrote {written}: the bar carried from ({args.start[0]:g}, {args.start[1]:g}) to "
-          f"({args.goal[0]:g}, {args.goal[1]:g}) through {args.map}; next: drake-social plan {written}")
+    print(f"wrote {written.path}: the bar carried from ({args.start[0]:g}, {args.start[1]:g}) to "
+          f"({args.goal[0]:g}, {args.goal[1]:g}) through {args.map}; next: drake-social plan {written.path}")
+    print("\n".join(written.lines()))
     return 0
 
 

@@ -23,6 +23,7 @@ from drake_social.cost import SocialCost
 from drake_social.maps import OCCUPIED, UNKNOWN, OccupancyMap
 from drake_social.people import PeopleState, people_model
 from drake_social.scenario import Box, Scenario
+from drake_social.scenario.map_rules import world_map_boxes
 from drake_social.viz.labels import MAX_LABEL_CHARS, fit_text
 from drake_social.world import Boxes, world_model
 
@@ -30,6 +31,7 @@ __all__ = [
     "FIELD_CMAP",
     "MAP_BOX_EDGE",
     "MAP_OCCUPIED_RGBA",
+    "MAP_OUTSIDE_RGBA",
     "MAP_UNKNOWN_RGBA",
     "OBSTACLE_COLOR",
     "PERSON_COLOR",
@@ -51,6 +53,9 @@ OBSTACLE_COLOR = "#5b5b5b"
 MAP_OCCUPIED_RGBA = (0.25, 0.25, 0.25, 1.0)
 MAP_UNKNOWN_RGBA = (0.55, 0.55, 0.6, 0.45)
 MAP_BOX_EDGE = "#1f77b4"
+#: What of the room lies outside a turned map's rectangle (an obstacle when
+#: unknown cells are: :func:`drake_social.scenario.map_rules.outside_boxes`).
+MAP_OUTSIDE_RGBA = (0.55, 0.55, 0.6, 0.75)
 #: Fill of person bodies.
 PERSON_COLOR = "#e8c39e"
 #: Colour map of the social-cost heat map (white at zero cost).
@@ -117,7 +122,8 @@ def draw_world(ax: Axes, scenario: Scenario, *, names: bool = True, margin: floa
                         linewidth=0.6, zorder=2)
         out["obstacles"].append(ax.add_patch(patch))
     if w.map is not None:
-        out["map"] = draw_map(ax, w.map, w.boxes.corners[hand:])
+        outside = world_map_boxes(scenario.world).cells[:, 0] < 0  # the boxes that close a turned map's outside
+        out["map"] = draw_map(ax, w.map, w.boxes.corners[hand:], outside=outside, clip=w.bounds)
     for i, ((px, py), theta, radius, name) in enumerate(zip(people.positions, people.headings, people.radii,
                                                            people.names)):
         px, py, theta, radius = float(px), float(py), float(theta), float(radius)
@@ -156,27 +162,50 @@ def map_rgba(grid: OccupancyMap) -> np.ndarray:
     return out
 
 
-def draw_map(ax: Axes, grid: OccupancyMap, corners: np.ndarray) -> list:
+def draw_map(ax: Axes, grid: OccupancyMap, corners: np.ndarray, *, outside: np.ndarray | None = None,
+             clip: Sequence[float] | None = None) -> list:
     """Draws an occupancy-grid map's cells under the outlines of its boxes.
 
     The image (:func:`map_rgba`, free cells transparent, so the heat map
     shows through) is placed by the map's origin and yaw; the boxes
     (``corners`` (K, 4, 2)) the planner sees are outlined on top of it.
 
+    Args:
+        outside: (K,) bool, the boxes that close the outside of a turned
+            map's rectangle (:func:`~drake_social.scenario.map_rules.outside_boxes`):
+            filled in :data:`MAP_OUTSIDE_RGBA`, not outlined (they reach far
+            beyond the room). None = none.
+        clip: ``[x_min, y_min, x_max, y_max]``: nothing of the map is drawn
+            beyond it (the room's bounds). None = no clipping.
+
     Returns:
-        ``[image, outlines]``; the image is labelled "map: occupied / unknown
-        cells" and the outlines "map boxes" for legends.
+        ``[image, outlines]``, then the outside's fill when there is one; the
+        image is labelled "map: occupied / unknown cells", the outlines "map
+        boxes" and the fill "map: outside its rectangle" for legends.
     """
     x, y, yaw = (float(v) for v in grid.origin)
     height, width = grid.shape[0] * grid.resolution, grid.shape[1] * grid.resolution
     image = ax.imshow(map_rgba(grid), origin="lower", extent=(0.0, width, 0.0, height), interpolation="nearest",
                       zorder=1, label="map: occupied / unknown cells")
     image.set_transform(Affine2D().rotate(yaw).translate(x, y) + ax.transData)
+    corners = np.asarray(corners, float).reshape(-1, 4, 2)
+    outside = np.zeros(len(corners), bool) if outside is None else np.asarray(outside, bool)
+    cells = corners[~outside]
     # Thinner outlines when there are many boxes, so that ragged walls stay readable.
-    outlines = PolyCollection(list(corners), closed=True, facecolors="none", edgecolors=MAP_BOX_EDGE,
-                              linewidths=0.4 if len(corners) <= 500 else 0.15, zorder=2, label="map boxes")
+    outlines = PolyCollection(list(cells), closed=True, facecolors="none", edgecolors=MAP_BOX_EDGE,
+                              linewidths=0.4 if len(cells) <= 500 else 0.15, zorder=2, label="map boxes")
     ax.add_collection(outlines)
-    return [image, outlines]
+    artists = [image, outlines]
+    if outside.any():
+        fill = PolyCollection(list(corners[outside]), closed=True, facecolors=[MAP_OUTSIDE_RGBA],
+                              edgecolors="none", zorder=1, label="map: outside its rectangle")
+        artists.append(ax.add_collection(fill))
+    if clip is not None:
+        x0, y0, x1, y1 = (float(v) for v in clip)
+        frame = Rectangle((x0, y0), x1 - x0, y1 - y0, transform=ax.transData)
+        for artist in artists:
+            artist.set_clip_path(frame)
+    return artists
 
 
 def field_resolution(bounds: Sequence[float], max_cells: int = FIELD_MAX_CELLS) -> float:
