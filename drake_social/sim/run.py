@@ -453,7 +453,7 @@ def analyze_execution(
 
     require_scenario(scenario, "analyze_execution")
     require_checker(checker, "analyze_execution", optional=True)
-    waypoints = waypoint_array(waypoints, "analyze_execution: waypoints")
+    waypoints = waypoint_array(waypoints, "analyze_execution: waypoints", fewest=1)
     times, q = _trajectory(times, q, "analyze_execution")
     # Clearances from the exact planar checker: Drake's cylinder-box distance
     # can exceed the true one (see drake_social.collision.drake_checker).
