@@ -331,3 +331,25 @@ def test_cli_peak_memory_of_a_replanning_run_among_400_walkers(tmp_path):
     assert record["num_samples"] == 1001 or record["reached"]  # the whole 10 s ran (or the goal was reached)
     assert (tmp_path / "out" / "people.csv").is_file()
     assert peak < 950, f"simulate --replan peaked at {peak:.0f} MB"
+
+
+def test_cli_peak_memory_of_map_inspect_of_the_largest_map(tmp_path):
+    """``map inspect`` of a 5000 x 5000 map of grid lines every 7 rows and 11 columns (docs/maps.md's
+    largest measured map, 325,780 boxes): 1.87 GB before (matplotlib resampled a float copy of the
+    25 million cells and held an outline per box), under 0.6 GB now, reading included."""
+    from PIL import Image
+
+    rows, cols = np.mgrid[0:5000, 0:5000]
+    Image.fromarray(np.where((rows % 7 == 0) | (cols % 11 == 0), 0, 254).astype(np.uint8)).save(tmp_path / "grid.pgm")
+    (tmp_path / "grid.yaml").write_text("image: grid.pgm\nresolution: 0.05\norigin: [0.0, 0.0, 0.0]\nnegate: 0\n"
+                                        "occupied_thresh: 0.65\nfree_thresh: 0.196\n")
+    del rows, cols
+    code, peak = _peak_mb(["map", "inspect", str(tmp_path / "grid.yaml"), "--out", str(tmp_path / "out")])
+    assert code == 0
+    with Image.open(tmp_path / "out" / "map.png") as png:
+        assert png.size[0] > 1000
+    assert peak < 600, f"map inspect peaked at {peak:.0f} MB"
+    from drake_social.viz.world import MAP_MAX_OUTLINES, MAP_PICTURE_CELLS
+
+    # What the figure drew: the cells in 3 x 3 blocks, and no outlines (325,780 boxes).
+    assert 5000 / 3 <= MAP_PICTURE_CELLS < 5000 / 2 and MAP_MAX_OUTLINES < 325_780
