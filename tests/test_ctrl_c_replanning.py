@@ -24,26 +24,15 @@ import pytest
 
 from drake_social.io.outputs import current_set
 
+from experiments.test_crowd_study import TINY_WALKER
+
 CLI = Path(sys.executable).with_name("drake-social")
 
-#: tiny.yaml's room and robot with a walker crossing the route again and again, replanned at 100 Hz.
-SCENARIO = """
-description: "tiny with a walker, replanned at 100 Hz"
-world:
-  bounds: [0.0, 0.0, 8.0, 5.0]
-  obstacles:
-    - {center: [4.0, 0.6], size: [1.6, 0.8], yaw: 0.0}
-people:
-  - {x: 3.5, y: 4.5, theta: -1.5708, radius: 0.25, name: "walker",
-     trajectory: [[0.0, 3.5, 4.5], [3.0, 3.5, 1.5], [6.0, 3.5, 4.5]], loop: true}
-robot: {base_radius: 0.35, link_lengths: [0.6, 0.5], link_width: 0.08}
-object: !Bar {length: 1.5, thickness: 0.05}
-start: [1.0, 2.5, 0.0, 1.5708]
-goal: [6.5, 2.5, 0.0, 1.5708]
-random_seed: 1
-planner: {iterations: 300, replan_search_period: 0, replan_rate: 100}
-execution: {time_limit: %s}
-"""
+#: The crowd study's tiny room with a walker crossing the route again and again, replanned at 100 Hz.
+_PLANNING = "planner: {iterations: 300}\nexecution: {time_limit: 20.0}\n"
+assert _PLANNING in TINY_WALKER
+SCENARIO = TINY_WALKER.replace(_PLANNING, "planner: {iterations: 300, replan_search_period: 0, replan_rate: 100}\n"
+                                          "execution: {time_limit: %s}\n")
 
 #: Seconds from the signal to the exit: far above the second a Ctrl-C takes, far below a run's length.
 WITHIN = 10.0
