@@ -294,7 +294,7 @@ def _held(kernel, *args):
     (:mod:`drake_social.interrupts`). The first call of a kernel in a process
     compiles, or loads, it before the hold, so that Ctrl-C stays live while
     it does."""
-    if not kernel.signatures and hasattr(kernel, "compile"):  # (a test's stand-in has nothing to compile)
+    if hasattr(kernel, "compile") and not kernel.signatures:  # a numba dispatcher with nothing loaded yet
         kernel.compile(tuple(numba.typeof(a) for a in args))
     with DeferredSignals() as held:
         out = kernel(*args)
