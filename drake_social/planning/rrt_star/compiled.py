@@ -296,10 +296,12 @@ def _held(kernel, *args):
     it does."""
     if hasattr(kernel, "compile") and not kernel.signatures:  # a numba dispatcher with nothing loaded yet
         kernel.compile(tuple(numba.typeof(a) for a in args))
-    with DeferredSignals() as held:
-        out = kernel(*args)
-    held.reraise()
-    return out
+    held = DeferredSignals()
+    try:
+        with held:
+            return kernel(*args)
+    finally:  # also when the kernel raised: a Ctrl-C is not lost
+        held.reraise()
 
 
 def prepare(space: ConfigurationSpace, checker: CompiledSceneChecker, objective: Objective, options: RrtStarOptions,
