@@ -16,7 +16,7 @@ The rules, each checked over the whole graph:
    layer modules (prefixes under ``drake_social.``)
    ===== ==================================================================
    0     ``limits``, ``errors``, ``io`` (the package itself),
-         ``io.textfile``, ``io.json_numbers``, ``_kernel_cache``
+         ``io.textfile``, ``io.json_numbers``, ``_kernel_cache``, ``interrupts``
    1     ``kinematics`` (pure numpy; the schema's types only for annotations),
          ``maps`` (map_server maps: numpy, PyYAML, Pillow)
    2     ``scenario`` (schema, load, validate), ``arguments``
@@ -64,6 +64,7 @@ LAYERS: dict[str, int] = {
     "drake_social.io.textfile": 0,
     "drake_social.io.json_numbers": 0,
     "drake_social._kernel_cache": 0,
+    "drake_social.interrupts": 0,
     "drake_social.kinematics": 1,
     "drake_social.maps": 1,
     "drake_social.scenario": 2,

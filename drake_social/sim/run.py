@@ -433,7 +433,10 @@ def analyze_execution(
 
     Args:
         scenario: the scenario.
-        waypoints: (N, 4) planned path.
+        waypoints: (N, 4) planned path; one row (N = 1) for a robot that
+            was to hold there (a replanning run that never found a path):
+            the deviations are then from that configuration, the planned
+            social cost 0.
         times, q: (T,), (T, 4) executed configurations over time.
         checker: the collision checker of the executed configurations;
             None = Drake's (:func:`~drake_social.collision.drake_checker.valid_configurations`:
@@ -450,14 +453,14 @@ def analyze_execution(
 
     Raises:
         TypeError: an argument of the wrong kind (named).
-        ScenarioError: ``waypoints`` not an (N, 4) array with 2 <= N <=
+        ScenarioError: ``waypoints`` not an (N, 4) array with 1 <= N <=
             MAX_WAYPOINTS; ``times`` and ``q`` not (T,) and (T, 4) finite.
     """
     from drake_social.collision.drake_checker import make_checker, valid_configurations
 
     require_scenario(scenario, "analyze_execution")
     require_checker(checker, "analyze_execution", optional=True)
-    waypoints = waypoint_array(waypoints, "analyze_execution: waypoints")
+    waypoints = waypoint_array(waypoints, "analyze_execution: waypoints", fewest=1)
     times, q = _trajectory(times, q, "analyze_execution")
     # Clearances from the exact planar checker: Drake's cylinder-box distance
     # can exceed the true one (see drake_social.collision.drake_checker).

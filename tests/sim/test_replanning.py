@@ -247,3 +247,33 @@ def test_replan_none_follows_the_scenario_when_it_plans(tiny):
     assert resolve_replan(on, False, False, True, "f") is False
     with pytest.raises(ValueError, match="f: replan=True needs the built-in planner"):
         resolve_replan(tiny, True, False, False, "f")
+
+
+def test_a_robot_that_waits_the_whole_run_is_measured_where_it_held(tiny_scenario_path):
+    """Someone within the safety distance of the robot for the whole run: every replan waits, and
+    simulate returns the run (not reached) analysed against the one configuration held."""
+    from drake_social.scenario import ScenarioError
+    from drake_social.sim.run import analyze_execution
+
+    text = tiny_scenario_path.read_text().replace(
+        'name: "standing"}  # faces south\n',
+        'name: "standing"}\n  - {x: 0.37, y: 2.5, theta: 0.0, radius: 0.25, name: "beside the start"}\n')
+    dut = load_scenario_text(text + "execution: {time_limit: 1.0}\n", "tiny, a person beside the start")
+    assert len(dut.people) == 2
+    run = simulate(dut, mode="kinematic", replan=True)
+    assert not run.reached and run.message == "goal not reached within the time limit of 1 s (the last replan: wait)"
+    assert [r.status for r in run.replans] == ["wait"] * 10  # the first plan and t = 0.1 .. 0.9 s
+    np.testing.assert_array_equal(run.waypoints, [dut.start])
+    np.testing.assert_array_equal(run.q, np.tile(dut.start, (len(run.times), 1)))
+    report = run.report
+    assert report is not None and report.collision_free and report.within_limits
+    assert report.planned_social_cost == report.executed_social_cost == 0.0
+    assert report.max_point_deviation["max"] == report.max_config_deviation == 0.0
+    # The base's surface 0.63 - 0.35 - 0.25 m from the person's.
+    assert report.min_clearance == pytest.approx(0.03, abs=1e-9)
+    # One configuration is a path to analyse; a step off it is measured; none is refused, naming the rule.
+    moved = run.q.copy()
+    moved[-1, 0] += 0.02
+    assert analyze_execution(dut, run.waypoints, run.times, moved).max_config_deviation == pytest.approx(0.02)
+    with pytest.raises(ScenarioError, match=r"1 <= N <= 10,000 .*got 0 waypoints"):
+        analyze_execution(dut, np.zeros((0, 4)), run.times, run.q)

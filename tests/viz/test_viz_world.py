@@ -182,3 +182,73 @@ def test_a_turned_maps_outside_is_drawn_as_outside_and_nothing_past_the_frame(tm
     artists = draw_world(dut.add_subplot(), scenario)["map"]
     assert len(artists) == 3 and len(artists[1].get_paths()) == 2 and len(artists[2].get_paths()) == 4
     assert MAP_BOX_EDGE
+
+
+# ---- a map's cells in a figure --------------------------------------------------
+
+
+def _grid(classes: np.ndarray, resolution: float = 0.1):
+    from pathlib import Path
+
+    from drake_social.maps import OccupancyMap
+
+    classes = np.asarray(classes, np.int8)
+    return OccupancyMap(path=Path("m.yaml"), image_path=Path("m.pgm"), resolution=resolution,
+                        origin=(1.0, 2.0, 0.0), negate=False, occupied_thresh=0.65, free_thresh=0.196,
+                        mode="trinary", values=np.where(classes == 1, 100, np.where(classes == 0, 0, -1)).astype(
+                            np.int8), classes=classes)
+
+
+@pytest.mark.parametrize("shape, max_cells, factor", [
+    ((4, 4), 4, 1), ((5, 4), 4, 2), ((4, 5), 4, 2), ((8, 3), 4, 2), ((9, 3), 4, 3), ((5000, 5000), 2048, 3)])
+def test_the_picture_factor_is_the_smallest_block_that_fits(shape, max_cells, factor):
+    from drake_social.viz.world import map_picture_factor
+
+    assert map_picture_factor(shape, max_cells) == factor
+
+
+def test_a_large_map_is_drawn_in_blocks_that_keep_every_wall():
+    """Blocks of f x f cells, each occupied where any cell is, else unknown where any is, else free;
+    the last row and column of blocks padded with free cells. Checked block by block."""
+    from drake_social.maps import FREE, OCCUPIED, UNKNOWN
+    from drake_social.viz.world import MAP_OCCUPIED_RGBA, MAP_UNKNOWN_RGBA, map_rgba
+
+    rng = np.random.default_rng(3)
+    classes = rng.choice(np.array([FREE, OCCUPIED, UNKNOWN]), p=[0.88, 0.04, 0.08], size=(10, 7))
+    grid = _grid(classes)
+    dut = map_rgba(grid, max_cells=4)  # f = 3: 4 x 3 blocks, the last padded
+    assert dut.dtype == np.uint8 and dut.shape == (4, 3, 4)
+    occupied, unknown = (np.round(np.multiply(rgba, 255)) for rgba in (MAP_OCCUPIED_RGBA, MAP_UNKNOWN_RGBA))
+    seen = set()
+    for i in range(4):
+        for j in range(3):
+            cells = classes[3 * i:3 * i + 3, 3 * j:3 * j + 3]
+            expected = (occupied if (cells == OCCUPIED).any() else unknown if (cells == UNKNOWN).any()
+                        else np.zeros(4))
+            np.testing.assert_array_equal(dut[i, j], expected)
+            seen.add(tuple(expected))
+    assert len(seen) == 3  # all three kinds of block occur
+    # A wall one cell thick in a 5000 x 5000 map: every block it crosses is occupied, no other.
+    wall = np.zeros((5000, 5000), np.int8)
+    wall[:, 4001] = OCCUPIED
+    big = map_rgba(_grid(wall))
+    assert big.shape == (1667, 1667, 4)
+    assert (big[:, 1333, 3] == 255).all() and big[:, np.r_[:1333, 1334:1667], 3].max() == 0
+    np.testing.assert_array_equal(map_rgba(grid), map_rgba(grid, max_cells=10))  # small: cell for cell
+
+
+def test_draw_map_places_the_blocks_and_outlines_at_most_the_stated_boxes():
+    from drake_social.maps import OCCUPIED
+    from drake_social.viz.world import MAP_MAX_OUTLINES, draw_map
+
+    classes = np.zeros((5000, 4000), np.int8)
+    classes[0, 0] = OCCUPIED
+    grid = _grid(classes, resolution=0.05)
+    square = np.array([[0.0, 0.0], [0.05, 0.0], [0.05, 0.05], [0.0, 0.05]])
+    for boxes, outlined in ((MAP_MAX_OUTLINES, MAP_MAX_OUTLINES), (MAP_MAX_OUTLINES + 1, 0)):
+        fig = Figure()
+        image, outlines = draw_map(fig.add_subplot(), grid, np.tile(square, (boxes, 1, 1)))[:2]
+        assert len(outlines.get_paths()) == outlined
+        # 1667 x 1334 pixels of 3 x 3 cells: the padded blocks reach past the map by up to two cells.
+        assert image.get_array().shape[:2] == (1667, 1334)
+        np.testing.assert_allclose(image.get_extent(), [0.0, 1334 * 0.15, 0.0, 1667 * 0.15], rtol=1e-12)
