@@ -86,6 +86,12 @@ MAX_REPLAN_BUDGET = 60.0
 #: no run lasts longer (MAX_TIME_LIMIT). The prediction holds one sample per
 #: 0.1 s per person (6,001 samples here).
 MAX_REPLAN_HORIZON = MAX_TIME_LIMIT
+#: Largest weight of the planners' objectives (``social.weights``,
+#: ``social.length_weight``, ``planner.replan_length_weight``): a motion's cost
+#: sums weight x AGF (at most 1) x metres over every point and person, so with
+#: weights up to 10^6 the costs of any room stay far below the largest float
+#: (1e308 made them inf: every path equally dear, the robot never left).
+MAX_COST_WEIGHT = 1e6
 
 #: Planner names accepted in ``planner.algorithm`` (see ``drake_social.planning``).
 ALGORITHMS = (

@@ -285,10 +285,10 @@ class SocialCostOptions:
     rear_ratio: float = 0.5
     # AGF values <= threshold count as 0 (the paper: 0.2), in [0, 1).
     threshold: float = 0.2
-    # One weight >= 0 per interest point, in the order base, link-1 tip,
+    # One weight in [0, 1e6] per interest point, in the order base, link-1 tip,
     # link-2 tip, then the object's points. None = 1 for every point.
     weights: Optional[list[float]] = None
-    # Path-length weight lambda >= 0 added to the social integral
+    # Path-length weight lambda in [0, 1e6] added to the social integral
     # (0 = the paper's pure social cost).
     length_weight: float = 0.0
     # Largest workspace displacement of any weighted interest point between two
@@ -365,7 +365,7 @@ class PlannerOptions:
     # current path against the new prediction; one that finds it unsafe
     # searches at once.
     replan_search_period: float = 1.0
-    # Added to social.length_weight in the replanner's objective (>= 0): while
+    # Added to social.length_weight in the replanner's objective (in [0, 1e6]): while
     # the robot drives, time passes for everyone, and among routes of about
     # equal social cost the shorter one should win (without it a replan may
     # take any of many near-zero-cost detours; docs/replanning.md).
