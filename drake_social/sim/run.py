@@ -62,13 +62,9 @@ from drake_social.collision.validity import ValidityChecker
 from drake_social.people import PeopleLog, PeopleModel, people_model, without_people
 from drake_social.scenario import Scenario, ScenarioError, time_limit_problem
 from drake_social.sim.analysis import config_deviation, densify, point_deviation
-from drake_social.sim.diagram import (
-    TransportDiagram,
-    build_checked,
-    check_diagram_options,
-    check_diagram_waypoints,
-    resolve_replan,
-)
+from drake_social.sim.autonomy import path_source
+from drake_social.sim.checks import check_diagram_options, check_diagram_waypoints, resolve_replan
+from drake_social.sim.diagram import TransportDiagram, build_checked
 from drake_social.waypoints import waypoint_array
 
 __all__ = ["CHECKED_ROOM", "CHECKED_ROOM_AND_PEOPLE", "ExecutionReport", "LimitViolation", "SimulationResult",
@@ -628,8 +624,8 @@ def run_checked(
     whether to replan (resolved); ``replanner``: the replanner object of
     :func:`~drake_social.sim.diagram.build_diagram` (None = the scenario's)."""
     limit = time_limit
-    built = build_checked(scenario, mode, execution, waypoints, checker, meshcat, people=people, replan=replan,
-                          replanner=replanner)
+    built = build_checked(scenario, mode, execution, path_source(waypoints, replan, replanner), checker, meshcat,
+                          people=people)
     root = built.diagram.CreateDefaultContext()
     if built.visualizer is not None:
         from drake_social.sim.replay import start_recording
@@ -642,10 +638,11 @@ def run_checked(
     planner_result = None
     path = built.waypoints
     if built.replanning:  # a first plan that waits is no failure: the robot waits for a safe path
-        path = np.asarray(built.subsystem("planner").GetOutputPort("waypoints").Eval(
-            built.subsystem("planner").GetMyContextFromRoot(root)), float).reshape(-1, 4)
+        planner = built.autonomy.planner
+        path = np.asarray(planner.GetOutputPort("waypoints").Eval(planner.GetMyContextFromRoot(root)),
+                          float).reshape(-1, 4)
     elif path is None:
-        planner = built.subsystem("planner")
+        planner = built.autonomy.planner
         planner_result = planner.GetOutputPort("result").Eval(planner.GetMyContextFromRoot(root))
         path = np.asarray(planner_result.waypoints, float).reshape(-1, 4)
         if not planner_result.success:
@@ -658,7 +655,7 @@ def run_checked(
     # Advance in chunks and stop at the first chunk after the goal: a Python
     # monitor called after every step would cost more than the whole kinematic
     # simulation. The time to goal comes from the logged done flag.
-    sequencer = built.subsystem("sequencer")
+    sequencer = built.autonomy.sequencer
     sequencer_context = sequencer.GetMyContextFromRoot(root)
     done_port = sequencer.GetOutputPort("done")
     chunk = max(_CHUNK, float(scenario.execution.control_period))
@@ -708,7 +705,7 @@ def run_checked(
     reached_at = [float(times[max(len(times) - 2, 0)])] if reached else []
     replans, replanning = (), None
     if built.replanning:
-        planner = built.subsystem("planner")
+        planner = built.autonomy.planner
         planner_context = planner.GetMyContextFromRoot(root)
         end = float(times[-1]) if len(times) else 0.0
         replans = tuple(r for r in planner.replans(planner_context) if r.t <= end + 1e-9)
@@ -728,7 +725,7 @@ def run_checked(
     )
     result.stopped = _stopped(times, result.stops)
     result.waiting = _waiting(times, replans)
-    source = built.subsystem("people")
+    source = built.station.people
     if source.model.count and len(times):  # the open-loop people sampled; a crowd from its logged state
         result.people = source.people_log(times, data.get("crowd_state"))
     _log.info("%s", result.summary())
@@ -747,9 +744,9 @@ def run_checked(
 def _stops(built: TransportDiagram, root, end_time: float) -> list[dict]:
     """The safety monitor's stops up to ``end_time`` (the last kept sample), as dicts
     (:attr:`SimulationResult.stops`); a stop released after ``end_time`` is still on at the end."""
-    if "stop" not in built.loggers:
+    monitor = built.autonomy.safety
+    if monitor is None:
         return []
-    monitor = built.subsystem("safety")
     out = []
     for stop in monitor.stops(monitor.GetMyContextFromRoot(root)):
         if stop.start > end_time:
