@@ -262,3 +262,22 @@ def test_bad_drake_settings_are_refused_by_name(tiny_scenario, field, value, rul
     function = {"build_diagram": build_diagram, "make_station": make_station, "make_autonomy": make_autonomy}[who]
     with pytest.raises(ScenarioError, match=f"{who}: scenario: execution.{field}: {rule}"):
         function(scenario)
+
+
+@pytest.mark.parametrize("count", [1999, 2000, 2001])
+def test_a_dynamic_station_holds_at_most_the_bound_of_map_boxes(tiny_scenario, monkeypatch, count):
+    """MAX_DYNAMIC_MAP_BOXES (docs/limits.md): a map of that many boxes builds, one more is refused by
+    name in dynamic mode; the kinematic station, which does not register them, takes any number."""
+    import types
+
+    import drake_social.sim.station as station_module
+
+    assert station_module.MAX_DYNAMIC_MAP_BOXES == 2000
+    monkeypatch.setattr(station_module, "world_model", lambda scenario: types.SimpleNamespace(map_box_count=count))
+    make_station(tiny_scenario, mode="kinematic")
+    if count <= 2000:
+        assert make_station(tiny_scenario, mode="dynamic").mode == "dynamic"
+    else:
+        with pytest.raises(ScenarioError, match="^world.map: 2,001 boxes are too many for a dynamic run .* at most "
+                                                "2,000: run it kinematic"):
+            make_station(tiny_scenario, mode="dynamic")
