@@ -174,7 +174,7 @@ def test_a_room_bound_pass_is_named_as_such(tmp_path, tiny_scenario_path, planne
     """A run whose base passes a room bound (the finding put into a real
     run's report): stderr and the summary name a room bound, not a joint limit."""
     import drake_social.sim.run as sim_run
-    from drake_social.sim.run import LimitViolation
+    from drake_social.sim.results import LimitViolation
 
     real = sim_run.run_checked
 

@@ -21,7 +21,8 @@ from drake_social.collision.geometric import GeometricChecker
 from drake_social.planning.result import PlanningInputError
 from drake_social.scenario import ScenarioError, validate_scenario
 from drake_social.sim.diagram import build_diagram
-from drake_social.sim.run import analyze_execution, simulate
+from drake_social.sim.execution_analysis import analyze_execution
+from drake_social.sim.run import simulate
 
 H = math.pi / 2
 #: A path of tiny.yaml whose waypoints are all free but whose second segment

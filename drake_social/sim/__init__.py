@@ -46,10 +46,9 @@ _EXPORTS.update({name: "drake_social.sim.station" for name in ("Station", "make_
                                                                  "servo_gains")})
 _EXPORTS.update({name: "drake_social.sim.autonomy" for name in ("Autonomy", "ExternalPath", "GivenWaypoints",
                                                                   "PlanAtInit", "Replan", "make_autonomy")})
-_EXPORTS.update({
-    name: "drake_social.sim.run"
-    for name in ("ExecutionReport", "SimulationResult", "analyze_execution", "scenario_simulator_config", "simulate")
-})
+_EXPORTS.update({name: "drake_social.sim.run" for name in ("scenario_simulator_config", "simulate")})
+_EXPORTS.update({name: "drake_social.sim.results" for name in ("ExecutionReport", "LimitViolation", "SimulationResult")})
+_EXPORTS.update({name: "drake_social.sim.execution_analysis" for name in ("analyze_execution", "limit_violations")})
 
 __all__ = sorted(_EXPORTS)
 
