@@ -47,7 +47,8 @@ _EXPORTS.update({name: "drake_social.sim.station" for name in ("Station", "make_
 _EXPORTS.update({name: "drake_social.sim.autonomy" for name in ("Autonomy", "ExternalPath", "GivenWaypoints",
                                                                   "PlanAtInit", "Replan", "make_autonomy")})
 _EXPORTS.update({name: "drake_social.sim.run" for name in ("scenario_simulator_config", "simulate")})
-_EXPORTS.update({name: "drake_social.sim.results" for name in ("ExecutionReport", "LimitViolation", "SimulationResult")})
+_EXPORTS.update({name: "drake_social.sim.results"
+                 for name in ("ExecutionReport", "LimitViolation", "SimulationResult")})
 _EXPORTS.update({name: "drake_social.sim.execution_analysis" for name in ("analyze_execution", "limit_violations")})
 
 __all__ = sorted(_EXPORTS)
