@@ -52,7 +52,7 @@ from drake_social.scenario import EXECUTIONS, SIM_MODES, Scenario, ScenarioError
 if TYPE_CHECKING:
     from drake_social.experiments.study import Study, StudyResult
     from drake_social.planning.result import PlannerResult
-    from drake_social.sim.run import SimulationResult
+    from drake_social.sim.results import SimulationResult
 
 __all__ = ["PLAN_OUTPUTS", "SIMULATE_OUTPUTS", "PlanRun", "Progress", "SimulateRun", "StudyRun", "check_scheduler",
            "load_with_overrides", "paper_experiment", "read_path_csv", "run_bench", "run_plan", "run_show",
@@ -386,7 +386,7 @@ class SimulateRun:
     Attributes:
         record: the record written as ``sim.json`` (the execution's summary
             and report, the planner's record under ``planner`` when it planned).
-        run: the :class:`~drake_social.sim.run.SimulationResult` (logs, report).
+        run: the :class:`~drake_social.sim.results.SimulationResult` (logs, report).
         files: the names of the files written into ``out``, in order.
         replay_bytes: the size of replay.html, bytes (None: no replay).
     """

@@ -131,9 +131,9 @@ def test_a_joint_limit_pass_exits_7_and_is_named_apart_from_collisions(tmp_path,
     # servo (Kd = 12 1/s instead of 2 w = 120): the arm passes pi near the
     # goal without touching anything. The run is collision-free and its
     # finding is the limit, by name, joint, amount and time.
-    import drake_social.sim.diagram as diagram
+    import drake_social.sim.station as station
 
-    monkeypatch.setattr(diagram, "servo_gains",
+    monkeypatch.setattr(station, "servo_gains",
                         lambda: (np.array([0.0, 0.0, 3600.0, 3600.0]), np.array([50.0, 50.0, 12.0, 12.0])))
     out = tmp_path / "sim"
     code = main(["simulate", str(tiny_scenario_path), "--set", "goal: [6.5, 2.5, 3.141592653589793, 1.5708]",
@@ -174,7 +174,7 @@ def test_a_room_bound_pass_is_named_as_such(tmp_path, tiny_scenario_path, planne
     """A run whose base passes a room bound (the finding put into a real
     run's report): stderr and the summary name a room bound, not a joint limit."""
     import drake_social.sim.run as sim_run
-    from drake_social.sim.run import LimitViolation
+    from drake_social.sim.results import LimitViolation
 
     real = sim_run.run_checked
 

@@ -102,13 +102,14 @@ def test_the_api_reference_puts_the_users_api_first_and_the_internals_apart(extr
     listed = [next(iter(e)) for e in nav[1]["Packages and modules"]]
     assert not {"arguments", "warmup", "cli_parser", "cli", "cli_progress"} & set(listed)
     assert {"scenario", "planning", "sim", "people", "maps", "app", "map_tools"} <= set(listed)
-    internal = dut.INTERNAL_MEMBERS["drake_social.sim.diagram"]
-    assert {"build_checked", "check_diagram_arguments", "check_diagram_options", "check_diagram_waypoints"} <= set(
-        internal)
+    assert dut.INTERNAL_MEMBERS["drake_social.sim.diagram"] == ("build_checked",)
+    assert {"check_diagram_options", "check_diagram_waypoints", "resolve_replan"} <= set(
+        dut.INTERNAL_MEMBERS["drake_social.sim.checks"])
     sim = dut.api_page("sim")
-    block = sim[sim.index("::: drake_social.sim.diagram\n"):].split("\n\n")[0]
-    for member in [*internal, "build_diagram"]:
-        assert f'"!^{member}$"' in block, member
+    for module, public in (("diagram", "build_diagram"), ("station", "make_station"), ("autonomy", "make_autonomy")):
+        block = sim[sim.index(f"::: drake_social.sim.{module}\n"):].split("\n\n")[0]
+        for member in [*dut.INTERNAL_MEMBERS[f"drake_social.sim.{module}"], public]:
+            assert f'"!^{member}$"' in block, member
     assert '"!^simulate$"' in sim[sim.index("::: drake_social.sim.run\n"):].split("\n\n")[0]
     internals = dut.internals_page()
     assert "::: drake_social.sim.diagram.build_checked" in internals and "::: drake_social.warmup" in internals

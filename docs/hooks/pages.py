@@ -31,7 +31,8 @@ USER_API = (
     ("Scenarios", ("drake_social.scenario.load.load_scenario",)),
     ("Checking and planning", ("drake_social.collision.drake_checker.make_checker",
                                "drake_social.planning.algorithms.plan")),
-    ("Executing", ("drake_social.sim.diagram.build_diagram", "drake_social.sim.run.simulate")),
+    ("Executing", ("drake_social.sim.diagram.build_diagram", "drake_social.sim.run.simulate",
+                   "drake_social.sim.station.make_station", "drake_social.sim.autonomy.make_autonomy")),
     ("The commands as functions", ("drake_social.app.run_show", "drake_social.app.run_plan",
                                    "drake_social.app.run_simulate", "drake_social.app.run_study",
                                    "drake_social.app.run_crowd_experiment", "drake_social.app.run_people_import",
@@ -47,8 +48,10 @@ INTERNAL_MODULES = ("arguments", "cli", "cli_parser", "cli_progress", "warmup")
 #: Public members that only other library functions call (``simulate`` checks
 #: and builds through them), by module.
 INTERNAL_MEMBERS = {
-    "drake_social.sim.diagram": ("DiagramArguments", "build_checked", "check_diagram_arguments",
-                                 "check_diagram_options", "check_diagram_waypoints", "resolve_replan"),
+    "drake_social.sim.diagram": ("build_checked",),
+    "drake_social.sim.station": ("station_checked",),
+    "drake_social.sim.autonomy": ("autonomy_checked", "check_path_source", "path_source"),
+    "drake_social.sim.checks": ("check_diagram_options", "check_diagram_waypoints", "resolve_replan"),
 }
 
 

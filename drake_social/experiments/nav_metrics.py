@@ -314,7 +314,7 @@ def execution_metrics(scenario, result) -> dict[str, float]:
 
     Args:
         scenario: the executed scenario.
-        result: a :class:`~drake_social.sim.run.SimulationResult`.
+        result: a :class:`~drake_social.sim.results.SimulationResult`.
 
     Returns:
         ``{"nav_<key>": value}`` for every key of :func:`run_metrics`; empty when

@@ -145,7 +145,7 @@ NAV_FIELDS: dict[str, str] = {
 #: The fields of a study's executed run (``--simulate``) beside its
 #: ``exec_``-prefixed :func:`~drake_social.experiments.metrics.executed_metrics`
 #: and its ``nav_*`` fields; ``sim.json`` holds the report's fields under
-#: their :class:`~drake_social.sim.run.ExecutionReport` names.
+#: their :class:`~drake_social.sim.results.ExecutionReport` names.
 EXECUTION_FIELDS: dict[str, str] = {
     "exec_reached": "whether the run reached the goal within execution.time_limit",
     "exec_time_to_goal": "seconds until the goal was reached; null when not reached",

@@ -61,9 +61,9 @@ def _reference_log(built, until: float):
     simulator = Simulator(built.diagram)
     simulator.Initialize()
     root = simulator.get_context()
-    reference = built.subsystem("reference")
+    reference = built.autonomy.reference
     context = reference.GetMyContextFromRoot(root)
-    planner = built.subsystem("planner")
+    planner = built.autonomy.planner
     planner_context = planner.GetMyContextFromRoot(root)
     times, p, v, version = [], [], [], []
     for k in range(1, int(round(until / period)) + 1):
@@ -77,8 +77,7 @@ def _reference_log(built, until: float):
 
 def test_handover_keeps_the_reference_continuous_in_position_and_velocity(tiny):
     built = build_diagram(tiny, replan=True, replanner=Detour(tiny.goal))
-    assert built.replanning and "held" not in [built.diagram.GetSystems()[i].get_name()
-                                                 for i in range(len(built.diagram.GetSystems()))]
+    assert built.replanning and not built.autonomy.diagram.HasSubsystemNamed("held")
     times, p, v, version, _ = _reference_log(built, 2.0)
     change = int(np.flatnonzero(np.diff(version) > 0)[0]) + 1
     # Replan 8 runs at t = 0.8 s; AdvanceTo(0.8) stops before the events of t = 0.8 s, so the first
@@ -111,7 +110,7 @@ def test_a_wait_holds_the_robot_and_the_path_resumes(tiny):
     assert np.all(version == 0)  # a wait keeps the path
     assert np.linalg.norm(v[-1, :2]) > 0.1  # and goes on along it after
     assert abs(p[-1, 1] - 2.5) < 1e-9  # on the straight segment to the goal
-    planner = built.subsystem("planner")
+    planner = built.autonomy.planner
     statuses = [r.status for r in planner.replans(planner.GetMyContextFromRoot(root))]
     assert statuses[5:15] == ["wait"] * 10 and statuses[15] == "kept"
 
@@ -204,7 +203,7 @@ def walked():
     built = build_diagram(_corridor("north"), replan=True)
     context = built.diagram.CreateDefaultContext()
     built.diagram.ExecuteInitializationEvents(context)
-    planner = built.subsystem("planner")
+    planner = built.autonomy.planner
     route = _route(planner.GetOutputPort("waypoints").Eval(planner.GetMyContextFromRoot(context)))
     scenario = _corridor(route)
     runs = [simulate(scenario, mode="kinematic", replan=True, analyze=k == 0) for k in range(2)]
@@ -237,7 +236,7 @@ def test_same_seed_same_episode_bit_for_bit(walked):
 
 
 def test_replan_none_follows_the_scenario_when_it_plans(tiny):
-    from drake_social.sim.diagram import resolve_replan
+    from drake_social.sim.checks import resolve_replan
 
     on = dc.replace(tiny, planner=dc.replace(tiny.planner, replan=True))
     assert resolve_replan(on, None, False, True, "f") is True
@@ -253,7 +252,7 @@ def test_a_robot_that_waits_the_whole_run_is_measured_where_it_held(tiny_scenari
     """Someone within the safety distance of the robot for the whole run: every replan waits, and
     simulate returns the run (not reached) analysed against the one configuration held."""
     from drake_social.scenario import ScenarioError
-    from drake_social.sim.run import analyze_execution
+    from drake_social.sim.execution_analysis import analyze_execution
 
     text = tiny_scenario_path.read_text().replace(
         'name: "standing"}  # faces south\n',

@@ -133,16 +133,21 @@ def test_no_path_is_reported_without_executing(tiny_scenario):
     assert len(dut.times) == 0
 
 
-@pytest.mark.parametrize("mode, execution, names", [
-    ("kinematic", "synchronized", {"planner", "sequencer", "reference", "controller", "drive", "base", "to_pose"}),
-    ("kinematic", "paper", {"planner", "sequencer", "arm", "controller", "drive", "base", "to_pose"}),
-    ("dynamic", "paper", {"planner", "sequencer", "arm", "controller", "drive", "plant", "hold"}),
+KINEMATIC = {"drive", "hold", "base", "to_pose"}
+
+
+@pytest.mark.parametrize("mode, execution, autonomy, station", [
+    ("kinematic", "synchronized", {"planner", "sequencer", "reference", "controller"}, KINEMATIC),
+    ("kinematic", "paper", {"planner", "sequencer", "arm", "controller"}, KINEMATIC),
+    ("dynamic", "paper", {"planner", "sequencer", "arm", "controller"}, {"drive", "hold", "plant", "servo"}),
 ])
-def test_subsystems_are_named(tiny_scenario, mode, execution, names):
+def test_subsystems_are_named(tiny_scenario, mode, execution, autonomy, station):
     dut = build_diagram(tiny_scenario, mode=mode, execution=execution, checker=make_checker(tiny_scenario, "numpy"))
+    assert autonomy <= {s.get_name() for s in dut.autonomy.diagram.GetSystems()}
+    assert station <= {s.get_name() for s in dut.station.diagram.GetSystems()}
     have = {s.get_name() for s in dut.diagram.GetSystems()}
-    assert names <= have
-    assert {"q_log", "v_log", "wheel_speeds_log", "target_log", "reference_log", "index_log"} <= have
+    assert {"station", "autonomy", "q_log", "v_log", "wheel_speeds_log", "target_log", "reference_log",
+            "index_log"} <= have
 
 
 def test_bad_choices_are_refused(tiny_scenario):

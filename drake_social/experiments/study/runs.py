@@ -93,7 +93,7 @@ def _execute(scenario, waypoints, checker, executed_metrics) -> dict:
     from drake_social.sim.run import simulate
 
     # With walking people the analysis swaps the planning checker (people at t = 0) for one of
-    # the same kind of the room alone (sim.run.analyze_execution); the metrics read the run's log.
+    # the same kind of the room alone (sim.execution_analysis.analyze_execution); the metrics read the run's log.
     run = simulate(scenario, mode="kinematic", waypoints=np.asarray(waypoints, float), checker=checker, analyze=True,
                    analysis_checker=checker)
     r = run.report
