@@ -30,9 +30,10 @@ DOCS = Path(__file__).resolve().parent
 LAYERS = [
     ("front end", "#d9d2e9", [("cli.py", "argparse and printing only")]),
     ("application", "#c9daf8", [("app.py", "run_show, run_plan, run_simulate, run_study; map_tools.py"),
-                                ("experiments/", "bench/, study/, metrics")]),
-    ("execution and figures", "#d0e0e3", [("sim/", "station diagram, simulate, analysis, replay"),
-                                          ("viz/", "matplotlib figures")]),
+                                ("experiments/", "the runners: bench/, study/ (sweeps, paper, crowd)")]),
+    ("execution, measures and figures", "#d0e0e3", [("sim/", "station diagram, simulate, analysis, replay"),
+                                                    ("evaluation/", "metrics of a plan or a run: per part, over time"),
+                                                    ("viz/", "matplotlib figures")]),
     ("Drake model and systems", "#d9ead3", [("model/", "plant and SceneGraph of a scenario"),
                                             ("control/", "LeafSystems: planner, sequencer, controller, drive, Ruckig"),
                                             ("collision/", "planar_checker, drake_checker")]),

@@ -335,7 +335,7 @@ def run_plan(*, scenario: Scenario | str | Path, out: str | Path, overrides: Seq
     """
     _door("run_plan", locals())
     from drake_social.collision.drake_checker import make_checker, verify_path
-    from drake_social.experiments.records import run_record
+    from drake_social.evaluation.records import run_record
     from drake_social.io.outputs import OutputSet
     from drake_social.io.paths import write_path_csv
     from drake_social.io.records import json_lines
@@ -437,7 +437,7 @@ def run_simulate(*, scenario: Scenario | str | Path, out: str | Path, overrides:
     import numpy as np
 
     from drake_social.collision.drake_checker import make_checker
-    from drake_social.experiments.metrics import execution_metrics
+    from drake_social.evaluation.metrics import execution_metrics
     from drake_social.io.json_numbers import finite_or_none
     from drake_social.io.outputs import OutputSet
     from drake_social.io.paths import parse_path_csv, write_executed_csv, write_people_csv, write_replans_csv

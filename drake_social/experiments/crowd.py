@@ -29,7 +29,7 @@ paper's Social Risk-RRT*, planned once at t = 0), ``replan_base``
 multi-point weights) and ``replan_speed`` (``replan_multi`` with Kirby's
 speed-scaled AGF). An episode's record (:func:`run_episode`) has the
 social-navigation metrics over time per part
-(:func:`~drake_social.experiments.nav_metrics.execution_metrics`, ``nav_*``)
+(:func:`~drake_social.evaluation.nav_metrics.execution_metrics`, ``nav_*``)
 and the replanning statistics (:func:`replan_stats`).
 
 A task carries its scenario's text, its variant's overrides and its seed
@@ -307,7 +307,7 @@ def run_episode(task: dict) -> dict:
     ``reached``, ``time_to_goal``, ``sim_time``, ``wall_time`` (seconds of
     simulation, planning included), ``plan_time_initial`` (the first plan's
     wall seconds), ``plan_found`` (the first plan found a path), every ``nav_*`` metric
-    (:func:`~drake_social.experiments.nav_metrics.execution_metrics`: per
+    (:func:`~drake_social.evaluation.nav_metrics.execution_metrics`: per
     part, contacts, zone times, minimum distance, time to goal, stops,
     success), :func:`replan_stats`, ``replan_times`` (every periodic replan's
     wall seconds) and, when ``task["trace"]``, ``trace``: the episode
@@ -316,7 +316,7 @@ def run_episode(task: dict) -> dict:
     ``plans`` ([t, waypoints] of every path followed, from its start).
     """
     from drake_social.collision.drake_checker import make_checker
-    from drake_social.experiments.nav_metrics import execution_metrics
+    from drake_social.evaluation.nav_metrics import execution_metrics
 
     scenario, delays = episode_scenario(task)
     checker = make_checker(scenario, "planar", parallelism=1)

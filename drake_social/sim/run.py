@@ -13,7 +13,7 @@ and the time to goal. The people are logged at the same times as the
 executed configurations (:attr:`SimulationResult.people`). When they move,
 the collision check covers the obstacles and walls only (the people at t = 0
 are not where the robot met them): the distances to people are measured over
-time from the people log (:mod:`drake_social.experiments.metrics`), and
+time from the people log (:mod:`drake_social.evaluation.metrics`), and
 :attr:`ExecutionReport.collision_checked` names what was checked.
 
 With ``replan`` (or the scenario's ``planner.replan``) the diagram's planner

@@ -7,7 +7,7 @@ algorithm, run); run ``r`` of every group and algorithm plans with the same
 seed, drawn from the study's seed by ``numpy.random.SeedSequence(seed).spawn``,
 so comparisons pair over seeds and the numbers never depend on which worker
 ran what. :func:`run_task` (in any process) loads the scenario from its text,
-plans, measures the path (:mod:`drake_social.experiments.metrics`) and, with
+plans, measures the path (:mod:`drake_social.evaluation.metrics`) and, with
 ``simulate``, executes it and measures the executed trajectory too.
 
 The modules, one concept each (this package re-exports their public names):

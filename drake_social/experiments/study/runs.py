@@ -1,7 +1,7 @@
 """Running a study: one task in any process, and every task on an executor.
 
 :func:`run_task` loads the task's scenario from its text, plans, measures
-the path (:mod:`drake_social.experiments.metrics`) and, with ``simulate``,
+the path (:mod:`drake_social.evaluation.metrics`) and, with ``simulate``,
 executes it and measures the executed trajectory too. :func:`run_study`
 runs every task of a study on an executor (:mod:`.executors`).
 """
@@ -43,7 +43,7 @@ def run_task(task: dict) -> dict:
     ``cost`` (the planner's objective), ``planning_time`` (s), ``raw_cost``,
     ``first_solution_iteration``, ``tree_size``, ...; ``F_multi`` and the
     other path measures None on failure), every metric of
-    :func:`~drake_social.experiments.metrics.path_metrics` (on success),
+    :func:`~drake_social.evaluation.metrics.path_metrics` (on success),
     ``waypoints``, the anytime curve ``progress`` ([iteration, best cost]
     at :data:`PROGRESS_POINTS` iterations) and ``progress_time`` (seconds
     since the start of solve at those iterations); with ``simulate``, the
@@ -51,8 +51,8 @@ def run_task(task: dict) -> dict:
     (``nav_*``, :data:`drake_social.io.records.NAV_FIELDS`).
     """
     # Imported when a task runs, not with the package: defining and checking a study needs neither.
-    from drake_social.experiments.metrics import executed_metrics, path_metrics
-    from drake_social.experiments.records import run_record
+    from drake_social.evaluation.metrics import executed_metrics, path_metrics
+    from drake_social.evaluation.records import run_record
     from drake_social.planning.algorithms import make_objective, plan
     from drake_social.planning.objective import SocialObjective
 
@@ -89,7 +89,7 @@ def run_task(task: dict) -> dict:
 
 
 def _execute(scenario, waypoints, checker, executed_metrics) -> dict:
-    from drake_social.experiments.metrics import execution_metrics
+    from drake_social.evaluation.metrics import execution_metrics
     from drake_social.sim.run import simulate
 
     # With walking people the analysis swaps the planning checker (people at t = 0) for one of
