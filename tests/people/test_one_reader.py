@@ -24,7 +24,7 @@ COST_PEOPLE = {
     ("sim/run.py", "result.people"),
     ("app.py", "run.people"),
     ("experiments/study/runs.py", "run.people"),
-    ("experiments/crowd.py", "run.people"),
+    ("experiments/study/crowd_episode.py", "run.people"),
 }
 
 
