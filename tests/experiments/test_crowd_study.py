@@ -417,3 +417,18 @@ def test_the_crowd_study_is_a_kind_of_the_one_study_framework(tiny_walker):
     assert dut.describe({"scenario": "s", "variant": "plan_once", "episode": 3}) == "s plan_once episode 3"
     with pytest.raises(TypeError, match=r"^not a study: dict; a study is one of Study, CrowdStudy$"):
         kind_of({"name": "crowd"})
+
+
+def test_a_crowd_result_loads_its_scenarios_from_the_text_its_episodes_read(tiny_walker):
+    """StudyResult.scenario of a crowd study: the text read before the
+    episodes with a variant's overrides, whatever the file holds since."""
+    from drake_social.experiments.study import StudyResult
+
+    study = CrowdStudy(scenarios=(str(tiny_walker),), variants=("plan_once", "replan_speed"), episodes=1)
+    text = tiny_walker.read_text()
+    tiny_walker.write_text(text.replace("random_seed: 1", "random_seed: 2"))
+    dut = StudyResult(study, [], 0.0, scenario_texts={"tiny_walker": text})
+    assert (dut.scenario("tiny_walker").random_seed, dut.scenario("tiny_walker").planner.replan) == (1, False)
+    speed = dut.scenario("tiny_walker", variant="replan_speed")
+    assert (speed.planner.replan, speed.social.speed_scaling) == (True, True)
+    assert study.scenario("tiny_walker").random_seed == 2  # without the text: the file as it is now

@@ -157,10 +157,12 @@ class CrowdStudy:
     def to_json_dict(self) -> dict:
         return dc.asdict(self)
 
-    def scenario(self, stem: str, text: str, variant: str = "plan_once") -> Scenario:
+    def scenario(self, stem: str, text: str | None = None, variant: str = "plan_once") -> Scenario:
         """Scenario file ``stem`` of the study with ``variant``'s overrides,
-        loaded from ``text`` (the file's text its episodes loaded)."""
+        loaded from ``text`` (the file's text as its episodes loaded it; None
+        = the file read now)."""
         source = next(s for s in self.scenarios if Path(s).stem == stem)
+        text = read_yaml_file(source, "scenario") if text is None else text
         return load_cached(str(source), text, VARIANTS[variant], f"variant {variant}")
 
 

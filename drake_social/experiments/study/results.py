@@ -13,12 +13,9 @@ from __future__ import annotations
 import csv
 import dataclasses as dc
 import io
-from typing import TYPE_CHECKING, Any, Sequence
+from typing import Any, Sequence
 
 from drake_social.scenario.schema import Scenario
-
-if TYPE_CHECKING:
-    from drake_social.experiments.study.spec import Group
 
 __all__ = [
     "TIMING_FIELDS",
@@ -59,10 +56,6 @@ class StudyResult:
     executor: str = "process"
     workers: int = 1
     scenario_texts: dict[str, str] = dc.field(default_factory=dict)
-
-    def group(self, name: str) -> Group:
-        """Group ``name`` of a planning study."""
-        return next(g for g in self.study.groups if g.name == name)
 
     def scenario(self, name: str, **options) -> Scenario:
         """The scenario ``name`` ran on, from the text read before the tasks
