@@ -166,7 +166,7 @@ def _run_bench(args: argparse.Namespace) -> int:
 
 
 def _run_experiment(args: argparse.Namespace) -> int:
-    from drake_social.experiments.study import StudyOutputError, load_sweep
+    from drake_social.experiments.study import KINDS, CrowdStudy, StudyOutputError, kind_of, load_sweep
 
     app.check_scheduler(args.executor, args.scheduler)  # before anything is read or run
     if args.executor == "dask" and not args.verbose:
@@ -176,83 +176,57 @@ def _run_experiment(args: argparse.Namespace) -> int:
             pass  # map_tasks says what to install
         else:
             logging.getLogger("distributed").setLevel(logging.WARNING)
-    if args.study == "crowd":
-        return _run_crowd(args)
-    if args.study == "paper":
-        study = app.paper_experiment(runs=args.runs, iterations=args.iterations, seed=args.seed,
-                                     simulate=args.simulate, scenario_dir=args.scenario_dir)
+    if args.study == "crowd":  # the study is made of the options by run_crowd_experiment
+        study_name, kind = CrowdStudy.name, KINDS[CrowdStudy]
     else:
-        study = load_sweep(args.config)
-    out = args.out if args.out is not None else Path("out") / study.name
+        if args.study == "paper":
+            study = app.paper_experiment(runs=args.runs, iterations=args.iterations, seed=args.seed,
+                                         simulate=args.simulate, scenario_dir=args.scenario_dir)
+        else:
+            study = load_sweep(args.config)
+        study_name, kind = study.name, kind_of(study)
+    out = args.out if args.out is not None else Path("out") / study_name
     bar = None
 
     def progress(done: int, total: int, record: dict) -> None:
         nonlocal bar
-        if bar is None:  # drawn from the first finished run: a refused --out draws nothing
+        if bar is None:  # drawn from the first finished task: a refused --out draws nothing
             from tqdm import tqdm
 
-            bar = tqdm(total=total, desc=f"experiment {study.name}", unit="run", file=sys.stderr, dynamic_ncols=True)
+            bar = tqdm(total=total, desc=f"experiment {study_name}", unit=kind.unit, file=sys.stderr,
+                       dynamic_ncols=True)
         bar.total = total
-        bar.set_postfix_str(f"{record['group']} {record['algorithm']} run {record['run']}", refresh=False)
+        bar.set_postfix_str(kind.describe(record), refresh=False)
         bar.update(done - bar.n)
 
+    where = {"out": out, "executor": args.executor, "workers": args.workers, "scheduler": args.scheduler,
+             "progress": progress if args.progress or sys.stderr.isatty() else None}
     try:
-        done = app.run_study(study=study, out=out, executor=args.executor, workers=args.workers,
-                             scheduler=args.scheduler, progress=progress if args.progress or sys.stderr.isatty() else None)
+        if args.study == "crowd":
+            done = app.run_crowd_experiment(
+                **where, scenarios=tuple(str(s) for s in args.scenarios), variants=tuple(args.variants),
+                episodes=args.episodes, seed=args.seed, jitter=args.jitter, time_limit=args.time_limit)
+        else:
+            done = app.run_study(study=study, **where)
     finally:
         if bar is not None:
             bar.close()
-    where = (f"on the Dask scheduler at {args.scheduler}" if args.scheduler is not None
-             else f"{args.workers} worker(s), {args.executor}")
-    print(f"{len(done.result.records)} runs in {done.result.wall_time:.1f} s ({where})")
+    on = (f"on the Dask scheduler at {args.scheduler}" if args.scheduler is not None
+          else f"{args.workers} worker(s), {args.executor}")
+    print(f"{done.runs} in {done.result.wall_time:.1f} s ({on})")
+    csv_name, json_name = done.record_files
     if done.interrupted:
         print(f"drake-social: experiment interrupted after its {done.runs}: their records were written to "
-              f"{out / 'results.json'} and {out / 'results.csv'} (the figures, REPORT.md and the arena files were "
-              "not written)", file=sys.stderr)
+              f"{out / json_name} and {out / csv_name} ({kind.later_outputs} were not written)", file=sys.stderr)
         return 130
     if done.failure is not None:
         raise StudyOutputError(f"writing the study's outputs into {out} failed: {done.failure}; the records of its "
-                               f"{done.runs} are in {out / 'results.json'} and {out / 'results.csv'} (the figures, "
-                               "REPORT.md and the arena files were not written)") from done.failure
+                               f"{done.runs} are in {out / json_name} and {out / csv_name} ({kind.later_outputs} were "
+                               "not written)") from done.failure
     for line in (out / "REPORT.md").read_text().splitlines():
         if line.startswith("- **"):
             print(line)
     print(f"wrote {out}/: {', '.join(done.files)}")
-    return 0
-
-
-def _run_crowd(args: argparse.Namespace) -> int:
-    from drake_social.experiments.study import StudyOutputError
-
-    out = args.out if args.out is not None else Path("out") / "crowd"
-    bar = None
-
-    def progress(done: int, total: int, record: dict) -> None:
-        nonlocal bar
-        if bar is None:
-            from tqdm import tqdm
-
-            bar = tqdm(total=total, desc="experiment crowd", unit="episode", file=sys.stderr, dynamic_ncols=True)
-        bar.set_postfix_str(f"{record['scenario']} {record['variant']} episode {record['episode']}", refresh=False)
-        bar.update(done - bar.n)
-
-    try:
-        result, files, failure = app.run_crowd_experiment(
-            out=out, executor=args.executor, workers=args.workers, scheduler=args.scheduler,
-            progress=progress if args.progress or sys.stderr.isatty() else None,
-            scenarios=tuple(str(s) for s in args.scenarios), variants=tuple(args.variants), episodes=args.episodes,
-            seed=args.seed, jitter=args.jitter, time_limit=args.time_limit)
-    finally:
-        if bar is not None:
-            bar.close()
-    print(f"{len(result.records)} episodes in {result.wall_time:.1f} s ({args.workers} worker(s), {args.executor})")
-    if failure is not None:
-        raise StudyOutputError(f"writing the crowd study's figures or REPORT.md into {out} failed: {failure}; "
-                                       f"its records are in {out / 'records.csv'} and {out / 'records.json'}") from failure
-    for line in (out / "REPORT.md").read_text().splitlines():
-        if line.startswith("- **"):
-            print(line)
-    print(f"wrote {out}/: {', '.join(files)}")
     return 0
 
 

@@ -223,8 +223,9 @@ def _add_experiment(subparsers) -> None:
                        help=f"K, at most {MAX_ITERATIONS:,} (default 2000)")
     paper.add_argument("--seed", type=_nonnegative_int, default=0, metavar="S",
                        help="study seed; run seeds are drawn from it with SeedSequence (default 0)")
-    paper.add_argument("--scenario-dir", type=Path, default=Path("scenarios"), metavar="DIR",
-                       help="folder of office_bar.yaml and generic_L.yaml (default: scenarios)")
+    paper.add_argument("--scenario-dir", type=Path, default=SHIPPED_SCENARIOS, metavar="DIR",
+                       help=f"folder of office_bar.yaml and generic_L.yaml (default: the shipped ones in "
+                            f"{SHIPPED_SCENARIOS})")
     paper.add_argument("--simulate", action="store_true",
                        help="also execute every path (kinematic simulation) and measure the executed trajectory")
     sweep = kinds.add_parser("sweep", help="your own study from a YAML file (see studies/example_sweep.yaml)")
@@ -255,8 +256,9 @@ def _add_experiment(subparsers) -> None:
 def _add_crowd_arguments(crowd: argparse.ArgumentParser) -> None:
     from drake_social.limits import CROWD_SCENARIOS as DEFAULT_SCENARIOS, CROWD_VARIANTS as VARIANTS, MAX_EPISODES
 
-    crowd.add_argument("--scenarios", type=Path, nargs="+", default=[Path(s) for s in DEFAULT_SCENARIOS],
-                       metavar="FILE", help=f"scenario files with walking people (default: {' '.join(DEFAULT_SCENARIOS)})")
+    crowd.add_argument("--scenarios", type=Path, nargs="+", default=[shipped_scenario(s) for s in DEFAULT_SCENARIOS],
+                       metavar="FILE", help=f"scenario files with walking people (default: the shipped "
+                                            f"{' '.join(DEFAULT_SCENARIOS)} in {SHIPPED_SCENARIOS})")
     crowd.add_argument("--episodes", type=_int_at_least(1, MAX_EPISODES), default=20, metavar="N",
                        help="seeded episodes per scenario and variant (default 20)")
     crowd.add_argument("--variants", nargs="+", choices=list(VARIANTS), default=list(VARIANTS), metavar="NAME",

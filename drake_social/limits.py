@@ -162,10 +162,11 @@ EXECUTORS = ("process", "dask")
 NEAR_RADIUS_MODES = ("fixed", "shrinking")
 
 #: The crowd study's variants (``experiment crowd --variants``; their overrides:
-#: ``drake_social.experiments.crowd.VARIANTS``), its default scenarios and
-#: the most episodes per scenario and variant.
+#: ``drake_social.experiments.study.crowd.VARIANTS``), its default scenarios
+#: (shipped scenario files, found beside the package:
+#: ``drake_social.scenario.shipped``) and the most episodes per scenario and variant.
 CROWD_VARIANTS = ("plan_once", "replan_base", "replan_multi", "replan_speed")
-CROWD_SCENARIOS = ("scenarios/office_walkers.yaml", "scenarios/lobby_crowd.yaml")
+CROWD_SCENARIOS = ("office_walkers.yaml", "lobby_crowd.yaml")
 MAX_EPISODES = 10_000
 #: Largest start delay of a crowd study's scripted walker (``experiment crowd
 #: --jitter``), seconds: a walker delayed longer than the longest run

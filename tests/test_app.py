@@ -244,8 +244,8 @@ NONE = "no-such-scenario.yaml"  # never read: the door comes first
      "run_bench: include_ompl must be True or False, got str 'no'"),
     ("run_bench", dict(scenario_paths=[NONE], ompl=True), TypeError, "run_bench: unexpected argument 'ompl'"),
     ("run_study", dict(study="sweep.yaml"), TypeError,
-     "run_study: study must be a drake_social.experiments.study.Study (paper_experiment(...) or load_sweep(file)), "
-     "got str 'sweep.yaml'"),
+     "run_study: study must be a drake_social.experiments.study.Study (paper_experiment(...) or load_sweep(file)) "
+     "or CrowdStudy, got str 'sweep.yaml'"),
     ("run_people_import", dict(file=NONE, fps="25"), TypeError,
      "run_people_import: fps must be a finite number > 0 frames per second, got str '25'"),
     ("run_people_import", dict(file=NONE, fps=0.0), ValueError,

@@ -143,7 +143,7 @@ def test_metrics_of_a_long_run_among_many_people_hold_bounded_temporaries(walked
     samples at a time (203 MB per temporary, some 1.3 GB for the Gaussian's) and the parts' distances
     all samples at once (51 MB per offset array): bounded now, and every figure is the one of the
     whole at once; the robot's distances equal the compiled one-configuration kernel's."""
-    import drake_social.experiments.nav_metrics as nav
+    import drake_social.evaluation.nav_metrics as nav
     import drake_social.people.proximity as proximity
 
     scenario, times, q, log = walked_among_400

@@ -3,8 +3,8 @@
 * ``index.md`` is README.md, its links into ``docs/`` made relative to the site.
 * ``api/index.md`` ("Using the library") is the user's API first: the
   functions a script calls (:data:`USER_API`: load a scenario, make a checker,
-  plan, build the diagram, simulate, the commands as ``run_*`` functions, the
-  people and map readers), each one's reference in full.
+  plan, build the diagram, simulate, measure the path or the run, the commands
+  as ``run_*`` functions, the people and map readers), each one's reference in full.
 * ``api/<name>.md`` is one API reference page per package or public top-level
   module of ``drake_social`` (``::: drake_social.<name>``, rendered by
   mkdocstrings from the docstrings), listed under "API reference" in the nav.
@@ -33,6 +33,8 @@ USER_API = (
                                "drake_social.planning.algorithms.plan")),
     ("Executing", ("drake_social.sim.diagram.build_diagram", "drake_social.sim.run.simulate",
                    "drake_social.sim.station.make_station", "drake_social.sim.autonomy.make_autonomy")),
+    ("Measuring", ("drake_social.evaluation.metrics.path_metrics",
+                   "drake_social.evaluation.nav_metrics.execution_metrics")),
     ("The commands as functions", ("drake_social.app.run_show", "drake_social.app.run_plan",
                                    "drake_social.app.run_simulate", "drake_social.app.run_study",
                                    "drake_social.app.run_crowd_experiment", "drake_social.app.run_people_import",

@@ -2,7 +2,7 @@
 
 The one home of the robot-to-people distance read by the safety monitor
 (:class:`drake_social.control.SafetyMonitor`), the crowd's view of the robot
-and the metrics (:mod:`drake_social.experiments.metrics`). A person is a body
+and the metrics (:mod:`drake_social.evaluation.metrics`). A person is a body
 disc (centre, radius); the robot is its base disc, its interest points (the
 elbow, the gripper and the object's points, as points) and its capsules (two
 links, the object's segments). Distances are exact for these shapes.

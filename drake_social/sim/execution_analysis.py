@@ -10,7 +10,7 @@ from the planned path (:mod:`drake_social.sim.analysis`) and the minimum
 clearance. When the people move, the collision check covers the obstacles
 and walls only (the people at t = 0 are not where the robot met them): the
 distances to people are measured over time from the people log
-(:mod:`drake_social.experiments.metrics`), and
+(:mod:`drake_social.evaluation.metrics`), and
 :attr:`~drake_social.sim.results.ExecutionReport.collision_checked` names
 what was checked.
 """

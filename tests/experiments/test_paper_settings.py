@@ -30,3 +30,18 @@ def test_every_paper_group_pins_the_raw_planner_and_the_fixed_radius(repo_root):
         assert (scenario.planner.near_radius, scenario.planner.planning_range, scenario.planner.iterations) == (
             unpinned.planner.near_radius, unpinned.planner.planning_range, unpinned.planner.iterations)
         assert scenario.social == unpinned.social
+
+
+def test_the_paper_study_finds_the_shipped_scenarios_whatever_the_folder(tmp_path, monkeypatch, repo_root):
+    """``experiment paper`` without --scenario-dir, and paper_study without
+    scenario_dir, read office_bar.yaml and generic_L.yaml beside the package."""
+    from drake_social.app import paper_experiment
+    from drake_social.cli_parser import build_parser
+
+    monkeypatch.chdir(tmp_path)
+    shipped = repo_root / "scenarios"
+    args = build_parser().parse_args(["experiment", "paper"])
+    assert args.scenario_dir == shipped
+    dut = paper_experiment(runs=1, iterations=10, seed=0, simulate=False, scenario_dir=args.scenario_dir)
+    assert [g.scenario for g in dut.groups] == [str(shipped / "office_bar.yaml")] + [str(shipped / "generic_L.yaml")] * 4
+    assert paper_study(runs=1, iterations=10) == dut

@@ -26,7 +26,7 @@ COST_PEOPLE = {
     ("sim/run.py", "built.station.people"),
     ("app.py", "run.people"),
     ("experiments/study/runs.py", "run.people"),
-    ("experiments/crowd.py", "run.people"),
+    ("experiments/study/crowd_episode.py", "run.people"),
 }
 
 

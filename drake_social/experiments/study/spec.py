@@ -25,7 +25,8 @@ from drake_social.experiments.study.scenarios import check_run_settings, load_ca
 from drake_social.io.textfile import read_yaml_file, shorten
 from drake_social.limits import (ALGORITHMS, CHECKERS, MAX_ITERATIONS, MAX_PAPER_RUNS, MAX_RUNS, MAX_STUDY_TASKS,
                                  PAPER_ALGORITHMS, PAPER_PAIRS, PAPER_PLANNER, PAPER_WEIGHTINGS)
-from drake_social.scenario.schema import Bar, interest_point_count
+from drake_social.scenario.schema import Bar, Scenario, interest_point_count
+from drake_social.scenario.shipped import SHIPPED_SCENARIOS
 
 __all__ = [
     "MAX_PAPER_RUNS",
@@ -100,6 +101,13 @@ class Study:
     def to_json_dict(self) -> dict:
         return dc.asdict(self)
 
+    def scenario(self, name: str, text: str | None = None) -> Scenario:
+        """Group ``name``'s scenario with its overrides, loaded from ``text``
+        (its file's text as the runs loaded it; None = the file read now)."""
+        g = next(g for g in self.groups if g.name == name)
+        text = read_yaml_file(g.scenario, "scenario") if text is None else text
+        return load_cached(g.scenario, text, tuple(g.overrides), f"group {g.name}")
+
 
 def paper_weights(num_points: int) -> dict[str, list[float]]:
     """Section V-D's weightings: object points 0.95 and the rest 0.05; base
@@ -111,8 +119,10 @@ def paper_weights(num_points: int) -> dict[str, list[float]]:
 
 
 def paper_study(*, runs: int = 10, iterations: int = 2000, seed: int = 0, simulate: bool = False,
-                scenario_dir: str | Path = "scenarios") -> Study:
-    """The paper's Section V (A, B and D; C is A and B's figures).
+                scenario_dir: str | Path = SHIPPED_SCENARIOS) -> Study:
+    """The paper's Section V (A, B and D; C is A and B's figures), on
+    ``office_bar.yaml`` and ``generic_L.yaml`` of ``scenario_dir`` (by
+    default the shipped ones, beside the package).
 
     D is "the generic map with the bar": generic_L.yaml with the office's
     1.5 m bar (``object: !Bar {length: 1.5, thickness: 0.05}``), 5 interest

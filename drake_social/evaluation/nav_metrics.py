@@ -123,8 +123,8 @@ import numpy as np
 
 from drake_social.cost.agf import PersonalSpace, apply_threshold, gaussian, speed_scaled_sigmas
 from drake_social.cost.social import FIELD_CHUNK_ELEMENTS
-from drake_social.experiments.proxemics import ZONES, HallZones, base_irregularity, shape_points
-from drake_social.experiments.time_series import episodes, held_time, motion_stats, run_starts, trapezoid_mean
+from drake_social.evaluation.proxemics import ZONES, HallZones, base_irregularity, shape_points
+from drake_social.evaluation.time_series import episodes, held_time, motion_stats, run_starts, trapezoid_mean
 from drake_social.io.records import NAV_PREFIX
 from drake_social.kinematics import ArmGeometry
 from drake_social.people import people_model, proximity
@@ -142,7 +142,7 @@ def _part_points(geometry: ArmGeometry, q: np.ndarray, reference: np.ndarray) ->
     """The points (M, n, 2) whose largest AGF is each part's: the base
     centre, the arm's and the object's capsule axes, and every interest
     point (``points``; the whole robot's value is the largest of the four,
-    as in :func:`drake_social.experiments.metrics.part_agf`)."""
+    as in :func:`drake_social.evaluation.metrics.part_agf`)."""
     interest = geometry.interest_points(q)
     return {"base": interest[:, :1], "points": interest, "arm": shape_points(geometry, q, slice(0, 2), reference),
             "object": shape_points(geometry, q, slice(2, None), reference)}

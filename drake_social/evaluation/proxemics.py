@@ -1,6 +1,6 @@
 """Hall's proxemic zones and the geometric measures of a track shared by the
-path metrics (:mod:`drake_social.experiments.metrics`) and the metrics over
-time (:mod:`drake_social.experiments.nav_metrics`).
+path metrics (:mod:`drake_social.evaluation.metrics`) and the metrics over
+time (:mod:`drake_social.evaluation.nav_metrics`).
 """
 
 from __future__ import annotations
