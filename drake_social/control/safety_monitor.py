@@ -17,7 +17,9 @@ decision is an unrestricted update, which Drake's Simulator applies before
 the discrete updates of the same instant: the sampled base command (a
 zero-order hold) and the sequencer read the new flag at once, while another
 unrestricted update (a Ruckig reference) reads it one ``period`` later (see
-:func:`braking_travel` for what the robot may travel meanwhile).
+:func:`braking_travel` for what the robot may travel meanwhile; in the
+synchronized execution the base follows that reference, so that base and arm
+stop together on the planned segment).
 
 State (one abstract value, an immutable :class:`SafetyRecord`): the flag and
 every stop so far (:class:`Stop`: start, end, nearest person, part,
@@ -124,20 +126,24 @@ def robot_reach(geometry: ArmGeometry) -> float:
     return max(geometry.base_radius, l1 + l2 + max(geometry.link_radius, obj))
 
 
-def braking_travel(geometry: ArmGeometry, *, max_base_speed: float, arm_max_velocity, period: float) -> float:
+def braking_travel(geometry: ArmGeometry, *, max_base_speed: float, arm_max_velocity, period: float,
+                   execution: str = "synchronized") -> float:
     """How far a point of the robot may move towards a person after the last clear sample, metres.
 
     The monitor decides every ``period``: at the last clear sample t_{k-1}
     every part is farther than the safety distance; the robot moves freely
-    until the next sample t_k, where the monitor sees it within. In the
-    diagram the base's sampled command reads the flag of t_k at t_k (zero
-    from then on), while the Ruckig references hold at t_{k+1}: the arm moves
-    one more period. A body point therefore moves at most ``period (v_base +
-    2 v_arm)`` with ``v_arm = w1 (l1 + l2 + e) + w2 (l2 + e)`` (``e`` the
+    until the next sample t_k, where the monitor sees it within. The Ruckig
+    references read the flag of t_k one period later and hold at t_{k+1}.
+    In ``synchronized`` execution the base follows the held reference, so
+    base and arm stop together at t_{k+1}, on the planned segment: a body
+    point moves at most ``2 period (v_base + v_arm)``. In ``paper``
+    execution the base's sampled command reads the flag at t_k (zero from
+    then on) while the arm moves one more period: ``period (v_base + 2
+    v_arm)``. Here ``v_arm = w1 (l1 + l2 + e) + w2 (l2 + e)`` (``e`` the
     object's reach beyond the gripper, its farthest point plus the capsule
-    radius, and ``w1``, ``w2`` the joint speed limits), so in ``kinematic``
+    radius, and ``w1``, ``w2`` the joint speed limits). So in ``kinematic``
     mode the robot never brings a part closer than ``safety_distance`` minus
-    this (and minus what the person walks in a period) to a person; a person
+    this (and minus what the person walks meanwhile) to a person; a person
     who walks on into the held robot comes closer by their own motion. In
     ``dynamic`` mode the servo's lag adds to it.
 
@@ -146,12 +152,18 @@ def braking_travel(geometry: ArmGeometry, *, max_base_speed: float, arm_max_velo
         max_base_speed: base speed limit, m/s.
         arm_max_velocity: (2,) joint speed limits, rad/s.
         period: the monitor's (and the controller's) period, seconds.
+        execution: ``"synchronized"`` or ``"paper"``.
     """
     l1, l2 = geometry.link_lengths
     e = max(geometry.link_radius,
             float(np.max(np.linalg.norm(geometry.object_points, axis=1))) + geometry.object_radius)
     w1, w2 = (float(w) for w in arm_max_velocity)
-    return period * (max_base_speed + 2.0 * (w1 * (l1 + l2 + e) + w2 * (l2 + e)))
+    arm = w1 * (l1 + l2 + e) + w2 * (l2 + e)
+    if execution == "paper":
+        return period * (max_base_speed + 2.0 * arm)
+    if execution != "synchronized":
+        raise ValueError(f"braking_travel: execution must be 'synchronized' or 'paper', got {execution!r}")
+    return 2.0 * period * (max_base_speed + arm)
 
 
 class SafetyMonitor(LeafSystem):

@@ -316,7 +316,8 @@ def autonomy_checked(scenario: Scenario, execution: str, path: PathSource, peopl
             builder.ExportInput(port, "people_state")
         else:
             builder.ConnectInput("people_state", port)
-    _hold(builder, safety, planner, (sequencer, controller, track.source))
+    # Synchronized, the base follows the held reference (base and arm stop together, on the path).
+    _hold(builder, safety, planner, (sequencer, track.source) if synchronized else (sequencer, controller, track.source))
 
     outputs = {
         "wheel_speeds": controller.GetOutputPort("wheel_speeds"),
@@ -348,13 +349,15 @@ def _path(builder: DiagramBuilder, scenario: Scenario, path: PathSource, people:
     opts = scenario.execution
     if isinstance(path, GivenWaypoints):
         sequencer = builder.AddNamedSystem("sequencer", WaypointSequencer.from_options(
-            opts, waypoints=path.waypoints, wait_for_reference=synchronized))
+            opts, waypoints=path.waypoints, wait_for_reference=synchronized, pass_through=synchronized,
+            distance_weights=scenario.planner.distance_weights))
         builder.Connect(q, sequencer.GetInputPort("q"))
         source = builder.AddNamedSystem("path", ConstantValueSource(AbstractValue.Make(path.waypoints.copy())))
         return sequencer, None, source.get_output_port()
     replan = isinstance(path, Replan)
     sequencer = builder.AddNamedSystem("sequencer", WaypointSequencer.from_options(
-        opts, wait_for_reference=synchronized, versioned=replan))
+        opts, wait_for_reference=synchronized, versioned=replan, pass_through=synchronized,
+        distance_weights=scenario.planner.distance_weights))
     builder.Connect(q, sequencer.GetInputPort("q"))
     planner = None
     if replan:  # the room's planar checker of the replanner, not the one with the people at t = 0
@@ -379,6 +382,7 @@ def _synchronized(builder: DiagramBuilder, scenario: Scenario, start: np.ndarray
     reference = builder.AddNamedSystem("reference", reference_source_from_options(
         scenario.execution, start, configuration_limits(scenario)))
     builder.Connect(sequencer.GetOutputPort("target"), reference.GetInputPort("target"))
+    builder.Connect(sequencer.GetOutputPort("via"), reference.GetInputPort("via"))
     builder.Connect(reference.GetOutputPort("finished"), sequencer.GetInputPort("reference_done"))
     # [xy, arm] x (position, velocity, acceleration) in one evaluation (a servo's, every plant step).
     state = builder.AddNamedSystem("reference_state_split", Demultiplexer([2] * 6))

@@ -164,8 +164,14 @@ def test_flag_equals_part_distances_on_random_scenes(geometry):
 def test_robot_reach_and_braking_travel_by_hand(geometry):
     # tiny.yaml: l1 = 0.6, l2 = 0.5; the 1.5 m bar is held at its middle: farthest point 0.75, radius 0.025.
     assert robot_reach(geometry) == pytest.approx(0.6 + 0.5 + 0.775)
+    arm = 1.0 * (1.1 + 0.775) + 2.0 * (0.5 + 0.775)
+    travel = braking_travel(geometry, max_base_speed=0.5, arm_max_velocity=[1.0, 2.0], period=0.01, execution="paper")
+    assert travel == pytest.approx(0.01 * (0.5 + 2 * arm))
+    # Synchronized: the base follows the held reference, one period after the paper's base command.
     travel = braking_travel(geometry, max_base_speed=0.5, arm_max_velocity=[1.0, 2.0], period=0.01)
-    assert travel == pytest.approx(0.01 * (0.5 + 2 * (1.0 * (1.1 + 0.775) + 2.0 * (0.5 + 0.775))))
+    assert travel == pytest.approx(2 * 0.01 * (0.5 + arm))
+    with pytest.raises(ValueError, match="execution must be 'synchronized' or 'paper', got 'fast'"):
+        braking_travel(geometry, max_base_speed=0.5, arm_max_velocity=[1.0, 2.0], period=0.01, execution="fast")
 
 
 @pytest.mark.parametrize("kwargs, match", [
