@@ -35,7 +35,21 @@ from typing import Callable, Sequence
 import numpy as np
 import ruckig
 
-__all__ = ["PathProfile", "Polyline", "line_limits", "plan_profile"]
+#: The smallest speed cap of s a profile keeps to (the DoFs' units per second); below it, a stop.
+SMALLEST_CAP = 1e-6
+
+__all__ = ["SMALLEST_CAP", "PathProfile", "Polyline", "line_limits", "plan_profile", "point_limits", "synchronized_limits"]
+
+
+def synchronized_limits(options) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, float]:
+    """The arguments of :func:`line_limits` for the synchronized reference of ``[x, y, psi1, psi2]``
+    with a scenario's ``execution`` options: the per-DoF limits (the base's for x and y, bounding
+    their norm), the group ``(0, 1)`` and the wheels' ``max_wheel_speed * wheel_radius``."""
+    e = options
+    return (np.array([e.max_base_speed, e.max_base_speed, *e.arm_max_velocity], float),
+            np.array([e.max_base_acceleration, e.max_base_acceleration, *e.arm_max_acceleration], float),
+            np.array([e.max_base_jerk, e.max_base_jerk, *e.arm_max_jerk], float),
+            np.array([0, 1]), float(e.max_wheel_speed * e.wheel_radius))
 
 
 class Polyline:
@@ -203,6 +217,8 @@ class PathProfile:
         """The profile along ``path`` from ``(s, s', s'')`` with ``|s'| <= cap`` (0: stop); see :func:`plan_profile`."""
         vmax, amax, jmax = limits
         cap = min(max(float(cap), 0.0), vmax)
+        if cap < SMALLEST_CAP:  # a crawl that Ruckig cannot plan (it fails near 1e-12): a stop
+            cap = 0.0
         return cls(path, limits, cap, plan_profile(path.length, s, sd, sdd, cap, amax, jmax), rest_s=s)
 
     def state(self, t: float) -> tuple[float, float, float]:
@@ -222,6 +238,15 @@ class PathProfile:
     def resting(self, t: float) -> "PathProfile":
         """At rest where this profile is at t, on the same path."""
         return PathProfile(self.path, self.limits, 0.0, None, rest_s=self.state(t)[0])
+
+
+def point_limits(u: np.ndarray, limit_args: Sequence, factor: Callable[[np.ndarray], float]
+                 ) -> tuple[float, float, float]:
+    """The speed, deceleration and jerk limits of the robot's fastest point on a straight motion of
+    unit direction u: ``factor(u)`` (its speed per unit of s') times :func:`line_limits`; the
+    reference brakes it at least that hard."""
+    k = float(factor(u))
+    return tuple(k * x for x in line_limits(u, *limit_args))
 
 
 def path_speed_factor(path: Polyline, factor: Callable[[np.ndarray], float] | None) -> float:

@@ -64,6 +64,7 @@ Example::
 
 from __future__ import annotations
 
+import functools
 import math
 from typing import Callable, Sequence
 
@@ -73,7 +74,8 @@ from pydrake.common.value import AbstractValue
 from pydrake.systems.framework import EventStatus, BasicVector, Context, LeafSystem, State, ValueProducer
 
 from drake_social.arguments import real_array, require_execution_options
-from drake_social.control.path_motion import PathProfile, Polyline, path_speed_factor, run_limits, speed_cap
+from drake_social.control.path_motion import (PathProfile, Polyline, path_speed_factor, run_limits, speed_cap,
+                                              synchronized_limits)
 from drake_social.kinematics import displacement_bound
 from drake_social.scenario import ExecutionOptions
 
@@ -636,6 +638,7 @@ def arm_source_from_options(
 def reference_source_from_options(
     execution_options: ExecutionOptions, initial_q: Sequence[float],
     position_limits: tuple[Sequence[float], Sequence[float]] | None = None,
+    lever: Sequence[float] | None = None,
 ) -> RuckigTrajectorySource:
     """The synchronized reference of the whole configuration ``[x, y, psi1, psi2]``.
 
@@ -648,26 +651,35 @@ def reference_source_from_options(
     :func:`~drake_social.control.holonomic.wheel_limited_speed` and the
     wheels are never asked for more than they give. Its ``mean_velocity``
     previews one ``control_period``, the feed-forward of the sampled base
-    controller.
+    controller. From rest it runs through the ``via`` input's positions
+    (the sequencer's waypoints where the path goes straight on) to the
+    target, carrying its speed through them.
 
     Args:
         execution_options: a scenario's ``execution`` section.
         initial_q: (4,) initial configuration (metres, radians).
         position_limits: (lower, upper) limits of ``[x, y, psi1, psi2]`` the
             reference keeps to (the room bounds and the joint limits), or None.
+        lever: the levers ``(c_s, c_g)`` of the robot's points
+            (``ArmGeometry.lever(include_body=True)``, metres): when given,
+            the input ``speed_limit`` caps the speed of the fastest point,
+            ``|v_xy| + c_s |psi1'| + c_g |psi1' + psi2'|``
+            (:func:`~drake_social.kinematics.displacement_bound`).
     """
     require_execution_options(execution_options, "reference_source_from_options")
     e = execution_options
+    max_velocity, max_acceleration, max_jerk, _, abs_sum = synchronized_limits(e)
     return RuckigTrajectorySource(
-        xy_max_abs_sum=e.max_wheel_speed * e.wheel_radius,
+        xy_max_abs_sum=abs_sum,
         position_limits=position_limits,
         initial_position=real_array(initial_q, "reference_source_from_options", "initial_q", (4,), layout="[x, y, psi1, psi2]"),
-        max_velocity=[e.max_base_speed, e.max_base_speed, *e.arm_max_velocity],
-        max_acceleration=[e.max_base_acceleration, e.max_base_acceleration, *e.arm_max_acceleration],
-        max_jerk=[e.max_base_jerk, e.max_base_jerk, *e.arm_max_jerk],
+        max_velocity=max_velocity,
+        max_acceleration=max_acceleration,
+        max_jerk=max_jerk,
         period=e.control_period,
         synchronization="phase",
         xy_norm_dofs=(0, 1),
         preview=e.control_period,
         via=True,
+        point_speed=None if lever is None else functools.partial(displacement_bound, lever=np.asarray(lever, float)),
     )

@@ -10,6 +10,8 @@ robot (the base disc, the two link capsules, the object's capsules) is within
 distance; every period its compiled single-configuration form
 :func:`~drake_social.people.proximity.robot_distance`, the same numbers), and clears it when every part is farther: a safety field, as on
 real mobile robots. ``safety_distance = 0`` stops on contact (or overlap) only.
+A stop is released only once every part has been clear for ``release_time``
+seconds (a minimum hold, against stop-and-go at the boundary).
 
 The flag is state, so ``stop`` has no direct feedthrough from ``q``: the
 loop monitor -> controller -> robot -> monitor has no algebraic loop. The
@@ -106,10 +108,13 @@ class SafetyRecord:
     Attributes:
         stopped: the robot is held.
         stops: every stop in order; the last one has ``end = None`` while stopped.
+        clear_since: while stopped, the time of the first of the samples in a
+            row that found every part clear (None: the last one did not).
     """
 
     stopped: bool = False
     stops: tuple[Stop, ...] = ()
+    clear_since: float | None = None
 
     def __copy__(self):
         return self
@@ -169,17 +174,24 @@ def braking_travel(geometry: ArmGeometry, *, max_base_speed: float, arm_max_velo
 class SafetyMonitor(LeafSystem):
     """Sets ``stop`` while a part of the robot is within ``safety_distance`` of a person.
 
+    A stop is released by the first sample that has found every part clear
+    for ``release_time`` seconds (every sample from one at least that long
+    ago clear): a person lingering at the boundary does not make the robot
+    stop and go every period. 0 releases at the first clear sample.
+
     Args:
         geometry: the robot and its object (``ArmGeometry.from_scenario``).
         safety_distance: metres (>= 0; 0 = stop on contact only).
         period: seconds between decisions (> 0; the control period).
+        release_time: seconds clear before a release (>= 0; the scenario's
+            ``execution.release_time``).
 
     Raises:
         TypeError: ``geometry`` is not an ArmGeometry.
         ValueError: ``safety_distance`` or ``period`` out of range.
     """
 
-    def __init__(self, geometry: ArmGeometry, *, safety_distance: float, period: float):
+    def __init__(self, geometry: ArmGeometry, *, safety_distance: float, period: float, release_time: float = 0.0):
         super().__init__()
         if not isinstance(geometry, ArmGeometry):
             raise TypeError(f"SafetyMonitor: geometry must be a drake_social.kinematics.ArmGeometry, "
@@ -190,6 +202,10 @@ class SafetyMonitor(LeafSystem):
                              f"got {safety_distance!r}")
         if not (isinstance(period, (int, float)) and math.isfinite(period) and period > 0):
             raise ValueError(f"SafetyMonitor: period must be a finite number of seconds > 0, got {period!r}")
+        if not (isinstance(release_time, (int, float)) and math.isfinite(release_time) and release_time >= 0):
+            raise ValueError(f"SafetyMonitor: release_time must be a finite number of seconds >= 0, "
+                             f"got {release_time!r}")
+        self._release = float(release_time)
         self._geometry = geometry
         self._safety = float(safety_distance)
         self._robot_args = robot_distance_args(geometry)
@@ -244,16 +260,26 @@ class SafetyMonitor(LeafSystem):
         q = self._q_port.Eval(context)
         people = self._people_port.Eval(context)
         close = self.too_close(q, people)
-        if close == record.stopped:
-            return EventStatus.DidNothing()
         t = context.get_time()
-        if close:
+        if close and record.stopped:
+            if record.clear_since is None:
+                return EventStatus.DidNothing()
+            record = dc.replace(record, clear_since=None)  # not clear for long enough
+        elif not close and not record.stopped:
+            return EventStatus.DidNothing()
+        elif close:
             distance, index, part = self.nearest(q, people)
             name = people.names[index] or str(index)
             record = SafetyRecord(True, record.stops + (Stop(t, None, name, part, distance),))
-        else:
-            last = dc.replace(record.stops[-1], end=t)
-            record = SafetyRecord(False, record.stops[:-1] + (last,))
+        else:  # stopped and clear: released once clear for release_time (1e-9 s: periods summed apart)
+            since = t if record.clear_since is None else record.clear_since
+            if t - since < self._release - 1e-9:
+                if record.clear_since is not None:
+                    return EventStatus.DidNothing()
+                record = dc.replace(record, clear_since=since)
+            else:
+                last = dc.replace(record.stops[-1], end=t)
+                record = SafetyRecord(False, record.stops[:-1] + (last,))
         state.get_mutable_abstract_state(self._record_index).set_value(record)
         return None
 

@@ -104,6 +104,7 @@ from drake_social.control import (
     ReplanningPlannerSystem,
     RuckigTrajectorySource,
     SafetyMonitor,
+    SpeedLimit,
     WaypointSequencer,
     arm_source_from_options,
     reference_source_from_options,
@@ -176,6 +177,9 @@ class Autonomy(NamedPorts):
             (``planner``), or None (given waypoints, an external path).
         safety: the :class:`~drake_social.control.SafetyMonitor` (``safety``),
             or None (the people stand still).
+        speed_limit: the :class:`~drake_social.control.SpeedLimit`
+            (``speed_limit``), or None (the people stand still, the paper's
+            execution, or ``execution.slow_down`` false).
     """
 
     diagram: Diagram
@@ -186,6 +190,7 @@ class Autonomy(NamedPorts):
     controller: HolonomicPController
     planner: PlannerSystem | ReplanningPlannerSystem | None = None
     safety: SafetyMonitor | None = None
+    speed_limit: SpeedLimit | None = None
 
     @property
     def replanning(self) -> bool:
@@ -301,13 +306,19 @@ def autonomy_checked(scenario: Scenario, execution: str, path: PathSource, peopl
     track = (_synchronized if synchronized else _paper)(builder, scenario, start, sequencer, controller)
 
     people_inputs: list[InputPort] = []
-    safety = None
+    safety = limiter = None
     if not people.static:  # hold the robot while a walking person is within the safety distance
         safety = builder.AddNamedSystem("safety", SafetyMonitor(
             ArmGeometry.from_scenario(scenario), safety_distance=float(opts.safety_distance),
-            period=float(opts.control_period)))
+            period=float(opts.control_period), release_time=float(opts.release_time)))
         builder.Connect(q, safety.GetInputPort("q"))
         people_inputs.append(safety.GetInputPort("people_state"))
+        if synchronized and opts.slow_down:  # and slow down before that, on the path
+            limiter = builder.AddNamedSystem("speed_limit", SpeedLimit(ArmGeometry.from_scenario(scenario), opts))
+            builder.Connect(q, limiter.GetInputPort("q"))
+            builder.Connect(sequencer.GetOutputPort("target"), limiter.GetInputPort("target"))
+            builder.Connect(limiter.GetOutputPort("speed_limit"), track.source.GetInputPort("speed_limit"))
+            people_inputs.append(limiter.GetInputPort("people_state"))
     if isinstance(planner, ReplanningPlannerSystem):  # it reads the robot and the people
         builder.Connect(q, planner.GetInputPort("q"))
         people_inputs.append(planner.GetInputPort("people_state"))
@@ -332,6 +343,8 @@ def autonomy_checked(scenario: Scenario, execution: str, path: PathSource, peopl
         outputs["reference_feedforward"] = track.feedforward
     if safety is not None:
         outputs["stop"] = safety.GetOutputPort("stop")
+    if limiter is not None:
+        outputs["speed_limit"] = limiter.GetOutputPort("speed_limit")
     if isinstance(planner, ReplanningPlannerSystem):
         outputs["waiting"] = planner.GetOutputPort("hold")
         outputs["path_version"] = planner.GetOutputPort("version")
@@ -340,7 +353,7 @@ def autonomy_checked(scenario: Scenario, execution: str, path: PathSource, peopl
     diagram = builder.Build()
     diagram.set_name("autonomy")
     return Autonomy(diagram=diagram, path=path, execution=execution, sequencer=sequencer, reference=track.source,
-                    controller=controller, planner=planner, safety=safety)
+                    controller=controller, planner=planner, safety=safety, speed_limit=limiter)
 
 
 def _path(builder: DiagramBuilder, scenario: Scenario, path: PathSource, people: PeopleModel,
@@ -380,7 +393,8 @@ def _synchronized(builder: DiagramBuilder, scenario: Scenario, start: np.ndarray
                   controller: HolonomicPController) -> _Tracking:
     """One 4-DoF reference: the controller tracks its xy with its feed-forward, the arm its psi."""
     reference = builder.AddNamedSystem("reference", reference_source_from_options(
-        scenario.execution, start, configuration_limits(scenario)))
+        scenario.execution, start, configuration_limits(scenario),
+        lever=ArmGeometry.from_scenario(scenario).lever(include_body=True)))
     builder.Connect(sequencer.GetOutputPort("target"), reference.GetInputPort("target"))
     builder.Connect(sequencer.GetOutputPort("via"), reference.GetInputPort("via"))
     builder.Connect(reference.GetOutputPort("finished"), sequencer.GetInputPort("reference_done"))

@@ -146,6 +146,13 @@ class SimulationResult:
         waiting: (T,) True at the sample times t_k the replanner holds the
             robot from (its latest decision at or before t_k found no safe
             path: status ``"wait"``), all False without replanning.
+        speed_limit: (T,) the slow-down's limit on the fastest point's speed
+            at the sample times (m/s; +inf where nothing limits, all +inf
+            without the slow-down; the logger publishes before the updates,
+            so sample k shows the limit decided at t_{k-1}).
+        slow_stops: one dict per stop of the slow-down (its limit 0), as
+            ``stops`` (the person that bound the limit, the part nearest to
+            them and its distance at the start).
         stops: one dict per stop by the safety monitor, in order: ``start``
             and ``end`` (the times of the updates that stopped and released
             the robot, seconds; ``end`` None when still stopped at the end),
@@ -187,6 +194,8 @@ class SimulationResult:
     stopped: np.ndarray = dc.field(default_factory=lambda: np.zeros(0, bool))
     waiting: np.ndarray = dc.field(default_factory=lambda: np.zeros(0, bool))
     stops: list[dict] = dc.field(default_factory=list)
+    speed_limit: np.ndarray = dc.field(default_factory=lambda: np.zeros(0))
+    slow_stops: list[dict] = dc.field(default_factory=list)
     replans: tuple = ()
     replanning: dict | None = None
 

@@ -120,6 +120,33 @@ def test_stops_are_recorded_with_start_and_end(geometry):
         {"start": 0.04, "end": None, "duration": 0.06, "person": "0", "part": "base", "distance": 0.02})
 
 
+@pytest.mark.parametrize("release, ends", [
+    (0.0, [0.03]),            # no hold: released at the first clear sample
+    (0.05, [0.08]),           # clear at 0.03 ... 0.08: 0.05 s clear, released at 0.08
+    (0.05 + 1e-6, [None]),    # just longer than the run stays clear: still stopped
+])
+def test_a_stop_is_released_after_release_time_clear(geometry, release, ends):
+    monitor = SafetyMonitor(geometry, safety_distance=SAFETY, period=PERIOD, release_time=release)
+    context = monitor.CreateDefaultContext()
+    near, far = _people(*_below_base(0.02)), _people(*_below_base(0.2))
+    for k, people in enumerate([far, near, near] + [far] * 6):
+        _update(monitor, context, Q, people, t=round(0.01 * k, 10))
+    assert [stop.end for stop in monitor.stops(context)] == pytest.approx(ends)
+
+
+def test_a_person_lingering_at_the_boundary_does_not_make_the_robot_stop_and_go(geometry):
+    # In and out of the safety distance every other period for 2 s: one stop with the hold, 100 without.
+    near, far = _people(*_below_base(SAFETY - 0.005)), _people(*_below_base(SAFETY + 0.005))
+    counts = []
+    for release in (0.5, 0.0):
+        monitor = SafetyMonitor(geometry, safety_distance=SAFETY, period=PERIOD, release_time=release)
+        context = monitor.CreateDefaultContext()
+        for k in range(200):
+            _update(monitor, context, Q, near if k % 2 == 0 else far, t=round(0.01 * k, 10))
+        counts.append(len(monitor.stops(context)))
+    assert counts == [1, 100]
+
+
 def test_clone_and_reset_keep_their_own_record(geometry):
     monitor = _monitor(geometry)
     context = monitor.CreateDefaultContext()
@@ -178,6 +205,8 @@ def test_robot_reach_and_braking_travel_by_hand(geometry):
     ({"safety_distance": -0.01, "period": PERIOD}, "safety_distance"),
     ({"safety_distance": float("nan"), "period": PERIOD}, "safety_distance"),
     ({"safety_distance": SAFETY, "period": 0.0}, "period"),
+    ({"safety_distance": SAFETY, "period": PERIOD, "release_time": -0.1}, "release_time"),
+    ({"safety_distance": SAFETY, "period": PERIOD, "release_time": float("inf")}, "release_time"),
 ])
 def test_bad_arguments_are_named(geometry, kwargs, match):
     with pytest.raises(ValueError, match=match):

@@ -46,10 +46,12 @@ SAFETY = 0.05
 
 @pytest.fixture(scope="module")
 def setting():
-    """tiny.yaml without its standing person; the robot drives straight east along y = 2.5 (its
-    1.5 m bar along x at y = 3 leads by 1.35 m) and a walker crosses its path southwards at x = 5.6
-    at 0.4 m/s, passing the bar's height y = 3 at t = 6.7 s, just when the bar's tip arrives."""
-    scenario = dc.replace(load_scenario("scenarios/tiny.yaml"), people=[])
+    """tiny.yaml without its standing person and without the slow-down (the paper's stop and go: the
+    monitor alone); the robot drives straight east along y = 2.5 (its 1.5 m bar along x at y = 3
+    leads by 1.35 m) and a walker crosses its path southwards at x = 5.6 at 0.4 m/s, passing the
+    bar's height y = 3 at t = 6.7 s, just when the bar's tip arrives."""
+    base = load_scenario("scenarios/tiny.yaml")
+    scenario = dc.replace(base, people=[], execution=dc.replace(base.execution, slow_down=False))
     waypoints = np.array([scenario.start, scenario.goal], float)
     walker = Walker([5.6, 4.8], [5.6, 0.3], 2.2, 2.2 + 4.5 / 0.4)
     return scenario, waypoints, walker
@@ -73,10 +75,15 @@ def test_walker_crossing_stops_the_robot_which_goes_on_after(setting, execution,
     (stop,) = run.stops
     assert (stop["person"], stop["part"]) == ("walker", "object")
     # The monitor decides from q and the people at each sample: the stop starts at the first sample
-    # within the safety distance and ends at the first one clear again, with the distance of its start.
+    # within the safety distance and ends release_time after the first one clear again (clear at
+    # every sample between), with the distance of its start.
     close = np.flatnonzero(d <= SAFETY)
     k_start = close[0]
-    k_end = k_start + np.flatnonzero(d[k_start:] > SAFETY)[0]
+    k_clear = k_start + np.flatnonzero(d[k_start:] > SAFETY)[0]
+    release = scenario.execution.release_time
+    assert release == 0.5
+    k_end = k_clear + int(round(release / period))
+    assert np.all(d[k_clear:k_end + 1] > SAFETY)
     assert stop["start"] == pytest.approx(run.times[k_start], abs=1e-9)
     assert stop["end"] == pytest.approx(run.times[k_end], abs=1e-9)
     assert stop["duration"] == pytest.approx(stop["end"] - stop["start"], abs=1e-12)
