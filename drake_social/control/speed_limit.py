@@ -124,11 +124,11 @@ def allowed_speed(gap: float, closing: float, *, decel: float, jerk: float, reac
     docstring), with ``rho = approach`` (in [0, 1]: the share of the fastest
     point's travel that closes the gap), ``c = closing`` (m/s, >= 0), ``T =
     reaction`` (s), ``A = decel``, ``J = jerk``; 0 when even a robot at rest
-    cannot keep the gap, ``top`` when ``top`` can; ``top`` too when the
-    robot's motion does not close the gap (``approach = 0``: stopping would
-    not keep a closing person away).
+    cannot keep the gap, ``top`` when ``top`` can. A robot whose motion does
+    not close the gap (``approach = 0``) is limited by a closing person alone
+    (it is to be at rest when they arrive), and not at all when nobody closes.
     """
-    if approach <= 0.0 or _needed(top, closing, decel, jerk, reaction, approach) <= gap:
+    if approach <= 0.0 and closing <= 0.0 or _needed(top, closing, decel, jerk, reaction, approach) <= gap:
         return top
     if _needed(0.0, closing, decel, jerk, reaction, approach) >= gap:
         return 0.0

@@ -339,6 +339,7 @@ def _result(built: TransportDiagram, root, path: np.ndarray, planner_result: Pla
         slow_stops=_stops(built.autonomy.speed_limit, root, end),
     )
     result.stopped = _stopped(times, result.stops)
+    result.slow_stopped = _stopped(times, result.slow_stops)
     result.waiting = _waiting(times, replans)
     source = built.station.people
     if source.model.count and len(times):  # the open-loop people sampled; a crowd from its logged state

@@ -55,8 +55,11 @@ def test_allowed_speed_is_on_the_boundary_and_at_its_ends():
     assert allowed_speed(need, 0.0, **kw) == 0.5
     v = allowed_speed(need - 1e-3, 0.0, **kw)
     assert 0.49 < v < 0.5 and v * lead + stopping_distance(v, 1.0, 5.0) == pytest.approx(need - 1e-3, abs=1e-12)
-    # A robot whose motion does not close the gap is not limited by it.
-    assert allowed_speed(-1.0, 2.0, approach=0.0, **kw) == 0.5
+    # A robot whose motion does not close the gap is limited only by a closing person: to be at rest
+    # when they arrive, t(v) <= gap / c - lead; with nobody closing, not at all (even within the gap).
+    assert allowed_speed(-1.0, 0.0, approach=0.0, **kw) == 0.5
+    v = allowed_speed(0.5, 1.0, approach=0.0, **kw)
+    assert stopping_time(v, 1.0, 5.0) == pytest.approx(0.5 / 1.0 - lead, abs=1e-12)
 
 
 def test_the_ramp_at_its_ends_and_either_side():
