@@ -203,7 +203,7 @@ class PathProfile:
         if cap > 0.0 and trajectory is not None:
             self.end_s = path.length  # a profile with a positive cap ends at rest at the end
         self.arrives = self.end_s >= path.length
-        self.end = path.at(self.end_s)[0]
+        self.end = list(path._points[-1]) if self.arrives else path.at(self.end_s)[0]
 
     def __copy__(self):
         return self

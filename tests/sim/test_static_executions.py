@@ -24,7 +24,7 @@ SCENARIOS = Path(__file__).resolve().parents[2] / "scenarios"
 PINNED = [
     ("tiny", "kinematic", 3408, "5c9a16d5cd29ff60"),
     ("tiny", "dynamic", 3408, "f9efa7ae7e8807e4"),
-    ("office_bar", "kinematic", 12138, "fc47f0bcebb2f956"),
+    ("office_bar", "kinematic", 7773, "465a6cb1b5b2c3ac"),
 ]
 
 
