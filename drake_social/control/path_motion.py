@@ -222,12 +222,19 @@ class PathProfile:
         return cls(path, limits, cap, plan_profile(path.length, s, sd, sdd, cap, amax, jmax), rest_s=s)
 
     def state(self, t: float) -> tuple[float, float, float]:
-        """``(s, s', s'')`` at t (clamped to [0, duration]; at rest at the end after it)."""
+        """``(s, s', s'')`` at t (clamped to [0, duration]; at rest at the end after it).
+
+        s stays on the path: a profile re-planned in its last braking may pass
+        the end by Ruckig's precision (1e-9 of a unit) and come back; s is
+        held at the end meanwhile, so the position never leaves the last segment.
+        """
         if self.trajectory is None:
             return self.rest_s, 0.0, 0.0
         if t >= self.duration:
             return self.end_s, 0.0, 0.0
         (s,), (sd,), (sdd,) = self.trajectory.at_time(max(t, 0.0))
+        if s > self.path.length:
+            s = self.path.length
         return s, sd, sdd
 
     def at_time(self, t: float) -> tuple[list[float], list[float], list[float]]:
