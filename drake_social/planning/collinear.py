@@ -29,10 +29,10 @@ __all__ = ["COLLINEAR_TOLERANCE", "collinear_runs", "merge_collinear", "segment_
 #: waypoints (equal parts of a subdivided motion, ``a + t (b - a)``) lie
 #: within a few ulp of a coordinate of the room (3.6e-15 on office_bar,
 #: whose nearest non-collinear waypoint is 1.5e-3 off its neighbours'
-#: segment), so 1e-9 is a million times their rounding; and it is the bound
-#: within which the synchronized execution keeps every body point on its
-#: planned segment, so a merged motion is as close to the parts as execution
-#: is to any motion.
+#: segment), so 1e-9 is a million times their rounding; and a body point
+#: (at most a few metres from the base) of a merged motion passes within a
+#: few 1e-9 m of where the parts took it, the order of the deviation from
+#: the planned segments that the synchronized execution itself allows.
 COLLINEAR_TOLERANCE = 1e-9
 
 

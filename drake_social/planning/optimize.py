@@ -26,7 +26,8 @@ the validity checker (:func:`~drake_social.planning.collinear.merge_collinear`)
 and costed with the objective like any other. The trapezoid rule samples a
 merged motion at other points than its parts, so the path's cost moves by that
 rule's discretisation, both sums estimating the same integral (on office_bar,
-seed 0: 3.9715648 with the parts, 3.9715871 merged). An optimised path has no
+seed 0, with the pure social integral: 3.9715648 with the parts, 3.9715871
+merged). An optimised path has no
 interior waypoint collinear with its neighbours unless the checker refuses the
 merged motion.
 
