@@ -136,6 +136,12 @@ INTEGRATION_SCHEMES = (
 #: paper study applies it over every group and ``bench`` over every scenario
 #: (its last override), so both run the planner OMPL's RRTstar is compared with.
 PAPER_PLANNER = "planner: {optimize: false, near_radius_mode: fixed}"
+#: The paper's objective (``--set`` text): the social integral alone, without
+#: the default's length tie-break (``social.length_weight`` 0.001). The paper
+#: study applies it over every group, after :data:`PAPER_PLANNER`; ``bench``
+#: keeps each file's objective (an ``informed_mode: admissible`` file needs its
+#: length weight).
+PAPER_OBJECTIVE = "social: {length_weight: 0.0}"
 
 #: The paper's algorithms, in its order (the non-social baseline first).
 PAPER_ALGORITHMS = ("rrt_star", "social_rrt_star", "base_rrt_star", "informed_social_rrt_star",
