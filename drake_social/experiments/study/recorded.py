@@ -70,11 +70,8 @@ VARIANTS: dict[str, tuple[str, ...]] = {"plan_once": CROWD_VARIANTS["plan_once"]
 #: The variants run by default: planning once against the default replanning.
 DEFAULT_VARIANTS = ("plan_once", "replan")
 
-#: The command's option of each setting, for messages.
-OPTIONS = {"recording": "--recording", "layout": "--layout", "fps": "--fps", "windows": "--windows",
-           "window_length": "--window-length", "min_people": "--min-people", "variants": "--variants",
-           "prediction": "--prediction", "sets": "--set", "episodes": "--episodes", "seed": "--seed",
-           "time_limit": "--time-limit"}
+#: The command's option of each setting of :func:`~drake_social.people.windows.cut_windows`, for its messages.
+WINDOW_OPTIONS = {"length": "--window-length", "count": "--windows", "min_people": "--min-people"}
 
 #: The rule of each setting (:class:`RecordedCrowdStudy`'s fields): :func:`check_recorded_settings`.
 RECORDED_SETTINGS: dict[str, Rule] = {
@@ -198,7 +195,7 @@ def recorded_scenes(study: RecordedCrowdStudy) -> list[WindowScene]:
     text = read_text_file(study.recording, "recording", "--recording", limit=MAX_RECORDING_BYTES)
     recording = parse_eth_ucy(text, str(study.recording), study.layout)
     windows = cut_windows(recording, fps=study.fps, length=study.window_length, count=study.windows,
-                          min_people=study.min_people, options=OPTIONS)
+                          min_people=study.min_people, options=WINDOW_OPTIONS)
     scenes = [window_scene(recording, w, fps=study.fps, sets=tuple(study.sets)) for w in windows]
     with tempfile.TemporaryDirectory(prefix="drake-social-windows-") as folder:
         for scene in scenes:

@@ -141,7 +141,7 @@ def robot_geometry(sets: tuple[str, ...] = ()) -> ArmGeometry:
     text = ("description: \"the robot of a recorded-crowd window\"\nworld: {bounds: [-10.0, -10.0, 10.0, 10.0]}\n"
             + ROBOT_YAML + f"start: [0.0, 0.0, {CARRYING_ARM[0]!r}, {CARRYING_ARM[1]!r}]\n"
             f"goal: [1.0, 0.0, {CARRYING_ARM[0]!r}, {CARRYING_ARM[1]!r}]\n")
-    return ArmGeometry.from_scenario(load_scenario_text(text, "a recorded-crowd window's robot", list(sets),
+    return ArmGeometry.from_scenario(load_scenario_text(text, "every window's scenario", list(sets),
                                                         overrides_name="--set"))
 
 
