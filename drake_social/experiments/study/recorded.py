@@ -50,8 +50,8 @@ from pathlib import Path
 from drake_social.arguments import (Rule, check_arguments, require_choice, require_choices, require_file_name,
                                     require_instance, require_int, require_number, require_strings)
 from drake_social.errors import ScenarioError
-from drake_social.experiments.study.crowd import (NO_REPLANNING, VARIANTS as CROWD_VARIANTS, episode_seeds, perturb,
-                                                  replanning_available)
+from drake_social.experiments.study.crowd import (NO_REPLANNING, VARIANTS as CROWD_VARIANTS, check_trace_episode,
+                                                  episode_seeds, perturb, replanning_available)
 from drake_social.experiments.study.recorded_scene import WindowScene, verify_scene, window_scene, write_scene
 from drake_social.limits import MAX_EPISODES, MAX_TIME_LIMIT, MAX_WINDOWS, MIN_WINDOW_LENGTH, RECORDED_VARIANTS
 from drake_social.people.eth_ucy import ETH_UCY_FPS, ETH_UCY_LAYOUTS, MAX_RECORDING_BYTES, parse_eth_ucy
@@ -103,10 +103,7 @@ def check_recorded_settings(who: str, settings: dict) -> None:
             value out of range; each naming ``who`` and the setting.
     """
     check_arguments(who, RECORDED_SETTINGS, settings)
-    trace, episodes = settings.get("trace_episode"), settings.get("episodes", RecordedCrowdStudy.episodes)
-    if trace is not None and not trace < episodes:
-        raise ValueError(f"{who}: trace_episode must be one of the {episodes} episodes, in [0, {episodes - 1}], or "
-                         f"None, got {trace}")
+    check_trace_episode(who, settings, RecordedCrowdStudy.episodes)
 
 
 @dc.dataclass(frozen=True)

@@ -210,6 +210,32 @@ def _number(v: float) -> str:
     return repr(float(v))
 
 
+def _scenario_text(stem: str, window: Window, fps: float, angle: float, rotation: float, offset: tuple, band: tuple,
+                   bounds: tuple, start: tuple, goal: tuple, people_name: str) -> str:
+    """The window's scenario YAML, its making said in its comments."""
+    return "\n".join([
+        f"# Window {window.index} of the recording {stem}, written by `drake-social experiment crowd --recording`:",
+        f"# t = {window.start:g} .. {window.end:g} s of the recording (t = frame / {fps:g}), {window.people_mean:.3g} "
+        f"people present on average ({window.people_min} .. {window.people_max}, {window.people_t0} at t = 0).",
+        f"# Its people ({people_name}) are turned by {rotation:.6g} rad about the recording's origin and shifted by "
+        f"({offset[0]:.6g}, {offset[1]:.6g}) m,",
+        f"# so that the flow (axis {angle:.6g} rad in the recording) runs along y, across the robot's task along +x;",
+        f"# the start and the goal are outside the flow band x in [{band[0]:.4g}, {band[1]:.4g}] m and at least "
+        f"{START_CLEARANCE:g} m from everyone present at t = 0.",
+        f"description: \"{stem} window {window.index}: t = {window.start:g} .. {window.end:g} s, "
+        f"{window.people_mean:.3g} people present on average, the bar carried across the flow\"",
+        f"world: {{bounds: [{', '.join(_number(v) for v in bounds)}]}}",
+        f"people_file: {people_name}",
+        ROBOT_YAML.rstrip("\n"),
+        f"start: [{', '.join(_number(v) for v in start)}]",
+        f"goal: [{', '.join(_number(v) for v in goal)}]",
+        "random_seed: 0",
+        PLANNER_YAML.rstrip("\n"),
+        f"execution: {{time_limit: {_number(window.end - window.start)}}}",
+        "",
+    ])
+
+
 def window_scene(recording: Recording, window: Window, *, fps: float, sets: tuple[str, ...] = ()) -> WindowScene:
     """The scenario of ``window`` (see the module docstring).
 
@@ -246,30 +272,11 @@ def window_scene(recording: Recording, window: Window, *, fps: float, sets: tupl
     bounds = (0.0, 0.0, float(size[0]), float(size[1]))
     name = f"window_{window.index}"
     people_name = f"{name}_people.csv"
-    stem = Path(recording.source).name
-    text = "\n".join([
-        f"# Window {window.index} of the recording {stem}, written by `drake-social experiment crowd --recording`:",
-        f"# t = {window.start:g} .. {window.end:g} s of the recording (t = frame / {fps:g}), {window.people_mean:.3g} "
-        f"people present on average ({window.people_min} .. {window.people_max}, {window.people_t0} at t = 0).",
-        f"# Its people ({people_name}) are turned by {rotation:.6g} rad about the recording's origin and shifted by "
-        f"({offset[0]:.6g}, {offset[1]:.6g}) m,",
-        f"# so that the flow (axis {angle:.6g} rad in the recording) runs along y, across the robot's task along +x;",
-        f"# the start and the goal are outside the flow band x in [{x_lo + offset[0]:.4g}, {x_hi + offset[0]:.4g}] m "
-        f"and at least {START_CLEARANCE:g} m from everyone present at t = 0.",
-        f"description: \"{stem} window {window.index}: t = {window.start:g} .. {window.end:g} s, "
-        f"{window.people_mean:.3g} people present on average, the bar carried across the flow\"",
-        f"world: {{bounds: [{', '.join(_number(v) for v in bounds)}]}}",
-        f"people_file: {people_name}",
-        ROBOT_YAML.rstrip("\n"),
-        f"start: [{', '.join(_number(v) for v in start)}]",
-        f"goal: [{', '.join(_number(v) for v in goal)}]",
-        "random_seed: 0",
-        PLANNER_YAML.rstrip("\n"),
-        f"execution: {{time_limit: {_number(window.end - window.start)}}}",
-        "",
-    ])
+    band = (x_lo + offset[0], x_hi + offset[0])
+    text = _scenario_text(Path(recording.source).name, window, fps, angle, rotation, offset, band, bounds, start,
+                          goal, people_name)
     return WindowScene(window=window, name=name, flow_angle=angle, rotation=rotation, offset=offset,
-                       band=(x_lo + offset[0], x_hi + offset[0]), task_y=task_y + offset[1], bounds=bounds,
+                       band=band, task_y=task_y + offset[1], bounds=bounds,
                        start=start, goal=goal, clearance_start=c_start, clearance_goal=c_goal,
                        people_end=float(max(r[0] for r in rows)), people_name=people_name, scenario_text=text,
                        people_text=people_csv_text(rows))
