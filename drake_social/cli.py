@@ -213,7 +213,7 @@ def _run_experiment(args: argparse.Namespace) -> int:
             pass  # map_tasks says what to install
         else:
             logging.getLogger("distributed").setLevel(logging.WARNING)
-    if args.study == "crowd":  # the study is made of the options by run_crowd_experiment
+    if args.study == "crowd":  # the study is made of the options by run_crowd_experiment or run_recorded_experiment
         settings = _crowd_settings(args)
         recorded = "recording" in settings
         study_name = settings["name"] if recorded else CrowdStudy.name

@@ -308,3 +308,64 @@ def test_a_tiny_benchmark_end_to_end_on_both_executors(tmp_path):
     assert same(run_study(study, workers=1, executor="dask").records) == same(one)
     saved = json.loads((tmp_path / "one" / "records.json").read_text())
     assert saved["study"] == json.loads(json.dumps(study.to_json_dict()))
+
+
+# ---- REPORT.md's targets and claims on hand-made records ----------------------------
+
+
+def _episodes(variant: str, crossed: list[float], **fields) -> list[dict]:
+    return [{"scenario": "rec", "variant": variant, "window": k // 2, "episode": k, "crossed": c,
+             "reached": c, **{f: (v[k] if isinstance(v, list) else v) for f, v in fields.items()}}
+            for k, c in enumerate(crossed)]
+
+
+@pytest.mark.parametrize("crossed, met", [(8, True), (7, False), (10, True)])
+def test_the_crossing_target_holds_at_80_percent(crossed, met):
+    from drake_social.experiments.study.recorded_report import target_lines
+
+    records = _episodes("plan_once", [1.0] * crossed + [0.0] * (10 - crossed), nav_collisions_robot=0.0,
+                        nav_collisions_moving_robot=0.0, nav_collisions_appeared_robot=0.0)
+    dut = target_lines(records, ["plan_once"], {})
+    assert dut[0] == (f"- **{'MET' if met else 'MISSED'}** (reference): plan-once (paper): crossed while people were "
+                      f"present in {crossed}/10 episodes = {10 * crossed} % (target >= 80 %)")
+
+
+def test_contacts_by_cause_and_replan_times_against_their_targets():
+    from drake_social.experiments.study.recorded_report import target_lines
+
+    # 4 episodes: contacts 3 (1 moving, 1 appeared), 1 (walked into), 0, a NaN moving count (no stop log).
+    records = _episodes("replan", [1.0, 1.0, 1.0, 0.0], nav_collisions_robot=[3.0, 1.0, 0.0, 0.0],
+                        nav_collisions_moving_robot=[1.0, 0.0, 0.0, float("nan")],
+                        nav_collisions_appeared_robot=[1.0, 0.0, 0.0, 0.0], replan_deadline_hits=[0.0, 2.0, 0.0, 0.0],
+                        replan_times=[[0.010] * 99 + [0.080], [], [], []])
+    dut = target_lines(records, ["replan"], {"replan": 0.08})
+    assert dut[0].startswith("- **MISSED** (target): replanning (default): crossed while people were present in 3/4 "
+                             "episodes = 75 %")
+    assert dut[1] == ("- **MISSED** (target): replanning (default): contacts begun while the robot was commanded to "
+                      "move: 1 (target 0); of all 4 contact(s), 1 by a person appearing in contact and 2 of a person "
+                      "walking into the held robot")
+    # 100 replans: 99 of 10 ms and one of 80 ms: median 10 ms (the target, met), 99th percentile at rank 98.01:
+    # 10 + 0.01 * 70 = 10.7 ms.
+    assert dut[2] == ("- **MET** (target): replanning (default): replan time over 100 replans: median 10 ms (target <= "
+                      "10 ms), 99th percentile 10.7 ms (target <= the budget 80 ms), 2 deadline hits")
+    records[0]["replan_times"] = [0.0101] * 99 + [0.080]
+    assert target_lines(records, ["replan"], {"replan": 0.08})[2].startswith("- **MISSED** (target): replanning "
+                                                                              "(default): replan time over 100 replans: "
+                                                                              "median 10.1 ms")
+    assert target_lines(records, ["replan"], {"replan": 0.0106})[2].startswith("- **MISSED**")  # p99 over the budget
+
+
+def test_claims_pair_over_window_and_episode():
+    from drake_social.experiments.study.recorded_report import claim_lines
+
+    # Five pairs: replanning crossed in 4 where planning once crossed in none; the goal distances at the end.
+    records = (_episodes("plan_once", [0.0] * 5, goal_distance_end=[5.0, 6.0, 7.0, 8.0, 9.0])
+               + _episodes("replan", [1.0, 1.0, 1.0, 1.0, 0.0], goal_distance_end=[0.0, 0.0, 0.0, 0.0, 9.5]))
+    dut = claim_lines(records, "rec", ["plan_once", "replan"])
+    # Differences +1 x 4 and a zero (dropped): W- = 0 of 4 pairs, exact one-sided p = 1 / 16.
+    assert dut[0] == ("- **NOT SIGNIFICANT**: rec: replanning (default) vs plan-once (paper): crossings while people "
+                      "are present higher in 4/5 paired episodes (median 1 vs 0, median difference +1, one-sided "
+                      "Wilcoxon p = 0.0625)")
+    assert dut[1].startswith("- **NOT SIGNIFICANT**: rec: replanning (default) vs plan-once (paper): distance to the "
+                             "goal at the end lower in 4/5 paired episodes (median 0 m vs 7 m, median difference -6 m")
+    assert claim_lines(records, "rec", ["replan"]) == []  # nothing to pair against

@@ -38,7 +38,7 @@ import numpy as np
 from drake_social.experiments.study.report import ALPHA, Comparison, median_iqr, paired
 
 __all__ = ["CLAIMS", "PARTS", "PART_METRICS", "SUCCESS_TARGET", "claim_line", "claim_lines", "compare", "figure_names",
-           "label", "metric_words", "output_names", "parts_table", "report_markdown", "target_lines", "variant_table",
+           "label", "output_names", "parts_table", "report_markdown", "target_lines", "variant_table",
            "write_figures", "write_outputs"]
 
 #: The per-part metrics of the tables and boxplots: (metric, header, unit, format).
@@ -87,7 +87,7 @@ def compare(records: Sequence[dict], scenario: str, a: str, b: str, metric: str,
     return paired(_view(records), (scenario, a), (scenario, b), metric, claim)
 
 
-def metric_words(metric: str) -> tuple[str, str]:
+def _metric_words(metric: str) -> tuple[str, str]:
     """``nav_time_intimate_object`` -> ("object intimate-zone time", "s")."""
     name = metric.removeprefix("nav_")
     for part in PARTS:
@@ -107,7 +107,7 @@ def claim_line(c: Comparison, scenario: str) -> str:
     """One claim line: ``- **SUPPORTED**: office_walkers: replanning multi-point vs
     replanning base-only: object intimate-zone time lower in 14/20 paired episodes
     (median 1.2 s vs 3.4 s, median difference -0.8 s, Wilcoxon p = 0.012)``."""
-    what, unit = metric_words(c.metric)
+    what, unit = _metric_words(c.metric)
     u = f" {unit}" if unit else ""
     if c.n == 0:
         return (f"- **{c.verdict.upper()}**: {scenario}: {_LABEL[c.a[1]]} vs {_LABEL[c.b[1]]}: {what} {c.claim}: no "
