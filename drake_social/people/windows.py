@@ -54,11 +54,14 @@ import numpy as np
 from drake_social.errors import ScenarioError
 from drake_social.people.eth_ucy import Recording
 
-__all__ = ["SAMPLE_TOLERANCE", "Window", "crossing_rotation", "cut_windows", "flow_angle", "frame_step",
+__all__ = ["MAX_GRID_SAMPLES", "SAMPLE_TOLERANCE", "Window", "crossing_rotation", "cut_windows", "flow_angle", "frame_step",
            "presence_counts"]
 
 #: Relative tolerance of ``length * fps / df`` when counting a window's samples.
 SAMPLE_TOLERANCE = 1e-9
+#: Most samples of a recording's grid (its span over ``df``): the counts are
+#: held in memory (16 bytes a sample); ETH/UCY's longest has about 1,300.
+MAX_GRID_SAMPLES = 4_000_000
 
 
 @dc.dataclass(frozen=True)
@@ -112,11 +115,19 @@ def frame_step(recording: Recording) -> float:
 
 def presence_counts(recording: Recording) -> tuple[np.ndarray, np.ndarray]:
     """The sample grid's frames (J,) and the ids present at each (J,) integers
-    (see the module docstring); a single sample for a one-frame recording."""
+    (see the module docstring); a single sample for a one-frame recording.
+
+    Raises:
+        ScenarioError: the grid would have more than :data:`MAX_GRID_SAMPLES` samples.
+    """
     frames = np.asarray(recording.frames, float)
     df = frame_step(recording)
     f0, f1 = float(frames.min()), float(frames.max())
-    grid = np.array([f0]) if df == 0 else f0 + df * np.arange(int(math.floor((f1 - f0) / df + SAMPLE_TOLERANCE)) + 1)
+    samples = 1 if df == 0 else math.floor((f1 - f0) / df + SAMPLE_TOLERANCE) + 1
+    if samples > MAX_GRID_SAMPLES:
+        raise ScenarioError(f"{recording.source}: frames {f0:g} .. {f1:g} in steps of {df:g} are {samples:,} samples; "
+                            f"a recording may span at most {MAX_GRID_SAMPLES:,} of its steps")
+    grid = np.array([f0]) if df == 0 else f0 + df * np.arange(samples)
     codes, n = _id_codes(recording)
     firsts, lasts = np.full(n, np.inf), np.full(n, -np.inf)
     np.minimum.at(firsts, codes, frames)

@@ -9,7 +9,8 @@ import pytest
 
 from drake_social.errors import ScenarioError
 from drake_social.people.eth_ucy import parse_eth_ucy
-from drake_social.people.windows import crossing_rotation, cut_windows, flow_angle, frame_step, presence_counts
+from drake_social.people.windows import (MAX_GRID_SAMPLES, crossing_rotation, cut_windows, flow_angle, frame_step,
+                                         presence_counts)
 
 
 def recording(spans: dict[int, tuple[int, int]], step: int = 10, name: str = "rec.txt"):
@@ -110,3 +111,16 @@ def test_the_turn_puts_the_flow_on_the_y_axis(angle, rotation):
     c, s = math.cos(dut), math.sin(dut)
     d = np.array([math.cos(angle), math.sin(angle)])
     assert c * d[0] - s * d[1] == pytest.approx(0.0, abs=1e-9)  # the flow's direction turned has no x
+
+
+@pytest.mark.parametrize("last, ok", [(MAX_GRID_SAMPLES - 1, True), (MAX_GRID_SAMPLES, False)])
+def test_the_sample_grid_is_bounded(last, ok):
+    """Id 1 steps one frame; id 2 stands alone at frame ``last``: the grid holds last + 1 samples."""
+    dut = parse_eth_ucy(f"0 1 0.0 0.0\n1 1 0.5 0.0\n{last} 2 1.0 1.0\n", "far.txt")
+    if ok:
+        grid, counts = presence_counts(dut)
+        assert len(grid) == MAX_GRID_SAMPLES and counts[:3].tolist() == [1, 1, 0] and counts[-1] == 1
+    else:
+        with pytest.raises(ScenarioError, match=r"^far\.txt: frames 0 \.\. 4e\+06 in steps of 1 are 4,000,001 "
+                                                r"samples; a recording may span at most 4,000,000 of its steps$"):
+            presence_counts(dut)
