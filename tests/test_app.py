@@ -15,7 +15,7 @@ from drake_social.cost.social import SocialCost
 from drake_social.io.records import PLANNER_FIELDS, SHARED_FIELDS
 from drake_social.kinematics import ArmGeometry
 from drake_social.planning.algorithms import make_objective, plan
-from drake_social.scenario import ScenarioError, load_scenario
+from drake_social.scenario import PREDICTIONS, ScenarioError, load_scenario
 
 
 def _edges(wp: np.ndarray):
@@ -253,7 +253,7 @@ NONE = "no-such-scenario.yaml"  # never read: the door comes first
     ("run_recorded_experiment", dict(recording=NONE, sets="planner: {}"), TypeError,
      "run_recorded_experiment: sets must be a list or tuple of strings, got str 'planner: {}'"),
     ("run_recorded_experiment", dict(recording=NONE, prediction="oracle"), ValueError,
-     "run_recorded_experiment: unknown prediction 'oracle'; allowed: constant_velocity, perfect"),
+     "run_recorded_experiment: unknown prediction 'oracle'; allowed: " + ", ".join(PREDICTIONS)),
     ("run_recorded_experiment", dict(recording=NONE, jitter=1.0), TypeError,
      "run_recorded_experiment: unexpected argument 'jitter'; allowed: name, recording, layout"),
     ("run_recorded_experiment", dict(recording=NONE, executor="threads"), ValueError,

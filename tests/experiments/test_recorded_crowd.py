@@ -21,7 +21,7 @@ from drake_social.experiments.study.recorded_scene import (PLACEMENT_STEP, START
 from drake_social.people.eth_ucy import parse_eth_ucy
 from drake_social.people.proximity import part_distances
 from drake_social.people.windows import cut_windows
-from drake_social.scenario import load_scenario
+from drake_social.scenario import PREDICTIONS, load_scenario
 
 ARM = (-1.2292, 2.8)
 
@@ -162,7 +162,7 @@ def test_tasks_pair_over_window_and_episode(tmp_path):
      "RecordedCrowdStudy: unknown variants[1] 'nope'; allowed: plan_once, replan, replan_base, replan_multi, "
      "replan_speed"),
     ({"prediction": "psychic"}, ValueError,
-     "RecordedCrowdStudy: unknown prediction 'psychic'; allowed: constant_velocity, perfect"),
+     "RecordedCrowdStudy: unknown prediction 'psychic'; allowed: " + ", ".join(PREDICTIONS)),
     ({"sets": "planner: {}"}, TypeError, "RecordedCrowdStudy: sets must be a list or tuple of strings"),
     ({"fps": 0.0}, ValueError, "RecordedCrowdStudy: fps must be a finite number > 0 frames per second, got 0.0"),
     ({"layout": "yx"}, ValueError, "RecordedCrowdStudy: unknown layout 'yx'; allowed: xy, xzy"),
