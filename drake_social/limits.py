@@ -179,6 +179,16 @@ MAX_EPISODES = 10_000
 #: (MAX_TIME_LIMIT) never walks in it.
 MAX_JITTER = MAX_TIME_LIMIT
 
+#: The recorded-crowd benchmark (``experiment crowd --recording``): its
+#: variants (their overrides: ``drake_social.experiments.study.recorded.VARIANTS``;
+#: ``replan`` replans with every other setting the scenario's default), the
+#: most windows of a recording (each a scenario written into the output set,
+#: and ``variants x episodes`` runs of it) and the shortest window, seconds
+#: (the longest: MAX_TIME_LIMIT, the longest run).
+RECORDED_VARIANTS = ("plan_once", "replan", "replan_base", "replan_multi", "replan_speed")
+MAX_WINDOWS = 1_000
+MIN_WINDOW_LENGTH = 1.0
+
 #: Most seeds of ``bench --seeds``: as many as a study's runs per planner
 #: (MAX_RUNS); each seed plans every algorithm on every scenario.
 MAX_BENCH_SEEDS = 10_000
