@@ -51,6 +51,7 @@ from drake_social.scenario import EXECUTIONS, SIM_MODES, Scenario, ScenarioError
 
 if TYPE_CHECKING:
     from drake_social.experiments.study import CrowdStudy, Study, StudyResult
+    from drake_social.experiments.study.recorded import RecordedCrowdStudy
     from drake_social.planning.result import PlannerResult
     from drake_social.sim.results import SimulationResult
 
@@ -58,7 +59,7 @@ __all__ = ["PLAN_OUTPUTS", "SIMULATE_OUTPUTS", "PlanRun", "Progress", "SimulateR
            "load_with_overrides", "paper_experiment", "read_path_csv", "run_bench", "run_plan", "run_show",
            "run_simulate", "run_study"]
 __all__ += ["PeopleImport", "run_people_import"]
-__all__ += ["run_crowd_experiment"]
+__all__ += ["run_crowd_experiment", "run_recorded_experiment"]
 
 #: The files ``plan`` writes into ``out`` (a folder of such a name is refused before planning).
 PLAN_OUTPUTS = ("path.csv", "result.json", "path.png", "cost_profile.png", "convergence.png")
@@ -99,7 +100,7 @@ def _study(value, who: str, name: str) -> None:
     from drake_social.experiments.study import KINDS
 
     require_instance(value, tuple(KINDS), who, name, "a drake_social.experiments.study.Study (paper_experiment(...) "
-                                                     "or load_sweep(file)) or CrowdStudy")
+                                                     "or load_sweep(file)), CrowdStudy or RecordedCrowdStudy")
 
 
 def _layout(value, who: str, name: str) -> None:
@@ -147,6 +148,7 @@ _ARGUMENTS: dict[str, dict[str, Rule]] = {
         "end": _number(optional=True, unit="seconds"),
         "ids": lambda v, who, name: require_strings(v, who, name, optional=True), "theta": _flag()},
     "run_crowd_experiment": {**_RUN, **_WORKERS},
+    "run_recorded_experiment": {**_RUN, **_WORKERS},
 }
 
 
@@ -685,7 +687,7 @@ def check_scheduler(executor: str, scheduler: str | None) -> None:
             raise ScenarioError(f"--scheduler: {e}") from None
 
 
-def run_study(*, study: Study | CrowdStudy, out: str | Path, executor: str = "process", workers: int = 1,
+def run_study(*, study: Study | CrowdStudy | RecordedCrowdStudy, out: str | Path, executor: str = "process", workers: int = 1,
               scheduler: str | None = None, progress: Callable[[int, int, dict], None] | None = None) -> StudyRun:
     """Runs a study and writes its outputs into ``out`` as one output set:
     for a planning study results.csv and results.json (every run's record),
@@ -840,4 +842,41 @@ def run_crowd_experiment(*, out: str | Path, executor: str = "process", workers:
     for i, s in enumerate(settings.get("scenarios", DEFAULT_SCENARIOS)):  # the shipped ones: absent from a wheel
         check_regular_file(s, "scenario", f"--scenarios[{i}]")
     study = CrowdStudy(**settings)
+    return run_study(study=study, out=out, executor=executor, workers=workers, scheduler=scheduler, progress=progress)
+
+
+def run_recorded_experiment(*, out: str | Path, executor: str = "process", workers: int = 1,
+                            scheduler: str | None = None, progress: Callable[[int, int, dict], None] | None = None,
+                            **settings) -> StudyRun:
+    """The recorded-crowd benchmark (``drake-social experiment crowd
+    --recording``): a
+    :class:`~drake_social.experiments.study.recorded.RecordedCrowdStudy` of
+    ``settings`` (recording, layout, fps, windows, window_length,
+    min_people, variants, prediction, sets, episodes, seed, time_limit),
+    run and written into ``out`` as :func:`run_study` runs and writes any
+    study: records.csv and records.json, each window's scenario and people
+    file, the boxplots, each window's snapshots and REPORT.md.
+
+    Returns:
+        A :class:`StudyRun`: ``failure`` and ``interrupted`` say when the
+        records alone were committed.
+
+    Raises:
+        TypeError, ValueError: an argument or setting of the wrong kind or
+            out of range (:data:`~drake_social.experiments.study.recorded.RECORDED_SETTINGS`), named.
+        ScenarioError: the recording cannot be read or is too short, has
+            too few windows dense enough, or a window's scenario with the
+            overrides is invalid (before ``out`` is taken).
+        StudyOutputError: as :func:`run_study`.
+    """
+    _door("run_recorded_experiment", {"out": out, "executor": executor, "workers": workers, "scheduler": scheduler,
+                                      "progress": progress})
+    from drake_social.experiments.study.recorded import RecordedCrowdStudy, check_recorded_settings
+
+    check_recorded_settings("run_recorded_experiment", settings)
+    check_scheduler(executor, scheduler)
+    if "recording" not in settings:
+        raise TypeError("run_recorded_experiment: recording (the ETH/UCY file) is required")
+    check_regular_file(settings["recording"], "recording", "--recording")
+    study = RecordedCrowdStudy(**settings)
     return run_study(study=study, out=out, executor=executor, workers=workers, scheduler=scheduler, progress=progress)

@@ -165,8 +165,45 @@ def _run_bench(args: argparse.Namespace) -> int:
     return 0
 
 
+#: ``experiment crowd``'s options of the recorded-crowd benchmark: argument name -> option.
+_RECORDED_OPTIONS = {"layout": "--layout", "fps": "--fps", "windows": "--windows", "window_length": "--window-length",
+                     "min_people": "--min-people", "prediction": "--prediction", "sets": "--set"}
+
+
+def _crowd_settings(args: argparse.Namespace) -> dict:
+    """``experiment crowd``'s study settings: those of a crowd study over
+    scenario files, or with ``--recording`` those of the recorded-crowd benchmark.
+
+    Raises:
+        ScenarioError: an option of the one given with the other.
+    """
+    from drake_social.limits import CROWD_VARIANTS
+
+    if args.recording is None:
+        given = [option for name, option in _RECORDED_OPTIONS.items() if getattr(args, name) is not None]
+        if given:
+            raise ScenarioError(f"{given[0]}: needs --recording (the recorded-crowd benchmark)")
+        if args.variants is not None and "replan" in args.variants:
+            raise ScenarioError(f"--variants: replan needs --recording; a crowd study over --scenarios runs "
+                                f"{', '.join(CROWD_VARIANTS)}")
+        return {"scenarios": tuple(str(s) for s in args.scenarios),
+                "variants": tuple(args.variants) if args.variants is not None else CROWD_VARIANTS,
+                "episodes": 20 if args.episodes is None else args.episodes, "seed": args.seed,
+                "jitter": 5.0 if args.jitter is None else args.jitter, "time_limit": args.time_limit}
+    if args.jitter is not None:
+        raise ScenarioError("--jitter: not with --recording (a recording has no scripted walkers to delay)")
+    settings = {"recording": str(args.recording), "name": f"crowd_{args.recording.stem}", "seed": args.seed,
+                "time_limit": args.time_limit}
+    for name, value in (("variants", args.variants), ("episodes", args.episodes),
+                        *((n, getattr(args, n)) for n in _RECORDED_OPTIONS)):
+        if value is not None:
+            settings[name] = tuple(value) if isinstance(value, list) else value
+    return settings
+
+
 def _run_experiment(args: argparse.Namespace) -> int:
     from drake_social.experiments.study import KINDS, CrowdStudy, StudyOutputError, kind_of, load_sweep
+    from drake_social.experiments.study.recorded import RecordedCrowdStudy
 
     app.check_scheduler(args.executor, args.scheduler)  # before anything is read or run
     if args.executor == "dask" and not args.verbose:
@@ -176,8 +213,11 @@ def _run_experiment(args: argparse.Namespace) -> int:
             pass  # map_tasks says what to install
         else:
             logging.getLogger("distributed").setLevel(logging.WARNING)
-    if args.study == "crowd":  # the study is made of the options by run_crowd_experiment
-        study_name, kind = CrowdStudy.name, KINDS[CrowdStudy]
+    if args.study == "crowd":  # the study is made of the options by run_crowd_experiment or run_recorded_experiment
+        settings = _crowd_settings(args)
+        recorded = "recording" in settings
+        study_name = settings["name"] if recorded else CrowdStudy.name
+        kind = KINDS[RecordedCrowdStudy if recorded else CrowdStudy]
     else:
         if args.study == "paper":
             study = app.paper_experiment(runs=args.runs, iterations=args.iterations, seed=args.seed,
@@ -203,9 +243,8 @@ def _run_experiment(args: argparse.Namespace) -> int:
              "progress": progress if args.progress or sys.stderr.isatty() else None}
     try:
         if args.study == "crowd":
-            done = app.run_crowd_experiment(
-                **where, scenarios=tuple(str(s) for s in args.scenarios), variants=tuple(args.variants),
-                episodes=args.episodes, seed=args.seed, jitter=args.jitter, time_limit=args.time_limit)
+            run = app.run_recorded_experiment if recorded else app.run_crowd_experiment
+            done = run(**where, **settings)
         else:
             done = app.run_study(study=study, **where)
     finally:

@@ -136,6 +136,12 @@ INTEGRATION_SCHEMES = (
 #: paper study applies it over every group and ``bench`` over every scenario
 #: (its last override), so both run the planner OMPL's RRTstar is compared with.
 PAPER_PLANNER = "planner: {optimize: false, near_radius_mode: fixed}"
+#: The paper's objective (``--set`` text): the social integral alone, without
+#: the default's length tie-break (``social.length_weight`` 0.001). The paper
+#: study applies it over every group, after :data:`PAPER_PLANNER`; ``bench``
+#: keeps each file's objective (an ``informed_mode: admissible`` file needs its
+#: length weight).
+PAPER_OBJECTIVE = "social: {length_weight: 0.0}"
 
 #: The paper's algorithms, in its order (the non-social baseline first).
 PAPER_ALGORITHMS = ("rrt_star", "social_rrt_star", "base_rrt_star", "informed_social_rrt_star",
@@ -172,6 +178,16 @@ MAX_EPISODES = 10_000
 #: --jitter``), seconds: a walker delayed longer than the longest run
 #: (MAX_TIME_LIMIT) never walks in it.
 MAX_JITTER = MAX_TIME_LIMIT
+
+#: The recorded-crowd benchmark (``experiment crowd --recording``): its
+#: variants (their overrides: ``drake_social.experiments.study.recorded.VARIANTS``;
+#: ``replan`` replans with every other setting the scenario's default), the
+#: most windows of a recording (each a scenario written into the output set,
+#: and ``variants x episodes`` runs of it) and the shortest window, seconds
+#: (the longest: MAX_TIME_LIMIT, the longest run).
+RECORDED_VARIANTS = ("plan_once", "replan", "replan_base", "replan_multi", "replan_speed")
+MAX_WINDOWS = 1_000
+MIN_WINDOW_LENGTH = 1.0
 
 #: Most seeds of ``bench --seeds``: as many as a study's runs per planner
 #: (MAX_RUNS); each seed plans every algorithm on every scenario.

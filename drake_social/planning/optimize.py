@@ -17,6 +17,20 @@ improves it locally, in rounds of
    odd-numbered waypoints move together, then the even-numbered ones
    (red-black ordering: waypoints of one parity share no motion).
 
+After the rounds, **merge**: every interior waypoint that lies on the straight
+segment of its neighbours (within
+:data:`~drake_social.planning.collinear.COLLINEAR_TOLERANCE`: mostly the
+equal parts of a subdivision that the descent left where they were) goes, since
+execution comes to rest at every waypoint; each merged motion is checked with
+the validity checker (:func:`~drake_social.planning.collinear.merge_collinear`)
+and costed with the objective like any other. The trapezoid rule samples a
+merged motion at other points than its parts, so the path's cost moves by that
+rule's discretisation, both sums estimating the same integral (on office_bar,
+seed 0, with the pure social integral: 3.9715648 with the parts, 3.9715871
+merged). An optimised path has no
+interior waypoint collinear with its neighbours unless the checker refuses the
+merged motion.
+
 Every accepted change is checked with the validity checker, so the result
 keeps every motion valid, and it never costs more than the input (the input
 comes back unless the result is cheaper by the margin below). No randomness:
@@ -57,6 +71,7 @@ import dataclasses as dc
 
 import numpy as np
 
+from drake_social.planning.collinear import merge_collinear
 from drake_social.planning.objective import Objective
 from drake_social.planning.space import ConfigurationSpace
 from drake_social.collision.validity import ValidityChecker
@@ -287,7 +302,9 @@ def optimize_path(
 
     Returns:
         (waypoints, cost) with cost < the input's cost by more than the
-        margin of :func:`cheaper`; else the input itself and its cost.
+        margin of :func:`cheaper`, without an interior waypoint collinear
+        with its neighbours (unless the checker refuses the merged motion);
+        else the input itself and its cost.
     """
     best = np.array(waypoints, dtype=float)
     if len(best) < 2:
@@ -313,6 +330,11 @@ def optimize_path(
                 best, best_cost, seg = wp, cost, costs
         if start_cost - best_cost <= options.tolerance * max(start_cost, 1e-12):
             break
+    # No rest at a waypoint that changes nothing: redundant waypoints go, each merged motion checked, then
+    # costed with the rest (the merged motion's trapezoid rule samples other points than its parts').
+    merged = merge_collinear(best, checker, space.weights)
+    if len(merged) < len(best):
+        best, best_cost = merged, path_cost(objective, merged)
     if not cheaper(best_cost, input_cost):  # nothing gained beyond the margin (or only subdivided)
         return np.array(waypoints, dtype=float), input_cost
     return best, best_cost

@@ -286,11 +286,14 @@ class SimulationDiverged(ScenarioError):
 
     Attributes:
         time: simulated seconds when it was found.
-        what: the state found (e.g. ``"speed 3.2e+05 of base_x"``).
+        what: the state found (e.g. ``"speed 3.2e+05 of base_x"``) or the
+            step that failed (the plant's contact solver).
     """
 
-    def __init__(self, scenario: Scenario, mode: str, time: float, what: str):
+    def __init__(self, scenario: Scenario, mode: str, time: float, what: str, advice: str | None = None):
         self.time, self.what = float(time), what
-        advice = (f": execution.plant_time_step {scenario.execution.plant_time_step:g} s is too large for this "
-                  "scenario's dynamics; use a smaller one" if mode == "dynamic" else "")
+        if advice is None:
+            advice = (f"execution.plant_time_step {scenario.execution.plant_time_step:g} s is too large for this "
+                      "scenario's dynamics; use a smaller one" if mode == "dynamic" else "")
+        advice = f": {advice}" if advice else ""
         super().__init__(f"the {mode} simulation diverged by t = {self.time:.2f} s ({what}){advice}")

@@ -69,6 +69,27 @@ _ABSURD_SPEED = 1e3
 _ABSURD_ANGLE = 1e2
 
 
+#: The start of Drake's message when a discrete plant's step fails.
+_SOLVER_FAILED = "discrete update solver failed to converge"
+
+
+def _contact_solver_failed(scenario: Scenario, time: float) -> SimulationDiverged:
+    """The error of a dynamic run whose plant step failed at ``time`` (s).
+
+    TAMSI, the default contact approximation, can fail to converge in a hard
+    contact (a body pushed into a wall by the base's servo, as the paper's
+    execution may do when it leaves the checked segments); SAP (``lagged``,
+    ``similar``) solves it, at about three times the cost of a step.
+    """
+    approximation = scenario.execution.contact_approximation
+    advice = ("a hard contact; execution.contact_approximation: lagged or similar (SAP) solves it, "
+              "as may a smaller execution.plant_time_step" if approximation == "tamsi" else
+              f"execution.plant_time_step {scenario.execution.plant_time_step:g} s is too large for this "
+              "contact; use a smaller one")
+    return SimulationDiverged(scenario, "dynamic", time,
+                              f"the plant's {approximation} contact solver did not converge", advice)
+
+
 def _divergence(q, v, lower: np.ndarray, upper: np.ndarray) -> str | None:
     """What makes the state ``q``, ``v`` (4,) a diverged one, or None."""
     q, v = np.asarray(q, float), np.asarray(v, float)
@@ -282,6 +303,8 @@ def _advance(simulator: Simulator, built: TransportDiagram, limit: float,
             simulator.AdvanceTo(min(limit, root.get_time() + chunk))
         except RuntimeError as e:  # Drake refuses a state gone non-finite: say why
             check_divergence(e)
+            if _SOLVER_FAILED in str(e):
+                raise _contact_solver_failed(built.scenario, root.get_time()) from e
             raise
         check_divergence()
         if progress is not None:

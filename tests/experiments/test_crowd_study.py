@@ -404,10 +404,11 @@ def test_the_crowd_study_is_a_kind_of_the_one_study_framework(tiny_walker):
     per-task function, record files and outputs; anything else is no study."""
     from drake_social.experiments.study import KINDS, Study, kind_of, output_names, run_task
     from drake_social.experiments.study.crowd_episode import run_episode
+    from drake_social.experiments.study.recorded import RecordedCrowdStudy
 
     study = CrowdStudy(scenarios=(str(tiny_walker),), variants=("plan_once", "replan_multi"), episodes=2)
     dut = kind_of(study)
-    assert set(KINDS) == {Study, CrowdStudy} and dut is KINDS[CrowdStudy]
+    assert set(KINDS) == {Study, CrowdStudy, RecordedCrowdStudy} and dut is KINDS[CrowdStudy]
     assert (dut.run, KINDS[Study].run) == (run_episode, run_task)
     assert dut.tasks(study) == crowd_tasks(study)
     assert output_names(study) == ["records.csv", "records.json", "boxplots_tiny_walker.png",
@@ -415,7 +416,7 @@ def test_the_crowd_study_is_a_kind_of_the_one_study_framework(tiny_walker):
     assert output_names(dc.replace(study, trace_episode=None)) == ["records.csv", "records.json",
                                                                    "boxplots_tiny_walker.png", "REPORT.md"]
     assert dut.describe({"scenario": "s", "variant": "plan_once", "episode": 3}) == "s plan_once episode 3"
-    with pytest.raises(TypeError, match=r"^not a study: dict; a study is one of Study, CrowdStudy$"):
+    with pytest.raises(TypeError, match=r"^not a study: dict; a study is one of Study, CrowdStudy, RecordedCrowdStudy$"):
         kind_of({"name": "crowd"})
 
 

@@ -157,12 +157,18 @@ def raw_paths(repo_root):
 def test_the_optimised_path_is_the_same_on_other_processors(raw_paths, name):
     """office_bar's seed 0 gave 67, 89 or 91 waypoints (cost 4.31, 3.961 or
     3.972) on three processors before the margin; now every processor gives
-    the same waypoints (to 1e-9 m) and cost (to 1e-9 relative)."""
+    the same waypoints (to 1e-8 m) and cost (to 1e-9 relative). The
+    waypoints are not bit for bit: the descent's direction is a finite
+    difference of costs that carry the processors' rounding, and with the
+    default length tie-break it is never 0 where the social cost is flat
+    (generic_L, seed 0, eight processors: up to 1.7e-9 m, 1.6e-10 m with
+    the pure social integral); the decisions, which the margin guards, are
+    the same."""
     raw, objective, checker, space = raw_paths[name]
     ref, ref_cost = optimize_path(raw, objective, checker, space)
     assert ref_cost < path_cost(objective, raw)
     for salt in range(4):
         dut, cost = optimize_path(raw, OtherProcessor(objective, salt), checker, space)
         assert dut.shape == ref.shape, (salt, len(dut), len(ref))
-        np.testing.assert_allclose(dut, ref, rtol=0, atol=1e-9)
+        np.testing.assert_allclose(dut, ref, rtol=0, atol=1e-8)
         assert cost == pytest.approx(ref_cost, rel=1e-9)

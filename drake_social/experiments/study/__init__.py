@@ -48,7 +48,7 @@ from drake_social.experiments.study.results import (TIMING_FIELDS, StudyOutputEr
                                                     comparable, results_csv)
 from drake_social.experiments.study.runs import PROGRESS_POINTS, run_task
 from drake_social.experiments.study.spec import (MAX_PAPER_RUNS, MAX_RUNS, MAX_STUDY_TASKS, NAME_PATTERN, PAPER_PLANNER,
-                                                 PAPER_ALGORITHMS, PAPER_PAIRS, Group, Study, check_study,
+                                                 PAPER_ALGORITHMS, PAPER_OBJECTIVE, PAPER_PAIRS, Group, Study, check_study,
                                                  paper_study, paper_weights, study_tasks)
 from drake_social.experiments.study.sweep import Sweep, load_sweep
 from drake_social.limits import ALGORITHMS, CHECKERS
@@ -62,6 +62,7 @@ __all__ = [
     "MAX_STUDY_TASKS",
     "NAME_PATTERN",
     "PAPER_ALGORITHMS",
+    "PAPER_OBJECTIVE",
     "PAPER_PLANNER",
     "PAPER_PAIRS",
     "PROGRESS_POINTS",

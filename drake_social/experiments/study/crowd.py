@@ -63,8 +63,8 @@ from drake_social.scenario import Scenario, time_limit_problem
 from drake_social.scenario.shipped import shipped_scenario
 
 __all__ = ["CROWD_SETTINGS", "DEFAULT_SCENARIOS", "JITTER_TAG", "MAX_EPISODES", "NO_REPLANNING", "VARIANTS",
-           "CrowdStudy", "check_crowd_settings", "check_crowd_study", "crowd_tasks", "episode_scenario",
-           "episode_seeds", "perturb", "replanning_available", "walker_delays"]
+           "CrowdStudy", "check_crowd_settings", "check_crowd_study", "check_trace_episode", "crowd_tasks",
+           "episode_scenario", "episode_seeds", "perturb", "replanning_available", "walker_delays"]
 
 #: The scenarios of the study by default: the shipped ones
 #: (:data:`drake_social.limits.CROWD_SCENARIOS`), found beside the package
@@ -103,7 +103,17 @@ def check_crowd_settings(who: str, settings: dict) -> None:
             value out of range; each naming ``who`` and the setting.
     """
     check_arguments(who, CROWD_SETTINGS, settings)
-    trace, episodes = settings.get("trace_episode"), settings.get("episodes", CrowdStudy.episodes)
+    check_trace_episode(who, settings, CrowdStudy.episodes)
+
+
+def check_trace_episode(who: str, settings: dict, episodes: int) -> None:
+    """Refuses a ``trace_episode`` of ``settings`` that is not one of its
+    episodes (``settings["episodes"]``, else ``episodes``).
+
+    Raises:
+        ValueError: naming ``who`` and the episodes.
+    """
+    trace, episodes = settings.get("trace_episode"), settings.get("episodes", episodes)
     if trace is not None and not trace < episodes:
         raise ValueError(f"{who}: trace_episode must be one of the {episodes} episodes, in [0, {episodes - 1}], or "
                          f"None, got {trace}")

@@ -20,7 +20,7 @@ import numpy as np
 from drake_social.experiments.study.crowd import NO_REPLANNING, episode_scenario, replanning_available
 from drake_social.scenario import Scenario
 
-__all__ = ["TRACE_STEP", "replan_stats", "run_episode"]
+__all__ = ["TRACE_STEP", "episode_record", "replan_stats", "run_episode"]
 
 #: Seconds between the samples of an episode's trace (the snapshots' data).
 TRACE_STEP = 0.25
@@ -104,10 +104,17 @@ def run_episode(task: dict) -> dict:
     ``positions``, ``headings``, ``present``, ``radii``, ``names``) and
     ``plans`` ([t, waypoints] of every path followed, from its start).
     """
+    scenario, delays = episode_scenario(task)
+    return episode_record(task, scenario, delays)[0]
+
+
+def episode_record(task: dict, scenario: Scenario, delays: dict[int, float]) -> tuple[dict, object]:
+    """Runs ``scenario`` (a task's episode, ``delays`` its walkers' start
+    delays) closed loop, kinematic, and measures it: the record of
+    :func:`run_episode` and the :class:`~drake_social.sim.results.SimulationResult`."""
     from drake_social.collision.drake_checker import make_checker
     from drake_social.evaluation.nav_metrics import execution_metrics
 
-    scenario, delays = episode_scenario(task)
     checker = make_checker(scenario, "planar", parallelism=1)
     t0 = time.perf_counter()
     run = _simulate(scenario, checker, task["time_limit"])
@@ -131,7 +138,7 @@ def run_episode(task: dict) -> dict:
     record["replan_times"] = [round(float(r.plan_time), 6) for r in replans if not _first(r)] if replans else []
     if task.get("trace"):
         record["trace"] = _trace(run, replans)
-    return record
+    return record, run
 
 
 def _trace(run, replans) -> dict:

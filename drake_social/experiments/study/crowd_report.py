@@ -38,8 +38,8 @@ import numpy as np
 from drake_social.experiments.study.report import ALPHA, Comparison, median_iqr, paired
 
 __all__ = ["CLAIMS", "PARTS", "PART_METRICS", "SUCCESS_TARGET", "claim_line", "claim_lines", "compare", "figure_names",
-           "output_names", "parts_table", "report_markdown", "target_lines", "variant_table", "write_figures",
-           "write_outputs"]
+           "label", "output_names", "parts_table", "report_markdown", "target_lines", "variant_table",
+           "write_figures", "write_outputs"]
 
 #: The per-part metrics of the tables and boxplots: (metric, header, unit, format).
 PART_METRICS = (("time_intimate", "intimate s", "s", ".3g"), ("time_personal", "personal s", "s", ".3g"),
@@ -49,11 +49,14 @@ PARTS = ("base", "arm", "object", "robot")
 SUCCESS_TARGET = 0.95
 #: Replan time targets: median and 95th percentile (None = the scenario's budget), seconds.
 REPLAN_MEDIAN_TARGET = 0.05
-_LABEL = {"plan_once": "plan-once (paper)", "replan_base": "replanning base-only",
+_LABEL = {"plan_once": "plan-once (paper)", "replan": "replanning (default)", "replan_base": "replanning base-only",
           "replan_multi": "replanning multi-point", "replan_speed": "replanning multi-point + speed scaling"}
 _WORDS = {"time_intimate": "intimate-zone time", "time_personal": "personal-zone time", "min_dist": "minimum distance",
-          "collisions": "contacts", "time_to_goal": "time to goal", "stopped_time": "stopped time",
-          "stop_count": "safety stops"}
+          "collisions": "contacts", "collisions_moving": "contacts begun while moving", "time_to_goal": "time to goal",
+          "stopped_time": "stopped time", "stop_count": "safety stops",
+          "crossed": "crossings while people are present", "goal_distance_end": "distance to the goal at the end"}
+#: The unit of a metric without a part that is not in seconds.
+_UNITS = {"stop_count": "", "crossed": "", "goal_distance_end": "m"}
 
 #: (a, b, metric (a ``nav_`` field), claim): a is claimed lower/higher than b.
 CLAIMS = (
@@ -90,10 +93,14 @@ def _metric_words(metric: str) -> tuple[str, str]:
     for part in PARTS:
         if name.endswith("_" + part):
             base = name[: -len(part) - 1]
-            unit = "m" if base.startswith("min_dist") else "" if base == "collisions" else "s"
+            unit = "m" if base.startswith("min_dist") else "" if base.startswith("collisions") else "s"
             return f"{part} {_WORDS.get(base, base)}", unit
-    unit = "" if name in ("stop_count",) else "s"
-    return _WORDS.get(name, name), unit
+    return _WORDS.get(name, name), _UNITS.get(name, "s")
+
+
+def label(variant: str) -> str:
+    """A variant's name in the report's words."""
+    return _LABEL[variant]
 
 
 def claim_line(c: Comparison, scenario: str) -> str:

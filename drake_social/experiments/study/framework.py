@@ -53,7 +53,7 @@ def run_study(study, *, tasks: list[dict] | None = None, executor: str = "proces
     wall = time.perf_counter() - t0
     _log.info("study %s: %s in %.1f s", study.name, count(study, len(records)), wall)
     texts = {task[kind.scenario_key]: task["scenario_text"] for task in tasks}
-    return StudyResult(study, records, wall, executor, workers, scenario_texts=texts)
+    return StudyResult(study, records, wall, executor, workers, scenario_texts=texts, tasks=tasks)
 
 
 def count(study, n: int) -> str:

@@ -21,6 +21,11 @@ crowd      one closed-loop episode of a scenario  per-part boxplots, snapshots,
            and a variant (:class:`~.crowd.        REPORT.md (paired claims, the
            CrowdStudy`; :func:`~.crowd_episode.   targets)
            run_episode`)
+recorded   one closed-loop episode of a window    the windows' scenario files,
+crowd      of a recording and a variant           boxplots, snapshots, REPORT.md
+           (:class:`~.recorded.                   (paired claims, the targets)
+           RecordedCrowdStudy`; :func:`~.
+           recorded.run_window_episode`)
 =========  =====================================  ===================================
 """
 
@@ -30,9 +35,10 @@ import dataclasses as dc
 from pathlib import Path
 from typing import Any, Callable
 
-from drake_social.experiments.study import arena, crowd_report, report
+from drake_social.experiments.study import arena, crowd_report, recorded_report, report
 from drake_social.experiments.study.crowd import CrowdStudy, check_crowd_study
 from drake_social.experiments.study.crowd_episode import run_episode
+from drake_social.experiments.study.recorded import RecordedCrowdStudy, check_recorded_study, run_window_episode
 from drake_social.experiments.study.results import StudyResult
 from drake_social.experiments.study.runs import run_task
 from drake_social.experiments.study.spec import Study, study_tasks
@@ -108,6 +114,13 @@ KINDS: dict[type, StudyKind] = {
         describe=lambda r: f"{r['scenario']} {r['variant']} episode {r['episode']}",
         output_names=crowd_report.output_names, write_outputs=crowd_report.write_outputs,
         later_outputs="the figures and REPORT.md"),
+    RecordedCrowdStudy: StudyKind(
+        unit="episode", record_files=("records.csv", "records.json"), records_key="episodes",
+        non_scalar=("delays", "replan_times", "trace"), scenario_key="window_name",
+        tasks=check_recorded_study, run=run_window_episode,
+        describe=lambda r: f"{r['scenario']} window {r['window']} {r['variant']} episode {r['window_episode']}",
+        output_names=recorded_report.output_names, write_outputs=recorded_report.write_outputs,
+        later_outputs="the windows' scenario files, the figures and REPORT.md"),
 }
 
 

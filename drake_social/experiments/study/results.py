@@ -46,8 +46,11 @@ class StudyResult:
         wall_time: seconds for all tasks (executor start-up included).
         executor, workers: where they ran.
         scenario_texts: the study's name of a scenario (a group's name, a
-            crowd scenario's file stem) -> the text its tasks loaded (read
-            once, before the first task).
+            crowd scenario's file stem, a recorded crowd's window) -> the
+            text its tasks loaded (read once, before the first task).
+        tasks: the plain-data tasks the records came from, in the same
+            order (what a kind's outputs may need beyond the records: a
+            recorded crowd's window files); empty when not kept.
     """
 
     study: Any
@@ -56,6 +59,7 @@ class StudyResult:
     executor: str = "process"
     workers: int = 1
     scenario_texts: dict[str, str] = dc.field(default_factory=dict)
+    tasks: list[dict] = dc.field(default_factory=list)
 
     def scenario(self, name: str, **options) -> Scenario:
         """The scenario ``name`` ran on, from the text read before the tasks

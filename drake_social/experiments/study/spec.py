@@ -24,7 +24,7 @@ from drake_social.errors import ScenarioError
 from drake_social.experiments.study.scenarios import check_run_settings, load_cached
 from drake_social.io.textfile import read_yaml_file, shorten
 from drake_social.limits import (ALGORITHMS, CHECKERS, MAX_ITERATIONS, MAX_PAPER_RUNS, MAX_RUNS, MAX_STUDY_TASKS,
-                                 PAPER_ALGORITHMS, PAPER_PAIRS, PAPER_PLANNER, PAPER_WEIGHTINGS)
+                                 PAPER_ALGORITHMS, PAPER_OBJECTIVE, PAPER_PAIRS, PAPER_PLANNER, PAPER_WEIGHTINGS)
 from drake_social.scenario.schema import Bar, Scenario, interest_point_count
 from drake_social.scenario.shipped import SHIPPED_SCENARIOS
 
@@ -35,6 +35,7 @@ __all__ = [
     "NAME_PATTERN",
     "NAME_RULE",
     "PAPER_ALGORITHMS",
+    "PAPER_OBJECTIVE",
     "PAPER_PAIRS",
     "PAPER_PLANNER",
     "PAPER_WEIGHTINGS",
@@ -128,18 +129,20 @@ def paper_study(*, runs: int = 10, iterations: int = 2000, seed: int = 0, simula
     1.5 m bar (``object: !Bar {length: 1.5, thickness: 0.05}``), 5 interest
     points, planned with Social Risk-RRT* under each of :func:`paper_weights`.
     Every group runs the paper's planner (:data:`PAPER_PLANNER`: the raw tree
-    path and the fixed r_near), whatever the scenario files' defaults.
+    path and the fixed r_near) and objective (:data:`PAPER_OBJECTIVE`: the
+    social integral alone), whatever the scenario files' defaults.
     """
     d = Path(scenario_dir)
+    pins = (PAPER_PLANNER, PAPER_OBJECTIVE)  # last: nothing after them can undo them
     bar = "object: !Bar {length: 1.5, thickness: 0.05}"
     n = 3 + interest_point_count(Bar(length=1.5, thickness=0.05))
     groups = [
-        Group("A", str(d / "office_bar.yaml"), overrides=(PAPER_PLANNER,), label="A: office, 1.5 m bar"),
-        Group("B", str(d / "generic_L.yaml"), overrides=(PAPER_PLANNER,), label="B: generic map, L-shaped object"),
+        Group("A", str(d / "office_bar.yaml"), overrides=pins, label="A: office, 1.5 m bar"),
+        Group("B", str(d / "generic_L.yaml"), overrides=pins, label="B: generic map, L-shaped object"),
     ]
     for name, w in paper_weights(n).items():
         groups.append(Group(f"D_{name}", str(d / "generic_L.yaml"),
-                            overrides=(bar, f"social: {{weights: {json.dumps(w)}}}", PAPER_PLANNER),
+                            overrides=(bar, f"social: {{weights: {json.dumps(w)}}}", *pins),
                             algorithms=("social_rrt_star",), label=f"D: generic map, bar, {name} weights {w}"))
     study = Study("paper", tuple(groups), runs=runs, iterations=iterations, seed=seed, simulate=simulate)
     check_study(study, "paper study")
