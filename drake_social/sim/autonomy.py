@@ -48,7 +48,8 @@ people move)::
     [s] reference ─state─▶ reference_state_split ─xy─▶ controller; ─arm p, v, a─▶ arm_command
     [p] sequencer ─target─▶ target_split ─xy─▶ controller; ─psi─▶ arm (2-DoF Ruckig) ─state─▶ arm_command
     [h] safety (SafetyMonitor) ◀─ q, people_state; stop ─hold─▶ sequencer, controller, reference / arm
-    [r] q, people_state, sequencer.index ─▶ planner (ReplanningPlannerSystem) ─waypoints, version─▶ sequencer
+    [r] q, people_state, sequencer.index, [s] reference.velocity ─▶ planner (ReplanningPlannerSystem)
+        ─waypoints, version─▶ sequencer
     [r] planner.hold (waiting), [h] safety.stop ─▶ held (Adder) ─hold─▶ sequencer, controller, reference / arm
 
 In ``synchronized`` execution each segment's reference is one
@@ -321,6 +322,8 @@ def autonomy_checked(scenario: Scenario, execution: str, path: PathSource, peopl
             people_inputs.append(limiter.GetInputPort("people_state"))
     if isinstance(planner, ReplanningPlannerSystem):  # it reads the robot and the people
         builder.Connect(q, planner.GetInputPort("q"))
+        if synchronized:  # and takes a new path only from rest (the paper's execution leaves the segments anyway)
+            builder.Connect(track.source.GetOutputPort("velocity"), planner.GetInputPort("velocity"))
         people_inputs.append(planner.GetInputPort("people_state"))
     for k, port in enumerate(people_inputs):  # one exported input feeds them all
         if k == 0:
