@@ -42,8 +42,10 @@ def sources_hash() -> str:
     return h.hexdigest()[:16]
 
 
-_PATTERNS = ("planar_kernel.*.nbi", "planar_kernel.*.nbc", "tree_kernel.*.nbi", "tree_kernel.*.nbc",
-             "kernel.*.nbi", "kernel.*.nbc")
+#: numba names a cached kernel's files after its module ("timed_kernel.msc_sums_timed-58.py311.nbi"):
+#: those of every kernel module above.
+_PATTERNS = tuple(f"{Path(name).stem}.*.{ext}" for name in KERNEL_SOURCES if name.endswith("kernel.py")
+                  for ext in ("nbi", "nbc"))
 
 
 def _clear(folder: Path, stamp: str, recursive: bool) -> None:
