@@ -28,8 +28,8 @@ from drake_social.collision.drake_checker import make_checker
 from drake_social.control import saturate_norm, wheel_speeds
 from drake_social.planning.algorithms import plan
 from drake_social.scenario import Scenario, load_scenario
+from drake_social.scenario.geometry import arm_geometry
 from drake_social.sim.analysis import point_deviation
-from drake_social.kinematics import ArmGeometry
 from drake_social.sim.diagram import build_diagram
 from drake_social.sim.run import scenario_simulator_config
 
@@ -105,7 +105,7 @@ def run(scenario: Scenario, waypoints: np.ndarray, kp: float, feedforward: bool 
         # The sequencer decided at the sample before the one that shows done.
         "time_to_goal": float(times[max(keep - 2, 0)]) if len(finished) else None,
         "max_tracking_error": float(np.max(np.linalg.norm(reference[:, :2] - q[:, :2], axis=1))),
-        "max_point_deviation": point_deviation(ArmGeometry.from_scenario(scenario), waypoints, q)["max"],
+        "max_point_deviation": point_deviation(arm_geometry(scenario), waypoints, q)["max"],
         "times": times,
         "q": q,
     }

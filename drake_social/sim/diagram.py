@@ -189,7 +189,7 @@ from drake_social.control import (
     arm_source_from_options,
     reference_source_from_options,
 )
-from drake_social.kinematics import ArmGeometry, configuration_limits
+from drake_social.scenario.geometry import arm_geometry, configuration_limits
 from drake_social.model.plant import add_environment, add_robot
 from drake_social.people import PeopleModel, people_model
 from drake_social.collision.validity import ValidityChecker
@@ -715,7 +715,7 @@ def build_checked(
     stop_port: OutputPort | None = None
     if not scenario_people.static:
         monitor = builder.AddNamedSystem("safety", SafetyMonitor(
-            ArmGeometry.from_scenario(scenario), safety_distance=float(opts.safety_distance), period=period))
+            arm_geometry(scenario), safety_distance=float(opts.safety_distance), period=period))
         builder.Connect(q_port, monitor.GetInputPort("q"))
         builder.Connect(people.GetOutputPort("people_state"), monitor.GetInputPort("people_state"))
         stop_port = monitor.GetOutputPort("stop")
