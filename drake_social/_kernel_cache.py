@@ -27,7 +27,7 @@ _PACKAGE = Path(__file__).resolve().parent
 #: they compile in, and the NamedTuple of the checker's scene they take.
 KERNEL_SOURCES = (
     "cost/kernel.py", "collision/planar_kernel.py", "planning/rrt_star/tree_kernel.py", "limits.py",
-    "collision/validity.py", "cost/timed_kernel.py", "collision/people_kernel.py",
+    "collision/validity.py", "cost/timed_kernel.py", "collision/people_kernel.py", "people/prediction_kernel.py",
 )
 _STAMP = "drake_social_kernels.stamp"
 _done = False

@@ -141,6 +141,7 @@ def _warm_up_timed(scenario) -> None:
 
     planner = make_planner(scenario, make_checker(without_people(scenario), "planar"))
     prediction = constant_velocity(people_model(scenario).state_at(0.0), 1.0)
+    prediction.state_at(0.5)  # the prediction's lookup from Python (its arrays are read-only)
     timed = timed_params(prediction, scenario.execution, 0.0, scenario.execution.safety_distance)
     start, goal = np.array(scenario.start, float), np.array(scenario.goal, float)
     seed = np.stack([start, start + np.array([0.5, 0.0, 0.0, 0.0])])

@@ -7,7 +7,8 @@ the step count n of :func:`drake_social.cost.kernel.msc_sums`) is evaluated
 against the people of a :class:`~drake_social.people.prediction.Prediction`
 at t(u): positions interpolated linearly between its samples, heading and
 presence those of the sample at or before t(u) (clamped to the first and the
-last sample: before ``t0`` and beyond the horizon the people hold). An absent
+last sample: before ``t0`` and beyond the horizon the people hold; the
+prediction's own lookup, :mod:`drake_social.people.prediction_kernel`). An absent
 person adds nothing at that sample (their raw Gaussian counts as 0 there, so
 a step from an absent to a present sample is a threshold crossing). A
 static prediction gives :func:`msc_sums`'s sums (to rounding).
@@ -26,33 +27,12 @@ import numpy as np
 
 from drake_social.cost import kernel
 from drake_social.limits import MAX_MOTION_STEPS
+from drake_social.people.prediction_kernel import centre, slot
 
 njit = kernel.njit
 AVAILABLE = kernel.AVAILABLE
 
 __all__ = ["AVAILABLE", "msc_sums_timed"]
-
-
-@njit(cache=True)
-def _slot(t, t0, dt, samples):
-    """The prediction's sample at or before time ``t`` (clamped to
-    0 .. samples - 1) and the fraction of the way to the next one (0 when
-    clamped), as :meth:`Prediction.state_at`."""
-    s = (t - t0) / dt
-    if not s > 0.0:
-        return 0, 0.0
-    if s >= samples - 1:
-        return samples - 1, 0.0
-    k = int(math.floor(s))
-    return k, s - k
-
-
-@njit(cache=True)
-def _position(xy, slot, frac, h):
-    """Person h's interpolated position at (slot, frac) of :func:`_slot`."""
-    x0, y0 = xy[slot, h, 0], xy[slot, h, 1]
-    nxt = min(slot + 1, xy.shape[0] - 1)
-    return x0 + frac * (xy[nxt, h, 0] - x0), y0 + frac * (xy[nxt, h, 1] - y0)
 
 
 @njit(cache=True)
@@ -149,8 +129,8 @@ def msc_sums_timed(
         # differ from t_b in the last bit: its slot is the one that counts).
         ta, dtime = t_a[e], t_b[e] - t_a[e]
         duration = abs(dtime)
-        slot_a, frac_a = _slot(ta, t0, dt, s_count)
-        slot_b, frac_b = _slot(ta + dtime, t0, dt, s_count)
+        slot_a, frac_a = slot(ta, t0, dt, s_count)
+        slot_b, frac_b = slot(ta + dtime, t0, dt, s_count)
         lo_slot, hi_slot = min(slot_a, slot_b), max(slot_a, slot_b)
         # Candidate people, in ascending order.
         ax, ay, bx, by = q_a[e, 0], q_a[e, 1], q_b[e, 0], q_b[e, 1]
@@ -163,12 +143,12 @@ def msc_sums_timed(
                     break
             if not seen:
                 continue
-            pa[h, 0], pa[h, 1] = _position(xy, slot_a, frac_a, h)
+            pa[h, 0], pa[h, 1] = centre(xy, h, slot_a, frac_a)
             if math.isfinite(reaches[h]):
                 radius = reaches[h] + point_reach + max_speeds[h] * duration + 1e-9
                 if kernel._segment_distance(pa[h, 0], pa[h, 1], ax, ay, bx, by) > radius:
                     continue
-            pb[h, 0], pb[h, 1] = _position(xy, slot_b, frac_b, h)
+            pb[h, 0], pb[h, 1] = centre(xy, h, slot_b, frac_b)
             cand[m] = h
             m += 1
         if m == 0:
@@ -218,7 +198,7 @@ def msc_sums_timed(
         kernel.motion_samples(q_a[e, 0], q_a[e, 1], q_a[e, 2], q_a[e, 3], d0, d1, d2, d3, n, k_lo, k_hi, l1, l2,
                               obj, active, xs, ys)
         for k in range(k_lo, k_hi + 1):
-            slots[k], fracs[k] = _slot(ta + (k / n) * dtime, t0, dt, s_count)
+            slots[k], fracs[k] = slot(ta + (k / n) * dtime, t0, dt, s_count)
         # Each candidate at the samples of its windows.
         count = 0
         for i in range(m):
@@ -233,7 +213,7 @@ def msc_sums_timed(
                 pin[i, k] = present[s, h]
                 if not pin[i, k]:
                     continue
-                px[i, k], py[i, k] = _position(xy, s, fracs[k], h)
+                px[i, k], py[i, k] = centre(xy, h, s, fracs[k])
                 if not have[s, h]:
                     cos_t[s, h], sin_t[s, h], have[s, h] = math.cos(theta[s, h]), math.sin(theta[s, h]), True
                 pc[i, k], ps[i, k] = cos_t[s, h], sin_t[s, h]

@@ -30,6 +30,7 @@ from drake_social.collision import people_kernel, planar_kernel
 from drake_social.collision.validity import CompiledSceneChecker
 from drake_social.cost import kernel as cost_kernel
 from drake_social.cost import timed_kernel
+from drake_social.people import prediction_kernel
 from drake_social.planning.objective import Objective
 from drake_social.planning.rrt_star import tree_kernel
 from drake_social.planning.rrt_star.options import RrtStarOptions
@@ -89,7 +90,7 @@ def kernel_dispatchers() -> dict[str, object]:
     """Every compiled function of the kernels the planner calls, by
     ``module.function`` (numba dispatchers; empty without numba)."""
     out = {}
-    for module in (cost_kernel, timed_kernel, planar_kernel, people_kernel, tree_kernel):
+    for module in (cost_kernel, timed_kernel, prediction_kernel, planar_kernel, people_kernel, tree_kernel):
         for name, value in vars(module).items():
             if hasattr(value, "stats") and hasattr(value, "signatures"):
                 out[f"{module.__name__}.{name}"] = value
