@@ -37,7 +37,7 @@ _kernel_cache.ensure_fresh()  # before any cached kernel is loaded
 from numba import njit  # noqa: E402  (a dependency)
 
 from drake_social.collision.planar_kernel import (  # noqa: E402
-    capsule_spans, segment_disc_distance, world_capsules)
+    capsule_spans, queue_pop, queue_split, queue_start, segment_disc_distance, world_capsules)
 from drake_social.people.prediction_kernel import centre, slot  # noqa: E402
 
 __all__ = ["MAX_STEPS", "STEP_MARGIN", "TIME_SLACK", "TOLERANCE", "motion_clear_of_people", "people_clearance"]
@@ -165,30 +165,18 @@ def _part_clear(q_a, dq, u_lo, u_hi, t_a, span_t, bodies, robot, spans, xy, radi
     lo, hi = u_lo + tau_lo, u_hi - tau_hi  # [u_lo, lo) and (hi, u_hi] are cleared
     if lo > hi:
         return True
-    # The part not yet cleared, as a queue of closed intervals (planar_kernel.motion_valid's search).
-    size = 64
-    q_lo, q_hi = np.empty(size), np.empty(size)
-    q_lo[0], q_hi[0] = lo, hi
-    head, tail = 0, 1
+    # The part not yet cleared, searched coarse to fine (planar_kernel.queue_start: the planar check's queue).
+    buffer, ends = queue_start(lo, hi)
     for _ in range(MAX_STEPS):
-        if head == tail:
+        if ends[0] == ends[1]:
             return True
-        a, b = q_lo[head % size], q_hi[head % size]
-        head += 1
+        a, b = queue_pop(buffer, ends)
         u = 0.5 * (a + b)
         tau = _probe(u, q_a, dq, t_a, span_t, bodies, robot, spans, span, xy, radii, max_speeds, t0, dt, safety,
                      keep, n, 0.5 * (b - a) + 1e-12)
         if tau < 0.0:
             return False
-        for lo_, hi_ in ((a, u - tau), (u + tau, b)):
-            if lo_ <= hi_:
-                if tail - head == size:  # full: double it, in order
-                    n_lo, n_hi = np.empty(2 * size), np.empty(2 * size)
-                    for r in range(size):
-                        n_lo[r], n_hi[r] = q_lo[(head + r) % size], q_hi[(head + r) % size]
-                    q_lo, q_hi, head, tail, size = n_lo, n_hi, 0, size, 2 * size
-                q_lo[tail % size], q_hi[tail % size] = lo_, hi_
-                tail += 1
+        buffer = queue_split(buffer, ends, a, b, u, tau)
     return False
 
 
