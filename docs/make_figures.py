@@ -1,10 +1,13 @@
 """Draws the architecture pictures of docs/architecture.md.
 
 * ``docs/layers.png``: the package's layers; imports point downwards only.
-* ``docs/diagram_<mode>_<execution>.png``: the execution diagram that
-  :func:`drake_social.sim.build_diagram` builds for ``scenarios/tiny.yaml``,
-  read from the built diagram itself: every subsystem by name (the loggers
-  left out) and every connection with its output and input port names.
+* ``docs/diagram_transport.png``, ``docs/diagram_station_<mode>.png`` and
+  ``docs/diagram_autonomy_<execution>.png``: the diagrams that
+  :func:`drake_social.sim.build_diagram`, :func:`~drake_social.sim.make_station`
+  and :func:`~drake_social.sim.make_autonomy` build for ``scenarios/tiny.yaml``
+  (its person walking), read from the built diagrams themselves: every
+  subsystem by name (the loggers left out), every connection with its output
+  and input port names, and each diagram's own input and output ports.
 
 Run from the repository root after a change of the layout or the diagram::
 
@@ -25,14 +28,17 @@ import matplotlib.pyplot as plt  # noqa: E402
 from matplotlib.patches import FancyBboxPatch  # noqa: E402
 
 DOCS = Path(__file__).resolve().parent
+#: tiny's person walking east along the north wall (the pictures' people move).
+WALKER = "people: [{theta: -1.5708, name: walker, trajectory: [[0.0, 4.0, 4.4], [30.0, 7.5, 4.4]]}]"
 
 # The layers, top to bottom: (title, colour, [(package, what it holds), ...]).
 LAYERS = [
     ("front end", "#d9d2e9", [("cli.py", "argparse and printing only")]),
     ("application", "#c9daf8", [("app.py", "run_show, run_plan, run_simulate, run_study; map_tools.py"),
-                                ("experiments/", "bench/, study/, metrics")]),
-    ("execution and figures", "#d0e0e3", [("sim/", "station diagram, simulate, analysis, replay"),
-                                          ("viz/", "matplotlib figures")]),
+                                ("experiments/", "the runners: bench/, study/ (sweeps, paper, crowd)")]),
+    ("execution, measures and figures", "#d0e0e3", [("sim/", "station diagram, simulate, analysis, replay"),
+                                                    ("evaluation/", "metrics of a plan or a run: per part, over time"),
+                                                    ("viz/", "matplotlib figures")]),
     ("Drake model and systems", "#d9ead3", [("model/", "plant and SceneGraph of a scenario"),
                                             ("control/", "LeafSystems: planner, sequencer, controller, drive, Ruckig"),
                                             ("collision/", "planar_checker, drake_checker")]),
@@ -77,45 +83,62 @@ def draw_layers(path: Path) -> None:
     plt.close(fig)
 
 
-# Where each subsystem of the execution diagram is drawn (x, y); a subsystem
-# not listed here goes into a row of its own below the others.
-POSITIONS = {
-    "planner": (0, 0), "sequencer": (4, 0), "reference": (8, 0), "target_split": (8, 0), "arm": (8, -2.6),
-    "reference_position_split": (12, 2.4), "reference_feedforward_split": (12, 0.8),
-    "reference_velocity_split": (12, -0.8), "reference_state_split": (12, -2.4),
-    "reference_config": (12, -2.6), "arm_state_split": (12, -4.2),
-    "controller": (16, 0), "hold": (20, 0), "drive": (24, 0),
-    "base": (24, -4.2), "configuration": (20, -4.2), "velocity": (20, -6.0), "q_split": (16, -4.2),
-    "to_pose": (4, -6.0), "scene_graph": (0, -6.0),
-    # dynamic mode: the plant under the inverse-dynamics servo
-    "state_split": (20, -4.2), "plant": (24, -4.2),
-    "desired_state": (12, -6.6), "servo_desired": (16, -6.6), "servo_acceleration": (20, -6.6), "servo": (24, -6.6),
-    "base_acceleration": (8, -8.4), "desired_acceleration": (12, -8.4), "servo_state": (16, -8.4),
+# Where each subsystem is drawn (x, y), per picture; a subsystem not listed
+# goes into a row of its own below the others. Each diagram's own input ports
+# are drawn on the left, its output ports on the right.
+TRANSPORT = {"station": (0, 0), "autonomy": (8, 0), "logged_state": (4, -2.4)}
+STATION_KINEMATIC = {
+    "hold": (0, 0), "drive": (4, 0), "base": (8, 0), "configuration": (12, 0), "to_pose": (16, 1.6),
+    "scene_graph": (20, 1.6), "arm_command_split": (4, -2.6), "velocity": (12, -2.6), "robot_state": (16, -1.3),
+    "people": (12, 3.4), "people_geometry": (16, 3.4),
 }
-# Where the dynamic mode's diagram differs: the hold follows the drive, and
-# the scene graph answers the plant's queries.
-DYNAMIC_POSITIONS = {"hold": (24, -2.1), "scene_graph": (28, -4.2)}
-BOX_W, BOX_H = 2.5, 0.75
+STATION_DYNAMIC = {
+    "wheel_speeds": (0, 0), "drive": (4, 0), "hold": (8, 0), "arm_command_split": (0, -2.6),
+    "desired_state": (12, -1.3), "servo_desired": (16, -1.3), "servo_acceleration": (20, -2.6),
+    "servo": (24, -2.6), "servo_state": (16, -3.9), "base_acceleration": (4, -4.6), "desired_acceleration": (8, -4.6),
+    "plant": (24, 0.6), "state_split": (20, 2.4), "q_split": (16, 2.4), "scene_graph": (28, 0.6),
+    "people": (20, 4.4), "people_geometry": (24, 4.4),
+}
+AUTONOMY = {
+    "robot_state_split": (0, 0), "planner": (4, 2.6), "path": (4, 2.6), "sequencer": (8, 0), "reference": (12, 0),
+    "target_split": (12, 0), "reference_feedforward_split": (16, 1.4), "reference_config": (16, 1.4),
+    "reference_state_split": (16, -1.4), "arm": (16, -1.4), "controller": (20, 0), "arm_command": (20, -2.6),
+    "safety": (4, -2.6), "held": (12, -2.8), "base_position_split": (16, 3.2),
+}
+BOX_W, BOX_H = 2.9, 0.75
+X_SCALE = 1.2  # the positions' x units, stretched so that a label fits between two boxes of a row
 GENERIC_PORT = re.compile(r"^(y|u)\d*$|^sum$|^Source_\d+_pose$")
 
 
-def diagram_edges(built) -> tuple[list[str], list[tuple[str, str, str, str]]]:
-    """The subsystems (loggers left out) and the connections ``(from, output, to, input)``."""
-    diagram = built.diagram
+def diagram_graph(diagram):
+    """What :func:`draw_diagram` draws of ``diagram``: its subsystems (loggers
+    left out), the connections ``(from, output, to, input)`` between them, its
+    input ports ``(name, [(to, input), ...])`` and output ports ``(name, from, output)``."""
+    from pydrake.systems.framework import InputPortIndex, OutputPortIndex
+
     names = [s.get_name() for s in diagram.GetSystems() if not s.get_name().endswith("_log")]
     edges = []
     for (in_sys, in_index), (out_sys, out_index) in diagram.connection_map().items():
         if in_sys.get_name() in names and out_sys.get_name() in names:
             edges.append((out_sys.get_name(), out_sys.get_output_port(out_index).get_name(),
                           in_sys.get_name(), in_sys.get_input_port(in_index).get_name()))
-    return names, sorted(edges)
+    inputs = [(diagram.get_input_port(i).get_name(),
+               [(system.get_name(), system.get_input_port(index).get_name())
+                for system, index in diagram.GetInputPortLocators(InputPortIndex(i))])
+              for i in range(diagram.num_input_ports())]
+    outputs = []
+    for i in range(diagram.num_output_ports()):
+        system, index = diagram.get_output_port_locator(OutputPortIndex(i))
+        outputs.append((diagram.get_output_port(i).get_name(), system.get_name(),
+                        system.get_output_port(index).get_name()))
+    return names, sorted(edges), inputs, outputs
 
 
-def _border(centre, towards):
-    """Where the segment from a box's centre towards ``towards`` leaves the box."""
-    (x, y), (tx, ty) = centre, towards
+def _border(centre, size, towards):
+    """Where the segment from a box's centre towards ``towards`` leaves the box of ``size`` (w, h)."""
+    (x, y), (w, h), (tx, ty) = centre, size, towards
     dx, dy = tx - x, ty - y
-    scale = min(BOX_W / 2 / abs(dx) if dx else float("inf"), BOX_H / 2 / abs(dy) if dy else float("inf"))
+    scale = min(w / 2 / abs(dx) if dx else float("inf"), h / 2 / abs(dy) if dy else float("inf"))
     return x + dx * scale, y + dy * scale
 
 
@@ -127,51 +150,89 @@ def _label(out_port: str, in_port: str) -> str:
     return " > ".join(names)
 
 
-def draw_diagram(built, title: str, path: Path) -> None:
-    """One execution diagram, as built: boxes by subsystem name, arrows labelled by port."""
-    names, edges = diagram_edges(built)
-    positions = {**POSITIONS, **(DYNAMIC_POSITIONS if built.mode == "dynamic" else {})}
-    pos, extra = {}, 0
+def _nodes(names, inputs, outputs, positions):
+    """Every box: name -> (centre, (w, h), lines). The diagram's own ports are
+    grouped by the subsystem they reach (``in:<subsystem>``, ``out:<subsystem>``),
+    one box each, on the left and the right beside that subsystem."""
+    nodes, extra = {}, 0
     for name in names:
         if name in positions:
-            pos[name] = positions[name]
+            centre = (positions[name][0] * X_SCALE, positions[name][1])
         else:
-            pos[name] = (extra % 7 * 4.0, -7.6 - extra // 7 * 1.2)
+            centre = (extra % 7 * 4.0 * X_SCALE, min(p[1] for p in positions.values()) - 2.4 - extra // 7 * 1.2)
             extra += 1
-    fig, ax = plt.subplots(figsize=(20, 8.5))
-    ax.set_aspect("equal")
+        nodes[name] = (centre, (BOX_W, BOX_H), None)
+    xs = [c[0] for c, _, _ in nodes.values()]
+    groups = {"in": {}, "out": {}}
+    for name, targets in inputs:
+        for to, _ in targets[:1]:
+            groups["in"].setdefault(to, []).append(name)
+    for name, source, _ in outputs:
+        groups["out"].setdefault(source, []).append(name)
+    for side, x in (("in", min(xs) - 4.5), ("out", max(xs) + 4.5)):
+        below = float("inf")
+        for system, ports in sorted(groups[side].items(), key=lambda item: -nodes[item[0]][0][1]):
+            h = 0.32 * len(ports) + 0.3
+            y = min(nodes[system][0][1], below - h / 2 - 0.25)
+            nodes[f"{side}:{system}"] = ((x, y), (BOX_W + 0.4, h), ports)
+            below = y - h / 2
+    return nodes
+
+
+def _arrow(ax, node0, node1, label):
+    (p0, size0, _), (p1, size1, _) = node0, node1
+    if p0[0] == p1[0]:  # vertical: the upward arrow bends, so a pair both ways stays apart
+        rad = 0.3 if p1[1] > p0[1] else 0.0
+    elif p1[0] > p0[0]:
+        rad = -0.15 if abs(p1[1] - p0[1]) < 0.1 and p1[0] - p0[0] < 6 else 0.0  # next on a row: above; back: below
+    else:
+        rad = -0.5 if abs(p1[0] - p0[0]) < 5 else -0.25
+    a, b = _border(p0, size0, p1), _border(p1, size1, p0)
+    ax.annotate("", xy=b, xytext=a, arrowprops=dict(arrowstyle="-|>", color="#4a6fa5", lw=1.0,
+                                                    shrinkA=0, shrinkB=0, connectionstyle=f"arc3,rad={rad}"))
+    if label:
+        dx, dy = b[0] - a[0], b[1] - a[1]
+        mx, my = (a[0] + b[0]) / 2 + 0.5 * rad * dy, (a[1] + b[1]) / 2 - 0.5 * rad * dx
+        ax.text(mx, my, label, ha="center", va="center", fontsize=7, color="#1f3b63", linespacing=1.1,
+                bbox=dict(fc="white", ec="none", alpha=0.85, pad=0.6))
+
+
+def draw_diagram(diagram, title: str, path: Path, positions: dict) -> None:
+    """One diagram, as built: boxes by subsystem name and type, arrows labelled
+    by port (parallel connections in one arrow), the diagram's own input and
+    output ports in boxes on either side."""
+    names, edges, inputs, outputs = diagram_graph(diagram)
+    nodes = _nodes(names, inputs, outputs, positions)
+    arrows: dict[tuple[str, str], list[str]] = {}
     for out_name, out_port, in_name, in_port in edges:
-        p0, p1 = pos[out_name], pos[in_name]
-        if p0[0] == p1[0]:  # vertical: the upward arrow bends, so a pair both ways stays apart
-            rad = 0.3 if p1[1] > p0[1] else 0.0
-        elif p1[0] > p0[0]:
-            rad = 0.0
-        else:
-            rad = -0.5 if abs(p1[0] - p0[0]) < 5 else -0.25
-        a, b = _border(p0, p1), _border(p1, p0)
-        ax.annotate("", xy=b, xytext=a, arrowprops=dict(arrowstyle="-|>", color="#4a6fa5", lw=1.0,
-                                                        shrinkA=0, shrinkB=0, connectionstyle=f"arc3,rad={rad}"))
-        label = _label(out_port, in_port)
-        if label:
-            dx, dy = b[0] - a[0], b[1] - a[1]
-            mx, my = (a[0] + b[0]) / 2 + 0.5 * rad * dy, (a[1] + b[1]) / 2 - 0.5 * rad * dx
-            ax.text(mx, my, label, ha="center", va="center", fontsize=7, color="#1f3b63",
-                    bbox=dict(fc="white", ec="none", alpha=0.85, pad=0.6))
-    for name, (x, y) in pos.items():
-        kind = type(built.diagram.GetSubsystemByName(name)).__name__.split("_")[0]
-        ax.add_patch(FancyBboxPatch((x - BOX_W / 2, y - BOX_H / 2), BOX_W, BOX_H,
-                                    boxstyle="round,pad=0.0,rounding_size=0.1", fc="#fff2cc", ec="#7f6000",
-                                    zorder=3))
+        arrows.setdefault((out_name, in_name), []).append(_label(out_port, in_port))
+    for name, targets in inputs:  # the port boxes name the ports: these arrows need no label
+        for to, _ in targets:
+            arrows.setdefault((f"in:{targets[0][0]}", to), [])
+    for name, source, _ in outputs:
+        arrows.setdefault((source, f"out:{source}"), [])
+    xs = [c[0] for c, _, _ in nodes.values()]
+    ys = [c[1] + sign * size[1] / 2 for c, size, _ in nodes.values() for sign in (-1, 1)]
+    fig, ax = plt.subplots(figsize=((max(xs) - min(xs)) * 0.62 + 3, (max(ys) - min(ys)) * 0.62 + 2))
+    ax.set_aspect("equal")
+    for (start, end), labels in arrows.items():
+        _arrow(ax, nodes[start], nodes[end], "\n".join(sorted({label for label in labels if label})))
+    for name, ((x, y), (w, h), ports) in nodes.items():
+        colour, edge = ("#d9ead3", "#38761d") if ports is not None else ("#fff2cc", "#7f6000")
+        ax.add_patch(FancyBboxPatch((x - w / 2, y - h / 2), w, h, boxstyle="round,pad=0.0,rounding_size=0.1",
+                                    fc=colour, ec=edge, zorder=3))
+        if ports is not None:
+            side = "inputs" if name.startswith("in:") else "outputs"
+            ax.text(x, y + h / 2 - 0.2, side, ha="center", va="center", fontsize=7, color="#555555", zorder=4)
+            ax.text(x, y - 0.1, "\n".join(ports), ha="center", va="center", fontsize=8, fontweight="bold",
+                    linespacing=1.25, zorder=4)
+            continue
+        kind = type(diagram.GetSubsystemByName(name)).__name__.split("_")[0]
         ax.text(x, y + 0.12, name, ha="center", va="center", fontsize=8, fontweight="bold", zorder=4)
         ax.text(x, y - 0.17, kind, ha="center", va="center", fontsize=7, color="#555555", zorder=4)
-    exported_in = [built.diagram.get_input_port(i).get_name() for i in range(built.diagram.num_input_ports())]
-    exported_out = [built.diagram.get_output_port(i).get_name() for i in range(built.diagram.num_output_ports())]
-    ports = f"exported inputs: {', '.join(exported_in) or 'none'};  outputs: {', '.join(exported_out) or 'none'}"
-    ax.set_title(f"{title}\n{ports}", fontsize=11)
-    xs = [p[0] for p in pos.values()]
-    ys = [p[1] for p in pos.values()]
+    ax.set_title(title, fontsize=11)
     ax.set_xlim(min(xs) - BOX_W, max(xs) + BOX_W)
-    ax.set_ylim(min(ys) - 1.0, max(ys) + 1.0)
+    ax.set_ylim(min(ys) - 0.4, max(ys) + 0.4)
     ax.set_axis_off()
     fig.savefig(path, dpi=100, bbox_inches="tight")
     plt.close(fig)
@@ -183,13 +244,20 @@ def main() -> None:
     args = parser.parse_args()
     draw_layers(args.out / "layers.png")
     from drake_social.scenario import load_scenario
-    from drake_social.sim import build_diagram
+    from drake_social.sim import Replan, build_diagram, make_autonomy, make_station
 
-    scenario = load_scenario(DOCS.parent / "scenarios" / "tiny.yaml")
-    for mode, execution in (("kinematic", "synchronized"), ("kinematic", "paper"), ("dynamic", "synchronized")):
-        built = build_diagram(scenario, mode=mode, execution=execution)
-        draw_diagram(built, f"build_diagram(scenario, mode={mode!r}, execution={execution!r})",
-                     args.out / f"diagram_{mode}_{execution}.png")
+    # tiny.yaml with its person walking: the people's bodies, the safety monitor and its stop are drawn too.
+    scenario = load_scenario(DOCS.parent / "scenarios" / "tiny.yaml", [WALKER])
+    built = build_diagram(scenario, mode="kinematic", execution="synchronized")
+    draw_diagram(built.diagram, "build_diagram(scenario): the station and the autonomy wired by port name",
+                 args.out / "diagram_transport.png", TRANSPORT)
+    for mode, positions in (("kinematic", STATION_KINEMATIC), ("dynamic", STATION_DYNAMIC)):
+        draw_diagram(make_station(scenario, mode=mode).diagram, f"make_station(scenario, mode={mode!r})",
+                     args.out / f"diagram_station_{mode}.png", positions)
+    for execution, path, call in (("synchronized", Replan(), "path=Replan()"), ("paper", None, "")):
+        autonomy = make_autonomy(scenario, execution=execution, path=path)
+        draw_diagram(autonomy.diagram, f"make_autonomy(scenario, execution={execution!r}{', ' + call if call else ''})",
+                     args.out / f"diagram_autonomy_{execution}.png", AUTONOMY)
 
 
 if __name__ == "__main__":

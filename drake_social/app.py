@@ -50,15 +50,16 @@ from drake_social.limits import (ALGORITHMS, CHECKERS, EXECUTORS, MAX_BENCH_REPE
 from drake_social.scenario import EXECUTIONS, SIM_MODES, Scenario, ScenarioError, compose_yaml, load_scenario
 
 if TYPE_CHECKING:
-    from drake_social.experiments.study import Study, StudyResult
+    from drake_social.experiments.study import CrowdStudy, Study, StudyResult
+    from drake_social.experiments.study.recorded import RecordedCrowdStudy
     from drake_social.planning.result import PlannerResult
-    from drake_social.sim.run import SimulationResult
+    from drake_social.sim.results import SimulationResult
 
 __all__ = ["PLAN_OUTPUTS", "SIMULATE_OUTPUTS", "PlanRun", "Progress", "SimulateRun", "StudyRun", "check_scheduler",
            "load_with_overrides", "paper_experiment", "read_path_csv", "run_bench", "run_plan", "run_show",
            "run_simulate", "run_study"]
 __all__ += ["PeopleImport", "run_people_import"]
-__all__ += ["run_crowd_experiment"]
+__all__ += ["run_crowd_experiment", "run_recorded_experiment"]
 
 #: The files ``plan`` writes into ``out`` (a folder of such a name is refused before planning).
 PLAN_OUTPUTS = ("path.csv", "result.json", "path.png", "cost_profile.png", "convergence.png")
@@ -96,10 +97,10 @@ def _file(*, optional: bool = False) -> Rule:
 
 
 def _study(value, who: str, name: str) -> None:
-    from drake_social.experiments.study import Study
+    from drake_social.experiments.study import KINDS
 
-    require_instance(value, Study, who, name, "a drake_social.experiments.study.Study (paper_experiment(...) or "
-                                              "load_sweep(file))")
+    require_instance(value, tuple(KINDS), who, name, "a drake_social.experiments.study.Study (paper_experiment(...) "
+                                                     "or load_sweep(file)), CrowdStudy or RecordedCrowdStudy")
 
 
 def _layout(value, who: str, name: str) -> None:
@@ -147,6 +148,7 @@ _ARGUMENTS: dict[str, dict[str, Rule]] = {
         "end": _number(optional=True, unit="seconds"),
         "ids": lambda v, who, name: require_strings(v, who, name, optional=True), "theta": _flag()},
     "run_crowd_experiment": {**_RUN, **_WORKERS},
+    "run_recorded_experiment": {**_RUN, **_WORKERS},
 }
 
 
@@ -335,7 +337,7 @@ def run_plan(*, scenario: Scenario | str | Path, out: str | Path, overrides: Seq
     """
     _door("run_plan", locals())
     from drake_social.collision.drake_checker import make_checker, verify_path
-    from drake_social.experiments.records import run_record
+    from drake_social.evaluation.records import run_record
     from drake_social.io.outputs import OutputSet
     from drake_social.io.paths import write_path_csv
     from drake_social.io.records import json_lines
@@ -386,7 +388,7 @@ class SimulateRun:
     Attributes:
         record: the record written as ``sim.json`` (the execution's summary
             and report, the planner's record under ``planner`` when it planned).
-        run: the :class:`~drake_social.sim.run.SimulationResult` (logs, report).
+        run: the :class:`~drake_social.sim.results.SimulationResult` (logs, report).
         files: the names of the files written into ``out``, in order.
         replay_bytes: the size of replay.html, bytes (None: no replay).
     """
@@ -437,7 +439,7 @@ def run_simulate(*, scenario: Scenario | str | Path, out: str | Path, overrides:
     import numpy as np
 
     from drake_social.collision.drake_checker import make_checker
-    from drake_social.experiments.metrics import execution_metrics
+    from drake_social.evaluation.metrics import execution_metrics
     from drake_social.io.json_numbers import finite_or_none
     from drake_social.io.outputs import OutputSet
     from drake_social.io.paths import parse_path_csv, write_executed_csv, write_people_csv, write_replans_csv
@@ -604,9 +606,9 @@ class StudyRun:
     """What :func:`run_study` did.
 
     Attributes:
-        result: the :class:`~drake_social.experiments.study.StudyResult` (every run's record).
+        result: the :class:`~drake_social.experiments.study.StudyResult` (every run's or episode's record).
         files: the names of the files written into ``out``.
-        interrupted: Ctrl-C came while the outputs after the runs were
+        interrupted: Ctrl-C came while the outputs after the records were
             written: only the records were committed.
         failure: the error of an output after the records (then only the
             records were committed), or None.
@@ -619,9 +621,18 @@ class StudyRun:
 
     @property
     def runs(self) -> str:
-        """"1 run", "12 runs": the number of the study's records."""
-        n = len(self.result.records)
-        return f"{n} run{'' if n == 1 else 's'}"
+        """"1 run", "12 runs", "40 episodes": the number of the study's records."""
+        from drake_social.experiments.study import count
+
+        return count(self.result.study, len(self.result.records))
+
+    @property
+    def record_files(self) -> tuple[str, str]:
+        """The names of the records' CSV and JSON files (results.csv and
+        results.json; a crowd study's records.csv and records.json)."""
+        from drake_social.experiments.study import record_files
+
+        return record_files(self.result.study)
 
 
 def paper_experiment(*, runs: int, iterations: int, seed: int, simulate: bool, scenario_dir: str | Path) -> Study:
@@ -653,11 +664,12 @@ def check_scheduler(executor: str, scheduler: str | None) -> None:
             raise ScenarioError(f"--scheduler: {e}") from None
 
 
-def run_study(*, study: Study, out: str | Path, executor: str = "process", workers: int = 1, scheduler: str | None = None,
-              progress: Callable[[int, int, dict], None] | None = None) -> StudyRun:
+def run_study(*, study: Study | CrowdStudy | RecordedCrowdStudy, out: str | Path, executor: str = "process", workers: int = 1,
+              scheduler: str | None = None, progress: Callable[[int, int, dict], None] | None = None) -> StudyRun:
     """Runs a study and writes its outputs into ``out`` as one output set:
-    results.csv and results.json (every run's record), the figures, REPORT.md
-    and the Planner Arena files.
+    for a planning study results.csv and results.json (every run's record),
+    the figures, REPORT.md and the Planner Arena files; for a crowd study
+    records.csv and records.json (every episode's), the figures and REPORT.md.
 
     When an output after the records fails (or Ctrl-C comes while they are
     written), the records alone are committed and the returned
@@ -665,30 +677,34 @@ def run_study(*, study: Study, out: str | Path, executor: str = "process", worke
 
     Args:
         study: a :class:`~drake_social.experiments.study.Study`
-            (:func:`paper_experiment`, ``load_sweep(file)``).
+            (:func:`paper_experiment`, ``load_sweep(file)``) or a
+            :class:`~drake_social.experiments.study.crowd.CrowdStudy`.
         out: the output folder.
         executor, workers, scheduler: where the runs go
             (:func:`~drake_social.experiments.study.executors.map_tasks`).
         progress: optional ``progress(done, total, record)`` after each run.
 
     Raises:
-        ScenarioError: ``scheduler`` without the dask executor, or a malformed address.
+        ScenarioError: ``scheduler`` without the dask executor, or a
+            malformed address; the study or one of its scenarios is invalid
+            (before ``out`` is taken).
         StudyOutputError: not even the records could be committed into
             ``out`` (the message says where they were saved instead).
     """
     _door("run_study", locals())
-    from drake_social.experiments.study import (StudyOutputError, output_names, rescue_records, write_records,
-                                                write_study)
+    from drake_social.experiments.study import (StudyOutputError, kind_of, output_names, rescue_records,
+                                                write_records, write_study)
     from drake_social.experiments.study import run_study as run_tasks
     from drake_social.io.outputs import DeferredSignals, OutputSet
 
     check_scheduler(executor, scheduler)
     out = Path(out)
     done = StudyRun(None, [])
+    tasks = kind_of(study).tasks(study)  # every scenario loaded and checked before out is taken
     try:
-        # Entered first: a busy out, or a folder in the way of any of its files, is refused before any run.
+        # Entered before any run: a busy out, or a folder in the way of any of its files, is refused first.
         with OutputSet(out, "experiment", names=output_names(study)) as outputs:
-            done.result = run_tasks(study, executor=executor, workers=workers, scheduler=scheduler,
+            done.result = run_tasks(study, tasks=tasks, executor=executor, workers=workers, scheduler=scheduler,
                                     progress=progress)
             try:
                 done.files = write_study(done.result, outputs.folder)
@@ -720,8 +736,9 @@ def run_study(*, study: Study, out: str | Path, executor: str = "process", worke
         except Exception as second:
             raise StudyOutputError(f"{cause}; saving the records of its {done.runs} into the temporary "
                                    f"directory failed too: {second}") from e
+        csv_name, json_name = done.record_files
         raise StudyOutputError(f"{cause}; the records of its {done.runs} were saved to "
-                               f"{rescued / 'results.json'} and {rescued / 'results.csv'} instead") from e
+                               f"{rescued / json_name} and {rescued / csv_name} instead") from e
     if done.interrupted:
         done.failure = None
     return done
@@ -775,28 +792,68 @@ def run_people_import(*, file: str | Path, out: str | Path, layout: str = "xy", 
 
 def run_crowd_experiment(*, out: str | Path, executor: str = "process", workers: int = 1,
                          scheduler: str | None = None, progress: Callable[[int, int, dict], None] | None = None,
-                         **settings):
+                         **settings) -> StudyRun:
     """The closed-loop crowd study (``drake-social experiment crowd``): a
-    :class:`~drake_social.experiments.crowd.CrowdStudy` of ``settings``
+    :class:`~drake_social.experiments.study.crowd.CrowdStudy` of ``settings``
     (scenarios, variants, episodes, seed, jitter, time_limit), run and
-    written into ``out`` (:func:`~drake_social.experiments.crowd_output.run_crowd_study`).
+    written into ``out`` as :func:`run_study` runs and writes any study:
+    records.csv and records.json (every episode's record), the per-part
+    boxplots and snapshots of every scenario, and REPORT.md.
 
     Returns:
-        ``(CrowdResult, names written, the error of an output after the records or None)``.
+        A :class:`StudyRun`: ``failure`` and ``interrupted`` say when the
+        records alone were committed.
 
     Raises:
         TypeError, ValueError: an argument or setting of the wrong kind or
-            out of range (:data:`~drake_social.experiments.crowd.CROWD_SETTINGS`), named.
+            out of range (:data:`~drake_social.experiments.study.crowd.CROWD_SETTINGS`), named.
         ScenarioError: a scenario file, or the time limit for it, is invalid.
+        StudyOutputError: as :func:`run_study`.
     """
     _door("run_crowd_experiment", {"out": out, "executor": executor, "workers": workers, "scheduler": scheduler,
                                    "progress": progress})
-    from drake_social.experiments.crowd import CrowdStudy, check_crowd_settings
-    from drake_social.experiments.crowd_output import run_crowd_study
+    from drake_social.experiments.study.crowd import DEFAULT_SCENARIOS, CrowdStudy, check_crowd_settings
 
     check_crowd_settings("run_crowd_experiment", settings)
     check_scheduler(executor, scheduler)
-    for i, s in enumerate(settings.get("scenarios", ())):
+    for i, s in enumerate(settings.get("scenarios", DEFAULT_SCENARIOS)):  # the shipped ones: absent from a wheel
         check_regular_file(s, "scenario", f"--scenarios[{i}]")
     study = CrowdStudy(**settings)
-    return run_crowd_study(study, out, executor=executor, workers=workers, scheduler=scheduler, progress=progress)
+    return run_study(study=study, out=out, executor=executor, workers=workers, scheduler=scheduler, progress=progress)
+
+
+def run_recorded_experiment(*, out: str | Path, executor: str = "process", workers: int = 1,
+                            scheduler: str | None = None, progress: Callable[[int, int, dict], None] | None = None,
+                            **settings) -> StudyRun:
+    """The recorded-crowd benchmark (``drake-social experiment crowd
+    --recording``): a
+    :class:`~drake_social.experiments.study.recorded.RecordedCrowdStudy` of
+    ``settings`` (recording, layout, fps, windows, window_length,
+    min_people, variants, prediction, sets, episodes, seed, time_limit),
+    run and written into ``out`` as :func:`run_study` runs and writes any
+    study: records.csv and records.json, each window's scenario and people
+    file, the boxplots, each window's snapshots and REPORT.md.
+
+    Returns:
+        A :class:`StudyRun`: ``failure`` and ``interrupted`` say when the
+        records alone were committed.
+
+    Raises:
+        TypeError, ValueError: an argument or setting of the wrong kind or
+            out of range (:data:`~drake_social.experiments.study.recorded.RECORDED_SETTINGS`), named.
+        ScenarioError: the recording cannot be read or is too short, has
+            too few windows dense enough, or a window's scenario with the
+            overrides is invalid (before ``out`` is taken).
+        StudyOutputError: as :func:`run_study`.
+    """
+    _door("run_recorded_experiment", {"out": out, "executor": executor, "workers": workers, "scheduler": scheduler,
+                                      "progress": progress})
+    from drake_social.experiments.study.recorded import RecordedCrowdStudy, check_recorded_settings
+
+    check_recorded_settings("run_recorded_experiment", settings)
+    check_scheduler(executor, scheduler)
+    if "recording" not in settings:
+        raise TypeError("run_recorded_experiment: recording (the ETH/UCY file) is required")
+    check_regular_file(settings["recording"], "recording", "--recording")
+    study = RecordedCrowdStudy(**settings)
+    return run_study(study=study, out=out, executor=executor, workers=workers, scheduler=scheduler, progress=progress)

@@ -165,8 +165,45 @@ def _run_bench(args: argparse.Namespace) -> int:
     return 0
 
 
+#: ``experiment crowd``'s options of the recorded-crowd benchmark: argument name -> option.
+_RECORDED_OPTIONS = {"layout": "--layout", "fps": "--fps", "windows": "--windows", "window_length": "--window-length",
+                     "min_people": "--min-people", "prediction": "--prediction", "sets": "--set"}
+
+
+def _crowd_settings(args: argparse.Namespace) -> dict:
+    """``experiment crowd``'s study settings: those of a crowd study over
+    scenario files, or with ``--recording`` those of the recorded-crowd benchmark.
+
+    Raises:
+        ScenarioError: an option of the one given with the other.
+    """
+    from drake_social.limits import CROWD_VARIANTS
+
+    if args.recording is None:
+        given = [option for name, option in _RECORDED_OPTIONS.items() if getattr(args, name) is not None]
+        if given:
+            raise ScenarioError(f"{given[0]}: needs --recording (the recorded-crowd benchmark)")
+        if args.variants is not None and "replan" in args.variants:
+            raise ScenarioError(f"--variants: replan needs --recording; a crowd study over --scenarios runs "
+                                f"{', '.join(CROWD_VARIANTS)}")
+        return {"scenarios": tuple(str(s) for s in args.scenarios),
+                "variants": tuple(args.variants) if args.variants is not None else CROWD_VARIANTS,
+                "episodes": 20 if args.episodes is None else args.episodes, "seed": args.seed,
+                "jitter": 5.0 if args.jitter is None else args.jitter, "time_limit": args.time_limit}
+    if args.jitter is not None:
+        raise ScenarioError("--jitter: not with --recording (a recording has no scripted walkers to delay)")
+    settings = {"recording": str(args.recording), "name": f"crowd_{args.recording.stem}", "seed": args.seed,
+                "time_limit": args.time_limit}
+    for name, value in (("variants", args.variants), ("episodes", args.episodes),
+                        *((n, getattr(args, n)) for n in _RECORDED_OPTIONS)):
+        if value is not None:
+            settings[name] = tuple(value) if isinstance(value, list) else value
+    return settings
+
+
 def _run_experiment(args: argparse.Namespace) -> int:
-    from drake_social.experiments.study import StudyOutputError, load_sweep
+    from drake_social.experiments.study import KINDS, CrowdStudy, StudyOutputError, kind_of, load_sweep
+    from drake_social.experiments.study.recorded import RecordedCrowdStudy
 
     app.check_scheduler(args.executor, args.scheduler)  # before anything is read or run
     if args.executor == "dask" and not args.verbose:
@@ -176,83 +213,59 @@ def _run_experiment(args: argparse.Namespace) -> int:
             pass  # map_tasks says what to install
         else:
             logging.getLogger("distributed").setLevel(logging.WARNING)
-    if args.study == "crowd":
-        return _run_crowd(args)
-    if args.study == "paper":
-        study = app.paper_experiment(runs=args.runs, iterations=args.iterations, seed=args.seed,
-                                     simulate=args.simulate, scenario_dir=args.scenario_dir)
+    if args.study == "crowd":  # the study is made of the options by run_crowd_experiment or run_recorded_experiment
+        settings = _crowd_settings(args)
+        recorded = "recording" in settings
+        study_name = settings["name"] if recorded else CrowdStudy.name
+        kind = KINDS[RecordedCrowdStudy if recorded else CrowdStudy]
     else:
-        study = load_sweep(args.config)
-    out = args.out if args.out is not None else Path("out") / study.name
+        if args.study == "paper":
+            study = app.paper_experiment(runs=args.runs, iterations=args.iterations, seed=args.seed,
+                                         simulate=args.simulate, scenario_dir=args.scenario_dir)
+        else:
+            study = load_sweep(args.config)
+        study_name, kind = study.name, kind_of(study)
+    out = args.out if args.out is not None else Path("out") / study_name
     bar = None
 
     def progress(done: int, total: int, record: dict) -> None:
         nonlocal bar
-        if bar is None:  # drawn from the first finished run: a refused --out draws nothing
+        if bar is None:  # drawn from the first finished task: a refused --out draws nothing
             from tqdm import tqdm
 
-            bar = tqdm(total=total, desc=f"experiment {study.name}", unit="run", file=sys.stderr, dynamic_ncols=True)
+            bar = tqdm(total=total, desc=f"experiment {study_name}", unit=kind.unit, file=sys.stderr,
+                       dynamic_ncols=True)
         bar.total = total
-        bar.set_postfix_str(f"{record['group']} {record['algorithm']} run {record['run']}", refresh=False)
+        bar.set_postfix_str(kind.describe(record), refresh=False)
         bar.update(done - bar.n)
 
+    where = {"out": out, "executor": args.executor, "workers": args.workers, "scheduler": args.scheduler,
+             "progress": progress if args.progress or sys.stderr.isatty() else None}
     try:
-        done = app.run_study(study=study, out=out, executor=args.executor, workers=args.workers,
-                             scheduler=args.scheduler, progress=progress if args.progress or sys.stderr.isatty() else None)
+        if args.study == "crowd":
+            run = app.run_recorded_experiment if recorded else app.run_crowd_experiment
+            done = run(**where, **settings)
+        else:
+            done = app.run_study(study=study, **where)
     finally:
         if bar is not None:
             bar.close()
-    where = (f"on the Dask scheduler at {args.scheduler}" if args.scheduler is not None
-             else f"{args.workers} worker(s), {args.executor}")
-    print(f"{len(done.result.records)} runs in {done.result.wall_time:.1f} s ({where})")
+    on = (f"on the Dask scheduler at {args.scheduler}" if args.scheduler is not None
+          else f"{args.workers} worker(s), {args.executor}")
+    print(f"{done.runs} in {done.result.wall_time:.1f} s ({on})")
+    csv_name, json_name = done.record_files
     if done.interrupted:
         print(f"drake-social: experiment interrupted after its {done.runs}: their records were written to "
-              f"{out / 'results.json'} and {out / 'results.csv'} (the figures, REPORT.md and the arena files were "
-              "not written)", file=sys.stderr)
+              f"{out / json_name} and {out / csv_name} ({kind.later_outputs} were not written)", file=sys.stderr)
         return 130
     if done.failure is not None:
         raise StudyOutputError(f"writing the study's outputs into {out} failed: {done.failure}; the records of its "
-                               f"{done.runs} are in {out / 'results.json'} and {out / 'results.csv'} (the figures, "
-                               "REPORT.md and the arena files were not written)") from done.failure
+                               f"{done.runs} are in {out / json_name} and {out / csv_name} ({kind.later_outputs} were "
+                               "not written)") from done.failure
     for line in (out / "REPORT.md").read_text().splitlines():
         if line.startswith("- **"):
             print(line)
     print(f"wrote {out}/: {', '.join(done.files)}")
-    return 0
-
-
-def _run_crowd(args: argparse.Namespace) -> int:
-    from drake_social.experiments.study import StudyOutputError
-
-    out = args.out if args.out is not None else Path("out") / "crowd"
-    bar = None
-
-    def progress(done: int, total: int, record: dict) -> None:
-        nonlocal bar
-        if bar is None:
-            from tqdm import tqdm
-
-            bar = tqdm(total=total, desc="experiment crowd", unit="episode", file=sys.stderr, dynamic_ncols=True)
-        bar.set_postfix_str(f"{record['scenario']} {record['variant']} episode {record['episode']}", refresh=False)
-        bar.update(done - bar.n)
-
-    try:
-        result, files, failure = app.run_crowd_experiment(
-            out=out, executor=args.executor, workers=args.workers, scheduler=args.scheduler,
-            progress=progress if args.progress or sys.stderr.isatty() else None,
-            scenarios=tuple(str(s) for s in args.scenarios), variants=tuple(args.variants), episodes=args.episodes,
-            seed=args.seed, jitter=args.jitter, time_limit=args.time_limit)
-    finally:
-        if bar is not None:
-            bar.close()
-    print(f"{len(result.records)} episodes in {result.wall_time:.1f} s ({args.workers} worker(s), {args.executor})")
-    if failure is not None:
-        raise StudyOutputError(f"writing the crowd study's figures or REPORT.md into {out} failed: {failure}; "
-                                       f"its records are in {out / 'records.csv'} and {out / 'records.json'}") from failure
-    for line in (out / "REPORT.md").read_text().splitlines():
-        if line.startswith("- **"):
-            print(line)
-    print(f"wrote {out}/: {', '.join(files)}")
     return 0
 
 
@@ -282,8 +295,9 @@ def _run_map(args: argparse.Namespace) -> int:
         return 0
     written = map_tools.write_map_scenario(args.map, args.scenario_out, args.start, args.goal, unknown=args.unknown,
                                            arm=args.arm, seed=args.seed, force=args.force)
-    print(f"wrote {written}: the bar carried from ({args.start[0]:g}, {args.start[1]:g}) to "
-          f"({args.goal[0]:g}, {args.goal[1]:g}) through {args.map}; next: drake-social plan {written}")
+    print(f"wrote {written.path}: the bar carried from ({args.start[0]:g}, {args.start[1]:g}) to "
+          f"({args.goal[0]:g}, {args.goal[1]:g}) through {args.map}; next: drake-social plan {written.path}")
+    print("\n".join(written.lines()))
     return 0
 
 

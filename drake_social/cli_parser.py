@@ -223,8 +223,9 @@ def _add_experiment(subparsers) -> None:
                        help=f"K, at most {MAX_ITERATIONS:,} (default 2000)")
     paper.add_argument("--seed", type=_nonnegative_int, default=0, metavar="S",
                        help="study seed; run seeds are drawn from it with SeedSequence (default 0)")
-    paper.add_argument("--scenario-dir", type=Path, default=Path("scenarios"), metavar="DIR",
-                       help="folder of office_bar.yaml and generic_L.yaml (default: scenarios)")
+    paper.add_argument("--scenario-dir", type=Path, default=SHIPPED_SCENARIOS, metavar="DIR",
+                       help=f"folder of office_bar.yaml and generic_L.yaml (default: the shipped ones in "
+                            f"{SHIPPED_SCENARIOS})")
     paper.add_argument("--simulate", action="store_true",
                        help="also execute every path (kinematic simulation) and measure the executed trajectory")
     sweep = kinds.add_parser("sweep", help="your own study from a YAML file (see studies/example_sweep.yaml)")
@@ -236,7 +237,10 @@ def _add_experiment(subparsers) -> None:
         "(replanning, multi-point) and replan_speed (replan_multi with speed-scaled AGF). Episode k's seed sets "
         "random_seed (planner, crowd speeds) and delays each scripted walker's start by up to --jitter seconds; "
         "the same for every variant (paired). Writes DIR/records.csv, DIR/records.json, per-part boxplots, "
-        "snapshots of an episode and DIR/REPORT.md (paired claim lines and the issue's targets).")
+        "snapshots of an episode and DIR/REPORT.md (paired claim lines and the issue's targets). With --recording "
+        "FILE, the recorded-crowd benchmark instead: windows of an ETH/UCY recording with the flow turned across the "
+        "robot's task, start and goal outside the flow, plan_once against replan (the replanner's defaults) paired "
+        "over (window, episode); it also writes each window's scenario (DIR/window_<k>.yaml and its people file).")
     _add_crowd_arguments(crowd)
     for q in (paper, sweep, crowd):
         q.add_argument("--out", type=Path, metavar="DIR", help="output directory (default: out/<study name>)")
@@ -253,22 +257,54 @@ def _add_experiment(subparsers) -> None:
 
 
 def _add_crowd_arguments(crowd: argparse.ArgumentParser) -> None:
-    from drake_social.limits import CROWD_SCENARIOS as DEFAULT_SCENARIOS, CROWD_VARIANTS as VARIANTS, MAX_EPISODES
+    from drake_social.limits import CROWD_SCENARIOS as DEFAULT_SCENARIOS, MAX_EPISODES, RECORDED_VARIANTS as VARIANTS
 
-    crowd.add_argument("--scenarios", type=Path, nargs="+", default=[Path(s) for s in DEFAULT_SCENARIOS],
-                       metavar="FILE", help=f"scenario files with walking people (default: {' '.join(DEFAULT_SCENARIOS)})")
-    crowd.add_argument("--episodes", type=_int_at_least(1, MAX_EPISODES), default=20, metavar="N",
-                       help="seeded episodes per scenario and variant (default 20)")
-    crowd.add_argument("--variants", nargs="+", choices=list(VARIANTS), default=list(VARIANTS), metavar="NAME",
-                       action=_Distinct,
-                       help=f"variants to run, of {', '.join(VARIANTS)} (default: all)")
+    source = crowd.add_mutually_exclusive_group()
+    source.add_argument("--scenarios", type=Path, nargs="+",
+                        default=[shipped_scenario(s) for s in DEFAULT_SCENARIOS],
+                        metavar="FILE", help=f"scenario files with walking people (default: the shipped "
+                                             f"{' '.join(DEFAULT_SCENARIOS)} in {SHIPPED_SCENARIOS})")
+    source.add_argument("--recording", type=Path, metavar="FILE",
+                        help="instead of scenarios: the recorded-crowd benchmark on windows of this ETH/UCY "
+                             "recording (frame id x y [vx vy], as people import reads it; docs/crowd_study.md)")
+    crowd.add_argument("--episodes", type=_int_at_least(1, MAX_EPISODES), metavar="N",
+                       help="seeded episodes per scenario (or window) and variant (default 20; with --recording 1)")
+    crowd.add_argument("--variants", nargs="+", choices=list(VARIANTS), metavar="NAME", action=_Distinct,
+                       help=f"variants to run, of {', '.join(VARIANTS)} (default: all but replan; with "
+                            "--recording: plan_once replan; replan, the replanner with its defaults, needs "
+                            "--recording)")
     crowd.add_argument("--seed", type=_nonnegative_int, default=0, metavar="S",
                        help="study seed; episode seeds are drawn from it with SeedSequence (default 0)")
-    crowd.add_argument("--jitter", type=_float_in(0.0, MAX_JITTER), default=5.0, metavar="SECONDS",
-                       help=f"largest start delay of a scripted walker, seconds, at most {MAX_JITTER:g} (default 5)")
+    crowd.add_argument("--jitter", type=_float_in(0.0, MAX_JITTER), metavar="SECONDS",
+                       help=f"largest start delay of a scripted walker, seconds, at most {MAX_JITTER:g} (default 5; "
+                            "not with --recording)")
     crowd.add_argument("--time-limit", type=_float_in(0.0, MAX_TIME_LIMIT, open_low=True), metavar="SECONDS",
                        help=f"simulated seconds per episode, at most {MAX_TIME_LIMIT:g} (default: each scenario's "
-                            "execution.time_limit)")
+                            "execution.time_limit; with --recording the window's length)")
+    _add_recorded_arguments(crowd)
+
+
+def _add_recorded_arguments(crowd: argparse.ArgumentParser) -> None:
+    """The options of ``experiment crowd --recording`` (each needs it)."""
+    from drake_social.limits import MAX_WINDOWS, MIN_WINDOW_LENGTH
+    from drake_social.scenario import PREDICTIONS
+
+    group = crowd.add_argument_group("the recorded-crowd benchmark (with --recording)")
+    group.add_argument("--layout", choices=("xy", "xzy"),
+                       help="the recording's columns: xy = frame id x y [vx vy] (default), xzy = frame id x z y "
+                            "[vx vz vy]")
+    group.add_argument("--fps", type=_positive_float, help="frames per second, t = frame / fps (default 25)")
+    group.add_argument("--windows", type=_int_at_least(1, MAX_WINDOWS), metavar="N",
+                       help=f"windows to cut, at most {MAX_WINDOWS:,}: the densest first, not overlapping (default 5)")
+    group.add_argument("--window-length", type=_float_in(MIN_WINDOW_LENGTH, MAX_TIME_LIMIT), metavar="SECONDS",
+                       help=f"seconds of each window, in [{MIN_WINDOW_LENGTH:g}, {MAX_TIME_LIMIT:g}] (default 60)")
+    group.add_argument("--min-people", type=_int_at_least(1), metavar="N",
+                       help="the least number of people present in a window, on average over it (default 1)")
+    group.add_argument("--prediction", choices=PREDICTIONS,
+                       help="planner.prediction of the replanning variants (default: the scenario's default)")
+    group.add_argument("--set", dest="sets", action="append", metavar="YAML",
+                       help="override fields of every window's scenario with a YAML mapping, before the variant's, "
+                            "e.g. \"planner: {replan_horizon: 2.0}\" (repeatable)")
 
 
 def _finite_float(text: str) -> float:

@@ -86,6 +86,12 @@ MAX_REPLAN_BUDGET = 60.0
 #: no run lasts longer (MAX_TIME_LIMIT). The prediction holds one sample per
 #: 0.1 s per person (6,001 samples here).
 MAX_REPLAN_HORIZON = MAX_TIME_LIMIT
+#: Largest weight of the planners' objectives (``social.weights``,
+#: ``social.length_weight``, ``planner.replan_length_weight``): a motion's cost
+#: sums weight x AGF (at most 1) x metres over every point and person, so with
+#: weights up to 10^6 the costs of any room stay far below the largest float
+#: (1e308 made them inf: every path equally dear, the robot never left).
+MAX_COST_WEIGHT = 1e6
 
 #: Planner names accepted in ``planner.algorithm`` (see ``drake_social.planning``).
 ALGORITHMS = (
@@ -130,6 +136,12 @@ INTEGRATION_SCHEMES = (
 #: paper study applies it over every group and ``bench`` over every scenario
 #: (its last override), so both run the planner OMPL's RRTstar is compared with.
 PAPER_PLANNER = "planner: {optimize: false, near_radius_mode: fixed}"
+#: The paper's objective (``--set`` text): the social integral alone, without
+#: the default's length tie-break (``social.length_weight`` 0.001). The paper
+#: study applies it over every group, after :data:`PAPER_PLANNER`; ``bench``
+#: keeps each file's objective (an ``informed_mode: admissible`` file needs its
+#: length weight).
+PAPER_OBJECTIVE = "social: {length_weight: 0.0}"
 
 #: The paper's algorithms, in its order (the non-social baseline first).
 PAPER_ALGORITHMS = ("rrt_star", "social_rrt_star", "base_rrt_star", "informed_social_rrt_star",
@@ -156,15 +168,26 @@ EXECUTORS = ("process", "dask")
 NEAR_RADIUS_MODES = ("fixed", "shrinking")
 
 #: The crowd study's variants (``experiment crowd --variants``; their overrides:
-#: ``drake_social.experiments.crowd.VARIANTS``), its default scenarios and
-#: the most episodes per scenario and variant.
+#: ``drake_social.experiments.study.crowd.VARIANTS``), its default scenarios
+#: (shipped scenario files, found beside the package:
+#: ``drake_social.scenario.shipped``) and the most episodes per scenario and variant.
 CROWD_VARIANTS = ("plan_once", "replan_base", "replan_multi", "replan_speed")
-CROWD_SCENARIOS = ("scenarios/office_walkers.yaml", "scenarios/lobby_crowd.yaml")
+CROWD_SCENARIOS = ("office_walkers.yaml", "lobby_crowd.yaml")
 MAX_EPISODES = 10_000
 #: Largest start delay of a crowd study's scripted walker (``experiment crowd
 #: --jitter``), seconds: a walker delayed longer than the longest run
 #: (MAX_TIME_LIMIT) never walks in it.
 MAX_JITTER = MAX_TIME_LIMIT
+
+#: The recorded-crowd benchmark (``experiment crowd --recording``): its
+#: variants (their overrides: ``drake_social.experiments.study.recorded.VARIANTS``;
+#: ``replan`` replans with every other setting the scenario's default), the
+#: most windows of a recording (each a scenario written into the output set,
+#: and ``variants x episodes`` runs of it) and the shortest window, seconds
+#: (the longest: MAX_TIME_LIMIT, the longest run).
+RECORDED_VARIANTS = ("plan_once", "replan", "replan_base", "replan_multi", "replan_speed")
+MAX_WINDOWS = 1_000
+MIN_WINDOW_LENGTH = 1.0
 
 #: Most seeds of ``bench --seeds``: as many as a study's runs per planner
 #: (MAX_RUNS); each seed plans every algorithm on every scenario.

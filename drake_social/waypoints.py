@@ -54,22 +54,26 @@ ENDPOINT_TOLERANCE = 1e-9
 FIELDS = ("x", "y", "psi1", "psi2")
 
 
-def waypoint_array(waypoints: Any, source: str) -> np.ndarray:
-    """``waypoints`` as a new (N, 4) float array, 2 <= N <= MAX_WAYPOINTS, refused otherwise.
+def waypoint_array(waypoints: Any, source: str, *, fewest: int = 2) -> np.ndarray:
+    """``waypoints`` as a new (N, 4) float array, ``fewest`` <= N <= MAX_WAYPOINTS, refused otherwise.
 
     Args:
         waypoints: an array or nested sequence of real numbers
             (:func:`~drake_social.arguments.real_array`; NaN and infinities
             are left to :func:`check_waypoints`, which names the waypoint).
         source: who passed it, for the message (``"simulate: waypoints"``).
+        fewest: 2 for a path from a start to a goal; 1 where one
+            configuration stands for the path (a replanning robot that never
+            found a path holds where it is).
 
     Raises:
         TypeError: not an array of real numbers (strings, booleans, complex,
             None, other objects, a masked array).
         ScenarioError: the wrong shape (never reshaped) or number of rows.
     """
-    return real_array(waypoints, source, "", (None, 4), layout="rows [x, y, psi1, psi2]", rows=(2, MAX_WAYPOINTS),
-                      rows_note="(the start, ..., the goal; limits.MAX_WAYPOINTS)", row_name="waypoint",
+    what = "the start, ..., the goal" if fewest > 1 else "a path, or the one configuration held"
+    return real_array(waypoints, source, "", (None, 4), layout="rows [x, y, psi1, psi2]", rows=(fewest, MAX_WAYPOINTS),
+                      rows_note=f"({what}; limits.MAX_WAYPOINTS)", row_name="waypoint",
                       finite=False, error=ScenarioError)
 
 

@@ -24,12 +24,15 @@ __all__ = ["crowd_scenario_text", "main"]
 
 def crowd_scenario_text(size: float = 100.0, people: int = 300, obstacles: int = 0, *, seed: int = 0,
                         description: str | None = None, clearance: float = 3.0,
-                        iterations: int = 200) -> str:
+                        iterations: int = 200, walking: bool = False) -> str:
     """YAML text of a ``size`` x ``size`` m room with ``people`` people and
     ``obstacles`` axis-aligned or turned boxes (0.4-1.6 m sides).
 
     The robot carries a 1.5 m bar from near the south-west corner to near the
-    north-east corner; ``planner.iterations`` is ``iterations``.
+    north-east corner; ``planner.iterations`` is ``iterations``. With
+    ``walking`` the people are a social-force crowd (``crowd.people``), each
+    walking to a point drawn in the room and back, again and again (the
+    points are drawn after the placements: the places are those without it).
 
     Raises:
         ValueError: the room cannot hold that many bodies and boxes (a placement
@@ -78,11 +81,20 @@ def crowd_scenario_text(size: float = 100.0, people: int = 300, obstacles: int =
         yaw = float(rng.choice([0.0, rng.uniform(-math.pi, math.pi)]))
         x, y = place(0.5 * math.hypot(sx, sy))  # the box's circumscribed disc
         lines.append(f"    - {{center: [{x:.4f}, {y:.4f}], size: [{sx:.4f}, {sy:.4f}], yaw: {yaw:.4f}}}")
-    lines.append("people:" if people else "people: []")
+    placed = []
     for k in range(people):
         x, y = place(0.25)
-        theta = rng.uniform(-math.pi, math.pi)
-        lines.append(f"  - {{x: {x:.4f}, y: {y:.4f}, theta: {theta:.4f}, radius: 0.25, name: \"p{k}\"}}")
+        placed.append((x, y, rng.uniform(-math.pi, math.pi)))
+    if walking:
+        lines += ["people: []", "crowd:", "  people:" if people else "  people: []"]
+        for k, (x, y, _) in enumerate(placed):
+            gx, gy = rng.uniform(0.5, size - 0.5, 2)
+            lines.append(f"    - {{x: {x:.4f}, y: {y:.4f}, goals: [[{gx:.4f}, {gy:.4f}], [{x:.4f}, {y:.4f}]], "
+                         f"cycle: true, name: \"p{k}\"}}")
+    else:
+        lines.append("people:" if people else "people: []")
+        for k, (x, y, theta) in enumerate(placed):
+            lines.append(f"  - {{x: {x:.4f}, y: {y:.4f}, theta: {theta:.4f}, radius: 0.25, name: \"p{k}\"}}")
     lines += [
         "robot: {base_radius: 0.35, link_lengths: [0.6, 0.5], link_width: 0.08}",
         "object: !Bar {length: 1.5, thickness: 0.05}",

@@ -15,7 +15,7 @@ from drake_social.cost.social import SocialCost
 from drake_social.io.records import PLANNER_FIELDS, SHARED_FIELDS
 from drake_social.scenario.geometry import arm_geometry
 from drake_social.planning.algorithms import make_objective, plan
-from drake_social.scenario import ScenarioError, load_scenario
+from drake_social.scenario import PREDICTIONS, ScenarioError, load_scenario
 
 
 def _edges(wp: np.ndarray):
@@ -245,7 +245,21 @@ NONE = "no-such-scenario.yaml"  # never read: the door comes first
     ("run_bench", dict(scenario_paths=[NONE], ompl=True), TypeError, "run_bench: unexpected argument 'ompl'"),
     ("run_study", dict(study="sweep.yaml"), TypeError,
      "run_study: study must be a drake_social.experiments.study.Study (paper_experiment(...) or load_sweep(file)), "
-     "got str 'sweep.yaml'"),
+     "CrowdStudy or RecordedCrowdStudy, got str 'sweep.yaml'"),
+    ("run_recorded_experiment", dict(recording=NONE, windows=0), ValueError,
+     "run_recorded_experiment: windows must be an integer >= 1 and <= 1,000, got 0"),
+    ("run_recorded_experiment", dict(recording=NONE, window_length=0.5), ValueError,
+     "run_recorded_experiment: window_length must be a finite number >= 1 and <= 600 seconds, got 0.5"),
+    ("run_recorded_experiment", dict(recording=NONE, sets="planner: {}"), TypeError,
+     "run_recorded_experiment: sets must be a list or tuple of strings, got str 'planner: {}'"),
+    ("run_recorded_experiment", dict(recording=NONE, prediction="oracle"), ValueError,
+     "run_recorded_experiment: unknown prediction 'oracle'; allowed: " + ", ".join(PREDICTIONS)),
+    ("run_recorded_experiment", dict(recording=NONE, jitter=1.0), TypeError,
+     "run_recorded_experiment: unexpected argument 'jitter'; allowed: name, recording, layout"),
+    ("run_recorded_experiment", dict(recording=NONE, executor="threads"), ValueError,
+     "run_recorded_experiment: unknown executor 'threads'; allowed: process, dask"),
+    ("run_recorded_experiment", dict(windows=1), TypeError,
+     "run_recorded_experiment: recording (the ETH/UCY file) is required"),
     ("run_people_import", dict(file=NONE, fps="25"), TypeError,
      "run_people_import: fps must be a finite number > 0 frames per second, got str '25'"),
     ("run_people_import", dict(file=NONE, fps=0.0), ValueError,

@@ -131,9 +131,9 @@ def test_a_joint_limit_pass_exits_7_and_is_named_apart_from_collisions(tmp_path,
     # servo (Kd = 12 1/s instead of 2 w = 120): the arm passes pi near the
     # goal without touching anything. The run is collision-free and its
     # finding is the limit, by name, joint, amount and time.
-    import drake_social.sim.diagram as diagram
+    import drake_social.sim.station as station
 
-    monkeypatch.setattr(diagram, "servo_gains",
+    monkeypatch.setattr(station, "servo_gains",
                         lambda: (np.array([0.0, 0.0, 3600.0, 3600.0]), np.array([50.0, 50.0, 12.0, 12.0])))
     out = tmp_path / "sim"
     code = main(["simulate", str(tiny_scenario_path), "--set", "goal: [6.5, 2.5, 3.141592653589793, 1.5708]",
@@ -174,7 +174,7 @@ def test_a_room_bound_pass_is_named_as_such(tmp_path, tiny_scenario_path, planne
     """A run whose base passes a room bound (the finding put into a real
     run's report): stderr and the summary name a room bound, not a joint limit."""
     import drake_social.sim.run as sim_run
-    from drake_social.sim.run import LimitViolation
+    from drake_social.sim.results import LimitViolation
 
     real = sim_run.run_checked
 
@@ -260,3 +260,48 @@ def test_replan_writes_replans_csv_and_the_summary(tmp_path, tiny_scenario_path,
     assert "planner" not in record  # the replans are the record of the planning
     if record["reached"]:
         np.testing.assert_allclose(wp[-1], [6.5, 2.5, 0.0, 1.5708])
+
+
+#: A person 0.03 m from the robot's base at the start of tiny.yaml (inside the 0.05 m safety distance), all the run.
+BESIDE_THE_START = '  - {x: 0.37, y: 2.5, theta: 0.0, radius: 0.25, name: "beside the start"}\n'
+
+
+def _stuck_scenario(tiny_scenario_path: Path, folder: Path) -> Path:
+    """tiny.yaml with a person standing within the safety distance of the robot at its start."""
+    text = tiny_scenario_path.read_text()
+    anchor = 'name: "standing"}  # faces south\n'
+    assert anchor in text
+    path = folder / "stuck.yaml"
+    path.write_text(text.replace(anchor, anchor + BESIDE_THE_START))
+    return path
+
+
+def test_a_replanning_robot_that_never_leaves_its_start_exits_5_with_its_outputs(tmp_path, tiny_scenario_path,
+                                                                                   capsys):
+    """Every replan waits (someone within the safety distance the whole run): a valid run that did
+    not reach its goal, with the whole output set, as a run that planned once."""
+    pytest.importorskip("drake_social.planning.replan")
+    scenario = _stuck_scenario(tiny_scenario_path, tmp_path)
+    out = tmp_path / "out"
+    code = main(["simulate", str(scenario), "--replan", "--no-replay", "--out", str(out),
+                 "--set", "planner: {replan_iterations: 100, replan_rate: 5.0}", "--set", "execution: {time_limit: 2}"])
+    captured = capsys.readouterr()
+    assert code == 5, captured.err
+    assert captured.err == ("drake-social: goal not reached within the time limit of 2 s "
+                            "(the last replan: wait)\n")
+    names = sorted(p.name for p in out.iterdir() if not p.name.startswith("."))
+    assert names == ["executed.csv", "people.csv", "replans.csv", "replans.png", "sim.json", "tracking.png"]
+    rows = [line.split(",") for line in (out / "replans.csv").read_text().splitlines()[1:]]
+    # The first plan and the replans at t = 0.2 .. 1.8 s (the one due at 2 s is past the run's end).
+    assert [float(r[0]) for r in rows] == pytest.approx(np.arange(10) * 0.2) and {r[4] for r in rows} == {"wait"}
+    executed = np.loadtxt(out / "executed.csv", delimiter=",", skiprows=1)
+    start = [1.0, 2.5, 0.0, 1.5708]
+    np.testing.assert_array_equal(executed[:, 1:5], np.tile(start, (len(executed), 1)))  # never moved
+    record = json.loads((out / "sim.json").read_text())
+    assert record["reached"] is False and record["num_waypoints"] == 1 and record["waypoints"] == [start]
+    assert record["replanning"]["waits"] == record["replanning"]["count"] == 9
+    # Measured against the one configuration it held: no motion, no deviation, 0.03 m from the person.
+    assert record["planned_social_cost"] == record["executed_social_cost"] == 0.0
+    assert record["max_point_deviation"]["max"] == record["max_config_deviation"] == 0.0
+    assert record["collision_free"] is True and record["within_limits"] is True
+    assert record["min_clearance"] == pytest.approx(0.03, abs=1e-9)

@@ -73,9 +73,47 @@ def test_every_package_gets_an_api_page(extra):
     names = dut.api_modules()
     packages = {p.name for p in (ROOT / "drake_social").iterdir() if (p / "__init__.py").is_file()}
     assert packages <= set(names)
-    assert {"kinematics", "limits", "cli"} <= set(names)
+    assert {"kinematics", "limits", "map_tools", "app"} <= set(names)
     assert not [n for n in names if n.startswith("_")]
     assert names == sorted(names)
+
+
+def test_the_api_reference_puts_the_users_api_first_and_the_internals_apart(extra):
+    import importlib
+
+    dut = _hooks(extra)
+    nav = dut.api_nav()
+    assert [next(iter(entry)) for entry in nav] == ["Using the library", "Packages and modules", "Internals"]
+    names = dut.user_api_names()
+    # The issue's list: the entry points a script meets, in order, then every run_* of the app layer.
+    short = [n.rpartition(".")[2] for n in names]
+    assert short[:5] == ["load_scenario", "make_checker", "plan", "build_diagram", "simulate"]
+    import drake_social.app as app
+
+    assert {n for n in app.__all__ if n.startswith("run_") and n != "run_bench"} <= set(short)
+    assert {"read_people_file", "parse_eth_ucy", "read_map", "map_boxes", "inspect_map",
+            "write_map_scenario"} <= set(short)
+    for name in names:  # each named by the module that defines it (its one home in the site)
+        module, _, attr = name.rpartition(".")
+        assert getattr(importlib.import_module(module), attr).__module__ == module, name
+    page = dut.user_api_page()
+    assert [line[4:] for line in page.splitlines() if line.startswith("::: ")] == names
+    # Internals: not among the packages' pages, but on their own page, members left out of their module's.
+    listed = [next(iter(e)) for e in nav[1]["Packages and modules"]]
+    assert not {"arguments", "warmup", "cli_parser", "cli", "cli_progress"} & set(listed)
+    assert {"scenario", "planning", "sim", "people", "maps", "app", "map_tools"} <= set(listed)
+    assert dut.INTERNAL_MEMBERS["drake_social.sim.diagram"] == ("build_checked",)
+    assert {"check_diagram_options", "check_diagram_waypoints", "resolve_replan"} <= set(
+        dut.INTERNAL_MEMBERS["drake_social.sim.checks"])
+    sim = dut.api_page("sim")
+    for module, public in (("diagram", "build_diagram"), ("station", "make_station"), ("autonomy", "make_autonomy")):
+        block = sim[sim.index(f"::: drake_social.sim.{module}\n"):].split("\n\n")[0]
+        for member in [*dut.INTERNAL_MEMBERS[f"drake_social.sim.{module}"], public]:
+            assert f'"!^{member}$"' in block, member
+    assert '"!^simulate$"' in sim[sim.index("::: drake_social.sim.run\n"):].split("\n\n")[0]
+    internals = dut.internals_page()
+    assert "::: drake_social.sim.diagram.build_checked" in internals and "::: drake_social.warmup" in internals
+    assert "::: drake_social.sim.diagram.build_checked" not in sim
 
 
 def _griffe_extension(extra):
@@ -151,6 +189,42 @@ def test_site_builds_strictly(tmp_path, extra):
     assert "Two commands" in index and 'src="office_bar.png"' in index
     for page in ("scenario", "people", "cli", "architecture", "performance", "testing", "limits", "memory"):
         assert (site / page / "index.html").is_file(), page
-    # The API pages carry the docstrings: load_scenario's summary line is on the scenario page.
-    api = (site / "api" / "scenario" / "index.html").read_text(encoding="utf-8")
-    assert "load_scenario" in api and "Loads and validates a scenario file" in api
+    # The API pages carry the docstrings: load_scenario's summary line is on the user's API page, which the
+    # scenario page links to; build_checked is on the internals page only.
+    api = (site / "api" / "index.html").read_text(encoding="utf-8")
+    assert 'id="drake_social.scenario.load.load_scenario"' in api and "Loads and validates a scenario file" in api
+    scenario_page = (site / "api" / "scenario" / "index.html").read_text(encoding="utf-8")
+    assert "Using the library" in scenario_page and 'id="drake_social.scenario.load.load_scenario"' not in scenario_page
+    assert 'id="drake_social.sim.diagram.build_checked"' in (site / "api" / "internals" / "index.html").read_text(
+        encoding="utf-8")
+    assert 'id="drake_social.sim.diagram.build_checked"' not in (site / "api" / "sim" / "index.html").read_text(
+        encoding="utf-8")
+
+
+FAST = "not slow and not browser and not subprocess"
+
+
+@pytest.mark.slow
+def test_the_documented_test_counts_are_the_collected_ones():
+    """docs/testing.md and the Makefile say how many tests make test and make
+    test-fast run: within 15 % of what pytest collects (tests are added all
+    the time; a figure that far off has drifted)."""
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join([str(ROOT), os.environ.get("PYTHONPATH", "")]))
+    out = subprocess.run([sys.executable, "-m", "pytest", "--collect-only", "-q", "-p", "no:cacheprovider", "-m", FAST,
+                          "tests"], cwd=ROOT, env=env, capture_output=True, text=True, timeout=600, check=False)
+    found = re.search(r"(\d+)/(\d+) tests collected", out.stdout)
+    assert found, out.stdout[-2000:] + out.stderr[-2000:]
+    fast, total = int(found.group(1)), int(found.group(2))
+    testing = (DOCS / "testing.md").read_text(encoding="utf-8")
+    makefile = (ROOT / "Makefile").read_text(encoding="utf-8")
+    documented = {
+        "testing.md, make test": re.search(r"`make test` ran ([\d,]+) tests", testing),
+        "testing.md, make test-fast": re.search(r"`make test-fast` ([\d,]+) in", testing),
+        "Makefile, make test": re.search(r"make test runs them all \(([\d,]+) tests", makefile),
+        "Makefile, make test-fast": re.search(r"three out \(([\d,]+) tests", makefile),
+    }
+    for where, match in documented.items():
+        assert match, f"{where}: no count found"
+        count = int(match.group(1).replace(",", ""))
+        actual = total if where.endswith("make test") else fast
+        assert abs(count - actual) <= 0.15 * actual, f"{where} says {count}, pytest collects {actual}"

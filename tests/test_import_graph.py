@@ -17,7 +17,8 @@ The rules, each checked over the whole graph:
    layer modules (prefixes under ``drake_social.``)
    ===== ==================================================================
    0     ``limits``, ``errors``, ``io`` (the package itself),
-         ``io.textfile``, ``io.json_numbers``, ``_kernel_cache``
+         ``io.textfile``, ``io.json_numbers``, ``io.records`` (the record
+         schema), ``_kernel_cache``, ``interrupts``
    1     ``kinematics`` (pure numpy; it names no schema type),
          ``maps`` (map_server maps: numpy, PyYAML, Pillow)
    2     ``scenario`` (schema, load, validate), ``arguments``
@@ -28,8 +29,9 @@ The rules, each checked over the whole graph:
    4     ``model``, ``collision.planar_checker``, ``collision.drake_checker``
          (Drake: the plant and Drake's checker)
    5     ``control``, ``viz``
-   6     ``sim``, ``io.paths`` (path CSVs, which a run may read)
-   7     ``io.outputs``, ``io.records``, ``experiments``, ``app``, ``map_tools``
+   6     ``sim``, ``evaluation`` (the measures of a plan or a run),
+         ``io.paths`` (path CSVs, which a run may read)
+   7     ``io.outputs``, ``experiments``, ``app``, ``map_tools``
    8     ``cli``, ``cli_parser``, ``cli_progress``
    ===== ==================================================================
 
@@ -65,7 +67,9 @@ LAYERS: dict[str, int] = {
     "drake_social.io": 0,
     "drake_social.io.textfile": 0,
     "drake_social.io.json_numbers": 0,
+    "drake_social.io.records": 0,
     "drake_social._kernel_cache": 0,
+    "drake_social.interrupts": 0,
     "drake_social.kinematics": 1,
     "drake_social.maps": 1,
     "drake_social.scenario": 2,
@@ -88,9 +92,9 @@ LAYERS: dict[str, int] = {
     "drake_social.control": 5,
     "drake_social.viz": 5,
     "drake_social.sim": 6,
+    "drake_social.evaluation": 6,
     "drake_social.io.outputs": 7,
     "drake_social.io.paths": 6,
-    "drake_social.io.records": 7,
     "drake_social.experiments": 7,
     "drake_social.app": 7,
     "drake_social.map_tools": 7,
@@ -409,6 +413,45 @@ def test_the_command_line_parser_does_not_import_the_studies():
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120, check=False)
     assert out.returncode == 0, out.stderr
     assert out.stdout.strip() == "[]"
+
+
+#: Runs ``plan`` and ``simulate`` (planned, and replanned among a walker with
+#: its people log, path figure and replans) through :mod:`drake_social.app`,
+#: then prints every ``drake_social`` module loaded.
+_PLAN_AND_SIMULATE = """
+import json, sys
+from drake_social import app
+tiny, walker, out = sys.argv[1:4]
+app.run_plan(scenario=tiny, out=out + "/plan", iterations=100)
+app.run_simulate(scenario=tiny, out=out + "/simulate", iterations=100, replay=False)
+app.run_simulate(scenario=walker, out=out + "/walker", iterations=100, replay=False, replan=True,
+                 overrides=["execution: {time_limit: 2.0}"])
+print(json.dumps(sorted(m for m in sys.modules if m.startswith("drake_social"))))
+"""
+
+
+def test_plan_and_simulate_load_nothing_from_the_experiments(tmp_path, tiny_scenario_path):
+    """``plan`` and ``simulate`` (app.py's run_plan and run_simulate, and all
+    they import: sim/, viz/, the metrics of :mod:`drake_social.evaluation`)
+    run in a fresh interpreter without loading :mod:`drake_social.experiments`."""
+    import json
+    import subprocess
+    import sys
+
+    from experiments.test_crowd_study import TINY_WALKER
+
+    walker = tmp_path / "tiny_walker.yaml"
+    walker.write_text(TINY_WALKER)
+    out = subprocess.run([sys.executable, "-c", _PLAN_AND_SIMULATE, str(tiny_scenario_path), str(walker),
+                          str(tmp_path / "out")], capture_output=True, text=True, timeout=600, check=False)
+    assert out.returncode == 0, out.stderr
+    loaded = json.loads(out.stdout.strip().splitlines()[-1])
+    assert [m for m in loaded if m == "drake_social.experiments" or m.startswith("drake_social.experiments.")] == []
+    # The code paths ran: the records, the metrics over time, the replanning figure.
+    assert {"drake_social.evaluation.records", "drake_social.evaluation.nav_metrics", "drake_social.sim.run",
+            "drake_social.viz.replans"} <= set(loaded)
+    assert {"result.json", "path.csv"} <= {p.name for p in (tmp_path / "out" / "plan").iterdir()}
+    assert {"sim.json", "people.csv", "replans.csv"} <= {p.name for p in (tmp_path / "out" / "walker").iterdir()}
 
 
 def test_arguments_checks_the_checker_protocol_by_its_methods():

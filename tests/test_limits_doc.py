@@ -36,3 +36,7 @@ def test_the_names_and_chunks_in_the_text_are_the_constants():
     text = " ".join(PAGE.split())  # the paragraph's line breaks as spaces
     assert f"at most {importlib.import_module('drake_social.cost.social').FIELD_CHUNK_ELEMENTS} (point" in text
     assert f"at most {importlib.import_module('drake_social.model.plant').ENVIRONMENT_PART} shapes" in text
+    proximity, world = (importlib.import_module(f"drake_social.{m}") for m in ("people.proximity", "viz.world"))
+    assert f"at most {proximity.DISTANCE_CHUNK_ELEMENTS} (sample, part" in text
+    assert f"at most {world.MAP_PICTURE_CELLS} pixels along a side" in text
+    assert f"at most {world.MAP_MAX_OUTLINES} box outlines" in text

@@ -7,6 +7,7 @@ bounds, nothing overlapping, start and goal free).
 
 from __future__ import annotations
 
+import json
 import subprocess
 import sys
 import textwrap
@@ -20,6 +21,7 @@ from crowd_scenarios import crowd_scenario_text
 from drake_social.cost import SocialCost
 from drake_social.cost.agf import agf, agf_xy
 from drake_social.scenario import load_scenario
+from drake_social.scenario.geometry import arm_geometry
 from drake_social.viz.labels import ELLIPSIS, MAX_LABEL_CHARS, MAX_TITLE_CHARS, fit_text
 from drake_social.viz.world import field_grid, field_resolution
 
@@ -107,6 +109,85 @@ def test_long_description_and_name_are_cut_in_figures():
     labels = [t.get_text() for t in fig.axes[0].texts]
     assert scenario.people[0].name[: MAX_LABEL_CHARS - 1] + ELLIPSIS in labels
     assert max(len(t) for t in labels) <= MAX_TITLE_CHARS
+
+
+# ---- a long run among many people ------------------------------------------------
+
+
+@pytest.fixture(scope="module")
+def walked_among_400(tmp_path_factory):
+    """A 20 s run logged every 0.01 s (2,001 samples) among 400 walkers in a 30 x 30 m room: the
+    robot drives diagonally through them, a fifth of them leaves halfway."""
+    from drake_social.people.log import PeopleLog
+
+    path = tmp_path_factory.mktemp("walked") / "crowd.yaml"
+    path.write_text(crowd_scenario_text(30.0, people=400, obstacles=0, seed=7, clearance=1.0))
+    scenario = load_scenario(path)
+    rng = np.random.default_rng(11)
+    times = np.round(np.arange(2001) * 0.01, 10)
+    start = np.array([[p.x, p.y] for p in scenario.people])
+    velocity = rng.uniform(-1.0, 1.0, (400, 2))
+    positions = start[None] + times[:, None, None] * velocity[None]
+    present = np.ones((2001, 400), bool)
+    present[1000:, ::5] = False
+    log = PeopleLog(times=times, positions=positions, headings=np.broadcast_to(np.arctan2(velocity[:, 1],
+                                                                                          velocity[:, 0]), (2001, 400)),
+                    velocities=np.broadcast_to(velocity, (2001, 400, 2)), present=present,
+                    radii=np.full(400, 0.25), names=[f"p{k}" for k in range(400)])
+    s = np.linspace(0.0, 1.0, 2001)[:, None]
+    q = np.column_stack([3.0 + 24.0 * s, 3.0 + 24.0 * s, np.zeros((2001, 1)), np.full((2001, 1), 1.5708)])
+    return scenario, times, q, log
+
+
+def test_metrics_of_a_long_run_among_many_people_hold_bounded_temporaries(walked_among_400, monkeypatch):
+    """The run's metrics among 400 people over 2,001 samples: the AGF over time was summed 2,048
+    samples at a time (203 MB per temporary, some 1.3 GB for the Gaussian's) and the parts' distances
+    all samples at once (51 MB per offset array): bounded now, and every figure is the one of the
+    whole at once; the robot's distances equal the compiled one-configuration kernel's."""
+    import drake_social.evaluation.nav_metrics as nav
+    import drake_social.people.proximity as proximity
+
+    scenario, times, q, log = walked_among_400
+    tracemalloc.start()
+    try:
+        dut = nav.run_metrics(scenario, times, q, log, None, False, 20.0)
+        _, peak = tracemalloc.get_traced_memory()
+    finally:
+        tracemalloc.stop()
+    assert peak < 64e6, f"run_metrics peaked at {peak / 1e6:.0f} MB"
+    monkeypatch.setattr(nav, "FIELD_CHUNK_ELEMENTS", 1 << 40)  # one block: the whole run at once
+    monkeypatch.setattr(proximity, "DISTANCE_CHUNK_ELEMENTS", 1 << 40)
+    whole = nav.run_metrics(scenario, times, q, log, None, False, 20.0)
+    assert dut.keys() == whole.keys()
+    assert all(dut[k] == whole[k] or (np.isnan(dut[k]) and np.isnan(whole[k])) for k in dut)
+    geometry = proximity.robot_distance_args(arm_geometry(scenario))
+    robot = [proximity.robot_distance(geometry, q[k], log.positions[k], log.radii, log.present[k])
+             for k in range(len(times))]
+    assert dut["min_dist_robot"] == pytest.approx(min(robot), rel=1e-12)
+    assert 0.0 < dut["agf_time_robot"] and dut["collisions_robot"] >= 1  # the walkers are met
+
+
+def test_people_csv_of_a_long_run_is_written_row_by_row(walked_among_400, tmp_path):
+    """people.csv of 400 people over 2,001 samples (720,400 rows): the rows were built as one list
+    first (some 200 MB); written as they are made now, the file is the same rows."""
+    from drake_social.io.paths import write_people_csv
+
+    _, times, _, log = walked_among_400
+    out = tmp_path / "people.csv"
+    tracemalloc.start()
+    try:
+        write_people_csv(out, log)
+        _, peak = tracemalloc.get_traced_memory()
+    finally:
+        tracemalloc.stop()
+    assert peak < 32e6, f"write_people_csv peaked at {peak / 1e6:.0f} MB"
+    with out.open() as f:
+        assert next(f) == "t,id,x,y,theta,v\n"
+        rows = sum(1 for _ in f)
+    assert rows == int(log.present.sum()) == 2001 * 400 - 1001 * 80
+    last = out.read_text().rstrip("\n").rsplit("\n", 1)[1].split(",")
+    assert (float(last[0]), last[1]) == (20.0, "p399")
+    assert (float(last[2]), float(last[3])) == (log.positions[-1, 399, 0], log.positions[-1, 399, 1])
 
 
 # ---- Drake: the room in parts -------------------------------------------------
@@ -236,3 +317,40 @@ def test_cli_peak_memory_of_a_crowd_among_boxes(tmp_path, command):
     assert code in (0, 3), code  # plan may find no path in 100 samples
     assert (tmp_path / "out" / ("scene.png" if command == "show" else "path.png")).is_file()
     assert peak < 1200, f"{command} peaked at {peak:.0f} MB"
+
+
+def test_cli_peak_memory_of_a_replanning_run_among_400_walkers(tmp_path):
+    """``simulate --replan`` of 10 s among a crowd of 400 walkers: 1.3 GB before (the run's metrics
+    and people.csv held every (sample, point, person) value at once), about 0.65 GB now; planning
+    once finds no path through them (nothing runs: 0.5 GB)."""
+    scenario = tmp_path / "walkers.yaml"
+    scenario.write_text(crowd_scenario_text(30.0, people=400, seed=7, clearance=1.0, walking=True, iterations=300)
+                        + "execution: {time_limit: 10}\n")
+    code, peak = _peak_mb(["simulate", str(scenario), "--replan", "--no-replay", "--out", str(tmp_path / "out")])
+    assert code in (0, 5), code
+    record = json.loads((tmp_path / "out" / "sim.json").read_text())
+    assert record["num_samples"] == 1001 or record["reached"]  # the whole 10 s ran (or the goal was reached)
+    assert (tmp_path / "out" / "people.csv").is_file()
+    assert peak < 950, f"simulate --replan peaked at {peak:.0f} MB"
+
+
+def test_cli_peak_memory_of_map_inspect_of_the_largest_map(tmp_path):
+    """``map inspect`` of a 5000 x 5000 map of grid lines every 7 rows and 11 columns (docs/maps.md's
+    largest measured map, 325,780 boxes): 1.87 GB before (matplotlib resampled a float copy of the
+    25 million cells and held an outline per box), under 0.6 GB now, reading included."""
+    from PIL import Image
+
+    rows, cols = np.mgrid[0:5000, 0:5000]
+    Image.fromarray(np.where((rows % 7 == 0) | (cols % 11 == 0), 0, 254).astype(np.uint8)).save(tmp_path / "grid.pgm")
+    (tmp_path / "grid.yaml").write_text("image: grid.pgm\nresolution: 0.05\norigin: [0.0, 0.0, 0.0]\nnegate: 0\n"
+                                        "occupied_thresh: 0.65\nfree_thresh: 0.196\n")
+    del rows, cols
+    code, peak = _peak_mb(["map", "inspect", str(tmp_path / "grid.yaml"), "--out", str(tmp_path / "out")])
+    assert code == 0
+    with Image.open(tmp_path / "out" / "map.png") as png:
+        assert png.size[0] > 1000
+    assert peak < 600, f"map inspect peaked at {peak:.0f} MB"
+    from drake_social.viz.world import MAP_MAX_OUTLINES, MAP_PICTURE_CELLS
+
+    # What the figure drew: the cells in 3 x 3 blocks, and no outlines (325,780 boxes).
+    assert 5000 / 3 <= MAP_PICTURE_CELLS < 5000 / 2 and MAP_MAX_OUTLINES < 325_780

@@ -145,7 +145,7 @@ BAD_VALUES = [
     ("neg_L", {"object": "!LShape {lengths: [3.0, -2.0]}"}, ["object.lengths", "> 0"]),
     ("neg_sigma", {"social": "{sigma_h: -2.0}"}, ["social.sigma_h", "> 0"]),
     ("neg_resolution", {"social": "{resolution: 0.0}"}, ["social.resolution", "> 0"]),
-    ("neg_lambda", {"social": "{length_weight: -1.0}"}, ["social.length_weight", ">= 0"]),
+    ("neg_lambda", {"social": "{length_weight: -1.0}"}, ["social.length_weight", "in [0, 1e+06]"]),
     ("neg_range", {"planner": "{planning_range: -1.0}"}, ["planner.planning_range", "> 0"]),
     ("neg_near", {"planner": "{near_radius: 0.0}"}, ["planner.near_radius", "> 0"]),
     ("zero_dist_w", {"planner": "{distance_weights: [1, 1, 0, 1]}"}, ["planner.distance_weights"]),
@@ -202,7 +202,7 @@ BAD_VALUES = [
     # weights of the wrong length / sign (the bar has 5 interest points)
     ("weights_4", {"social": "{weights: [1, 1, 1, 1]}"}, ["social.weights", "5 values"]),
     ("weights_6", {"social": "{weights: [1, 1, 1, 1, 1, 1]}"}, ["social.weights", "5 values"]),
-    ("weights_neg", {"social": "{weights: [1, -1, 1, 1, 1]}"}, ["social.weights", ">= 0"]),
+    ("weights_neg", {"social": "{weights: [1, -1, 1, 1, 1]}"}, ["social.weights", "in [0, 1e+06]"]),
     # joints out of range
     ("start_psi1", {"start": "[1.0, 2.5, 3.5, 0.0]"}, ["start[2]", "psi1", "joint range"]),
     ("goal_psi2", {"goal": "[7.0, 2.5, 0.0, -4.0]"}, ["goal[3]", "psi2", "joint range"]),

@@ -657,3 +657,30 @@ def test_simulate_refuses_an_unknown_integration_scheme_with_exit_2(tmp_path, ca
     err = capsys.readouterr().err
     assert f"{TINY} (--set {override!r}): execution.integration_scheme: unknown scheme 'foo'; allowed: " in err
     assert "Traceback" not in err
+
+
+# ---- the objectives' weights: costs stay finite
+
+ABOVE_1E6 = 1000000.0000000001  # math.nextafter(1e6, inf)
+
+
+@pytest.mark.parametrize("field, override", [
+    ("social.length_weight", "social: {length_weight: %r}"),
+    ("planner.replan_length_weight", "planner: {replan_length_weight: %r}"),
+    ("social.weights", "social: {weights: [1, 1, 1, 1, %r]}"),
+])
+def test_objective_weights_are_bounded_at_max_cost_weight(field, override):
+    """At MAX_COST_WEIGHT and just below they load; just above and 1e308 (whose costs overflowed to inf,
+    so that every path was equally dear) are refused naming the field; -0.0 loads, the smallest negative
+    does not."""
+    import math
+
+    from drake_social.limits import MAX_COST_WEIGHT
+
+    assert MAX_COST_WEIGHT == 1e6 and math.nextafter(MAX_COST_WEIGHT, math.inf) == ABOVE_1E6
+    for fine in (MAX_COST_WEIGHT, math.nextafter(MAX_COST_WEIGHT, 0.0), 0.0):
+        load_scenario(TINY, [override % fine])
+    for bad in (ABOVE_1E6, 1e308, -5e-324):
+        shown = f"[1.0, 1.0, 1.0, 1.0, {bad!r}]" if field == "social.weights" else repr(bad)
+        assert _message(TINY, [override % bad]) == (
+            f"{TINY} (--set {(override % bad)!r}): {field}: must be in [0, 1e+06], got {shown}")

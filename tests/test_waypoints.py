@@ -21,7 +21,8 @@ from drake_social.collision.geometric import GeometricChecker
 from drake_social.planning.result import PlanningInputError
 from drake_social.scenario import ScenarioError, validate_scenario
 from drake_social.sim.diagram import build_diagram
-from drake_social.sim.run import analyze_execution, simulate
+from drake_social.sim.execution_analysis import analyze_execution
+from drake_social.sim.run import simulate
 
 H = math.pi / 2
 #: A path of tiny.yaml whose waypoints are all free but whose second segment
@@ -461,12 +462,12 @@ def _counting(monkeypatch, owner, name):
 def test_a_path_file_and_the_scenario_are_checked_once(tmp_path, tiny_scenario_path, capsys, monkeypatch):
     import drake_social.scenario
     import drake_social.scenario.load
-    import drake_social.sim.diagram
+    import drake_social.sim.checks
     from drake_social.collision.planar_checker import PlanarChecker
 
     motions = _counting(monkeypatch, PlanarChecker, "are_motions_valid")
     validations = [_counting(monkeypatch, module, "validate_scenario")  # every name a caller reaches it by
-                   for module in (drake_social.scenario, drake_social.scenario.load, drake_social.sim.diagram)]
+                   for module in (drake_social.scenario, drake_social.scenario.load, drake_social.sim.checks)]
     file = _csv(tmp_path, [[1.0, 2.5, 0.0, 1.5708], [6.5, 2.5, 0.0, 1.5708]])
     code = main(["simulate", str(tiny_scenario_path), "--path", file, "--no-replay", "--mode", "kinematic",
                  "--out", str(tmp_path / "out")])

@@ -57,6 +57,7 @@ from drake_social.model.plant import (
     environment_discs,
     environment_parts,
     registration_order,
+    shape_label,
 )
 from drake_social.collision.geometric import CheckerBase, GeometricChecker
 from drake_social.collision.planar_checker import PlanarChecker
@@ -270,7 +271,8 @@ class SceneGraphChecker(CheckerBase):
                 continue
             key = (bodies[0].name(), inspector.GetName(ids[1]))
             deepest[key] = min(pair.distance, deepest.get(key, math.inf))
-        return sorted((Contact(a, b, d) for (a, b), d in deepest.items()), key=lambda c: c.distance)
+        return sorted((Contact(a, shape_label(self.scenario, b), d) for (a, b), d in deepest.items()),
+                      key=lambda c: c.distance)
 
 
 def near_environment(scenario: Scenario, a_xy: np.ndarray, b_xy: np.ndarray, margin: float = 0.01) -> np.ndarray:

@@ -37,6 +37,7 @@ from drake_social.model.plant import (
     build_robot_diagram,
     environment_shapes,
     registration_order,
+    shape_label,
 )
 from drake_social.collision import planar_kernel as kernel
 from drake_social.collision.broadphase import build_grid
@@ -293,7 +294,8 @@ class PlanarChecker(CheckerBase):
         for j, k in zip(*np.nonzero(d <= 0.0)):
             key = (self.capsule_names[j][0], self.env_names[k])
             deepest[key] = min(float(d[j, k]), deepest.get(key, math.inf))
-        return sorted((Contact(a, b, v) for (a, b), v in deepest.items()), key=lambda c: c.distance)
+        return sorted((Contact(a, shape_label(self.scenario, b), v) for (a, b), v in deepest.items()),
+                      key=lambda c: c.distance)
 
 
 def _rotate(cs: np.ndarray, p: np.ndarray) -> np.ndarray:

@@ -45,7 +45,8 @@ class Contact:
     Attributes:
         robot_body: ``base``, ``link1``, ``link2`` or ``object``.
         other: the environment shape (``obstacle[i]``, ``person[i] 'name'``,
-            ``wall_<side>``).
+            ``wall_<side>``, or ``map[j], the box of world.map ... over image
+            rows ..., columns ... (x .. m, y .. m)``).
         distance: their signed distance, metres (<= 0).
     """
 

@@ -62,10 +62,10 @@ Example::
     from pydrake.systems.analysis import Simulator
     from drake_social.sim import build_diagram
 
-    built = build_diagram(scenario, replan=True)   # "planner" is a ReplanningPlannerSystem
+    built = build_diagram(scenario, replan=True)   # the autonomy's planner is a ReplanningPlannerSystem
     simulator = Simulator(built.diagram)
     simulator.AdvanceTo(5.0)
-    planner = built.subsystem("planner")
+    planner = built.autonomy.planner
     print(len(planner.replans(planner.GetMyContextFromRoot(simulator.get_context()))))  # 51
 """
 

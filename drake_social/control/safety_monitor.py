@@ -159,7 +159,7 @@ class SafetyMonitor(LeafSystem):
     """Sets ``stop`` while a part of the robot is within ``safety_distance`` of a person.
 
     Args:
-        geometry: the robot and its object (``ArmGeometry.from_scenario``).
+        geometry: the robot and its object (``drake_social.scenario.geometry.arm_geometry``).
         safety_distance: metres (>= 0; 0 = stop on contact only).
         period: seconds between decisions (> 0; the control period).
 

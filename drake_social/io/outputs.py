@@ -68,17 +68,16 @@ import secrets
 import shutil
 import signal
 import tempfile
-import threading
 from collections.abc import Iterable
 from pathlib import Path
+
+from drake_social.interrupts import DeferredSignals  # held back while a set is moved into place (re-exported)
 
 __all__ = ["CommittedSet", "DeferredSignals", "InterruptedAfterCommit", "OutputBusyError", "OutputInTheWayError",
            "OutputSet", "check_out_folder", "current_set"]
 
 _log = logging.getLogger(__name__)
 
-#: Signals deferred while a set is moved into place.
-_DEFERRED_SIGNALS = (signal.SIGINT, signal.SIGTERM)
 #: The generation's list of its files (inside the generation folder).
 _MANIFEST = ".manifest"
 
@@ -468,35 +467,6 @@ class OutputSet:
                 entry.unlink(missing_ok=True)
             elif not name.startswith(".") and name not in have and self._ours(entry):
                 entry.unlink(missing_ok=True)
-
-
-class DeferredSignals:
-    """Holds back SIGINT and SIGTERM over a block (main thread only; elsewhere
-    Python runs no signal handler anyway): the signals received are noted and
-    :meth:`reraise` delivers them afterwards with the original handlers."""
-
-    def __init__(self):
-        self.received: list[int] = []
-        self._old: dict[int, object] = {}
-
-    def __enter__(self) -> "DeferredSignals":
-        if threading.current_thread() is threading.main_thread():
-            for sig in _DEFERRED_SIGNALS:
-                if signal.getsignal(sig) is not None:  # None: a handler set outside Python, left alone
-                    self._old[sig] = signal.signal(sig, self._note)
-        return self
-
-    def _note(self, signum, frame) -> None:
-        self.received.append(signum)
-
-    def __exit__(self, *exc) -> bool:
-        for sig, handler in self._old.items():
-            signal.signal(sig, handler)
-        return False
-
-    def reraise(self) -> None:
-        for sig in dict.fromkeys(self.received):
-            signal.raise_signal(sig)
 
 
 def check_out_folder(out: str | os.PathLike, option: str = "--out") -> None:

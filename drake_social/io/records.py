@@ -5,13 +5,13 @@ run in ``bench.json``; a study keeps one per task in ``results.json`` and
 ``results.csv``. All three name every quantity as :data:`RUN_FIELDS` does:
 the planner's part comes from
 :meth:`drake_social.planning.result.PlannerResult.to_record`, the path's
-measures from :func:`drake_social.experiments.records.path_costs`, and each
+measures from :func:`drake_social.evaluation.records.path_costs`, and each
 producer adds the fields of its context (:data:`CONTEXT_FIELDS`). A producer
 may leave a field out (``bench`` keeps no ``cost_history``), never rename it.
 
 A simulated run (``simulate``'s ``sim.json``, a study's executed runs) also
 carries the social-navigation metrics over time of
-:func:`drake_social.experiments.records.execution_metrics`, flat keys named
+:func:`drake_social.evaluation.nav_metrics.execution_metrics`, flat keys named
 by :data:`NAV_FIELDS` (prefix :data:`NAV_PREFIX`); a study's executed runs
 also carry :data:`EXECUTION_FIELDS`.
 
@@ -64,7 +64,7 @@ PLANNER_FIELDS: dict[str, str] = {
     "cost_history": "the best objective after each iteration (null before the first solution)",
 }
 
-#: The fields of a path's measures (:func:`drake_social.experiments.records.path_costs`), recomputed from the
+#: The fields of a path's measures (:func:`drake_social.evaluation.records.path_costs`), recomputed from the
 #: waypoints by the same code for every producer; null on failure.
 PATH_FIELDS: dict[str, str] = {
     "F_multi": "the social integral along the path with weight 1 on every interest point (the paper's F; "
@@ -96,7 +96,7 @@ RUN_FIELDS: dict[str, str] = {**CONTEXT_FIELDS, **PLANNER_FIELDS, **PATH_FIELDS}
 NAV_PREFIX = "nav_"
 
 #: The metrics over time of an executed run against where people were
-#: (:func:`drake_social.experiments.metrics.run_metrics`; its docstring's table
+#: (:func:`drake_social.evaluation.metrics.run_metrics`; its docstring's table
 #: gives the definitions and the conventions: sample-and-hold for times spent,
 #: trapezoid rule for means and integrals), with ``<part>`` one of base, arm,
 #: object, robot (the whole robot) and ``<zone>`` one of Hall's intimate
@@ -143,9 +143,9 @@ NAV_FIELDS: dict[str, str] = {
 }
 
 #: The fields of a study's executed run (``--simulate``) beside its
-#: ``exec_``-prefixed :func:`~drake_social.experiments.metrics.executed_metrics`
+#: ``exec_``-prefixed :func:`~drake_social.evaluation.metrics.executed_metrics`
 #: and its ``nav_*`` fields; ``sim.json`` holds the report's fields under
-#: their :class:`~drake_social.sim.run.ExecutionReport` names.
+#: their :class:`~drake_social.sim.results.ExecutionReport` names.
 EXECUTION_FIELDS: dict[str, str] = {
     "exec_reached": "whether the run reached the goal within execution.time_limit",
     "exec_time_to_goal": "seconds until the goal was reached; null when not reached",

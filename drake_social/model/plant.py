@@ -15,6 +15,7 @@ south and north walls run past the corners so the room is closed.
 from __future__ import annotations
 
 import dataclasses as dc
+import re
 from typing import Sequence
 
 import numpy as np
@@ -29,6 +30,7 @@ from pydrake.planning import RobotDiagram, RobotDiagramBuilder
 from drake_social.model.robot_model import COLLISION_HEIGHT, robot_sdf
 from drake_social.people import PeopleState, people_model
 from drake_social.scenario import Box, Scenario
+from drake_social.scenario.map_rules import map_box_label
 from drake_social.world import WALL_NAMES, world_model
 
 __all__ = [
@@ -49,6 +51,7 @@ __all__ = [
     "environment_shapes",
     "register_environment",
     "registration_order",
+    "shape_label",
     "wall_boxes",
 ]
 
@@ -83,6 +86,18 @@ def environment_names(scenario: Scenario) -> list[str]:
     names = world_model(scenario).box_names
     indices, people = people_at_start(scenario)
     return names + person_geometry_names(people.names, indices) + list(WALL_NAMES)
+
+
+def shape_label(scenario: Scenario, name: str) -> str:
+    """How a report names the environment shape ``name``
+    (:func:`environment_names`): the name, and for a box of the map,
+    ``map[j]``, also where it is (its image rows and columns and its world
+    coordinates, :func:`~drake_social.scenario.map_rules.map_box_label`),
+    since no figure numbers the map's boxes."""
+    match = re.fullmatch(r"map\[(\d+)\]", name)
+    if match is None or scenario.world.map is None:
+        return name
+    return f"{name}, {map_box_label(scenario.world, int(match.group(1)))}"
 
 
 def people_at_start(scenario: Scenario) -> tuple[np.ndarray, PeopleState]:

@@ -2,8 +2,10 @@
 
 The robot's dimensions live in the scenario, so the model text is generated
 here, in one function (:func:`robot_sdf`), rather than kept as a second source
-of truth. ``models/mobile_manipulator.sdf`` is this function's output for the
-default :class:`~drake_social.scenario.Scenario`; a test keeps them equal.
+of truth. ``models/mobile_manipulator.sdf`` (at the top of the repository;
+``drake_social/models`` links to it, so that it is package data, installed with
+the package: :func:`models_dir`) is this function's output for the default
+:class:`~drake_social.scenario.Scenario`; a test keeps them equal.
 
 The model (all lengths metres, angles radians):
 
@@ -77,8 +79,11 @@ _MASSES = {"base": 20.0, "link1": 1.0, "link2": 1.0, "object": 0.5}
 
 
 def models_dir() -> Path:
-    """The ``models/`` folder of this repository (``package://drake_social``)."""
-    return Path(__file__).resolve().parents[2] / "models"
+    """The package's ``models/`` folder (``package://drake_social``: its
+    ``package.xml``): in a checkout a link to the repository's ``models/``,
+    in an installed package a copy of it (package data), so an installed
+    package finds it without the repository."""
+    return Path(__file__).resolve().parents[1] / "models"
 
 
 def default_model_path() -> Path:

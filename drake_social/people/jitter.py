@@ -1,5 +1,5 @@
 """Seeded start delays of a scenario's scripted walkers (the crowd study's
-episodes, :mod:`drake_social.experiments.crowd`).
+episodes, :mod:`drake_social.experiments.study.crowd`).
 
 Walker ``i`` (a :class:`~drake_social.scenario.schema.Person` with a
 ``trajectory``, ``i`` its index in the scenario's people) starts late by

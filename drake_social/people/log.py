@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import dataclasses as dc
 import math
-from typing import Sequence
+from typing import Iterator, Sequence
 
 import numpy as np
 
@@ -147,14 +147,13 @@ class PeopleLog:
             velocities=(1 - w) * self.velocities[k] + w * self.velocities[k + 1],
             radii=self.radii, names=self.names, present=self.present[k])
 
-    def csv_rows(self) -> list[tuple[float, str, float, float, float, float]]:
+    def csv_rows(self) -> Iterator[tuple[float, str, float, float, float, float]]:
         """Rows (t, id, x, y, theta, v) of ``people.csv``: one per present person
-        per sample, in time order, then the people's order (ids from :func:`person_ids`)."""
+        per sample, in time order, then the people's order (ids from :func:`person_ids`),
+        one at a time (a long run among many people has millions)."""
         ids = person_ids(self.names)
         speeds = np.hypot(self.velocities[..., 0], self.velocities[..., 1])
-        rows = []
         for k, t in enumerate(self.times):
             for i in np.flatnonzero(self.present[k]):
-                rows.append((float(t), ids[i], float(self.positions[k, i, 0]), float(self.positions[k, i, 1]),
-                             float(self.headings[k, i]), float(speeds[k, i])))
-        return rows
+                yield (float(t), ids[i], float(self.positions[k, i, 0]), float(self.positions[k, i, 1]),
+                       float(self.headings[k, i]), float(speeds[k, i]))

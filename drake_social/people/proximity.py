@@ -2,7 +2,7 @@
 
 The one home of the robot-to-people distance read by the safety monitor
 (:class:`drake_social.control.SafetyMonitor`), the crowd's view of the robot
-and the metrics (:mod:`drake_social.experiments.metrics`). A person is a body
+and the metrics (:mod:`drake_social.evaluation.metrics`). A person is a body
 disc (centre, radius); the robot is its base disc, its interest points (the
 elbow, the gripper and the object's points, as points) and its capsules (two
 links, the object's segments). Distances are exact for these shapes.
@@ -15,7 +15,12 @@ import numpy as np
 from drake_social.kinematics import ArmGeometry
 from drake_social.people import proximity_kernel
 
-__all__ = ["part_distances", "part_names", "robot_distance", "robot_distance_args", "segment_point_distance"]
+__all__ = ["DISTANCE_CHUNK_ELEMENTS", "part_distances", "part_names", "robot_distance", "robot_distance_args", "segment_point_distance"]
+
+#: (configuration, point or segment, person) distances per block of :func:`part_distances`: each
+#: temporary holds at most this many values (2 MB, 4 MB for the offsets), however many configurations
+#: and people (at least one configuration per block).
+DISTANCE_CHUNK_ELEMENTS = 1 << 18
 
 
 def part_names(geometry: ArmGeometry) -> list[str]:
@@ -54,6 +59,9 @@ def part_distances(geometry: ArmGeometry, q: np.ndarray, centres: np.ndarray, ra
 
     Returns:
         ``{part: (M,) distances}`` for :func:`part_names`.
+
+    Memory does not grow with M: the configurations are measured in blocks
+    (:data:`DISTANCE_CHUNK_ELEMENTS`).
     """
     q = np.asarray(q, float).reshape(-1, 4)
     m = len(q)
@@ -64,6 +72,11 @@ def part_distances(geometry: ArmGeometry, q: np.ndarray, centres: np.ndarray, ra
     names = part_names(geometry)
     if n == 0:
         return {name: np.full(m, np.inf) for name in names}
+    rows = max(1, DISTANCE_CHUNK_ELEMENTS // (n * max(len(geometry.interest_names), len(geometry.segment_radii))))
+    if m > rows:  # in blocks of configurations: each row's distances are those of the whole at once
+        blocks = [part_distances(geometry, q[i:i + rows], centres[i:i + rows], radii, present[i:i + rows])
+                  for i in range(0, m, rows)]
+        return {name: np.concatenate([b[name] for b in blocks]) for name in names}
     absent = np.where(present, 0.0, np.inf)[:, None, :]  # (M, 1, P)
     pts = geometry.interest_points(q)  # (M, K, 2)
     d_pts = np.linalg.norm(pts[:, :, None, :] - centres[:, None, :, :], axis=-1) - radii + absent  # (M, K, P)

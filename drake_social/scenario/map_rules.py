@@ -35,7 +35,7 @@ from drake_social.errors import ScenarioError
 from drake_social.maps import OCCUPIED, UNKNOWN, MapBoxes, OccupancyMap, map_boxes, read_map
 from drake_social.scenario.schema import MAP_UNKNOWN
 
-__all__ = ["check_map", "map_extent", "obstacle_arrays", "obstacle_label", "outside_boxes", "world_map",
+__all__ = ["check_map", "map_box_label", "map_extent", "obstacle_arrays", "obstacle_label", "outside_boxes", "world_map",
            "world_map_boxes", "world_map_file"]
 
 Fail = Callable[[str, str], None]
@@ -147,21 +147,39 @@ def obstacle_arrays(world) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
 
 def obstacle_label(world, k: int) -> str:
     """How messages name obstacle ``k`` of :func:`obstacle_arrays`:
-    ``world.obstacles[k]``, or a box of the map with its image pixels."""
+    ``world.obstacles[k]``, or a box of the map (:func:`map_box_label`)."""
     k = int(k)
     n = len(world.obstacles)
     if k < n:
         return f"world.obstacles[{k}]"
+    return map_box_label(world, k - n)
+
+
+def map_box_label(world, j: int) -> str:
+    """How messages name box ``j`` of ``world``'s map (:func:`world_map_boxes`):
+    the image rows and columns it covers (as an image viewer numbers them:
+    row 0 at the top) and the world coordinates it spans (metres; the axis-
+    aligned range of its corners), e.g. ``the box of world.map lab.yaml over
+    image rows 3-11, columns 8-9 (x 4.00 .. 5.00 m, y 0.00 .. 4.50 m)``; or
+    the outside of a turned map's rectangle (:func:`outside_boxes`)."""
     boxes = world_map_boxes(world)
     grid = world_map(world)
-    r0, c0, r1, c1 = (int(v) for v in boxes.cells[k - n])
+    j = int(j)
+    r0, c0, r1, c1 = (int(v) for v in boxes.cells[j])
     if r0 < 0:
-        return f"the outside of world.map {grid.path.name} (unknown: world.unknown is obstacle)"
+        return (f"the outside of world.map {grid.path.name}'s rectangle (unknown: world.unknown is obstacle; "
+                f"docs/maps.md)")
     # Grid rows count from the image's bottom row.
     top, bottom = grid.shape[0] - r1, grid.shape[0] - 1 - r0
-    return (f"the box of world.map {grid.path.name} over image rows {top}-{bottom}, columns {c0}-{c1 - 1}"
-            if (top, c0) != (bottom, c1 - 1) else f"the cell of world.map {grid.path.name} at image row {top}, "
-                                                   f"column {c0}")
+    c, s = math.cos(float(boxes.yaws[j])), math.sin(float(boxes.yaws[j]))
+    hx, hy = 0.5 * np.asarray(boxes.sizes[j], float)
+    corners = np.asarray(boxes.centers[j], float) + np.array([[c * u - s * v, s * u + c * v]
+                                                              for u in (-hx, hx) for v in (-hy, hy)])
+    (x0, y0), (x1, y1) = corners.min(axis=0), corners.max(axis=0)
+    where = f"(x {x0:.2f} .. {x1:.2f} m, y {y0:.2f} .. {y1:.2f} m)"
+    if (top, c0) != (bottom, c1 - 1):
+        return f"the box of world.map {grid.path.name} over image rows {top}-{bottom}, columns {c0}-{c1 - 1} {where}"
+    return f"the cell of world.map {grid.path.name} at image row {top}, column {c0} {where}"
 
 
 def check_map(scenario, fail: Fail) -> None:

@@ -285,12 +285,16 @@ class SocialCostOptions:
     rear_ratio: float = 0.5
     # AGF values <= threshold count as 0 (the paper: 0.2), in [0, 1).
     threshold: float = 0.2
-    # One weight >= 0 per interest point, in the order base, link-1 tip,
+    # One weight in [0, 1e6] per interest point, in the order base, link-1 tip,
     # link-2 tip, then the object's points. None = 1 for every point.
     weights: Optional[list[float]] = None
-    # Path-length weight lambda >= 0 added to the social integral
-    # (0 = the paper's pure social cost).
-    length_weight: float = 0.0
+    # Path-length weight lambda in [0, 1e6] added to the social integral
+    # (0 = the paper's pure social cost). The default breaks ties by length:
+    # where the social cost is 0 (nobody near) every route costs the same
+    # without it, and the planner's path wanders; 0.001 per unit of length is
+    # far below any social cost a route could save (a route 10 m longer costs
+    # 0.01 more), so it decides only among routes of about equal social cost.
+    length_weight: float = 0.001
     # Largest workspace displacement of any weighted interest point between two
     # samples of the trapezoid rule along a motion, metres (> 0). Threshold
     # crossings are located inside steps, so 0.1 m keeps Msc within ~0.5% of
@@ -365,10 +369,11 @@ class PlannerOptions:
     # current path against the new prediction; one that finds it unsafe
     # searches at once.
     replan_search_period: float = 1.0
-    # Added to social.length_weight in the replanner's objective (>= 0): while
-    # the robot drives, time passes for everyone, and among routes of about
-    # equal social cost the shorter one should win (without it a replan may
-    # take any of many near-zero-cost detours; docs/replanning.md).
+    # Added to social.length_weight in the replanner's objective (in [0, 1e6]): while
+    # the robot drives, time passes for everyone, and a path should pay for
+    # its length (with social.length_weight's tie-break alone, 0.001, a replan
+    # may take any of many near-zero-cost detours: the replan margin of a
+    # route's cost by length alone is too small to hold it; docs/replanning.md).
     replan_length_weight: float = 0.1
     # How people are predicted: "constant_velocity" (from their state now) or
     # "perfect" (scripted and recorded people as they will walk; a crowd at constant velocity).

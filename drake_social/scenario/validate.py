@@ -22,7 +22,8 @@ from drake_social.scenario.geometry import arm_geometry
 from drake_social.limits import (ALGORITHMS, CONTACT_APPROXIMATIONS, INFORMED_ALGORITHMS, INTEGRATION_SCHEMES,
                                  MAX_CONTROL_STEPS, MAX_DYNAMIC_PLANT_TIME_STEP,
                                  MAX_ITERATIONS, MAX_MOTION_STEPS, MAX_OBJECT_POINTS, MAX_PLANT_STEPS,
-                                 MAX_REPLAN_BUDGET, MAX_REPLAN_HORIZON, MAX_REPLAN_ITERATIONS,
+                                 MAX_COST_WEIGHT, MAX_REPLAN_BUDGET, MAX_REPLAN_HORIZON,
+                                 MAX_REPLAN_ITERATIONS,
                                  MAX_REPLANS_PER_CONTROL_PERIOD, MAX_REPLAY_FPS, MAX_TIME_LIMIT, MIN_CONTROL_PERIODS,
                                  SERVO_BANDWIDTH)
 from drake_social.scenario.crowd_rules import crowd_problems
@@ -67,6 +68,13 @@ class _Checker:
         self.finite(field, value)
         if not np.all(np.asarray(value, dtype=float) >= 0):
             self.fail(field, f"must be >= 0, got {_shown(value)}")
+
+    def weight(self, field: str, value) -> None:
+        """A weight of an objective: in [0, MAX_COST_WEIGHT]."""
+        self.finite(field, value)
+        arr = np.asarray(value, dtype=float)
+        if not np.all((arr >= 0) & (arr <= MAX_COST_WEIGHT)):
+            self.fail(field, f"must be in [0, {MAX_COST_WEIGHT:g}], got {_shown(value)}")
 
     def length(self, field: str, value, n: int) -> None:
         if len(value) != n:
@@ -337,8 +345,8 @@ def validate_scenario(scenario: Scenario, source: str = "<scenario>") -> None:
     n_points = 3 + interest_point_count(o)
     if s.weights is not None:
         c.length("social.weights", s.weights, n_points)
-        c.nonnegative("social.weights", s.weights)
-    c.nonnegative("social.length_weight", s.length_weight)
+        c.weight("social.weights", s.weights)
+    c.weight("social.length_weight", s.length_weight)
     c.positive("social.resolution", s.resolution)
     # The longest motion in the room must be sampleable in at most
     # MAX_MOTION_STEPS steps (the object and robot are checked above).
@@ -388,9 +396,7 @@ def validate_scenario(scenario: Scenario, source: str = "<scenario>") -> None:
     c.finite("planner.replan_margin", p.replan_margin)
     if not 0.0 <= p.replan_margin < 1.0:
         c.fail("planner.replan_margin", f"must be in [0, 1), got {p.replan_margin}")
-    c.finite("planner.replan_length_weight", p.replan_length_weight)
-    if not p.replan_length_weight >= 0.0:
-        c.fail("planner.replan_length_weight", f"must be >= 0, got {p.replan_length_weight}")
+    c.weight("planner.replan_length_weight", p.replan_length_weight)
     c.finite("planner.replan_search_period", p.replan_search_period)
     if not p.replan_search_period >= 0.0:
         c.fail("planner.replan_search_period", f"must be >= 0 seconds, got {p.replan_search_period}")

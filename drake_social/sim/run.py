@@ -3,24 +3,20 @@
 :func:`simulate` builds the diagram (:func:`~drake_social.sim.diagram.build_diagram`),
 plans at initialization (or takes the given waypoints), advances until the
 sequencer reports the goal reached or ``execution.time_limit`` passes, and
-returns a :class:`SimulationResult`: the logged trajectory and, after every
-run, what the *executed* trajectory did: checked for collisions at the
-checker's resolution (geometry only), checked against the limits of a valid
-configuration (a separate finding: which joint, when, by how much), its
-social cost integrated with the same cost code as the planner's, the
-deviation of every body point from the planned path, the minimum clearance
-and the time to goal. The people are logged at the same times as the
-executed configurations (:attr:`SimulationResult.people`). When they move,
-the collision check covers the obstacles and walls only (the people at t = 0
-are not where the robot met them): the distances to people are measured over
-time from the people log (:mod:`drake_social.experiments.metrics`), and
-:attr:`ExecutionReport.collision_checked` names what was checked.
+returns a :class:`~drake_social.sim.results.SimulationResult`: the logged
+trajectory, the people at the same times, the safety stops and, after every
+run, what the *executed* trajectory did
+(:func:`~drake_social.sim.execution_analysis.analyze_execution`: collisions,
+limits, social cost, deviation from the plan, clearance). It reads the
+systems it needs from the diagram's records (the autonomy's sequencer,
+planner and safety monitor, the station's people source), never by a
+subsystem's name.
 
 With ``replan`` (or the scenario's ``planner.replan``) the diagram's planner
 replans every ``1 / planner.replan_rate`` seconds
 (:class:`~drake_social.control.ReplanningPlannerSystem`): the result keeps
-every replan (:attr:`SimulationResult.replans`), their summary
-(:attr:`SimulationResult.replanning`, also in :meth:`SimulationResult.to_json_dict`
+every replan (``SimulationResult.replans``), their summary
+(``SimulationResult.replanning``, also in ``SimulationResult.to_json_dict``
 and logged in one line) and, as ``waypoints``, the path followed.
 
 Example::
@@ -39,280 +35,32 @@ import dataclasses as dc
 import logging
 import math
 import time
-from typing import Any, Callable
+from typing import Callable
 
 import numpy as np
 from pydrake.geometry import Meshcat
 from pydrake.systems.analysis import ApplySimulatorConfig, InitializeParams, Simulator, SimulatorConfig
 
-from drake_social.arguments import (
-    real_array,
-    require_callable,
-    require_checker,
-    require_instance,
-    require_number,
-    require_scenario,
-)
-from drake_social.control import replanning_summary
-from drake_social.cost.social import SocialCost
-from drake_social.scenario.geometry import arm_geometry, configuration_limits
-from drake_social.model.plant import ACTUATED_JOINTS
-from drake_social.planning.result import PlannerResult
+from drake_social.arguments import require_callable, require_checker, require_instance, require_number, require_scenario
 from drake_social.collision.validity import ValidityChecker
-from drake_social.people import PeopleLog, PeopleModel, people_model, without_people
-from drake_social.scenario import Scenario, ScenarioError, time_limit_problem
-from drake_social.sim.analysis import config_deviation, densify, point_deviation
-from drake_social.sim.diagram import (
-    TransportDiagram,
-    build_checked,
-    check_diagram_options,
-    check_diagram_waypoints,
-    resolve_replan,
-)
-from drake_social.waypoints import waypoint_array
+from drake_social.control import replanning_summary
+from drake_social.scenario.geometry import configuration_limits
+from drake_social.model.plant import ACTUATED_JOINTS
+from drake_social.people import PeopleModel
+from drake_social.planning.result import PlannerResult
+from drake_social.scenario import Scenario, time_limit_problem
+from drake_social.sim.autonomy import path_source
+from drake_social.sim.checks import check_diagram_options, check_diagram_waypoints, resolve_replan
+from drake_social.sim.diagram import TransportDiagram, build_checked
+from drake_social.sim.execution_analysis import analyze_execution
+from drake_social.sim.results import SimulationDiverged, SimulationResult, replanning_line
 
-__all__ = ["CHECKED_ROOM", "CHECKED_ROOM_AND_PEOPLE", "ExecutionReport", "LimitViolation", "SimulationResult",
-           "analyze_execution", "limit_violations", "replanning_line", "scenario_simulator_config", "simulate"]
+__all__ = ["scenario_simulator_config", "simulate"]
 
 #: Simulated seconds per AdvanceTo call between checks for the goal.
 _CHUNK = 0.25
 
 _log = logging.getLogger(__name__)
-
-#: What the collision check of an executed trajectory covers
-#: (:attr:`ExecutionReport.collision_checked`): everything when the people
-#: stand still, the room alone when they move.
-CHECKED_ROOM_AND_PEOPLE = ("obstacles", "walls", "people")
-CHECKED_ROOM = ("obstacles", "walls")
-
-
-@dc.dataclass(frozen=True)
-class LimitViolation:
-    """One joint of the executed trajectory beyond its limit.
-
-    The limits are those of a valid configuration (the checkers' and the
-    robot model's): the room bounds for ``base_x`` and ``base_y`` (metres),
-    ``robot.joint_lower`` / ``joint_upper`` for ``psi1`` and ``psi2``
-    (radians).
-
-    Attributes:
-        joint: ``base_x``, ``base_y``, ``psi1`` or ``psi2``.
-        bound: ``"lower"`` or ``"upper"``.
-        limit: the limit passed, metres or radians.
-        first_time: first logged time beyond it, seconds.
-        worst_time: time of the largest excess, seconds.
-        max_excess: the largest distance beyond the limit (> 0), metres or radians.
-    """
-
-    joint: str
-    bound: str
-    limit: float
-    first_time: float
-    worst_time: float
-    max_excess: float
-
-    @property
-    def kind(self) -> str:
-        """What was passed: ``"a room bound"`` (base) or ``"a joint limit"`` (arm)."""
-        return "a room bound" if self.joint.startswith("base") else "a joint limit"
-
-    def __str__(self) -> str:
-        unit = "m" if self.joint.startswith("base") else "rad"
-        return (f"{self.joint} {self.max_excess:.3g} {unit} beyond its {self.bound} limit {self.limit:.6g} "
-                f"at t = {self.worst_time:.2f} s (first at t = {self.first_time:.2f} s)")
-
-
-@dc.dataclass
-class ExecutionReport:
-    """What the executed trajectory did, beside what was planned.
-
-    Attributes:
-        planned_social_cost: Msc summed along the planned waypoints (the
-            scenario's full multi-point weights).
-        executed_social_cost: the same integral along the executed trajectory,
-            with the same cost function as the planner's: against the people
-            at t = 0, even when they walk (the planned cost's counterpart;
-            the cost among the people where they were is ``nav_agf_time_*``).
-        max_point_deviation: body point name -> largest distance (metres) of
-            its executed position from its planned curve, and ``"max"``.
-        max_config_deviation: largest configuration-space distance of an
-            executed configuration from the planned waypoint polyline.
-        min_clearance: smallest signed distance (metres) of the robot to the
-            environment along the executed trajectory (checked configurations;
-            exact planar distances).
-        collision_free: no checked configuration collides with what
-            ``collision_checked`` names: a verdict on the geometry alone
-            (signed distance > 0), whatever the joint limits.
-        first_collision_time: time (s) of the first colliding configuration, or None.
-        within_limits: no executed configuration is beyond a limit of a valid
-            configuration (see :class:`LimitViolation`).
-        limit_violations: one :class:`LimitViolation` per joint and bound
-            passed, in joint order (empty when ``within_limits``).
-        checked_configurations: how many configurations were checked (the
-            executed samples, densified to the collision resolution).
-        collision_resolution: largest body-point motion between checked
-            configurations, metres.
-        collision_checked: what the collision check and ``min_clearance``
-            cover: :data:`CHECKED_ROOM_AND_PEOPLE` (the people stand still) or
-            :data:`CHECKED_ROOM` (the people move; their distances over time
-            are the metrics' from the people log).
-    """
-
-    planned_social_cost: float
-    executed_social_cost: float
-    max_point_deviation: dict[str, float]
-    max_config_deviation: float
-    min_clearance: float
-    collision_free: bool
-    first_collision_time: float | None
-    checked_configurations: int
-    collision_resolution: float
-    within_limits: bool
-    limit_violations: list[LimitViolation]
-    collision_checked: list[str] = dc.field(default_factory=lambda: list(CHECKED_ROOM_AND_PEOPLE))
-
-
-@dc.dataclass
-class SimulationResult:
-    """A simulated execution.
-
-    Attributes:
-        mode, execution: how it ran.
-        reached: the sequencer reported the goal reached before the time limit.
-        message: one line on the outcome.
-        time_to_goal: simulated seconds until the goal was reached (None if not).
-        sim_time: simulated seconds.
-        wall_time: seconds spent in ``Simulator.AdvanceTo`` (planning excluded).
-        realtime_factor: ``sim_time / wall_time``.
-        waypoints: (N, 4) the path followed.
-        times: (T,) log times, seconds.
-        q: (T, 4) configurations; v: (T, 4) their velocities (m/s, rad/s).
-        wheel_speeds: (T, 4) commanded wheel speeds, rad/s.
-        target: (T, 4) the sequencer's target; reference: (T, 4) what was tracked.
-        target_index: (T,) the sequencer's index.
-        planner: the PlannerResult when the diagram planned, else None.
-        report: the :class:`ExecutionReport`, or None when not analysed or no path.
-        people: the people at ``times`` (a :class:`~drake_social.people.PeopleLog`;
-            the crowd as it reacted to the robot), or None when the scenario
-            has no people or nothing ran.
-        stopped: (T,) True at the sample times t_k the safety monitor holds
-            the robot from (its decision at t_k: ``start <= t_k < end`` of a
-            stop), all False without people. (The ``stop`` logger, published
-            before the updates, shows the decision of t_{k-1} at t_k.)
-        waiting: (T,) True at the sample times t_k the replanner holds the
-            robot from (its latest decision at or before t_k found no safe
-            path: status ``"wait"``), all False without replanning.
-        stops: one dict per stop by the safety monitor, in order: ``start``
-            and ``end`` (the times of the updates that stopped and released
-            the robot, seconds; ``end`` None when still stopped at the end),
-            ``duration`` (seconds, until the end of the run when still
-            stopped), ``person`` (nearest person's name, or index), ``part``
-            (``base``, ``arm`` or ``object``) and ``distance`` (that part's
-            surface distance at the start, metres).
-        replans: with replanning, every
-            :class:`~drake_social.planning.replan.ReplanResult` of the run in
-            order (the first plan's first; the replans after the goal was
-            reached are left out); empty without.
-        replanning: with replanning, the summary of ``replans``
-            (:func:`~drake_social.control.replanning_summary`: count, changed,
-            waits, plan times, deadline hits, rate, budget); None without.
-            With replanning ``waypoints`` is the path followed: each path up
-            to the waypoint it was heading for when a replan replaced it, then
-            the last one.
-    """
-
-    mode: str
-    execution: str
-    reached: bool
-    message: str
-    time_to_goal: float | None
-    sim_time: float
-    wall_time: float
-    realtime_factor: float
-    waypoints: np.ndarray
-    times: np.ndarray
-    q: np.ndarray
-    v: np.ndarray
-    wheel_speeds: np.ndarray
-    target: np.ndarray
-    reference: np.ndarray
-    target_index: np.ndarray
-    planner: PlannerResult | None = None
-    report: ExecutionReport | None = None
-    people: PeopleLog | None = None
-    stopped: np.ndarray = dc.field(default_factory=lambda: np.zeros(0, bool))
-    waiting: np.ndarray = dc.field(default_factory=lambda: np.zeros(0, bool))
-    stops: list[dict] = dc.field(default_factory=list)
-    replans: tuple = ()
-    replanning: dict | None = None
-
-    @property
-    def stopped_time(self) -> float:
-        """Seconds the safety monitor held the robot (the stops' durations summed)."""
-        return float(sum(stop["duration"] or 0.0 for stop in self.stops))
-
-    def summary(self) -> str:
-        """One line for the terminal."""
-        line = f"{self.mode}/{self.execution}: {self.message}"
-        if self.report is not None:
-            r = self.report
-            line += (f"; social cost planned {r.planned_social_cost:.4g}, executed {r.executed_social_cost:.4g}; "
-                     f"max point deviation {r.max_point_deviation['max']:.3g} m; "
-                     f"min clearance {r.min_clearance:.3g} m; "
-                     f"{'collision-free' if r.collision_free else 'COLLIDES'}"
-                     f"{'' if 'people' in r.collision_checked else ' (obstacles and walls; the people move)'}; "
-                     + ("within the joint limits and room bounds" if r.within_limits else
-                        "BEYOND A LIMIT: " + "; ".join(str(v) for v in r.limit_violations)))
-        if self.stops:
-            line += f"; {len(self.stops)} safety stop{'s' if len(self.stops) > 1 else ''} ({self.stopped_time:.2f} s)"
-        if self.replanning is not None:
-            line += f"; {replanning_line(self.replanning)}"
-        if self.sim_time > 0 and math.isfinite(self.realtime_factor):  # nothing simulated: no factor to show
-            line += f"; {self.realtime_factor:.0f}x realtime"
-        return line
-
-    def to_json_dict(self) -> dict[str, Any]:
-        """JSON-ready summary (the logged arrays are left out)."""
-
-        def num(x):
-            return None if x is None or not np.isfinite(x) else float(x)
-
-        out: dict[str, Any] = {
-            "mode": self.mode,
-            "execution": self.execution,
-            "reached": self.reached,
-            "message": self.message,
-            "time_to_goal": num(self.time_to_goal),
-            "sim_time": self.sim_time,
-            "wall_time": self.wall_time,
-            "realtime_factor": num(self.realtime_factor),
-            "num_waypoints": int(len(self.waypoints)),
-            "num_samples": int(len(self.times)),
-            "stops": [dict(stop) for stop in self.stops],
-            "stopped_time": self.stopped_time,
-        }
-        if self.report is not None:
-            r = dc.asdict(self.report)
-            r["first_collision_time"] = num(r["first_collision_time"])
-            r["min_clearance"] = num(r["min_clearance"])
-            out.update(r)
-        if self.planner is not None:
-            out["planner"] = {k: v for k, v in self.planner.to_record().items() if k != "cost_history"}
-        if self.replanning is not None:
-            out["replanning"] = dict(self.replanning)
-        return out
-
-
-def replanning_line(summary: dict) -> str:
-    """A run's replanning summary (:func:`~drake_social.control.replanning_summary`) in words."""
-    line = (f"{summary['count']} replans at {summary['rate']:g} Hz: {summary['changed']} changed the path, "
-            f"{summary['waits']} waited")
-    if summary["count"]:
-        line += (f"; plan time median {summary['plan_time_median'] * 1e3:.1f} ms, p95 "
-                 f"{summary['plan_time_p95'] * 1e3:.1f} ms, max {summary['plan_time_max'] * 1e3:.1f} ms "
-                 f"(budget {summary['budget'] * 1e3:g} ms, {summary['deadline_hits']} deadline hits)")
-    return line
-
 
 #: A state beyond these is a diverged simulation, not a motion: speeds
 #: (m/s, rad/s) and arm angles (rad), and the base more than the room's
@@ -321,20 +69,25 @@ _ABSURD_SPEED = 1e3
 _ABSURD_ANGLE = 1e2
 
 
-class SimulationDiverged(ScenarioError):
-    """The simulated state became non-finite or absurd (a plant step too
-    large for the scenario's dynamics).
+#: The start of Drake's message when a discrete plant's step fails.
+_SOLVER_FAILED = "discrete update solver failed to converge"
 
-    Attributes:
-        time: simulated seconds when it was found.
-        what: the state found (e.g. ``"speed 3.2e+05 of base_x"``).
+
+def _contact_solver_failed(scenario: Scenario, time: float) -> SimulationDiverged:
+    """The error of a dynamic run whose plant step failed at ``time`` (s).
+
+    TAMSI, the default contact approximation, can fail to converge in a hard
+    contact (a body pushed into a wall by the base's servo, as the paper's
+    execution may do when it leaves the checked segments); SAP (``lagged``,
+    ``similar``) solves it, at about three times the cost of a step.
     """
-
-    def __init__(self, scenario: Scenario, mode: str, time: float, what: str):
-        self.time, self.what = float(time), what
-        advice = (f": execution.plant_time_step {scenario.execution.plant_time_step:g} s is too large for this "
-                  "scenario's dynamics; use a smaller one" if mode == "dynamic" else "")
-        super().__init__(f"the {mode} simulation diverged by t = {self.time:.2f} s ({what}){advice}")
+    approximation = scenario.execution.contact_approximation
+    advice = ("a hard contact; execution.contact_approximation: lagged or similar (SAP) solves it, "
+              "as may a smaller execution.plant_time_step" if approximation == "tamsi" else
+              f"execution.plant_time_step {scenario.execution.plant_time_step:g} s is too large for this "
+              "contact; use a smaller one")
+    return SimulationDiverged(scenario, "dynamic", time,
+                              f"the plant's {approximation} contact solver did not converge", advice)
 
 
 def _divergence(q, v, lower: np.ndarray, upper: np.ndarray) -> str | None:
@@ -371,157 +124,6 @@ def scenario_simulator_config(scenario: Scenario) -> SimulatorConfig:
     e = scenario.execution
     return SimulatorConfig(integration_scheme=e.integration_scheme, max_step_size=float(e.control_period),
                            accuracy=float(e.accuracy), target_realtime_rate=float(e.target_realtime_rate))
-
-
-def limit_violations(scenario: Scenario, times: np.ndarray, q: np.ndarray) -> list[LimitViolation]:
-    """Where the executed configurations ``q`` (T, 4) at ``times`` (T,) pass a limit.
-
-    The configurations are compared with the limits exactly (as the
-    checkers do); between two logged samples the executed trajectory is
-    taken as straight, whose extremes are at the samples.
-
-    Returns:
-        One :class:`LimitViolation` per joint and bound passed, in joint
-        order, lower before upper; empty when every sample is within.
-    """
-    lower, upper = configuration_limits(scenario)
-    q = np.asarray(q, float).reshape(-1, 4)
-    times = np.asarray(times, float).reshape(-1)
-    found = []
-    for j, joint in enumerate(ACTUATED_JOINTS):
-        for bound, excess, limit in (("lower", lower[j] - q[:, j], lower[j]), ("upper", q[:, j] - upper[j], upper[j])):
-            beyond = np.flatnonzero(excess > 0)
-            if len(beyond):
-                worst = int(np.argmax(excess))
-                found.append(LimitViolation(joint=joint, bound=bound, limit=float(limit),
-                                            first_time=float(times[beyond[0]]), worst_time=float(times[worst]),
-                                            max_excess=float(excess[worst])))
-    return found
-
-
-def _collision_free(are_valid: Callable[[np.ndarray], np.ndarray], clearance: Callable[[np.ndarray], float],
-                    lower: np.ndarray, upper: np.ndarray, qs: np.ndarray) -> np.ndarray:
-    """(N,) bool: each configuration's geometry is clear (signed distance > 0).
-
-    A checker's ``are_valid`` also refuses configurations beyond the limits;
-    those (found separately, :func:`limit_violations`) are judged here by
-    their ``clearance`` alone.
-    """
-    inside = np.all((qs >= lower) & (qs <= upper), axis=1)
-    free = np.zeros(len(qs), bool)
-    if inside.any():
-        free[inside] = np.asarray(are_valid(qs[inside]), bool)
-    for i in np.flatnonzero(~inside):
-        free[i] = clearance(qs[i]) > 0.0
-    return free
-
-
-def analyze_execution(
-    scenario: Scenario,
-    waypoints: np.ndarray,
-    times: np.ndarray,
-    q: np.ndarray,
-    checker: ValidityChecker | None = None,
-    *,
-    people_move: bool | None = None,
-) -> ExecutionReport:
-    """Checks and measures an executed trajectory against its planned path.
-
-    Two separate findings: collisions (the geometry at the checker's
-    resolution) and the limits of a valid configuration
-    (:func:`limit_violations`).
-
-    Args:
-        scenario: the scenario.
-        waypoints: (N, 4) planned path.
-        times, q: (T,), (T, 4) executed configurations over time.
-        checker: the collision checker of the executed configurations;
-            None = Drake's (:func:`~drake_social.collision.drake_checker.valid_configurations`:
-            SceneGraphCollisionChecker answers from the shapes near the
-            trajectory), independent of the planar checker that planned. The minimum
-            clearance is the exact planar checker's. A given checker is used
-            as given when the people stand still; when they move, a checker
-            of the same kind is built for the room alone (a checker built
-            with the people at t = 0 would judge the run against where they
-            no longer are), and an unknown kind gives way to Drake's.
-        people_move: whether the scenario's people move (None = ask its
-            people model). When they do, the check and the clearance cover
-            the obstacles and walls only (:data:`CHECKED_ROOM`).
-
-    Raises:
-        TypeError: an argument of the wrong kind (named).
-        ScenarioError: ``waypoints`` not an (N, 4) array with 2 <= N <=
-            MAX_WAYPOINTS; ``times`` and ``q`` not (T,) and (T, 4) finite.
-    """
-    from drake_social.collision.drake_checker import make_checker, valid_configurations
-
-    require_scenario(scenario, "analyze_execution")
-    require_checker(checker, "analyze_execution", optional=True)
-    waypoints = waypoint_array(waypoints, "analyze_execution: waypoints")
-    times, q = _trajectory(times, q, "analyze_execution")
-    # Clearances from the exact planar checker: Drake's cylinder-box distance
-    # can exceed the true one (see drake_social.collision.drake_checker).
-    if people_move is None:
-        people_move = not people_model(scenario).static
-    room = without_people(scenario) if people_move else scenario  # what the collisions are checked against
-    planar = make_checker(room, "planar")
-    geometry = arm_geometry(scenario)
-    social = SocialCost.from_scenario(scenario)
-    wp = waypoints
-    planned = float(social.motion_cost(wp[:-1], wp[1:]).sum()) if len(wp) > 1 else 0.0
-    executed = float(social.motion_cost(q[:-1], q[1:]).sum()) if len(q) > 1 else 0.0
-
-    resolution = float(scenario.planner.collision_resolution)
-    # Which executed sample each densified configuration follows (for the collision time).
-    dense, owner = densify(geometry, q, resolution, return_owner=True)
-    lower, upper = configuration_limits(scenario)
-    if people_move and checker is not None:
-        checker = _room_checker(checker, room)
-    if checker is None:  # Drake's, from SceneGraphs of the shapes near the trajectory (bounded memory)
-        valid = _collision_free(lambda qs: valid_configurations(room, qs), planar.clearance, lower, upper, dense)
-    else:
-        valid = _collision_free(checker.are_valid, checker.clearance, lower, upper, dense)
-    violations = limit_violations(scenario, times, q)
-    clearance = float(np.min(planar.clearances(dense))) if len(dense) else math.inf
-    first = None if valid.all() else float(times[owner[int(np.argmin(valid))]])
-    return ExecutionReport(
-        planned_social_cost=planned,
-        executed_social_cost=executed,
-        max_point_deviation=point_deviation(geometry, wp, q),
-        max_config_deviation=config_deviation(wp, q),
-        min_clearance=float(clearance),
-        collision_free=bool(valid.all()),
-        first_collision_time=first,
-        checked_configurations=int(len(dense)),
-        collision_resolution=resolution,
-        within_limits=not violations,
-        limit_violations=violations,
-        collision_checked=list(CHECKED_ROOM if people_move else CHECKED_ROOM_AND_PEOPLE),
-    )
-
-
-def _room_checker(checker: ValidityChecker, room: Scenario) -> ValidityChecker | None:
-    """A checker of ``checker``'s kind for ``room`` (the scenario without its
-    people), or None (Drake's) for a kind this module does not know."""
-    from drake_social.collision.drake_checker import GeometricChecker, PlanarChecker, SceneGraphChecker, make_checker
-
-    for cls, kind in ((PlanarChecker, "planar"), (GeometricChecker, "numpy"), (SceneGraphChecker, "drake")):
-        if isinstance(checker, cls):
-            return make_checker(room, kind, parallelism=1) if kind == "drake" else make_checker(room, kind)
-    _log.info("analyze_execution: a %s checker of the people at t = 0 replaced by Drake's of the room alone",
-              type(checker).__name__)
-    return None
-
-
-def _trajectory(times, q, who: str) -> tuple[np.ndarray, np.ndarray]:
-    """``times`` (T,) and ``q`` (T, 4), T >= 1, as finite float arrays, or the error naming them."""
-    times = real_array(times, who, "times", (None,), layout="seconds", rows=(1, None), row_name="sample",
-                       error=ScenarioError)
-    q = real_array(q, who, "q", (None, 4), layout="rows [x, y, psi1, psi2]", rows=(1, None), row_name="sample",
-                   error=ScenarioError)
-    if len(times) != len(q):
-        raise ScenarioError(f"{who}: times and q must have the same T rows, got {len(times)} and {len(q)}")
-    return times, q
 
 
 def simulate(
@@ -627,9 +229,8 @@ def run_checked(
     callers that checked them once (``drake-social simulate``). ``replan``:
     whether to replan (resolved); ``replanner``: the replanner object of
     :func:`~drake_social.sim.diagram.build_diagram` (None = the scenario's)."""
-    limit = time_limit
-    built = build_checked(scenario, mode, execution, waypoints, checker, meshcat, people=people, replan=replan,
-                          replanner=replanner)
+    built = build_checked(scenario, mode, execution, path_source(waypoints, replan, replanner), checker, meshcat,
+                          people=people)
     root = built.diagram.CreateDefaultContext()
     if built.visualizer is not None:
         from drake_social.sim.replay import start_recording
@@ -639,39 +240,62 @@ def run_checked(
     # that a failed plan is reported before anything evaluates the sequencer;
     # Initialize() below then does not repeat them.
     built.diagram.ExecuteInitializationEvents(root)
-    planner_result = None
-    path = built.waypoints
-    if built.replanning:  # a first plan that waits is no failure: the robot waits for a safe path
-        path = np.asarray(built.subsystem("planner").GetOutputPort("waypoints").Eval(
-            built.subsystem("planner").GetMyContextFromRoot(root)), float).reshape(-1, 4)
-    elif path is None:
-        planner = built.subsystem("planner")
-        planner_result = planner.GetOutputPort("result").Eval(planner.GetMyContextFromRoot(root))
-        path = np.asarray(planner_result.waypoints, float).reshape(-1, 4)
-        if not planner_result.success:
-            return _empty_result(built, path, planner_result, f"no path to execute ({planner_result.message})")
-    simulator = Simulator(built.diagram, root)
+    path, planner_result = _first_path(built, root)
+    if planner_result is not None and not planner_result.success:
+        return _empty_result(built, path, planner_result, f"no path to execute ({planner_result.message})")
+    simulator = Simulator(built.diagram, root)  # owns root: alive until the logs are read
     ApplySimulatorConfig(scenario_simulator_config(scenario) if simulator_config is None else simulator_config,
                          simulator)
     simulator.Initialize(InitializeParams(suppress_initialization_events=True))
+    wall = _advance(simulator, built, time_limit, progress)
+    if built.visualizer is not None:
+        from drake_social.sim.replay import finish_recording
 
-    # Advance in chunks and stop at the first chunk after the goal: a Python
-    # monitor called after every step would cost more than the whole kinematic
-    # simulation. The time to goal comes from the logged done flag.
-    sequencer = built.subsystem("sequencer")
+        finish_recording(built.meshcat)
+    result = _result(built, root, path, planner_result, time_limit, wall)
+    _log_result(result)
+    if analyze:
+        result.report = analyze_execution(scenario, result.waypoints, result.times, result.q, analysis_checker,
+                                          people_move=not built.station.people.model.static)
+    return result
+
+
+def _first_path(built: TransportDiagram, root) -> tuple[np.ndarray, PlannerResult | None]:
+    """The path to execute after the initialization events, and the planner's
+    result when it planned once (None: given waypoints, or the replanner's
+    first plan, which may wait without failing: the robot waits for a safe path)."""
+    planner = built.autonomy.planner
+    if built.replanning:
+        path = planner.GetOutputPort("waypoints").Eval(planner.GetMyContextFromRoot(root))
+        return np.asarray(path, float).reshape(-1, 4), None
+    if built.waypoints is not None:
+        return built.waypoints, None
+    result = planner.GetOutputPort("result").Eval(planner.GetMyContextFromRoot(root))
+    return np.asarray(result.waypoints, float).reshape(-1, 4), result
+
+
+def _advance(simulator: Simulator, built: TransportDiagram, limit: float,
+             progress: Callable[[float], None] | None) -> float:
+    """Advances until the sequencer's goal flag or ``limit`` (s), checking for
+    divergence; returns the wall-clock seconds spent in ``AdvanceTo``.
+
+    Advance in chunks and stop at the first chunk after the goal: a Python
+    monitor called after every step would cost more than the whole kinematic
+    simulation. The time to goal comes from the logged done flag.
+    """
+    root = simulator.get_context()
+    sequencer = built.autonomy.sequencer
     sequencer_context = sequencer.GetMyContextFromRoot(root)
     done_port = sequencer.GetOutputPort("done")
-    chunk = max(_CHUNK, float(scenario.execution.control_period))
-    q_port = built.loggers["q"].get_input_port()
-    v_port = built.loggers["v"].get_input_port()
-    q_context = built.loggers["q"].GetMyContextFromRoot(root)
-    v_context = built.loggers["v"].GetMyContextFromRoot(root)
-    bounds = configuration_limits(scenario)
+    chunk = max(_CHUNK, float(built.scenario.execution.control_period))
+    q_port, v_port = built.loggers["q"].get_input_port(), built.loggers["v"].get_input_port()
+    q_context, v_context = (built.loggers[name].GetMyContextFromRoot(root) for name in ("q", "v"))
+    bounds = configuration_limits(built.scenario)
 
     def check_divergence(cause: BaseException | None = None) -> None:
         what = _divergence(q_port.Eval(q_context), v_port.Eval(v_context), *bounds)
         if what is not None:
-            raise SimulationDiverged(scenario, built.mode, root.get_time(), what) from cause
+            raise SimulationDiverged(built.scenario, built.mode, root.get_time(), what) from cause
 
     t0 = time.perf_counter()
     while root.get_time() < limit:
@@ -679,77 +303,86 @@ def run_checked(
             simulator.AdvanceTo(min(limit, root.get_time() + chunk))
         except RuntimeError as e:  # Drake refuses a state gone non-finite: say why
             check_divergence(e)
+            if _SOLVER_FAILED in str(e):
+                raise _contact_solver_failed(built.scenario, root.get_time()) from e
             raise
         check_divergence()
         if progress is not None:
             progress(root.get_time())
         if done_port.Eval(sequencer_context)[0] > 0.5:
             break
-    wall = time.perf_counter() - t0
-    if built.visualizer is not None:
-        from drake_social.sim.replay import finish_recording
+    return time.perf_counter() - t0
 
-        finish_recording(built.meshcat)
 
+def _logs(built: TransportDiagram, root) -> tuple[np.ndarray, dict[str, np.ndarray], bool]:
+    """The log times, each logger's samples (T, n) and whether the goal was reached.
+
+    The sequencer decides in its update at t_k from q(t_k); a log sample at
+    t_k is published before that update, so done shows from t_k + period on.
+    The time to goal is t_k; the samples after the first done one (the
+    chunk's remainder) are dropped.
+    """
     logs = {name: logger.FindLog(root) for name, logger in built.loggers.items()}
     times = logs["q"].sample_times().copy()
     data = {name: log.data().T.copy() for name, log in logs.items()}
-    sim_time = root.get_time()
-    # The sequencer decides in its update at t_k from q(t_k); a log sample at
-    # t_k is published before that update, so done shows from t_k + period on.
-    # The time to goal is t_k; the samples after the first done one (the
-    # chunk's remainder) are dropped.
     done = np.flatnonzero(data["done"][:, 0] > 0.5)
-    reached = len(done) > 0
-    if reached:
+    if len(done):
         keep = int(done[0]) + 1
         times = times[:keep]
         data = {name: values[:keep] for name, values in data.items()}
+    return times, data, len(done) > 0
+
+
+def _result(built: TransportDiagram, root, path: np.ndarray, planner_result: PlannerResult | None, limit: float,
+            wall: float) -> SimulationResult:
+    """The :class:`~drake_social.sim.results.SimulationResult` of a finished run (not yet analysed)."""
+    times, data, reached = _logs(built, root)
     reached_at = [float(times[max(len(times) - 2, 0)])] if reached else []
+    end = float(times[-1]) if len(times) else 0.0
     replans, replanning = (), None
     if built.replanning:
-        planner = built.subsystem("planner")
+        planner = built.autonomy.planner
         planner_context = planner.GetMyContextFromRoot(root)
-        end = float(times[-1]) if len(times) else 0.0
         replans = tuple(r for r in planner.replans(planner_context) if r.t <= end + 1e-9)
         path = planner.followed(planner_context)
-        replanning = replanning_summary(replans, planner.rate, float(scenario.planner.replan_budget))
+        replanning = replanning_summary(replans, planner.rate, float(built.scenario.planner.replan_budget))
     message = (f"goal reached at t = {reached_at[0]:.2f} s" if reached
                else f"goal not reached within the time limit of {limit:g} s "
                     + (f"(the last replan: {replans[-1].status})" if replans else
                        f"(at waypoint {int(data['index'][-1, 0]) if len(times) else 0} of {len(path) - 1})"))
+    sim_time = root.get_time()
     result = SimulationResult(
         mode=built.mode, execution=built.execution, reached=reached, message=message,
         time_to_goal=reached_at[0] if reached else None, sim_time=sim_time, wall_time=wall,
         realtime_factor=sim_time / wall if wall > 0 else math.inf, waypoints=path, times=times,
         q=data["q"], v=data["v"], wheel_speeds=data["wheel_speeds"], target=data["target"],
         reference=data["reference"], target_index=data["index"][:, 0].astype(int), planner=planner_result,
-        stops=_stops(built, root, float(times[-1]) if len(times) else 0.0), replans=replans, replanning=replanning,
+        stops=_stops(built, root, end), replans=replans, replanning=replanning,
     )
     result.stopped = _stopped(times, result.stops)
     result.waiting = _waiting(times, replans)
-    source = built.subsystem("people")
+    source = built.station.people
     if source.model.count and len(times):  # the open-loop people sampled; a crowd from its logged state
         result.people = source.people_log(times, data.get("crowd_state"))
+    return result
+
+
+def _log_result(result: SimulationResult) -> None:
     _log.info("%s", result.summary())
-    if replanning is not None:
-        _log.info("replanning: %s", replanning_line(replanning))
+    if result.replanning is not None:
+        _log.info("replanning: %s", replanning_line(result.replanning))
     for stop in result.stops:
         _log.info("safety stop at t = %.3f s (%s of the robot %.3f m from %s) %s", stop["start"], stop["part"],
                   stop["distance"], stop["person"],
                   "until the end" if stop["end"] is None else f"until t = {stop['end']:.3f} s")
-    if analyze:
-        result.report = analyze_execution(scenario, path, times, result.q, analysis_checker,
-                                          people_move=not source.model.static)
-    return result
 
 
 def _stops(built: TransportDiagram, root, end_time: float) -> list[dict]:
     """The safety monitor's stops up to ``end_time`` (the last kept sample), as dicts
     (:attr:`SimulationResult.stops`); a stop released after ``end_time`` is still on at the end."""
-    if "stop" not in built.loggers:
+    monitor = built.autonomy.safety
+    if monitor is None:
         return []
-    monitor = built.subsystem("safety")
     out = []
     for stop in monitor.stops(monitor.GetMyContextFromRoot(root)):
         if stop.start > end_time:

@@ -9,7 +9,7 @@ from matplotlib.figure import Figure
 from matplotlib.patches import Patch
 
 from drake_social.maps import MapBoxes, OccupancyMap
-from drake_social.viz.world import MAP_BOX_EDGE, MAP_OCCUPIED_RGBA, MAP_UNKNOWN_RGBA, draw_map
+from drake_social.viz.world import MAP_BOX_EDGE, MAP_MAX_OUTLINES, MAP_OCCUPIED_RGBA, MAP_UNKNOWN_RGBA, draw_map
 from drake_social.world import Boxes
 
 __all__ = ["map_figure", "write_map_picture"]
@@ -41,7 +41,9 @@ def map_figure(grid: OccupancyMap, boxes: MapBoxes, *, unknown: str = "obstacle"
                  f"{len(boxes.yaws):,} boxes (unknown cells as {unknown})", fontsize=9)
     handles = [Patch(facecolor=MAP_OCCUPIED_RGBA, label="occupied cells"),
                Patch(facecolor=MAP_UNKNOWN_RGBA, label="unknown cells"),
-               Patch(facecolor="none", edgecolor=MAP_BOX_EDGE, label="boxes (the obstacles planned against)")]
+               Patch(facecolor="none", edgecolor=MAP_BOX_EDGE, label="boxes (the obstacles planned against)"
+                     if len(boxes.yaws) <= MAP_MAX_OUTLINES else
+                     f"boxes: not outlined, more than {MAP_MAX_OUTLINES:,} (they cover the cells drawn)")]
     ax.legend(handles=handles, loc="upper center", bbox_to_anchor=(0.5, -0.08), ncol=3, fontsize=8, frameon=False)
     return fig
 

@@ -136,7 +136,7 @@ def write_replan_figure(source, out_dir: str | Path, *, budget: float | None = N
     """Writes :func:`replan_figure` of a run as ``out_dir / name``.
 
     Args:
-        source: a :class:`~drake_social.sim.run.SimulationResult` (its
+        source: a :class:`~drake_social.sim.results.SimulationResult` (its
             ``replans``; its ``sim_time`` ends a wait still on at the end)
             or the log itself (a sequence of ReplanResult).
         out_dir: the folder (must exist).

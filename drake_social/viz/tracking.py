@@ -48,7 +48,7 @@ def people_distances(geometry: ArmGeometry, times: np.ndarray, q: np.ndarray,
 def tracking_figure(run, *, max_base_speed: float | None = None, max_wheel_speed: float | None = None,
                     title: str | None = None, geometry: ArmGeometry | None = None,
                     safety_distance: float | None = None) -> Figure:
-    """Reference against actual over time for a :class:`~drake_social.sim.run.SimulationResult`.
+    """Reference against actual over time for a :class:`~drake_social.sim.results.SimulationResult`.
 
     Args:
         run: the simulation result (its ``times``, ``q``, ``reference``,

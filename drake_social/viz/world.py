@@ -20,16 +20,20 @@ from matplotlib.patches import Circle, FancyArrow, Polygon, Rectangle
 from matplotlib.transforms import Affine2D
 
 from drake_social.cost import SocialCost
-from drake_social.maps import OCCUPIED, UNKNOWN, OccupancyMap
+from drake_social.maps import FREE, OCCUPIED, UNKNOWN, OccupancyMap
 from drake_social.people import PeopleState, people_model
 from drake_social.scenario import Box, Scenario
+from drake_social.scenario.map_rules import world_map_boxes
 from drake_social.viz.labels import MAX_LABEL_CHARS, fit_text
 from drake_social.world import Boxes, world_model
 
 __all__ = [
     "FIELD_CMAP",
     "MAP_BOX_EDGE",
+    "MAP_MAX_OUTLINES",
+    "MAP_PICTURE_CELLS",
     "MAP_OCCUPIED_RGBA",
+    "MAP_OUTSIDE_RGBA",
     "MAP_UNKNOWN_RGBA",
     "OBSTACLE_COLOR",
     "PERSON_COLOR",
@@ -42,6 +46,7 @@ __all__ = [
     "FIELD_MIN_RESOLUTION",
     "field_grid",
     "field_resolution",
+    "map_picture_factor",
     "map_rgba",
 ]
 
@@ -51,6 +56,16 @@ OBSTACLE_COLOR = "#5b5b5b"
 MAP_OCCUPIED_RGBA = (0.25, 0.25, 0.25, 1.0)
 MAP_UNKNOWN_RGBA = (0.55, 0.55, 0.6, 0.45)
 MAP_BOX_EDGE = "#1f77b4"
+#: What of the room lies outside a turned map's rectangle (an obstacle when
+#: unknown cells are: :func:`drake_social.scenario.map_rules.outside_boxes`).
+MAP_OUTSIDE_RGBA = (0.55, 0.55, 0.6, 0.75)
+#: Most pixels along either side of a map's cells in a figure (:func:`map_rgba`):
+#: a larger map is drawn in blocks of cells. The map picture of ``map inspect``
+#: is 10 inches at 150 dpi (1,500 pixels) along the map's longer side.
+MAP_PICTURE_CELLS = 2048
+#: Most map boxes a figure outlines (some 0.8 kB of matplotlib's each; 20,000
+#: tiny outlines already fill a picture): a map of more is drawn by its cells.
+MAP_MAX_OUTLINES = 20_000
 #: Fill of person bodies.
 PERSON_COLOR = "#e8c39e"
 #: Colour map of the social-cost heat map (white at zero cost).
@@ -117,7 +132,8 @@ def draw_world(ax: Axes, scenario: Scenario, *, names: bool = True, margin: floa
                         linewidth=0.6, zorder=2)
         out["obstacles"].append(ax.add_patch(patch))
     if w.map is not None:
-        out["map"] = draw_map(ax, w.map, w.boxes.corners[hand:])
+        outside = world_map_boxes(scenario.world).cells[:, 0] < 0  # the boxes that close a turned map's outside
+        out["map"] = draw_map(ax, w.map, w.boxes.corners[hand:], outside=outside, clip=w.bounds)
     for i, ((px, py), theta, radius, name) in enumerate(zip(people.positions, people.headings, people.radii,
                                                            people.names)):
         px, py, theta, radius = float(px), float(py), float(theta), float(radius)
@@ -146,37 +162,96 @@ def draw_world(ax: Axes, scenario: Scenario, *, names: bool = True, margin: floa
     return out
 
 
-def map_rgba(grid: OccupancyMap) -> np.ndarray:
-    """The map's cells as an RGBA image (H, W, 4) of ``uint8`` in the map's grid order
+def map_picture_factor(shape: Sequence[int], max_cells: int = MAP_PICTURE_CELLS) -> int:
+    """The side f of the blocks of f x f cells that :func:`map_rgba` draws as one
+    pixel, for a map of ``shape`` (rows, columns): the smallest f (>= 1) that
+    leaves at most ``max_cells`` pixels along either side."""
+    return max(1, math.ceil(max(int(shape[0]), int(shape[1])) / max_cells))
+
+
+def map_rgba(grid: OccupancyMap, max_cells: int = MAP_PICTURE_CELLS) -> np.ndarray:
+    """The map's cells as an RGBA image of ``uint8`` in the map's grid order
     (row 0 = the bottom row): occupied :data:`MAP_OCCUPIED_RGBA`, unknown
-    :data:`MAP_UNKNOWN_RGBA`, free transparent."""
-    out = np.zeros((*grid.shape, 4), np.uint8)  # 4 bytes a cell: 100 MB at the largest map
-    out[grid.classes == OCCUPIED] = np.round(np.multiply(MAP_OCCUPIED_RGBA, 255))
-    out[grid.classes == UNKNOWN] = np.round(np.multiply(MAP_UNKNOWN_RGBA, 255))
+    :data:`MAP_UNKNOWN_RGBA`, free transparent.
+
+    A map of at most ``max_cells`` cells along either side is drawn cell for
+    cell, (H, W, 4). A larger one in blocks of f x f cells
+    (:func:`map_picture_factor`), (ceil(H / f), ceil(W / f), 4), the last row and
+    column of blocks padded with free cells: a block is occupied where any of
+    its cells is, else unknown where any is, else free, so that a wall one
+    cell thick is still drawn. The picture then costs at most 4 bytes a pixel
+    (16 MB), however large the map.
+    """
+    classes = grid.classes
+    f = map_picture_factor(classes.shape, max_cells)
+    if f == 1:
+        occupied, unknown = classes == OCCUPIED, classes == UNKNOWN
+    else:
+        rows, cols = -(-classes.shape[0] // f), -(-classes.shape[1] // f)
+        occupied, unknown = np.zeros((rows, cols), bool), np.zeros((rows, cols), bool)
+        step = max(1, (1 << 22) // (f * f * cols))  # rows of blocks at a time: about 4 M cells
+        for r0 in range(0, rows, step):
+            band = classes[r0 * f:(r0 + step) * f]
+            padded = np.full((-(-len(band) // f) * f, cols * f), FREE, classes.dtype)
+            padded[:band.shape[0], :band.shape[1]] = band
+            blocks = padded.reshape(-1, f, cols, f)
+            occupied[r0:r0 + len(blocks)] = (blocks == OCCUPIED).any(axis=(1, 3))
+            unknown[r0:r0 + len(blocks)] = (blocks == UNKNOWN).any(axis=(1, 3))
+    out = np.zeros((*occupied.shape, 4), np.uint8)
+    out[occupied] = np.round(np.multiply(MAP_OCCUPIED_RGBA, 255))
+    out[unknown & ~occupied] = np.round(np.multiply(MAP_UNKNOWN_RGBA, 255))
     return out
 
 
-def draw_map(ax: Axes, grid: OccupancyMap, corners: np.ndarray) -> list:
+def draw_map(ax: Axes, grid: OccupancyMap, corners: np.ndarray, *, outside: np.ndarray | None = None,
+             clip: Sequence[float] | None = None) -> list:
     """Draws an occupancy-grid map's cells under the outlines of its boxes.
 
     The image (:func:`map_rgba`, free cells transparent, so the heat map
     shows through) is placed by the map's origin and yaw; the boxes
-    (``corners`` (K, 4, 2)) the planner sees are outlined on top of it.
+    (``corners`` (K, 4, 2)) the planner sees are outlined on top of it, at
+    most :data:`MAP_MAX_OUTLINES` of them: more are not outlined (their
+    union is the cells drawn), the outlines then empty.
+
+    Args:
+        outside: (K,) bool, the boxes that close the outside of a turned
+            map's rectangle (:func:`~drake_social.scenario.map_rules.outside_boxes`):
+            filled in :data:`MAP_OUTSIDE_RGBA`, not outlined (they reach far
+            beyond the room). None = none.
+        clip: ``[x_min, y_min, x_max, y_max]``: nothing of the map is drawn
+            beyond it (the room's bounds). None = no clipping.
 
     Returns:
-        ``[image, outlines]``; the image is labelled "map: occupied / unknown
-        cells" and the outlines "map boxes" for legends.
+        ``[image, outlines]``, then the outside's fill when there is one; the
+        image is labelled "map: occupied / unknown cells", the outlines "map
+        boxes" and the fill "map: outside its rectangle" for legends.
     """
     x, y, yaw = (float(v) for v in grid.origin)
-    height, width = grid.shape[0] * grid.resolution, grid.shape[1] * grid.resolution
-    image = ax.imshow(map_rgba(grid), origin="lower", extent=(0.0, width, 0.0, height), interpolation="nearest",
+    rgba = map_rgba(grid)
+    side = map_picture_factor(grid.shape) * grid.resolution  # of a pixel (the last ones padded with free cells)
+    height, width = rgba.shape[0] * side, rgba.shape[1] * side
+    image = ax.imshow(rgba, origin="lower", extent=(0.0, width, 0.0, height), interpolation="nearest",
                       zorder=1, label="map: occupied / unknown cells")
     image.set_transform(Affine2D().rotate(yaw).translate(x, y) + ax.transData)
+    corners = np.asarray(corners, float).reshape(-1, 4, 2)
+    outside = np.zeros(len(corners), bool) if outside is None else np.asarray(outside, bool)
+    cells = corners[~outside]
     # Thinner outlines when there are many boxes, so that ragged walls stay readable.
-    outlines = PolyCollection(list(corners), closed=True, facecolors="none", edgecolors=MAP_BOX_EDGE,
-                              linewidths=0.4 if len(corners) <= 500 else 0.15, zorder=2, label="map boxes")
+    outlines = PolyCollection(list(cells) if len(cells) <= MAP_MAX_OUTLINES else [], closed=True,
+                              facecolors="none", edgecolors=MAP_BOX_EDGE,
+                              linewidths=0.4 if len(cells) <= 500 else 0.15, zorder=2, label="map boxes")
     ax.add_collection(outlines)
-    return [image, outlines]
+    artists = [image, outlines]
+    if outside.any():
+        fill = PolyCollection(list(corners[outside]), closed=True, facecolors=[MAP_OUTSIDE_RGBA],
+                              edgecolors="none", zorder=1, label="map: outside its rectangle")
+        artists.append(ax.add_collection(fill))
+    if clip is not None:
+        x0, y0, x1, y1 = (float(v) for v in clip)
+        frame = Rectangle((x0, y0), x1 - x0, y1 - y0, transform=ax.transData)
+        for artist in artists:
+            artist.set_clip_path(frame)
+    return artists
 
 
 def field_resolution(bounds: Sequence[float], max_cells: int = FIELD_MAX_CELLS) -> float:

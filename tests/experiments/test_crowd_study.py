@@ -15,9 +15,10 @@ import pytest
 
 from drake_social.cli_parser import build_parser
 from drake_social.errors import ScenarioError
-from drake_social.experiments.crowd import (JITTER_TAG, VARIANTS, CrowdStudy, crowd_tasks, episode_scenario,
-                                            episode_seeds, perturb, replan_stats, walker_delays)
-from drake_social.experiments.crowd_report import claim_line, compare, target_lines
+from drake_social.experiments.study.crowd import (JITTER_TAG, VARIANTS, CrowdStudy, crowd_tasks, episode_scenario,
+                                                  episode_seeds, perturb, walker_delays)
+from drake_social.experiments.study.crowd_episode import replan_stats
+from drake_social.experiments.study.crowd_report import claim_line, compare, target_lines
 from drake_social.people import people_model
 from drake_social.scenario import load_scenario
 
@@ -61,7 +62,7 @@ def tiny_walker(tmp_path) -> Path:
 def test_episode_seeds_are_the_study_run_seeds():
     seeds = episode_seeds(7, 3)
     assert seeds == [int(s.generate_state(1)[0]) for s in np.random.SeedSequence(7).spawn(3)]
-    assert CrowdStudy(scenarios=("a.yaml",), episodes=3, seed=7).seeds() == seeds
+    assert CrowdStudy(scenarios=("a.yaml",), episodes=3, seed=7).run_seeds() == seeds
 
 
 def test_jitter_shifts_the_walkers_times_by_their_delays(tiny_walker):
@@ -98,7 +99,7 @@ def test_episodes_are_deterministic_and_paired_across_variants(tiny_walker):
     assert [(t["variant"], t["episode"]) for t in tasks[:4]] == [("plan_once", 0), ("plan_once", 1),
                                                                  ("plan_once", 2), ("replan_multi", 0)]
     by = {(t["variant"], t["episode"]): t for t in tasks}
-    for k, seed in enumerate(study.seeds()):
+    for k, seed in enumerate(study.run_seeds()):
         scenarios = {v: episode_scenario(by[(v, k)]) for v in study.variants}
         walkers = {v: [p.trajectory for p in s.people] for v, (s, _) in scenarios.items()}
         assert walkers["plan_once"] == walkers["replan_multi"] == walkers["replan_speed"]
@@ -254,10 +255,25 @@ def test_cli_parses_experiment_crowd():
                                       "replan_multi", "--jitter", "2.5", "--workers", "2", "--out", "x"])
     assert (args.study, args.episodes, args.variants, args.jitter, args.workers) == \
         ("crowd", 3, ["plan_once", "replan_multi"], 2.5, 2)
-    assert [str(s) for s in args.scenarios] == ["scenarios/office_walkers.yaml", "scenarios/lobby_crowd.yaml"]
     for bad in (["--episodes", "0"], ["--jitter", "-1"], ["--variants", "nope"]):
         with pytest.raises(SystemExit):
             build_parser().parse_args(["experiment", "crowd", *bad])
+
+
+def test_the_default_scenarios_are_the_shipped_ones_whatever_the_folder(tmp_path, monkeypatch):
+    """``experiment crowd`` and a CrowdStudy without scenarios find the
+    shipped office_walkers.yaml and lobby_crowd.yaml beside the package, run
+    from any folder."""
+    monkeypatch.chdir(tmp_path)
+    shipped = ROOT / "scenarios"
+    args = build_parser().parse_args(["experiment", "crowd"])
+    assert args.scenarios == [shipped / "office_walkers.yaml", shipped / "lobby_crowd.yaml"]
+    dut = CrowdStudy(variants=("plan_once",), episodes=1)
+    assert dut.scenarios == tuple(str(p) for p in args.scenarios)
+    tasks = crowd_tasks(dut)  # read and loaded from here
+    assert [(t["scenario"], t["source"]) for t in tasks] == [("office_walkers", str(shipped / "office_walkers.yaml")),
+                                                            ("lobby_crowd", str(shipped / "lobby_crowd.yaml"))]
+    assert tasks[0]["scenario_text"] == (shipped / "office_walkers.yaml").read_text()
 
 
 _MACHINE = ("wall_time", "plan_time_initial", "replan_time_median", "replan_time_p95", "replan_time_max",
@@ -267,12 +283,14 @@ _MACHINE = ("wall_time", "plan_time_initial", "replan_time_median", "replan_time
 
 @pytest.mark.slow
 def test_tiny_study_writes_its_outputs_and_does_not_depend_on_the_workers(tiny_walker, tmp_path):
-    from drake_social.experiments.crowd_output import run_crowd_study
+    from drake_social.app import run_crowd_experiment
 
-    study = CrowdStudy(scenarios=(str(tiny_walker),), variants=("plan_once",), episodes=2, seed=3, jitter=2.0,
-                       time_limit=12.0)
-    one, names, failure = run_crowd_study(study, tmp_path / "one", workers=1)
-    assert failure is None
+    settings = dict(scenarios=(str(tiny_walker),), variants=("plan_once",), episodes=2, seed=3, jitter=2.0,
+                    time_limit=12.0)
+    study = CrowdStudy(**settings)
+    done = run_crowd_experiment(out=tmp_path / "one", workers=1, **settings)
+    one, names = done.result, done.files
+    assert done.failure is None and not done.interrupted and done.runs == "2 episodes"
     assert names == ["records.csv", "records.json", "boxplots_tiny_walker.png", "snapshots_tiny_walker.png",
                      "REPORT.md"]
     for n in names:
@@ -280,14 +298,16 @@ def test_tiny_study_writes_its_outputs_and_does_not_depend_on_the_workers(tiny_w
     csv = (tmp_path / "one" / "records.csv").read_text().splitlines()
     assert len(csv) == 3 and csv[0].startswith("index,scenario,variant,episode,seed,jitter,")
     saved = json.loads((tmp_path / "one" / "records.json").read_text())
-    assert saved["seeds"] == study.seeds() and len(saved["episodes"]) == 2
+    assert saved["seeds"] == study.run_seeds() and len(saved["episodes"]) == 2
+    assert saved["study"] == json.loads(json.dumps(dc.asdict(study)))
+    assert set(saved) == {"study", "seeds", "wall_time", "executor", "workers", "episodes"}
     report = (tmp_path / "one" / "REPORT.md").read_text()
     assert "tiny_walker, plan-once (paper): success" in report and "![snapshots_tiny_walker.png]" in report
     for r in one.records:
         assert r["sim_time"] <= 12.0 + 1e-9 and r["nav_people_count"] == 2.0 and "nav_time_intimate_object" in r
         assert math.isnan(r["replans"])
     assert "trace" in one.records[0] and "trace" not in one.records[1]
-    two, _, _ = run_crowd_study(study, tmp_path / "two", workers=2)
+    two = run_crowd_experiment(out=tmp_path / "two", workers=2, **settings).result
 
     def same(r):
         return json.dumps({k: v for k, v in r.items() if k not in _MACHINE}, sort_keys=True, default=str)
@@ -295,8 +315,47 @@ def test_tiny_study_writes_its_outputs_and_does_not_depend_on_the_workers(tiny_w
     assert [same(r) for r in one.records] == [same(r) for r in two.records]
 
 
+def _no_space(*args, **kwargs):
+    raise OSError(28, "No space left on device")
+
+
+def _interrupt(*args, **kwargs):
+    raise KeyboardInterrupt
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("where, failure", [("write_figures", _no_space), ("report_markdown", _no_space),
+                                            ("write_figures", _interrupt)])
+def test_an_output_error_or_ctrl_c_after_the_episodes_keeps_their_records(tiny_walker, tmp_path, monkeypatch, capsys,
+                                                                          where, failure):
+    """As for every study: when a figure or REPORT.md fails, or Ctrl-C comes
+    while they are written, the finished episodes' records are committed
+    alone and the message names them (exit 1, or 130 for Ctrl-C)."""
+    from drake_social.cli import main
+    from drake_social.experiments.study import crowd_report
+    from drake_social.io.outputs import current_set
+
+    out = tmp_path / "out"
+    monkeypatch.setattr(crowd_report, where, failure)
+    rc = main(["experiment", "crowd", "--scenarios", str(tiny_walker), "--variants", "plan_once", "--episodes", "2",
+               "--time-limit", "1", "--out", str(out)])
+    err = capsys.readouterr().err
+    records = f"{out / 'records.json'} and {out / 'records.csv'} (the figures and REPORT.md were not written)\n"
+    if failure is _interrupt:
+        assert rc == 130
+        assert err == f"drake-social: experiment interrupted after its 2 episodes: their records were written to {records}"
+    else:
+        assert rc == 1
+        assert err == (f"drake-social: error: writing the study's outputs into {out} failed: [Errno 28] No space left "
+                       f"on device; the records of its 2 episodes are in {records}")
+    assert sorted(p.name for p in out.iterdir() if not p.name.startswith(".")) == ["records.csv", "records.json"]
+    assert current_set(out, "experiment").files == ("records.csv", "records.json")
+    episodes = json.loads((out / "records.json").read_text())["episodes"]
+    assert [(r["variant"], r["episode"], r["sim_time"]) for r in episodes] == [("plan_once", 0, 1.0), ("plan_once", 1, 1.0)]
+
+
 def test_a_replanning_variant_needs_a_simulator_that_replans(tiny_walker, monkeypatch):
-    from drake_social.experiments import crowd
+    from drake_social.experiments.study import crowd
 
     study = CrowdStudy(scenarios=(str(tiny_walker),), variants=("plan_once", "replan_multi"), episodes=1)
     monkeypatch.setattr(crowd, "replanning_available", lambda: False)
@@ -318,7 +377,8 @@ def test_a_claim_without_pairs_says_so():
 def test_replanning_episodes_are_paired_and_do_not_depend_on_the_workers(tmp_path):
     """With a budget no replan reaches (the iteration cap binds), replanning
     episodes are the same on 1 and 2 workers, bit for bit but for the wall clock."""
-    from drake_social.experiments.crowd import replanning_available, run_crowd
+    from drake_social.experiments.study import run_study
+    from drake_social.experiments.study.crowd import replanning_available
 
     if not replanning_available():
         pytest.skip("simulate(..., replan=True) is not in this tree yet")
@@ -327,8 +387,8 @@ def test_replanning_episodes_are_paired_and_do_not_depend_on_the_workers(tmp_pat
                                         "replan_iterations: 60, replan_budget: 30.0}"))
     study = CrowdStudy(scenarios=(str(path),), variants=("replan_multi",), episodes=2, seed=5, jitter=2.0,
                        time_limit=8.0)
-    one = run_crowd(study, workers=1)
-    two = run_crowd(study, workers=2)
+    one = run_study(study, workers=1)
+    two = run_study(study, workers=2)
     for r in one.records:
         assert r["replans"] >= 10 and r["replan_deadline_hits"] == 0.0  # 2 Hz over 8 s, none over the budget
         assert r["replan_changes"] <= r["replans"] and len(r["replan_times"]) == r["replans"]
@@ -337,3 +397,39 @@ def test_replanning_episodes_are_paired_and_do_not_depend_on_the_workers(tmp_pat
         return json.dumps({k: v for k, v in r.items() if k not in _MACHINE}, sort_keys=True, default=str)
 
     assert [same(r) for r in one.records] == [same(r) for r in two.records]
+
+
+def test_the_crowd_study_is_a_kind_of_the_one_study_framework(tiny_walker):
+    """A CrowdStudy goes through the studies' framework: its kind's tasks,
+    per-task function, record files and outputs; anything else is no study."""
+    from drake_social.experiments.study import KINDS, Study, kind_of, output_names, run_task
+    from drake_social.experiments.study.crowd_episode import run_episode
+    from drake_social.experiments.study.recorded import RecordedCrowdStudy
+
+    study = CrowdStudy(scenarios=(str(tiny_walker),), variants=("plan_once", "replan_multi"), episodes=2)
+    dut = kind_of(study)
+    assert set(KINDS) == {Study, CrowdStudy, RecordedCrowdStudy} and dut is KINDS[CrowdStudy]
+    assert (dut.run, KINDS[Study].run) == (run_episode, run_task)
+    assert dut.tasks(study) == crowd_tasks(study)
+    assert output_names(study) == ["records.csv", "records.json", "boxplots_tiny_walker.png",
+                                   "snapshots_tiny_walker.png", "REPORT.md"]
+    assert output_names(dc.replace(study, trace_episode=None)) == ["records.csv", "records.json",
+                                                                   "boxplots_tiny_walker.png", "REPORT.md"]
+    assert dut.describe({"scenario": "s", "variant": "plan_once", "episode": 3}) == "s plan_once episode 3"
+    with pytest.raises(TypeError, match=r"^not a study: dict; a study is one of Study, CrowdStudy, RecordedCrowdStudy$"):
+        kind_of({"name": "crowd"})
+
+
+def test_a_crowd_result_loads_its_scenarios_from_the_text_its_episodes_read(tiny_walker):
+    """StudyResult.scenario of a crowd study: the text read before the
+    episodes with a variant's overrides, whatever the file holds since."""
+    from drake_social.experiments.study import StudyResult
+
+    study = CrowdStudy(scenarios=(str(tiny_walker),), variants=("plan_once", "replan_speed"), episodes=1)
+    text = tiny_walker.read_text()
+    tiny_walker.write_text(text.replace("random_seed: 1", "random_seed: 2"))
+    dut = StudyResult(study, [], 0.0, scenario_texts={"tiny_walker": text})
+    assert (dut.scenario("tiny_walker").random_seed, dut.scenario("tiny_walker").planner.replan) == (1, False)
+    speed = dut.scenario("tiny_walker", variant="replan_speed")
+    assert (speed.planner.replan, speed.social.speed_scaling) == (True, True)
+    assert study.scenario("tiny_walker").random_seed == 2  # without the text: the file as it is now

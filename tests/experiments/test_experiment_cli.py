@@ -358,7 +358,7 @@ def test_a_second_ctrl_c_while_the_records_are_written_alone_keeps_them(tmp_path
             signal.raise_signal(signal.SIGINT)
         return original(*args, **kwargs)
 
-    for owner in (study, study.output):  # the command's own call and write_study's
+    for owner in (study, study.framework):  # the command's own call and write_study's
         monkeypatch.setattr(owner, "write_records", write_records)
     rc = main(["experiment", "sweep", str(sweep), "--out", str(out)])
     captured = capsys.readouterr()

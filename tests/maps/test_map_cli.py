@@ -69,6 +69,36 @@ def test_scenario_refuses_a_blocked_start_or_goal(room_map, tmp_path, capsys, st
     assert not out.exists()
 
 
+@pytest.mark.parametrize("extra, words", [
+    (["--arm", "100", "0"], ["--arm: psi1 = 100.0 is outside the joint range"]),
+    (["--arm", "0", "-4"], ["--arm: psi2 = -4.0 is outside the joint range"]),
+    (["--goal", "2.5", "0"], ["--goal: must differ from start"]),
+    (["--goal", "40", "0"], ["--goal: position (40.0, 0.0) is outside world.bounds"]),
+])
+def test_scenario_names_the_option_of_a_refused_field(room_map, tmp_path, capsys, extra, words):
+    """The scenario file is not written when it is refused: the error names
+    the option the field came from, never the file or its field (start[2])."""
+    out = tmp_path / "s.yaml"
+    argv = ["map", "scenario", str(room_map), "--start", "2.5", "0", "--goal", "9", "0", "--out", str(out), *extra]
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and err.startswith("drake-social: error: --")
+    for word in words:
+        assert word in err
+    assert str(out) not in err and "start[" not in err and "goal[" not in err
+    assert not out.exists()
+
+
+def test_a_field_without_an_option_is_named_with_the_file_not_written():
+    from drake_social.map_tools import OPTION_OF_FIELD, _as_option_error
+
+    assert _as_option_error("s.yaml: people[0]: too close", "s.yaml") == "s.yaml (not written): people[0]: too close"
+    assert _as_option_error("s.yaml: world.map: m.yaml: resolution: bad", "s.yaml") == "m.yaml: resolution: bad"
+    assert _as_option_error("s.yaml: start[3]: psi2 = 9", "s.yaml") == "--arm: psi2 = 9"
+    assert _as_option_error("other: x: y", "s.yaml") == "other: x: y"
+    assert {OPTION_OF_FIELD[f"{end}[{i}]"] for end in ("start", "goal") for i in (2, 3)} == {"--arm"}
+
+
 def test_scenario_refuses_a_bad_map_naming_its_field(tmp_path, capsys):
     bad = tmp_path / "bad.yaml"
     bad.write_text("image: none.pgm\nresolution: 0.05\norigin: [0, 0, 0]\nnegate: 0\noccupied_thresh: 0.65\n"

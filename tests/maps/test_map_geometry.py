@@ -5,6 +5,7 @@ draws them as one mesh, and a plan on a generated map passes Drake's own check."
 from __future__ import annotations
 
 import math
+import re
 
 import numpy as np
 import pytest
@@ -63,6 +64,45 @@ def test_the_robot_at_a_map_wall_is_reported_against_the_map_box(room):
     with pytest.raises(ScenarioError, match=r"start: configuration .* is in collision: .* with map\["):
         make_checker(load_scenario(room.world.map.replace("maps/room.yaml", "room_scenario.yaml"),
                                    ["start: [3.6, 2.0, 0.0, 1.0]"]), "planar", source="room_scenario.yaml")
+
+
+def _wall_label() -> str:
+    """The room's wall as a report names it, computed here from the image:
+    its image rows and columns, and its world extent (origin 0, 0.5 m cells,
+    image row 0 at the top of the 12-row image)."""
+    from maps.test_map_scenario import RESOLUTION, room_image
+
+    rows, cols = np.nonzero(room_image() == 0)
+    height = room_image().shape[0]
+    x0, x1 = cols.min() * RESOLUTION, (cols.max() + 1) * RESOLUTION
+    y0, y1 = (height - 1 - rows.max()) * RESOLUTION, (height - rows.min()) * RESOLUTION
+    return (f"the box of world.map room.yaml over image rows {rows.min()}-{rows.max()}, columns {cols.min()}-"
+            f"{cols.max()} (x {x0:.2f} .. {x1:.2f} m, y {y0:.2f} .. {y1:.2f} m)")
+
+
+@pytest.mark.parametrize("kind", ["planar", "drake"])
+def test_a_contact_with_a_map_box_names_its_image_cells_and_world_coordinates(room, kind):
+    """No figure numbers the map's boxes: a report says where map[j] is."""
+    assert _wall_label() == ("the box of world.map room.yaml over image rows 3-11, columns 8-9 "
+                             "(x 4.00 .. 5.00 m, y 0.00 .. 4.50 m)")
+    checker = make_checker(room, kind)
+    contacts = checker.contacts(np.array([3.6, 2.0, 0.0, 1.0]))
+    names = {c.other for c in contacts}
+    assert len(names) == 1 and re.fullmatch(r"map\[\d+\], " + re.escape(_wall_label()), names.pop())
+    with pytest.raises(ScenarioError) as e:
+        make_checker(load_scenario(room.world.map.replace("maps/room.yaml", "room_scenario.yaml"),
+                                   ["start: [3.6, 2.0, 0.0, 1.0]"]), kind, source="room_scenario.yaml")
+    assert _wall_label() in str(e.value)
+
+
+def test_a_contact_with_the_outside_of_a_turned_map_names_it(tmp_path):
+    path = write_scenario(tmp_path, origin=(0.0, 0.0, math.pi / 6), start="1.0, 3.0", goal="3.0, 5.0")
+    scenario = load_scenario(path)
+    world = world_model(scenario)
+    outside = f"map[{world.map_box_count - 1}]"  # the last four boxes close the outside
+    corner = world.boxes.corners[-1].mean(axis=0)  # well inside the last outside box
+    labels = [c.other for c in make_checker(scenario, "planar").contacts(np.array([*corner, 0.0, 1.0]))]
+    assert any(label.startswith(outside + ", the outside of world.map room.yaml's rectangle") for label in labels)
 
 
 def test_boxes_mesh_covers_each_footprint_once():

@@ -235,7 +235,7 @@ def test_the_shipped_crowds_draw_the_speeds_of_the_floor_alone():
     # generator's normals above 0.1 m/s, as drawn before the range had an upper end.
     from pathlib import Path
 
-    from drake_social.experiments.crowd import episode_seeds
+    from drake_social.experiments.study.crowd import episode_seeds
     from drake_social.scenario import load_scenario
 
     lobby = load_scenario(Path(__file__).resolve().parents[2] / "scenarios" / "lobby_crowd.yaml")

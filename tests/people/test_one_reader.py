@@ -22,9 +22,11 @@ COST_PEOPLE = {
     ("planning/rrt_star/compiled.py", "sc.people"),
     # A SimulationResult's people log (a PeopleLog over the run), not a scenario's list.
     ("sim/run.py", "result.people"),
+    # The station's people source (a PeopleSource, which answers from the people model).
+    ("sim/run.py", "built.station.people"),
     ("app.py", "run.people"),
     ("experiments/study/runs.py", "run.people"),
-    ("experiments/crowd.py", "run.people"),
+    ("experiments/study/crowd_episode.py", "run.people"),
 }
 
 

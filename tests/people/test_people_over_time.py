@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 from drake_social.cost.agf import PersonalSpace, agf_algorithm1
-from drake_social.experiments import metrics
+from drake_social.evaluation import metrics
 from drake_social.people import PeopleModel, PeopleState, people_model
 from drake_social.scenario import load_scenario
 

@@ -25,9 +25,10 @@ SCENARIO_DIR = Path(__file__).resolve().parents[2] / "scenarios"
 SCENARIOS = ("office_bar", "generic_L")
 SEEDS = (0, 1, 2)
 ITERATIONS = 2000
-#: The paper's planner (the raw tree path, the fixed r_near), pinned over the
-#: scenario files' defaults (an optimised path, the shrinking radius).
-PAPER_PLANNER = "planner: {optimize: false, near_radius_mode: fixed}"
+#: The paper's planner (the raw tree path, the fixed r_near, the pure social
+#: integral), pinned over the scenario files' defaults (an optimised path, the
+#: shrinking radius, a length tie-break).
+PAPER_PLANNER = "{planner: {optimize: false, near_radius_mode: fixed}, social: {length_weight: 0.0}}"
 
 
 def path_hash(waypoints: np.ndarray) -> str:

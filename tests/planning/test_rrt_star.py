@@ -301,6 +301,8 @@ def test_admissible_ellipse_never_excludes_the_optimum():
 
 def test_admissible_mode_needs_a_length_weight(tiny):
     bad = with_planner(tiny, algorithm="informed_social_rrt_star", informed_mode="admissible")
+    validate_scenario(bad)  # with the default tie-break (length_weight 0.001)
+    bad.social = dc.replace(bad.social, length_weight=0.0)
     from drake_social.scenario import ScenarioError
 
     with pytest.raises(ScenarioError, match="planner.informed_mode"):
@@ -385,6 +387,7 @@ def test_variants_are_configurations_of_one_core(tiny, tiny_checker):
 
 def test_length_weight_adds_lambda_times_length(tiny, rng):
     scenario = copy.deepcopy(tiny)
+    scenario.social.length_weight = 0.0
     plain = make_objective(scenario, "social_rrt_star")
     scenario.social.length_weight = 0.7
     dut = make_objective(scenario, "social_rrt_star")
@@ -466,6 +469,7 @@ def test_every_scenario_plans_a_valid_path_with_drake(name, repo_root):
 
 def test_admissible_mode_without_a_length_weight_is_refused(tiny, tiny_checker):
     bad = with_planner(tiny, informed_mode="admissible")  # the file's algorithm is not informed: passes validation
+    bad.social = dc.replace(bad.social, length_weight=0.0)
     validate_scenario(bad)
     with pytest.raises(PlanningInputError, match="admissible.*length_weight"):
         make_planner(bad, tiny_checker, "informed_social_rrt_star")

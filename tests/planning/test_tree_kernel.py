@@ -4,7 +4,11 @@ from __future__ import annotations
 
 import copy
 import dataclasses as dc
+import json
 import math
+import subprocess
+import sys
+import textwrap
 
 import numpy as np
 import pytest
@@ -216,6 +220,65 @@ def test_ctrl_c_stops_the_compiled_loop_between_chunks(tiny):
     with pytest.raises(KeyboardInterrupt):
         planner.solve(np.array(scenario.start), np.array(scenario.goal), np.random.default_rng(0), interrupt)
     assert seen == list(range(1, 11))
+
+
+#: Ctrl-C after Ctrl-C on the compiled loop: SIGINT to the main thread every 0 to 2 ms while the planner
+#: of tiny.yaml (300 iterations, about 10 ms) solves again and again; the handler raises
+#: KeyboardInterrupt only inside solve(), as Python's own does wherever it runs.
+_STORM = textwrap.dedent("""
+    import dataclasses as dc, json, signal, sys, threading, time
+    import numpy as np
+    from drake_social.collision.planar_checker import PlanarChecker
+    from drake_social.planning.algorithms import make_planner
+    from drake_social.scenario import load_scenario
+
+    scenario = load_scenario(sys.argv[1])
+    scenario.planner = dc.replace(scenario.planner, iterations=300)
+    planner = make_planner(scenario, PlanarChecker(scenario), "social_rrt_star")
+    start, goal = np.array(scenario.start), np.array(scenario.goal)
+    before = planner.solve(start, goal, np.random.default_rng(0))
+    inside, storming = False, threading.Event()
+
+    def interrupt(signum, frame):
+        if inside:
+            raise KeyboardInterrupt
+
+    signal.signal(signal.SIGINT, interrupt)
+
+    def storm():
+        pause = np.random.default_rng(1)
+        while storming.is_set():
+            time.sleep(pause.uniform(0.0, 0.002))
+            signal.pthread_kill(threading.main_thread().ident, signal.SIGINT)
+
+    storming.set()
+    threading.Thread(target=storm, daemon=True).start()
+    caught = solved = 0
+    while caught < int(sys.argv[2]):
+        inside = True
+        try:
+            planner.solve(start, goal, np.random.default_rng(solved))
+            inside = False
+            solved += 1
+        except KeyboardInterrupt:
+            inside = False
+            caught += 1
+    storming.clear()
+    time.sleep(0.01)
+    after = planner.solve(start, goal, np.random.default_rng(0))
+    print(json.dumps({"caught": caught, "same": bool(np.array_equal(before.waypoints, after.waypoints)
+                                                       and before.cost == after.cost)}))
+""")
+
+
+def test_ctrl_c_during_the_compiled_loop_is_a_clean_keyboard_interrupt(tiny_scenario_path):
+    """numba's passing of the generator and its boxing of the tree's state run Python code that a
+    KeyboardInterrupt raised inside crashed (a segmentation fault, or a SystemError): 300 Ctrl-Cs
+    that land in the compiled loop are each a KeyboardInterrupt, and the next plan is the same."""
+    done = subprocess.run([sys.executable, "-c", _STORM, str(tiny_scenario_path), "300"], capture_output=True,
+                          text=True, timeout=600)
+    assert done.returncode == 0, done.stderr[-3000:]
+    assert json.loads(done.stdout) == {"caught": 300, "same": True}
 
 
 @pytest.mark.slow

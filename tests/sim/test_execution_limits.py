@@ -17,7 +17,9 @@ import pytest
 from drake_social.collision.drake_checker import make_checker
 from drake_social.sim.diagram import build_diagram
 from drake_social.planning.algorithms import plan
-from drake_social.sim.run import LimitViolation, analyze_execution, limit_violations, simulate
+from drake_social.sim.execution_analysis import analyze_execution, limit_violations
+from drake_social.sim.results import LimitViolation
+from drake_social.sim.run import simulate
 
 # Whole executions in Drake's Simulator.
 pytestmark = pytest.mark.slow
@@ -208,7 +210,8 @@ def test_a_diverging_dynamic_run_is_reported_as_such(tiny_scenario):
     the run stops there with the error naming it and the step."""
     import dataclasses as dc
 
-    from drake_social.sim.run import SimulationDiverged, run_checked
+    from drake_social.sim.results import SimulationDiverged
+    from drake_social.sim.run import run_checked
 
     scenario = copy.deepcopy(tiny_scenario)
     scenario.execution = dc.replace(scenario.execution, mode="dynamic", plant_time_step=0.02, control_period=0.02)

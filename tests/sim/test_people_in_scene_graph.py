@@ -10,8 +10,8 @@ from pydrake.geometry import Role
 from drake_social.control import PARKED_DEPTH
 from drake_social.model.robot_model import COLLISION_HEIGHT
 from drake_social.people import PeopleState, ScenarioPeople
-from drake_social.sim import diagram as diagram_module
-from drake_social.sim.diagram import build_diagram
+from drake_social.sim import station as station_module
+from drake_social.sim.station import make_station
 
 BASE_RADIUS, PERSON_RADIUS = 0.35, 0.25  # scenarios/tiny.yaml
 #: Drake measures cylinder to cylinder by GJK: within about 1e-6 m of the exact distance.
@@ -32,12 +32,20 @@ class Walkers:
 
 @pytest.fixture
 def walking(monkeypatch):
-    monkeypatch.setattr(diagram_module, "people_model", lambda scenario: ScenarioPeople([Walkers()]))
+    monkeypatch.setattr(station_module, "people_model", lambda scenario: ScenarioPeople([Walkers()]))
 
 
 def _ids(built, name):
     inspector = built.scene_graph.model_inspector()
     return [g for g in inspector.GetAllGeometryIds(Role.kProximity) if inspector.GetName(g) == name]
+
+
+def _context(station, scenario):
+    """A context of the station alone, its commands holding the robot at the scenario's start."""
+    context = station.diagram.CreateDefaultContext()
+    station.diagram.GetInputPort("wheel_speeds").FixValue(context, np.zeros(4))
+    station.diagram.GetInputPort("arm_command").FixValue(context, np.concatenate([scenario.start[2:], np.zeros(4)]))
+    return context
 
 
 def _base(built):
@@ -48,14 +56,14 @@ def _base(built):
 
 @pytest.mark.parametrize("mode", ["kinematic", "dynamic"])
 def test_queries_see_the_people_where_they_walk(tiny_scenario, walking, mode):
-    built = build_diagram(tiny_scenario, mode=mode, planner=False)
-    assert built.subsystem("people_geometry") is not None
+    built = make_station(tiny_scenario, mode=mode)
+    assert built.diagram.GetSubsystemByName("people_geometry") is not None
     # Not anchored in the plant: only the moving body carries the person's name.
     (person,) = _ids(built, "person[0] 'standing'")
     (late,) = _ids(built, "person[1] 'late'")
     assert built.scene_graph.model_inspector().GetFrameId(person) != built.scene_graph.world_frame_id()
     base = _base(built)
-    context = built.diagram.CreateDefaultContext()
+    context = _context(built, tiny_scenario)
     port = built.diagram.GetOutputPort("query_object")
     start = np.asarray(tiny_scenario.start[:2], float)
     for t in (0.0, 3.0):
@@ -76,10 +84,10 @@ def test_queries_see_the_people_where_they_walk(tiny_scenario, walking, mode):
 
 
 def test_standing_people_stay_anchored(tiny_scenario):
-    built = build_diagram(tiny_scenario, mode="kinematic", planner=False)
-    assert built.subsystem("people").model.static
+    built = make_station(tiny_scenario, mode="kinematic")
+    assert built.people.model.static
     with pytest.raises(RuntimeError):
-        built.subsystem("people_geometry")
+        built.diagram.GetSubsystemByName("people_geometry")
     (person,) = _ids(built, "person[0] 'standing'")
     inspector = built.scene_graph.model_inspector()
     assert inspector.GetFrameId(person) == built.scene_graph.world_frame_id()
@@ -106,8 +114,8 @@ def test_the_replay_draws_the_walking_people(tiny_scenario, walking):
     from drake_social.sim.replay import make_meshcat
 
     meshcat = make_meshcat()
-    built = build_diagram(tiny_scenario, mode="kinematic", planner=False, meshcat=meshcat)
-    context = built.diagram.CreateDefaultContext()
+    built = make_station(tiny_scenario, mode="kinematic", meshcat=meshcat)
+    context = _context(built, tiny_scenario)
     context.SetTime(2.0)
     built.visualizer.ForcedPublish(built.visualizer.GetMyContextFromRoot(context))
     # The visualizer draws each person's frame (its illustration geometry) under the prefix.

@@ -14,7 +14,8 @@ from drake_social import app
 from drake_social.io.paths import PEOPLE_HEADER, write_people_csv
 from drake_social.people import PEOPLE_CSV_FIELDS, PeopleLog, PeopleState, ScenarioPeople, people_model
 from drake_social.sim import diagram as diagram_module
-from drake_social.sim.run import CHECKED_ROOM, CHECKED_ROOM_AND_PEOPLE, simulate
+from drake_social.sim.results import CHECKED_ROOM, CHECKED_ROOM_AND_PEOPLE
+from drake_social.sim.run import simulate
 
 
 class Walkers:
@@ -140,7 +141,7 @@ def test_a_given_checker_of_the_people_at_t0_is_replaced_by_the_room_alone_when_
     # (people at t = 0) rejects it, the room alone (the person has walked off) accepts it.
     from drake_social.collision.drake_checker import make_checker
     from drake_social.people import without_people
-    from drake_social.sim.run import analyze_execution
+    from drake_social.sim.execution_analysis import analyze_execution
 
     q = np.array([[x, 3.4, 0.0, 1.5708] for x in np.linspace(3.0, 5.0, 41)])
     times = np.linspace(0.0, 4.0, len(q))

@@ -61,9 +61,9 @@ def _reference_log(built, until: float):
     simulator = Simulator(built.diagram)
     simulator.Initialize()
     root = simulator.get_context()
-    reference = built.subsystem("reference")
+    reference = built.autonomy.reference
     context = reference.GetMyContextFromRoot(root)
-    planner = built.subsystem("planner")
+    planner = built.autonomy.planner
     planner_context = planner.GetMyContextFromRoot(root)
     times, p, v, version = [], [], [], []
     for k in range(1, int(round(until / period)) + 1):
@@ -77,8 +77,7 @@ def _reference_log(built, until: float):
 
 def test_handover_keeps_the_reference_continuous_in_position_and_velocity(tiny):
     built = build_diagram(tiny, replan=True, replanner=Detour(tiny.goal))
-    assert built.replanning and "held" not in [built.diagram.GetSystems()[i].get_name()
-                                                 for i in range(len(built.diagram.GetSystems()))]
+    assert built.replanning and not built.autonomy.diagram.HasSubsystemNamed("held")
     times, p, v, version, _ = _reference_log(built, 2.0)
     change = int(np.flatnonzero(np.diff(version) > 0)[0]) + 1
     # Replan 8 runs at t = 0.8 s; AdvanceTo(0.8) stops before the events of t = 0.8 s, so the first
@@ -111,7 +110,7 @@ def test_a_wait_holds_the_robot_and_the_path_resumes(tiny):
     assert np.all(version == 0)  # a wait keeps the path
     assert np.linalg.norm(v[-1, :2]) > 0.1  # and goes on along it after
     assert abs(p[-1, 1] - 2.5) < 1e-9  # on the straight segment to the goal
-    planner = built.subsystem("planner")
+    planner = built.autonomy.planner
     statuses = [r.status for r in planner.replans(planner.GetMyContextFromRoot(root))]
     assert statuses[5:15] == ["wait"] * 10 and statuses[15] == "kept"
 
@@ -204,7 +203,7 @@ def walked():
     built = build_diagram(_corridor("north"), replan=True)
     context = built.diagram.CreateDefaultContext()
     built.diagram.ExecuteInitializationEvents(context)
-    planner = built.subsystem("planner")
+    planner = built.autonomy.planner
     route = _route(planner.GetOutputPort("waypoints").Eval(planner.GetMyContextFromRoot(context)))
     scenario = _corridor(route)
     runs = [simulate(scenario, mode="kinematic", replan=True, analyze=k == 0) for k in range(2)]
@@ -237,7 +236,7 @@ def test_same_seed_same_episode_bit_for_bit(walked):
 
 
 def test_replan_none_follows_the_scenario_when_it_plans(tiny):
-    from drake_social.sim.diagram import resolve_replan
+    from drake_social.sim.checks import resolve_replan
 
     on = dc.replace(tiny, planner=dc.replace(tiny.planner, replan=True))
     assert resolve_replan(on, None, False, True, "f") is True
@@ -247,3 +246,33 @@ def test_replan_none_follows_the_scenario_when_it_plans(tiny):
     assert resolve_replan(on, False, False, True, "f") is False
     with pytest.raises(ValueError, match="f: replan=True needs the built-in planner"):
         resolve_replan(tiny, True, False, False, "f")
+
+
+def test_a_robot_that_waits_the_whole_run_is_measured_where_it_held(tiny_scenario_path):
+    """Someone within the safety distance of the robot for the whole run: every replan waits, and
+    simulate returns the run (not reached) analysed against the one configuration held."""
+    from drake_social.scenario import ScenarioError
+    from drake_social.sim.execution_analysis import analyze_execution
+
+    text = tiny_scenario_path.read_text().replace(
+        'name: "standing"}  # faces south\n',
+        'name: "standing"}\n  - {x: 0.37, y: 2.5, theta: 0.0, radius: 0.25, name: "beside the start"}\n')
+    dut = load_scenario_text(text + "execution: {time_limit: 1.0}\n", "tiny, a person beside the start")
+    assert len(dut.people) == 2
+    run = simulate(dut, mode="kinematic", replan=True)
+    assert not run.reached and run.message == "goal not reached within the time limit of 1 s (the last replan: wait)"
+    assert [r.status for r in run.replans] == ["wait"] * 10  # the first plan and t = 0.1 .. 0.9 s
+    np.testing.assert_array_equal(run.waypoints, [dut.start])
+    np.testing.assert_array_equal(run.q, np.tile(dut.start, (len(run.times), 1)))
+    report = run.report
+    assert report is not None and report.collision_free and report.within_limits
+    assert report.planned_social_cost == report.executed_social_cost == 0.0
+    assert report.max_point_deviation["max"] == report.max_config_deviation == 0.0
+    # The base's surface 0.63 - 0.35 - 0.25 m from the person's.
+    assert report.min_clearance == pytest.approx(0.03, abs=1e-9)
+    # One configuration is a path to analyse; a step off it is measured; none is refused, naming the rule.
+    moved = run.q.copy()
+    moved[-1, 0] += 0.02
+    assert analyze_execution(dut, run.waypoints, run.times, moved).max_config_deviation == pytest.approx(0.02)
+    with pytest.raises(ScenarioError, match=r"1 <= N <= 10,000 .*got 0 waypoints"):
+        analyze_execution(dut, np.zeros((0, 4)), run.times, run.q)

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from drake_social.control import braking_travel
-from drake_social.experiments.nav_metrics import execution_metrics
+from drake_social.evaluation.nav_metrics import execution_metrics
 from drake_social.scenario.geometry import arm_geometry
 from drake_social.people import PeopleState
 from drake_social.people.proximity import part_distances

@@ -18,15 +18,30 @@ from drake_social.collision.drake_checker import make_checker
 from drake_social.planning.algorithms import plan
 from drake_social.sim.analysis import body_points, config_deviation, densify, point_deviation
 from drake_social.sim.diagram import build_diagram
+from drake_social.sim.results import SimulationDiverged
 from drake_social.sim.run import simulate
 
 # Whole executions in Drake's Simulator.
 pytestmark = pytest.mark.slow
 
 
+def _paper_planner(scenario):
+    """``scenario`` with the paper's planner and objective (limits.PAPER_PLANNER, PAPER_OBJECTIVE)."""
+    paper = copy.deepcopy(scenario)
+    paper.planner.optimize, paper.planner.near_radius_mode = False, "fixed"
+    paper.social.length_weight = 0.0
+    return paper
+
+
 @pytest.fixture(scope="module")
 def tiny_path(tiny_scenario):
-    result = plan(tiny_scenario, make_checker(tiny_scenario, "numpy"))
+    """The paper's raw tree path (14 waypoints), which the paper's execution was
+    made for: base and arm move independently between waypoints close together
+    and stay clear of the room (min clearance 4 cm). The default, optimised
+    path has 13 waypoints farther apart; see
+    test_paper_execution_of_far_waypoints_may_touch_and_says_so."""
+    paper = _paper_planner(tiny_scenario)
+    result = plan(paper, make_checker(paper, "numpy"))
     assert result.success
     return result.waypoints
 
@@ -99,6 +114,32 @@ def test_dynamic_synchronized_tracks_within_a_few_centimetres(runs):
     assert dut.report.max_point_deviation["max"] < 0.05
 
 
+def test_paper_execution_of_far_waypoints_may_touch_and_says_so(tiny_scenario):
+    """The default path's waypoints are far apart: the paper's execution, base
+    and arm independent, leaves its segments far enough to touch the room. The
+    report's independent re-check finds the contact; in dynamic mode the
+    default contact solver (TAMSI) fails in it and the run stops with one
+    line that names the setting that solves it, which then reaches the goal."""
+    path = plan(tiny_scenario, make_checker(tiny_scenario, "numpy")).waypoints
+    kinematic = simulate(tiny_scenario, mode="kinematic", execution="paper", waypoints=path)
+    assert kinematic.reached
+    assert not kinematic.report.collision_free
+    assert kinematic.report.min_clearance < 0
+    touch = kinematic.report.first_collision_time
+    with pytest.raises(SimulationDiverged, match=r"^the dynamic simulation diverged by t = \d+\.\d\d s \(the "
+                       r"plant's tamsi contact solver did not converge\): a hard contact; "
+                       r"execution.contact_approximation: lagged or similar \(SAP\) solves it") as failed:
+        simulate(tiny_scenario, mode="dynamic", execution="paper", waypoints=path, analyze=False)
+    # It fails in the contact, not before the kinematic run's first one.
+    assert failed.value.time >= touch - 1.0
+    lagged = copy.deepcopy(tiny_scenario)
+    lagged.execution.contact_approximation = "lagged"
+    dut = simulate(lagged, mode="dynamic", execution="paper", waypoints=path)
+    assert dut.reached
+    assert not dut.report.collision_free  # it touched, and the contact held it out of the wall
+    assert dut.report.min_clearance > -0.01
+
+
 def test_runs_are_deterministic(tiny_scenario, tiny_path):
     a = simulate(tiny_scenario, mode="kinematic", execution="paper", waypoints=tiny_path, analyze=False)
     b = simulate(tiny_scenario, mode="kinematic", execution="paper", waypoints=tiny_path, analyze=False)
@@ -133,16 +174,21 @@ def test_no_path_is_reported_without_executing(tiny_scenario):
     assert len(dut.times) == 0
 
 
-@pytest.mark.parametrize("mode, execution, names", [
-    ("kinematic", "synchronized", {"planner", "sequencer", "reference", "controller", "drive", "base", "to_pose"}),
-    ("kinematic", "paper", {"planner", "sequencer", "arm", "controller", "drive", "base", "to_pose"}),
-    ("dynamic", "paper", {"planner", "sequencer", "arm", "controller", "drive", "plant", "hold"}),
+KINEMATIC = {"drive", "hold", "base", "to_pose"}
+
+
+@pytest.mark.parametrize("mode, execution, autonomy, station", [
+    ("kinematic", "synchronized", {"planner", "sequencer", "reference", "controller"}, KINEMATIC),
+    ("kinematic", "paper", {"planner", "sequencer", "arm", "controller"}, KINEMATIC),
+    ("dynamic", "paper", {"planner", "sequencer", "arm", "controller"}, {"drive", "hold", "plant", "servo"}),
 ])
-def test_subsystems_are_named(tiny_scenario, mode, execution, names):
+def test_subsystems_are_named(tiny_scenario, mode, execution, autonomy, station):
     dut = build_diagram(tiny_scenario, mode=mode, execution=execution, checker=make_checker(tiny_scenario, "numpy"))
+    assert autonomy <= {s.get_name() for s in dut.autonomy.diagram.GetSystems()}
+    assert station <= {s.get_name() for s in dut.station.diagram.GetSystems()}
     have = {s.get_name() for s in dut.diagram.GetSystems()}
-    assert names <= have
-    assert {"q_log", "v_log", "wheel_speeds_log", "target_log", "reference_log", "index_log"} <= have
+    assert {"station", "autonomy", "q_log", "v_log", "wheel_speeds_log", "target_log", "reference_log",
+            "index_log"} <= have
 
 
 def test_bad_choices_are_refused(tiny_scenario):

@@ -22,9 +22,9 @@ from drake_social.sim import simulate
 SCENARIOS = Path(__file__).resolve().parents[2] / "scenarios"
 
 PINNED = [
-    ("tiny", "kinematic", 3408, "5c9a16d5cd29ff60"),
-    ("tiny", "dynamic", 3408, "f9efa7ae7e8807e4"),
-    ("office_bar", "kinematic", 10367, "b0836a6312f954fd"),
+    ("tiny", "kinematic", 3329, "6c2f4ab49ef1c0b7"),
+    ("tiny", "dynamic", 3329, "3b08d8b973ae9b25"),
+    ("office_bar", "kinematic", 5828, "b5581bcac446570d"),
 ]
 
 

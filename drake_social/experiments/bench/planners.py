@@ -42,7 +42,7 @@ from drake_social.collision.drake_checker import CHECKERS, make_checker
 from drake_social.planning.space import ConfigurationSpace
 from drake_social.collision.validity import ValidityChecker
 from drake_social.experiments.bench.machine import cpu_model, load_average as _load_average
-from drake_social.experiments.records import run_record
+from drake_social.evaluation.records import run_record
 from drake_social.io.records import write_json
 from drake_social.limits import PAPER_PLANNER
 from drake_social.planning.algorithms import (ALGORITHM_SPECS, algorithm_spec, evaluate_path, make_objective,

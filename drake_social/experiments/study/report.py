@@ -410,7 +410,7 @@ def report_markdown(result, figures: Sequence[str], arena_files: Sequence[str] =
         claims = paper_claims(result.records)
     if claims:
         lines += ["Paired over seeds, one-sided Wilcoxon signed-rank test at "
-                  f"{ALPHA}; see `drake_social/experiments/report.py` for the verdict rule.", ""]
+                  f"{ALPHA}; see `drake_social/experiments/study/report.py` for the verdict rule.", ""]
         lines += [c.markdown() for c in claims]
     else:
         lines += ["Each algorithm against the group's first, on F, paired over seeds:", ""]

@@ -1,9 +1,11 @@
-"""A finished study's records: the result, the best runs, and the record files.
+"""A finished study of any kind: its records, and the CSV of their scalar fields.
 
-One record per run (see :func:`drake_social.experiments.study.runs.run_task`);
-:func:`write_records` writes them as results.csv and results.json
-(:data:`RECORD_FILES`) before any other output, and :func:`rescue_records`
-into a new folder when the output folder cannot take them.
+One record per task: a planning run
+(:func:`drake_social.experiments.study.runs.run_task`) or a crowd episode
+(:func:`drake_social.experiments.study.crowd_episode.run_episode`). The
+record files are written by :mod:`.framework` (each kind names its own:
+:mod:`.kinds`); :func:`best_runs` and :func:`comparable` read a planning
+study's records.
 """
 
 from __future__ import annotations
@@ -11,27 +13,17 @@ from __future__ import annotations
 import csv
 import dataclasses as dc
 import io
-import json
-import tempfile
-from pathlib import Path
-from typing import Sequence
+from typing import Any, Sequence
 
-from drake_social.experiments.study.scenarios import load_cached
-from drake_social.experiments.study.spec import Group, Study
-from drake_social.io.json_numbers import finite_or_none
-from drake_social.io.textfile import read_yaml_file
 from drake_social.scenario.schema import Scenario
 
 __all__ = [
-    "RECORD_FILES",
     "TIMING_FIELDS",
     "StudyOutputError",
     "StudyResult",
     "best_runs",
     "comparable",
-    "rescue_records",
     "results_csv",
-    "write_records",
 ]
 
 #: Record fields that measure the machine, not the method (left out of comparisons).
@@ -45,31 +37,35 @@ def comparable(record: dict) -> dict:
 
 @dc.dataclass
 class StudyResult:
-    """A finished study.
+    """A finished study of any kind.
 
     Attributes:
-        study: what was run.
-        records: one per task, in task order (see :func:`~drake_social.experiments.study.runs.run_task`).
-        wall_time: seconds for all runs (executor start-up included).
+        study: what was run: a :class:`~drake_social.experiments.study.Study`
+            or a :class:`~drake_social.experiments.study.crowd.CrowdStudy`.
+        records: one per task, in task order.
+        wall_time: seconds for all tasks (executor start-up included).
         executor, workers: where they ran.
+        scenario_texts: the study's name of a scenario (a group's name, a
+            crowd scenario's file stem, a recorded crowd's window) -> the
+            text its tasks loaded (read once, before the first task).
+        tasks: the plain-data tasks the records came from, in the same
+            order (what a kind's outputs may need beyond the records: a
+            recorded crowd's window files); empty when not kept.
     """
 
-    study: Study
+    study: Any
     records: list[dict]
     wall_time: float
     executor: str = "process"
     workers: int = 1
-    #: Group name -> the scenario text its runs loaded (read once, before the first run).
     scenario_texts: dict[str, str] = dc.field(default_factory=dict)
+    tasks: list[dict] = dc.field(default_factory=list)
 
-    def group(self, name: str) -> Group:
-        return next(g for g in self.study.groups if g.name == name)
-
-    def scenario(self, name: str) -> Scenario:
-        """The scenario group ``name`` ran on, from the text read before the runs (the file may have changed since)."""
-        g = self.group(name)
-        text = self.scenario_texts[name] if name in self.scenario_texts else read_yaml_file(g.scenario, "scenario")
-        return load_cached(g.scenario, text, tuple(g.overrides), f"group {g.name}")
+    def scenario(self, name: str, **options) -> Scenario:
+        """The scenario ``name`` ran on, from the text read before the tasks
+        (the file may have changed since): the study's ``scenario(name,
+        text, **options)`` (a crowd study's take the ``variant``)."""
+        return self.study.scenario(name, self.scenario_texts.get(name), **options)
 
 
 def best_runs(records: Sequence[dict]) -> dict[tuple[str, str], dict]:
@@ -87,18 +83,14 @@ def best_runs(records: Sequence[dict]) -> dict[tuple[str, str], dict]:
 
 class StudyOutputError(OSError):
     """A finished study's outputs could not all be written; the message says
-    where its records (:data:`RECORD_FILES`) were kept."""
-
-_NON_SCALAR = ("waypoints", "progress", "progress_time", "overrides")
-#: The files holding every run's record, written before any other output.
-RECORD_FILES = ("results.csv", "results.json")
+    where its records were kept."""
 
 
-def results_csv(records: Sequence[dict]) -> str:
-    """Every scalar field of every record, one row per run (empty cell: no value)."""
+def results_csv(records: Sequence[dict], non_scalar: Sequence[str]) -> str:
+    """Every field of every record but ``non_scalar``, one row per record (empty cell: no value)."""
     columns: list[str] = []
     for r in records:
-        columns += [k for k in r if k not in _NON_SCALAR and k not in columns]
+        columns += [k for k in r if k not in non_scalar and k not in columns]
     buf = io.StringIO()
     writer = csv.writer(buf, lineterminator="\n")
     writer.writerow(columns)
@@ -106,28 +98,3 @@ def results_csv(records: Sequence[dict]) -> str:
         writer.writerow(["" if r.get(c) is None else (repr(r[c]) if isinstance(r[c], float) else r[c])
                          for c in columns])
     return buf.getvalue()
-
-
-def write_records(result: StudyResult, out_dir: str | Path) -> list[str]:
-    """Writes the records of every run: results.csv and results.json
-    (:data:`RECORD_FILES`) into ``out_dir`` (created when missing).
-
-    Returns:
-        The names of the written files.
-    """
-    out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
-    (out / "results.csv").write_text(results_csv(result.records))
-    meta = {"study": result.study.to_json_dict(), "seeds": result.study.run_seeds(), "wall_time": result.wall_time,
-            "executor": result.executor, "workers": result.workers}
-    (out / "results.json").write_text(json.dumps(finite_or_none({**meta, "runs": result.records}), allow_nan=False) + "\n")
-    return list(RECORD_FILES)
-
-
-def rescue_records(result: StudyResult) -> Path:
-    """Writes the records (:func:`write_records`) into a new folder of the
-    system's temporary directory (``$TMPDIR``), for when the output folder
-    cannot take them; returns the folder."""
-    folder = Path(tempfile.mkdtemp(prefix="drake-social-records-"))
-    write_records(result, folder)
-    return folder

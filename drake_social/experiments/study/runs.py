@@ -1,28 +1,22 @@
-"""Running a study: one task in any process, and every task on an executor.
+"""One run of a planning study (a sweep, the paper's), in any process.
 
-:func:`run_task` loads the task's scenario from its text, plans, measures
-the path (:mod:`drake_social.experiments.metrics`) and, with ``simulate``,
-executes it and measures the executed trajectory too. :func:`run_study`
-runs every task of a study on an executor (:mod:`.executors`).
+:func:`run_task` is the planning study's per-task function (its kind in
+:mod:`.kinds`; the framework runs every task on an executor): it loads the
+task's scenario from its text, plans, measures the path
+(:mod:`drake_social.evaluation.metrics`) and, with ``simulate``, executes it
+and measures the executed trajectory too.
 """
 
 from __future__ import annotations
 
 import functools
-import logging
 import time
-from typing import Callable
 
 import numpy as np
 
-from drake_social.experiments.study.executors import map_tasks
-from drake_social.experiments.study.results import StudyResult
 from drake_social.experiments.study.scenarios import load_cached
-from drake_social.experiments.study.spec import Study, study_tasks
 
-__all__ = ["PROGRESS_POINTS", "run_study", "run_task"]
-
-_log = logging.getLogger(__name__)
+__all__ = ["PROGRESS_POINTS", "run_task"]
 
 #: Points of the anytime curve kept per run (evenly spaced iterations, the last included).
 PROGRESS_POINTS = 50
@@ -43,7 +37,7 @@ def run_task(task: dict) -> dict:
     ``cost`` (the planner's objective), ``planning_time`` (s), ``raw_cost``,
     ``first_solution_iteration``, ``tree_size``, ...; ``F_multi`` and the
     other path measures None on failure), every metric of
-    :func:`~drake_social.experiments.metrics.path_metrics` (on success),
+    :func:`~drake_social.evaluation.metrics.path_metrics` (on success),
     ``waypoints``, the anytime curve ``progress`` ([iteration, best cost]
     at :data:`PROGRESS_POINTS` iterations) and ``progress_time`` (seconds
     since the start of solve at those iterations); with ``simulate``, the
@@ -51,8 +45,8 @@ def run_task(task: dict) -> dict:
     (``nav_*``, :data:`drake_social.io.records.NAV_FIELDS`).
     """
     # Imported when a task runs, not with the package: defining and checking a study needs neither.
-    from drake_social.experiments.metrics import executed_metrics, path_metrics
-    from drake_social.experiments.records import run_record
+    from drake_social.evaluation.metrics import executed_metrics, path_metrics
+    from drake_social.evaluation.records import run_record
     from drake_social.planning.algorithms import make_objective, plan
     from drake_social.planning.objective import SocialObjective
 
@@ -89,11 +83,11 @@ def run_task(task: dict) -> dict:
 
 
 def _execute(scenario, waypoints, checker, executed_metrics) -> dict:
-    from drake_social.experiments.metrics import execution_metrics
+    from drake_social.evaluation.metrics import execution_metrics
     from drake_social.sim.run import simulate
 
     # With walking people the analysis swaps the planning checker (people at t = 0) for one of
-    # the same kind of the room alone (sim.run.analyze_execution); the metrics read the run's log.
+    # the same kind of the room alone (sim.execution_analysis.analyze_execution); the metrics read the run's log.
     run = simulate(scenario, mode="kinematic", waypoints=np.asarray(waypoints, float), checker=checker, analyze=True,
                    analysis_checker=checker)
     r = run.report
@@ -113,16 +107,3 @@ def _execute(scenario, waypoints, checker, executed_metrics) -> dict:
         out.update(executed_metrics(scenario, run.times, run.q, run.people))
         out.update(execution_metrics(scenario, run))
     return out
-
-
-def run_study(study: Study, *, executor: str = "process", workers: int = 1, scheduler: str | None = None,
-              progress: Callable[[int, int, dict], None] | None = None) -> StudyResult:
-    """Runs every task of ``study`` (see :func:`~drake_social.experiments.study.executors.map_tasks`)."""
-    tasks = study_tasks(study)
-    t0 = time.perf_counter()
-    records = map_tasks(run_task, tasks, executor=executor, workers=workers, scheduler=scheduler,
-                        progress=progress)
-    wall = time.perf_counter() - t0
-    _log.info("study %s: %d runs in %.1f s", study.name, len(records), wall)
-    texts = {task["group"]: task["scenario_text"] for task in tasks}
-    return StudyResult(study, records, wall, executor, workers, scenario_texts=texts)

@@ -24,8 +24,9 @@ from drake_social.errors import ScenarioError
 from drake_social.experiments.study.scenarios import check_run_settings, load_cached
 from drake_social.io.textfile import read_yaml_file, shorten
 from drake_social.limits import (ALGORITHMS, CHECKERS, MAX_ITERATIONS, MAX_PAPER_RUNS, MAX_RUNS, MAX_STUDY_TASKS,
-                                 PAPER_ALGORITHMS, PAPER_PAIRS, PAPER_PLANNER, PAPER_WEIGHTINGS)
-from drake_social.scenario.schema import Bar, interest_point_count
+                                 PAPER_ALGORITHMS, PAPER_OBJECTIVE, PAPER_PAIRS, PAPER_PLANNER, PAPER_WEIGHTINGS)
+from drake_social.scenario.schema import Bar, Scenario, interest_point_count
+from drake_social.scenario.shipped import SHIPPED_SCENARIOS
 
 __all__ = [
     "MAX_PAPER_RUNS",
@@ -34,6 +35,7 @@ __all__ = [
     "NAME_PATTERN",
     "NAME_RULE",
     "PAPER_ALGORITHMS",
+    "PAPER_OBJECTIVE",
     "PAPER_PAIRS",
     "PAPER_PLANNER",
     "PAPER_WEIGHTINGS",
@@ -100,6 +102,13 @@ class Study:
     def to_json_dict(self) -> dict:
         return dc.asdict(self)
 
+    def scenario(self, name: str, text: str | None = None) -> Scenario:
+        """Group ``name``'s scenario with its overrides, loaded from ``text``
+        (its file's text as the runs loaded it; None = the file read now)."""
+        g = next(g for g in self.groups if g.name == name)
+        text = read_yaml_file(g.scenario, "scenario") if text is None else text
+        return load_cached(g.scenario, text, tuple(g.overrides), f"group {g.name}")
+
 
 def paper_weights(num_points: int) -> dict[str, list[float]]:
     """Section V-D's weightings: object points 0.95 and the rest 0.05; base
@@ -111,25 +120,29 @@ def paper_weights(num_points: int) -> dict[str, list[float]]:
 
 
 def paper_study(*, runs: int = 10, iterations: int = 2000, seed: int = 0, simulate: bool = False,
-                scenario_dir: str | Path = "scenarios") -> Study:
-    """The paper's Section V (A, B and D; C is A and B's figures).
+                scenario_dir: str | Path = SHIPPED_SCENARIOS) -> Study:
+    """The paper's Section V (A, B and D; C is A and B's figures), on
+    ``office_bar.yaml`` and ``generic_L.yaml`` of ``scenario_dir`` (by
+    default the shipped ones, beside the package).
 
     D is "the generic map with the bar": generic_L.yaml with the office's
     1.5 m bar (``object: !Bar {length: 1.5, thickness: 0.05}``), 5 interest
     points, planned with Social Risk-RRT* under each of :func:`paper_weights`.
     Every group runs the paper's planner (:data:`PAPER_PLANNER`: the raw tree
-    path and the fixed r_near), whatever the scenario files' defaults.
+    path and the fixed r_near) and objective (:data:`PAPER_OBJECTIVE`: the
+    social integral alone), whatever the scenario files' defaults.
     """
     d = Path(scenario_dir)
+    pins = (PAPER_PLANNER, PAPER_OBJECTIVE)  # last: nothing after them can undo them
     bar = "object: !Bar {length: 1.5, thickness: 0.05}"
     n = 3 + interest_point_count(Bar(length=1.5, thickness=0.05))
     groups = [
-        Group("A", str(d / "office_bar.yaml"), overrides=(PAPER_PLANNER,), label="A: office, 1.5 m bar"),
-        Group("B", str(d / "generic_L.yaml"), overrides=(PAPER_PLANNER,), label="B: generic map, L-shaped object"),
+        Group("A", str(d / "office_bar.yaml"), overrides=pins, label="A: office, 1.5 m bar"),
+        Group("B", str(d / "generic_L.yaml"), overrides=pins, label="B: generic map, L-shaped object"),
     ]
     for name, w in paper_weights(n).items():
         groups.append(Group(f"D_{name}", str(d / "generic_L.yaml"),
-                            overrides=(bar, f"social: {{weights: {json.dumps(w)}}}", PAPER_PLANNER),
+                            overrides=(bar, f"social: {{weights: {json.dumps(w)}}}", *pins),
                             algorithms=("social_rrt_star",), label=f"D: generic map, bar, {name} weights {w}"))
     study = Study("paper", tuple(groups), runs=runs, iterations=iterations, seed=seed, simulate=simulate)
     check_study(study, "paper study")

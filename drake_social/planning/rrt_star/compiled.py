@@ -24,12 +24,14 @@ import math
 import time
 from typing import Callable, NamedTuple
 
+import numba
 import numpy as np
 
 from drake_social.collision import people_kernel, planar_kernel
 from drake_social.collision.validity import CompiledSceneChecker
 from drake_social.cost import kernel as cost_kernel
 from drake_social.cost import timed_kernel
+from drake_social.interrupts import DeferredSignals
 from drake_social.people import prediction_kernel
 from drake_social.planning.objective import Objective
 from drake_social.planning.rrt_star import tree_kernel
@@ -228,8 +230,9 @@ class CompiledRun:
 
     def run(self, rng: np.random.Generator, progress: Callable[[int, float], None] | None = None, *,
             deadline: float | None = None, seed_path: np.ndarray | None = None) -> CompiledTree:
-        """All iterations, in chunks: between them Python runs (Ctrl-C is
-        seen, ``progress`` is called for each iteration of the chunk).
+        """All iterations, in chunks: between them Python runs (a Ctrl-C
+        during a chunk is raised after it, ``progress`` is called for each
+        iteration of the chunk).
 
         Args:
             deadline: a ``time.perf_counter()`` value: the run stops at the
@@ -249,21 +252,21 @@ class CompiledRun:
             ValueError: ``seed_path`` not (M, 4) finite values from the start, named.
         """
         k = self.iterations
-        state = tree_kernel.init_state(self.start, k, self.params)
+        state = _held(tree_kernel.init_state, self.start, k, self.params)
         if seed_path is not None:
             seed = np.ascontiguousarray(seed_path, dtype=float)
             if seed.ndim != 2 or seed.shape[1] != 4 or len(seed) < 1 or not np.all(np.isfinite(seed)):
                 raise ValueError(f"seed_path must be (M, 4) finite configurations, got shape {seed.shape}")
             if not np.array_equal(seed[0], self.start):
                 raise ValueError(f"seed_path must start at the start {self.start.tolist()}, got {seed[0].tolist()}")
-            state = tree_kernel.seed_chain(seed, self.params, state)
+            state = _held(tree_kernel.seed_chain, seed, self.params, state)
         chunk = PROGRESS_CHUNK if progress is not None else (DEADLINE_CHUNK if deadline is not None else CHUNK)
         done = -1
         hit = False
         t_start = time.perf_counter()
         while done < k:
             stop = min(k, done + chunk)
-            state = tree_kernel.grow(rng, done, stop, self.params, state)
+            state = _held(tree_kernel.grow, rng, done, stop, self.params, state)
             if progress is not None:
                 for it in range(max(done, 0), stop):
                     progress(it + 1, float(state.history[it]))
@@ -287,6 +290,25 @@ class CompiledRun:
                             state.goal_nodes[:n_goal], state.goal_edges[:n_goal])
 
 
+def _held(kernel, *args):
+    """``kernel(*args)`` (a kernel of :mod:`~.tree_kernel`) with SIGINT and
+    SIGTERM held back over the call and raised once it is back: numba's
+    passing of a ``numpy.random.Generator`` and its boxing of a ``NamedTuple``
+    result (the tree's state) run Python code that a ``KeyboardInterrupt``
+    raised inside turns into a segmentation fault
+    (:mod:`drake_social.interrupts`). The first call of a kernel in a process
+    compiles, or loads, it before the hold, so that Ctrl-C stays live while
+    it does."""
+    if hasattr(kernel, "compile") and not kernel.signatures:  # a numba dispatcher with nothing loaded yet
+        kernel.compile(tuple(numba.typeof(a) for a in args))
+    held = DeferredSignals()
+    try:
+        with held:
+            return kernel(*args)
+    finally:  # also when the kernel raised: a Ctrl-C is not lost
+        held.reraise()
+
+
 def prepare(space: ConfigurationSpace, checker: CompiledSceneChecker, objective: Objective, options: RrtStarOptions,
             gamma: float, start: np.ndarray, goal: np.ndarray, timed: TimedParams = STATIC,
             iterations: int | None = None) -> CompiledRun:
@@ -308,8 +330,9 @@ def prepare(space: ConfigurationSpace, checker: CompiledSceneChecker, objective:
     params = grow_params(space, checker, objective, options, gamma, start, goal, timed)  # the people grid's kernel too
     run = CompiledRun(start, params, options.iterations if iterations is None else iterations)
     if loading:
-        state = tree_kernel.seed_chain(run.start[None], params, tree_kernel.init_state(run.start, 1, params))
-        tree_kernel.grow(np.random.default_rng(0), -1, 0, params, state)
+        state = _held(tree_kernel.init_state, run.start, 1, params)
+        state = _held(tree_kernel.seed_chain, run.start[None], params, state)
+        _held(tree_kernel.grow, np.random.default_rng(0), -1, 0, params, state)
     if loading and cache_misses() > misses and not _cold_cache_reported:
         _cold_cache_reported = True
         _log.warning("numba's cache of the planning kernels was cold: compiled them once in %.1f s, outside the "

@@ -449,16 +449,17 @@ class RrtStar:
 
     def _finish(self, result: PlannerResult) -> PlannerResult:
         """Records the raw cost and, when asked, optimises the path (kept only
-        when strictly cheaper, so rounding in the recomputed sum can never
-        report a higher cost than the planner's own)."""
+        when cheaper by the optimiser's margin, :func:`~drake_social.planning.optimize.cheaper`,
+        so neither rounding in the recomputed sum nor a processor's last bits
+        decide, and the cost reported is never above the planner's own)."""
         result.raw_cost = result.cost
         result.near_radius_mode = self.options.near_radius_mode
         if self.options.optimize and result.success:
-            from drake_social.planning.optimize import optimize_path
+            from drake_social.planning.optimize import cheaper, optimize_path
 
             t_opt = time.perf_counter()
             waypoints, cost = optimize_path(result.waypoints, self.objective, self.checker, self.space)
-            if cost < result.cost:
+            if cheaper(cost, result.cost):
                 result.waypoints, result.cost = waypoints, cost
             result.optimized = True
             result.optimize_time = time.perf_counter() - t_opt

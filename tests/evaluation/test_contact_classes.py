@@ -1,6 +1,6 @@
 """Who made a contact: run_metrics' appeared / moving / held classes on hand-built runs.
 
-The rule (drake_social/experiments/nav_metrics.py): a contact episode starting
+The rule (drake_social/evaluation/nav_metrics.py): a contact episode starting
 at sample k is *appeared* when a person entering at k (present at t_k, absent
 at t_{k-1} or k = 0) touches the part at t_k; otherwise *moving* when k >= 1
 and the robot is not held (``stopped`` or ``waiting``) at both samples k - 1
@@ -21,7 +21,7 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
-from drake_social.experiments.metrics import RUN_PARTS, execution_metrics, run_metrics
+from drake_social.evaluation.metrics import RUN_PARTS, execution_metrics, run_metrics
 from drake_social.people.log import PeopleLog
 from drake_social.scenario import load_scenario
 

@@ -1,6 +1,6 @@
 """Hall's proxemic zones and the geometric measures of a track shared by the
-path metrics (:mod:`drake_social.experiments.metrics`) and the metrics over
-time (:mod:`drake_social.experiments.nav_metrics`).
+path metrics (:mod:`drake_social.evaluation.metrics`) and the metrics over
+time (:mod:`drake_social.evaluation.nav_metrics`).
 """
 
 from __future__ import annotations
@@ -46,11 +46,19 @@ class HallZones:
 ZONES = HallZones()
 
 
-def shape_points(geometry: ArmGeometry, q: np.ndarray, which: slice) -> np.ndarray:
+def shape_points(geometry: ArmGeometry, q: np.ndarray, which: slice, reference: np.ndarray | None = None) -> np.ndarray:
     """Points (M, n, 2) every <= :data:`SHAPE_SPACING` metres along the capsule
-    axes ``which`` (a slice of :meth:`ArmGeometry.segments`) at configurations q (M, 4)."""
+    axes ``which`` (a slice of :meth:`ArmGeometry.segments`) at configurations q (M, 4).
+
+    The axes are rigid, but their lengths measured at a configuration differ
+    in the last bit from one configuration to another, which can change n:
+    n is that of ``reference`` (4,), None = ``q[0]``; a caller that takes a
+    run in parts passes the run's first configuration to get the points of
+    the whole at once.
+    """
     seg = geometry.segments(q)[:, which]  # (M, S', 2, 2)
-    lengths = np.linalg.norm(seg[0, :, 1] - seg[0, :, 0], axis=-1)  # rigid: the same at every q
+    ref = seg[0] if reference is None else geometry.segments(np.asarray(reference, float).reshape(1, 4))[0, which]
+    lengths = np.linalg.norm(ref[:, 1] - ref[:, 0], axis=-1)
     pieces = []
     for s, length in enumerate(lengths):
         t = np.linspace(0.0, 1.0, max(2, int(np.ceil(length / SHAPE_SPACING)) + 1))

@@ -7,7 +7,7 @@ measures) and from a simulated execution (the metrics over time).
 schema, with the meaning and unit of each field, is
 :data:`drake_social.io.records.RUN_FIELDS`. ``simulate`` (``sim.json``) and
 the studies' executed runs add
-:func:`drake_social.experiments.metrics.execution_metrics`, named as
+:func:`drake_social.evaluation.metrics.execution_metrics`, named as
 :data:`drake_social.io.records.NAV_FIELDS` names them.
 """
 

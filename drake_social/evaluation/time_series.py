@@ -1,7 +1,7 @@
 """Time series of a logged run reduced to numbers: held integrals, episodes,
 trapezoid means and finite-difference motion statistics.
 
-Conventions (the ones :func:`drake_social.experiments.metrics.run_metrics`
+Conventions (the ones :func:`drake_social.evaluation.metrics.run_metrics`
 states in its table):
 
 * **sample-and-hold** for a flag or a class sampled at ``t_0 < ... < t_{T-1}``:

@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 
-from drake_social.experiments.time_series import (
+from drake_social.evaluation.time_series import (
     derivative_magnitudes,
     episodes,
     held_time,

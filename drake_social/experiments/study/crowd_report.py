@@ -1,4 +1,11 @@
-"""The crowd study's statistics and REPORT.md (``drake-social experiment crowd``).
+"""The crowd study's outputs after its records: the figures and REPORT.md
+(``drake-social experiment crowd``; the records and the output set are the
+study framework's, :mod:`.framework`).
+
+Figures, per scenario: ``boxplots_<scenario>.png`` (intimate and personal
+zone time, minimum distance per part and variant) and
+``snapshots_<scenario>.png`` (the traced episode of every variant at a few
+times).
 
 Comparisons pair the variants over episodes (episode k of every variant has
 the same seed and the same walkers' delays): :func:`compare` reuses the
@@ -23,14 +30,16 @@ from __future__ import annotations
 import math
 import os
 import platform
+from pathlib import Path
 from typing import Sequence
 
 import numpy as np
 
 from drake_social.experiments.study.report import ALPHA, Comparison, median_iqr, paired
 
-__all__ = ["CLAIMS", "PART_METRICS", "SUCCESS_TARGET", "compare", "claim_lines", "report_markdown", "target_lines",
-           "variant_table", "parts_table"]
+__all__ = ["CLAIMS", "PARTS", "PART_METRICS", "SUCCESS_TARGET", "claim_line", "claim_lines", "compare", "figure_names",
+           "label", "output_names", "parts_table", "report_markdown", "target_lines", "variant_table",
+           "write_figures", "write_outputs"]
 
 #: The per-part metrics of the tables and boxplots: (metric, header, unit, format).
 PART_METRICS = (("time_intimate", "intimate s", "s", ".3g"), ("time_personal", "personal s", "s", ".3g"),
@@ -40,11 +49,14 @@ PARTS = ("base", "arm", "object", "robot")
 SUCCESS_TARGET = 0.95
 #: Replan time targets: median and 95th percentile (None = the scenario's budget), seconds.
 REPLAN_MEDIAN_TARGET = 0.05
-_LABEL = {"plan_once": "plan-once (paper)", "replan_base": "replanning base-only",
+_LABEL = {"plan_once": "plan-once (paper)", "replan": "replanning (default)", "replan_base": "replanning base-only",
           "replan_multi": "replanning multi-point", "replan_speed": "replanning multi-point + speed scaling"}
 _WORDS = {"time_intimate": "intimate-zone time", "time_personal": "personal-zone time", "min_dist": "minimum distance",
-          "collisions": "contacts", "time_to_goal": "time to goal", "stopped_time": "stopped time",
-          "stop_count": "safety stops"}
+          "collisions": "contacts", "collisions_moving": "contacts begun while moving", "time_to_goal": "time to goal",
+          "stopped_time": "stopped time", "stop_count": "safety stops",
+          "crossed": "crossings while people are present", "goal_distance_end": "distance to the goal at the end"}
+#: The unit of a metric without a part that is not in seconds.
+_UNITS = {"stop_count": "", "crossed": "", "goal_distance_end": "m"}
 
 #: (a, b, metric (a ``nav_`` field), claim): a is claimed lower/higher than b.
 CLAIMS = (
@@ -81,10 +93,14 @@ def _metric_words(metric: str) -> tuple[str, str]:
     for part in PARTS:
         if name.endswith("_" + part):
             base = name[: -len(part) - 1]
-            unit = "m" if base.startswith("min_dist") else "" if base == "collisions" else "s"
+            unit = "m" if base.startswith("min_dist") else "" if base.startswith("collisions") else "s"
             return f"{part} {_WORDS.get(base, base)}", unit
-    unit = "" if name in ("stop_count",) else "s"
-    return _WORDS.get(name, name), unit
+    return _WORDS.get(name, name), _UNITS.get(name, "s")
+
+
+def label(variant: str) -> str:
+    """A variant's name in the report's words."""
+    return _LABEL[variant]
 
 
 def claim_line(c: Comparison, scenario: str) -> str:
@@ -200,11 +216,12 @@ def parts_table(records: Sequence[dict], scenarios: Sequence[str], variants: Seq
 
 
 def report_markdown(result, figures: Sequence[str], budgets: dict[str, float]) -> str:
-    """The whole REPORT.md of a :class:`~drake_social.experiments.crowd.CrowdResult`."""
+    """The whole REPORT.md of a crowd study's
+    :class:`~drake_social.experiments.study.results.StudyResult`."""
     st = result.study
     scenarios = list(dict.fromkeys(r["scenario"] for r in result.records)) or [s for s in result.scenario_texts]
     variants = list(st.variants)
-    seeds = st.seeds()
+    seeds = st.run_seeds()
     limit = "each scenario's execution.time_limit" if st.time_limit is None else f"{st.time_limit:g} s"
     lines = [f"# drake-social experiment crowd ({st.name})", "",
              f"{len(result.records)} closed-loop episodes (kinematic): {st.episodes} per (scenario, variant), study "
@@ -233,3 +250,58 @@ def report_markdown(result, figures: Sequence[str], budgets: dict[str, float]) -
     lines += ["", "Per-episode records: `records.csv` (scalars) and `records.json` (with the walkers' delays, every "
               "replan's wall time and the traced episodes).", ""]
     return "\n".join(lines)
+
+
+# ---- the figures and the outputs after the records ------------------------------------
+
+#: The boxplots' metrics: (label, nav_ metric prefix).
+_BOX_METRICS = (("intimate-zone time, s", "time_intimate"), ("personal-zone time, s", "time_personal"),
+                ("minimum distance to a person, m", "min_dist"))
+
+
+def figure_names(study) -> list[str]:
+    """The figure files :func:`write_figures` writes for a
+    :class:`~drake_social.experiments.study.crowd.CrowdStudy`."""
+    stems = [Path(s).stem for s in study.scenarios]
+    return [f"boxplots_{s}.png" for s in stems] + ([f"snapshots_{s}.png" for s in stems]
+                                                   if study.trace_episode is not None else [])
+
+
+def output_names(study) -> list[str]:
+    """Every file name :func:`write_outputs` may write (known before any episode)."""
+    return [*figure_names(study), "REPORT.md"]
+
+
+def write_figures(result, out: Path) -> list[str]:
+    """The boxplots and snapshots of every scenario; returns the file names."""
+    from drake_social.viz.crowd import part_boxplots_figure, snapshots_figure
+
+    names = []
+    variants = list(result.study.variants)
+    for stem in dict.fromkeys(r["scenario"] for r in result.records):
+        runs = [r for r in result.records if r["scenario"] == stem]
+        values = {label: {p: {v: [r.get(f"nav_{m}_{p}") for r in runs if r["variant"] == v] for v in variants}
+                          for p in PARTS} for label, m in _BOX_METRICS}
+        fig = part_boxplots_figure(values, title=f"{stem}: {result.study.episodes} paired episodes per variant, "
+                                   "per body part (surface distance to the nearest person)")
+        fig.savefig(out / f"boxplots_{stem}.png", dpi=100)
+        names.append(f"boxplots_{stem}.png")
+        traced = {v: r["trace"] for v in variants for r in runs if r["variant"] == v and "trace" in r}
+        if traced:
+            episode = next(r for r in runs if "trace" in r)
+            fig = snapshots_figure(result.scenario(stem), traced,
+                                   title=f"{stem}, episode {episode['episode']} (seed {episode['seed']}): robot, "
+                                   "people, base track so far (red, dashed) and the path followed then (blue)")
+            fig.savefig(out / f"snapshots_{stem}.png", dpi=90)
+            names.append(f"snapshots_{stem}.png")
+    return names
+
+
+def write_outputs(result, out: Path) -> list[str]:
+    """Writes the figures and REPORT.md into ``out`` (the records are there
+    already); returns the file names."""
+    figures = write_figures(result, out)
+    budgets = {stem: float(result.scenario(stem, variant=v).planner.replan_budget)
+               for stem in result.scenario_texts for v in result.study.variants[:1]}
+    (out / "REPORT.md").write_text(report_markdown(result, figures, budgets))
+    return [*figures, "REPORT.md"]

@@ -17,7 +17,7 @@ import pytest
 from scipy.integrate import quad
 
 from drake_social.cost.social import SocialCost
-from drake_social.experiments.metrics import (
+from drake_social.evaluation.metrics import (
     RUN_PARTS,
     ZONES,
     executed_metrics,

@@ -122,8 +122,9 @@ import dataclasses as dc
 import numpy as np
 
 from drake_social.cost.agf import PersonalSpace, apply_threshold, gaussian, speed_scaled_sigmas
-from drake_social.experiments.proxemics import ZONES, HallZones, base_irregularity, shape_points
-from drake_social.experiments.time_series import episodes, held_time, motion_stats, run_starts, trapezoid_mean
+from drake_social.cost.social import FIELD_CHUNK_ELEMENTS
+from drake_social.evaluation.proxemics import ZONES, HallZones, base_irregularity, shape_points
+from drake_social.evaluation.time_series import episodes, held_time, motion_stats, run_starts, trapezoid_mean
 from drake_social.io.records import NAV_PREFIX
 from drake_social.kinematics import ArmGeometry
 from drake_social.people import people_model, proximity
@@ -136,18 +137,16 @@ __all__ = ["RUN_PARTS", "execution_metrics", "run_metrics"]
 #: The parts :func:`run_metrics` measures against people: the base disc, the
 #: arm's capsules, the object's capsules and the whole robot.
 RUN_PARTS = ("base", "arm", "object", "robot")
-#: Samples per block when the AGF over time is summed (bounds the memory of a long run).
-_AGF_BLOCK = 2048
 
 
-def _part_points(geometry: ArmGeometry, q: np.ndarray) -> dict[str, np.ndarray]:
+def _part_points(geometry: ArmGeometry, q: np.ndarray, reference: np.ndarray) -> dict[str, np.ndarray]:
     """The points (M, n, 2) whose largest AGF is each part's: the base
     centre, the arm's and the object's capsule axes, and every interest
     point (``points``; the whole robot's value is the largest of the four,
-    as in :func:`drake_social.experiments.metrics.part_agf`)."""
+    as in :func:`drake_social.evaluation.metrics.part_agf`)."""
     interest = geometry.interest_points(q)
-    return {"base": interest[:, :1], "points": interest, "arm": shape_points(geometry, q, slice(0, 2)),
-            "object": shape_points(geometry, q, slice(2, None))}
+    return {"base": interest[:, :1], "points": interest, "arm": shape_points(geometry, q, slice(0, 2), reference),
+            "object": shape_points(geometry, q, slice(2, None), reference)}
 
 
 def _agf_over_time(scenario, geometry: ArmGeometry, q: np.ndarray, people: PeopleLog) -> dict[str, np.ndarray]:
@@ -158,8 +157,12 @@ def _agf_over_time(scenario, geometry: ArmGeometry, q: np.ndarray, people: Peopl
     if people.count == 0:
         return {part: np.zeros(len(q)) for part in RUN_PARTS}
     out = {part: np.zeros(len(q)) for part in ("base", "points", "arm", "object")}
-    for lo in range(0, len(q), _AGF_BLOCK):
-        k = slice(lo, lo + _AGF_BLOCK)
+    # Blocks of samples whose Gaussians' temporaries hold at most FIELD_CHUNK_ELEMENTS (sample, point,
+    # person) values each, however long the run and however many people (at least one sample a block).
+    points = max(pts.shape[1] for pts in _part_points(geometry, q[:1], q[0]).values())
+    rows = max(1, FIELD_CHUNK_ELEMENTS // (points * people.count))
+    for lo in range(0, len(q), rows):
+        k = slice(lo, lo + rows)
         pos, heading = people.positions[k], people.headings[k]  # (B, P, 2), (B, P)
         sp = space
         if options.speed_scaling:
@@ -169,7 +172,7 @@ def _agf_over_time(scenario, geometry: ArmGeometry, q: np.ndarray, people: Peopl
                             sigma_r=sigmas[:, None, :, 2])
         cos, sin = np.cos(heading)[:, None, :], np.sin(heading)[:, None, :]
         present = people.present[k][:, None, :]
-        for part, pts in _part_points(geometry, q[k]).items():
+        for part, pts in _part_points(geometry, q[k], q[0]).items():  # as many points in every block
             value = gaussian(pts[..., 0, None] - pos[:, None, :, 0], pts[..., 1, None] - pos[:, None, :, 1],
                              cos, sin, sp)  # (B, n, P)
             out[part][k] = np.where(present, apply_threshold(value, space), 0.0).sum(-1).max(-1)
@@ -312,7 +315,7 @@ def execution_metrics(scenario, result) -> dict[str, float]:
 
     Args:
         scenario: the executed scenario.
-        result: a :class:`~drake_social.sim.run.SimulationResult`.
+        result: a :class:`~drake_social.sim.results.SimulationResult`.
 
     Returns:
         ``{"nav_<key>": value}`` for every key of :func:`run_metrics`; empty when

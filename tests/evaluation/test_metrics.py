@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 
-from drake_social.experiments.metrics import (
+from drake_social.evaluation.metrics import (
     ZONES,
     base_irregularity,
     executed_metrics,
@@ -146,7 +146,7 @@ def test_arm_and_object_agf_use_the_speed_scaled_sigmas_of_the_points(speed):
     # tiny: the person at (4, 3.8) faces south; at q = (3, 2.2, 0, pi/2) the bar lies along
     # y = 2.7 from x = 2.85 to 4.35, its nearest point (4, 2.7) 1.1 m in front of the person.
     from drake_social.cost.social import SocialCost
-    from drake_social.experiments.metrics import part_agf
+    from drake_social.evaluation.metrics import part_agf
     from drake_social.people import PeopleState
 
     scenario = load_scenario("scenarios/tiny.yaml")

@@ -47,9 +47,9 @@ Overall:
 
 Over time, against where people actually were: :func:`run_metrics` and
 :func:`execution_metrics` (the ``nav_*`` fields of ``sim.json`` and the
-studies), defined in :mod:`drake_social.experiments.nav_metrics` and
+studies), defined in :mod:`drake_social.evaluation.nav_metrics` and
 re-exported here; the zones and the track measures shared by both live in
-:mod:`drake_social.experiments.proxemics`.
+:mod:`drake_social.evaluation.proxemics`.
 """
 
 from __future__ import annotations
@@ -57,8 +57,8 @@ from __future__ import annotations
 import numpy as np
 
 from drake_social.cost.social import SocialCost
-from drake_social.experiments.nav_metrics import RUN_PARTS, execution_metrics, run_metrics
-from drake_social.experiments.proxemics import (
+from drake_social.evaluation.nav_metrics import RUN_PARTS, execution_metrics, run_metrics
+from drake_social.evaluation.proxemics import (
     HEADING_STEP,
     SHAPE_SPACING,
     ZONES,
@@ -67,7 +67,7 @@ from drake_social.experiments.proxemics import (
     shape_points,
     zone_shares,
 )
-from drake_social.experiments.records import path_costs
+from drake_social.evaluation.records import path_costs
 from drake_social.kinematics import ArmGeometry, config_distance
 from drake_social.people import PeopleLog, people_model, proximity
 from drake_social.people.proximity import part_names

@@ -9,7 +9,7 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
-from drake_social.experiments.metrics import RUN_PARTS, ZONES, execution_metrics, run_metrics
+from drake_social.evaluation.metrics import RUN_PARTS, ZONES, execution_metrics, run_metrics
 from drake_social.experiments.study.people_tables import moving_people_groups, people_tables
 from drake_social.io.records import NAV_FIELDS, NAV_PREFIX
 from drake_social.people import people_model
