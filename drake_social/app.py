@@ -446,8 +446,8 @@ def run_simulate(*, scenario: Scenario | str | Path, out: str | Path, overrides:
     from drake_social.io.records import json_lines
     from drake_social.planning.result import PlanningInputError
     from drake_social.scenario import plant_time_step_problem, replan_rate_problem, validate_scenario
+    from drake_social.scenario.geometry import arm_geometry
     from drake_social.sim.run import run_checked
-    from drake_social.kinematics import ArmGeometry
     from drake_social.viz.tracking import tracking_figure
 
     out = Path(out)
@@ -522,7 +522,7 @@ def run_simulate(*, scenario: Scenario | str | Path, out: str | Path, overrides:
                 _write_path_figure(outputs.path("path.png"), loaded, run, _title(loaded, file))
                 files.append("path.png")
         fig = tracking_figure(run, max_base_speed=opts.max_base_speed, max_wheel_speed=opts.max_wheel_speed,
-                              geometry=ArmGeometry.from_scenario(loaded), safety_distance=opts.safety_distance,
+                              geometry=arm_geometry(loaded), safety_distance=opts.safety_distance,
                               title=f"{_title(loaded, file)}\n{run.mode} / {run.execution}: {run.message}")
         fig.savefig(outputs.path("tracking.png"), dpi=130)
         record = {"scenario": file, "overrides": list(overrides or []),

@@ -108,7 +108,7 @@ from drake_social.control import (
     arm_source_from_options,
     reference_source_from_options,
 )
-from drake_social.kinematics import ArmGeometry, configuration_limits
+from drake_social.scenario.geometry import arm_geometry, configuration_limits
 from drake_social.people import PeopleModel, people_model
 from drake_social.scenario import Scenario
 from drake_social.sim.checks import check_diagram_options, check_diagram_waypoints, resolve_replan
@@ -304,7 +304,7 @@ def autonomy_checked(scenario: Scenario, execution: str, path: PathSource, peopl
     safety = None
     if not people.static:  # hold the robot while a walking person is within the safety distance
         safety = builder.AddNamedSystem("safety", SafetyMonitor(
-            ArmGeometry.from_scenario(scenario), safety_distance=float(opts.safety_distance),
+            arm_geometry(scenario), safety_distance=float(opts.safety_distance),
             period=float(opts.control_period)))
         builder.Connect(q, safety.GetInputPort("q"))
         people_inputs.append(safety.GetInputPort("people_state"))
