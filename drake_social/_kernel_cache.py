@@ -27,7 +27,7 @@ _PACKAGE = Path(__file__).resolve().parent
 #: they compile in, and the NamedTuple of the checker's scene they take.
 KERNEL_SOURCES = (
     "cost/kernel.py", "collision/planar_kernel.py", "planning/rrt_star/tree_kernel.py", "limits.py",
-    "collision/validity.py", "cost/timed_kernel.py", "collision/people_kernel.py",
+    "collision/validity.py", "cost/timed_kernel.py", "collision/people_kernel.py", "people/prediction_kernel.py",
 )
 _STAMP = "drake_social_kernels.stamp"
 _done = False
@@ -42,8 +42,10 @@ def sources_hash() -> str:
     return h.hexdigest()[:16]
 
 
-_PATTERNS = ("planar_kernel.*.nbi", "planar_kernel.*.nbc", "tree_kernel.*.nbi", "tree_kernel.*.nbc",
-             "kernel.*.nbi", "kernel.*.nbc")
+#: numba names a cached kernel's files after its module ("timed_kernel.msc_sums_timed-58.py311.nbi"):
+#: those of every kernel module above.
+_PATTERNS = tuple(f"{Path(name).stem}.*.{ext}" for name in KERNEL_SOURCES if name.endswith("kernel.py")
+                  for ext in ("nbi", "nbc"))
 
 
 def _clear(folder: Path, stamp: str, recursive: bool) -> None:

@@ -446,8 +446,8 @@ def run_simulate(*, scenario: Scenario | str | Path, out: str | Path, overrides:
     from drake_social.io.records import json_lines
     from drake_social.planning.result import PlanningInputError
     from drake_social.scenario import plant_time_step_problem, replan_rate_problem, validate_scenario
+    from drake_social.scenario.geometry import arm_geometry
     from drake_social.sim.run import run_checked
-    from drake_social.kinematics import ArmGeometry
     from drake_social.viz.tracking import tracking_figure
 
     out = Path(out)
@@ -525,7 +525,7 @@ def run_simulate(*, scenario: Scenario | str | Path, out: str | Path, overrides:
                 _write_path_figure(outputs.path("path.png"), loaded, run, _title(loaded, file))
                 files.append("path.png")
         fig = tracking_figure(run, max_base_speed=opts.max_base_speed, max_wheel_speed=opts.max_wheel_speed,
-                              geometry=ArmGeometry.from_scenario(loaded), safety_distance=opts.safety_distance,
+                              geometry=arm_geometry(loaded), safety_distance=opts.safety_distance,
                               title=f"{_title(loaded, file)}\n{run.mode} / {run.execution}: {run.message}")
         fig.savefig(outputs.path("tracking.png"), dpi=130)
         _write_motion_figure(outputs.path("motion.png"), loaded, run, _title(loaded, file))
@@ -542,14 +542,14 @@ def _write_motion_figure(path: Path, scenario: Scenario, run: SimulationResult, 
     """Writes ``motion.png``: the speed, acceleration and jerk of the base and of the
     object's fastest point over time, with the slow-down's limit and the stops."""
     from drake_social.evaluation.time_series import motion_profile
-    from drake_social.kinematics import ArmGeometry
+    from drake_social.scenario.geometry import arm_geometry
     from drake_social.viz.motion import motion_figure
 
     profiles = {}
     if len(run.times) > 1:
         profiles = {"base": motion_profile(run.times, run.q[:, :2]),
                     "object (fastest point)": motion_profile(
-                        run.times, ArmGeometry.from_scenario(scenario).interest_points(run.q)[:, 3:])}
+                        run.times, arm_geometry(scenario).interest_points(run.q)[:, 3:])}
     e = scenario.execution
     fig = motion_figure(run.times, profiles, speed_limit=run.speed_limit, stops=run.stops, slow_stops=run.slow_stops,
                         limits=(e.max_base_speed, e.max_base_acceleration, e.max_base_jerk),

@@ -16,14 +16,8 @@ Motions are straight lines in these coordinates (``(1 - t) q_a + t q_b``).
 from __future__ import annotations
 
 import dataclasses as dc
-from typing import TYPE_CHECKING
 
 import numpy as np
-
-from drake_social.io.textfile import shorten
-
-if TYPE_CHECKING:  # the schema's types, for annotations only: the scenario's validation imports this module
-    from drake_social.scenario.schema import Bar, LShape, Polyline, Scenario
 
 __all__ = [
     "ArmGeometry",
@@ -32,26 +26,7 @@ __all__ = [
     "displacement_bound",
     "nominal_durations",
     "nominal_path_times",
-    "object_polyline",
-    "object_interest_points",
 ]
-
-
-def object_polyline(obj: Bar | LShape | Polyline) -> np.ndarray:
-    """The object's vertices in the gripper frame, shape (M, 2), metres
-    (each object type of the schema knows its own: ``obj.polyline()``)."""
-    return obj.polyline()
-
-
-def object_interest_points(obj: Bar | LShape | Polyline) -> np.ndarray:
-    """The object's interest points in the gripper frame, shape (P, 2).
-
-    Defaults: the two ends of a bar, the three vertices of an L, the first and
-    last vertex of a polyline.
-    """
-    if obj.interest_points is not None:
-        return np.asarray(obj.interest_points, dtype=float).reshape(-1, 2)
-    return obj.default_interest_points()
 
 
 def _gripper_cos_sin(q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -84,27 +59,6 @@ class ArmGeometry:
     object_points: np.ndarray
     object_radius: float
     object_interest: np.ndarray
-
-    @classmethod
-    def from_scenario(cls, scenario: Scenario) -> "ArmGeometry":
-        """The dimensions of ``scenario``'s robot and object.
-
-        Raises:
-            TypeError: ``scenario`` is not a scenario (has no robot and object).
-        """
-        try:
-            r, o = scenario.robot, scenario.object
-        except AttributeError:
-            raise TypeError(f"ArmGeometry.from_scenario: scenario must be a drake_social.scenario.Scenario, got "
-                            f"{type(scenario).__name__} {shorten(repr(scenario))}") from None
-        return cls(
-            base_radius=float(r.base_radius),
-            link_lengths=(float(r.link_lengths[0]), float(r.link_lengths[1])),
-            link_radius=float(r.link_width) / 2,
-            object_points=object_polyline(o),
-            object_radius=float(o.thickness) / 2,
-            object_interest=object_interest_points(o),
-        )
 
     # ---- names and counts -------------------------------------------------
 
@@ -261,15 +215,6 @@ class ArmGeometry:
         See :meth:`lever` and :func:`displacement_bound`.
         """
         return displacement_bound(np.asarray(q_b, float) - np.asarray(q_a, float), self.lever(include_body, active))
-
-
-def configuration_limits(scenario: Scenario) -> tuple[np.ndarray, np.ndarray]:
-    """(lower, upper), each (4,), of a valid ``q = [x, y, psi1, psi2]``: the
-    room's ``world.bounds`` for the base position, ``robot.joint_lower`` /
-    ``robot.joint_upper`` for the joints (metres, radians)."""
-    x_min, y_min, x_max, y_max = (float(v) for v in scenario.world.bounds)
-    r = scenario.robot
-    return np.array([x_min, y_min, *r.joint_lower], float), np.array([x_max, y_max, *r.joint_upper], float)
 
 
 def displacement_bound(dq: np.ndarray, lever: np.ndarray) -> np.ndarray:

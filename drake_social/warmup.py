@@ -116,7 +116,7 @@ def _warm_up_people(scenario) -> None:
     without the robot (:mod:`drake_social.people.social_force_kernel`) and the
     safety monitor's distance (:mod:`drake_social.people.proximity_kernel`)."""
     from drake_social.control import SafetyMonitor
-    from drake_social.kinematics import ArmGeometry
+    from drake_social.scenario.geometry import arm_geometry
     from drake_social.people.compose import people_model
     from drake_social.scenario import load_scenario_text
 
@@ -127,7 +127,7 @@ def _warm_up_people(scenario) -> None:
     state = model.state_at(0.5)  # the walker, the crowd stepped open loop (no robot)
     q = np.array(scenario.start, float)
     model.crowd.step(np.array(model.crowd.initial_state(), float), 0.0, model.open_loop_state(0.0), q.copy())
-    SafetyMonitor(ArmGeometry.from_scenario(people), safety_distance=0.05, period=0.01).too_close(q, state)
+    SafetyMonitor(arm_geometry(people), safety_distance=0.05, period=0.01).too_close(q, state)
 
 
 def _warm_up_timed(scenario) -> None:
@@ -141,6 +141,7 @@ def _warm_up_timed(scenario) -> None:
 
     planner = make_planner(scenario, make_checker(without_people(scenario), "planar"))
     prediction = constant_velocity(people_model(scenario).state_at(0.0), 1.0)
+    prediction.state_at(0.5)  # the prediction's lookup from Python (its arrays are read-only)
     timed = timed_params(prediction, scenario.execution, 0.0, scenario.execution.safety_distance)
     start, goal = np.array(scenario.start, float), np.array(scenario.goal, float)
     seed = np.stack([start, start + np.array([0.5, 0.0, 0.0, 0.0])])

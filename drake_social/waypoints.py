@@ -36,7 +36,7 @@ from typing import Any, Sequence
 import numpy as np
 
 from drake_social.arguments import real_array, require_checker, require_scenario
-from drake_social.kinematics import configuration_limits
+from drake_social.scenario.geometry import configuration_limits
 from drake_social.limits import MAX_WAYPOINTS
 from drake_social.people import people_model
 from drake_social.collision.validity import ValidityChecker

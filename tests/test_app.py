@@ -13,7 +13,7 @@ from drake_social import app
 from drake_social.collision.geometric import GeometricChecker
 from drake_social.cost.social import SocialCost
 from drake_social.io.records import PLANNER_FIELDS, SHARED_FIELDS
-from drake_social.kinematics import ArmGeometry
+from drake_social.scenario.geometry import arm_geometry
 from drake_social.planning.algorithms import make_objective, plan
 from drake_social.scenario import PREDICTIONS, ScenarioError, load_scenario
 
@@ -50,7 +50,7 @@ def test_run_plan_record_is_the_written_path_measured_independently(planned, tin
     assert record["cost"] == pytest.approx(by_edge, rel=1e-9)
     assert record["raw_cost"] >= record["cost"] - 1e-9  # optimisation never makes the path worse
     # F_multi: weight 1 on every interest point; F_base: the base alone; F_planner: base-only (this planner).
-    n = ArmGeometry.from_scenario(scenario).num_interest_points
+    n = arm_geometry(scenario).num_interest_points
     ones = SocialCost.from_scenario(scenario, np.ones(n))
     base = SocialCost.from_scenario(scenario, np.eye(n)[0])
     assert record["F_multi"] == pytest.approx(sum(float(ones.motion_cost(a, b)[0]) for a, b in _edges(wp)), rel=1e-9)

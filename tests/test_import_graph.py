@@ -1,14 +1,15 @@
 """drake_social's modules import each other one way, layer by layer.
 
-The graph: a module -> every module its import statements run, wherever they
-stand (at the top, inside functions, methods or ``try``); an import of
-``a.b.c`` runs the packages ``a.b`` and ``a`` too, except the importer's own
-packages (already being imported when it runs). Only the body of
-``if TYPE_CHECKING:`` is left out: it never runs (a type checker reads it).
+The graph: a module -> every module its import statements name, wherever they
+stand (at the top, inside functions, methods or ``try``, and under ``if
+TYPE_CHECKING:``, which never runs but ties the module to what it names for
+a type checker: an annotation, string or not, is a dependency too); an import
+of ``a.b.c`` runs the packages ``a.b`` and ``a`` too, except the importer's
+own packages (already being imported when it runs).
 
 The rules, each checked over the whole graph:
 
-1. no cycle, not even through a function-level import;
+1. no cycle, not even through a function-level import or an annotation's;
 2. a module imports only modules of its own layer or a lower one, by this
    table (the longest matching prefix of the module's dotted name decides):
 
@@ -18,7 +19,7 @@ The rules, each checked over the whole graph:
    0     ``limits``, ``errors``, ``io`` (the package itself),
          ``io.textfile``, ``io.json_numbers``, ``io.records`` (the record
          schema), ``_kernel_cache``, ``interrupts``
-   1     ``kinematics`` (pure numpy; the schema's types only for annotations),
+   1     ``kinematics`` (pure numpy; it names no schema type),
          ``maps`` (map_server maps: numpy, PyYAML, Pillow)
    2     ``scenario`` (schema, load, validate), ``arguments``
    3     ``people``, ``world``, ``cost``, ``collision`` (the package),
@@ -48,6 +49,7 @@ package made here.
 from __future__ import annotations
 
 import ast
+import re
 from pathlib import Path
 from typing import NamedTuple
 
@@ -122,24 +124,15 @@ def _modules(root: Path = ROOT) -> dict[str, Path]:
     return out
 
 
-def _is_type_checking(node: ast.If) -> bool:
-    test = node.test
-    return (test.id if isinstance(test, ast.Name) else test.attr if isinstance(test, ast.Attribute) else "") \
-        == "TYPE_CHECKING"
-
-
 def _import_statements(tree: ast.AST):
-    """Every import statement of a module, at any depth, but those under ``if TYPE_CHECKING:``."""
+    """Every import statement of a module, at any depth (``if TYPE_CHECKING:`` blocks included)."""
     stack = [tree]
     while stack:
         node = stack.pop()
         if isinstance(node, (ast.Import, ast.ImportFrom)):
             yield node
             continue
-        children = list(ast.iter_child_nodes(node))
-        if isinstance(node, ast.If) and _is_type_checking(node):
-            children = node.orelse
-        stack.extend(children)
+        stack.extend(ast.iter_child_nodes(node))
 
 
 def _imported_module(name: str, is_package: bool, node: ast.ImportFrom) -> str:
@@ -266,7 +259,7 @@ def _package(tmp_path: Path, files: dict[str, str]) -> dict[str, Path]:
     return _modules(tmp_path / "top")
 
 
-def test_the_graph_sees_function_level_imports_and_cycles_through_a_package(tmp_path):
+def test_the_graph_sees_function_level_and_annotation_imports_and_cycles_through_a_package(tmp_path):
     modules = _package(tmp_path, {
         "top/__init__.py": "",
         # a -> pkg.sub runs pkg/__init__, which imports b, which imports a.
@@ -276,15 +269,17 @@ def test_the_graph_sees_function_level_imports_and_cycles_through_a_package(tmp_
         "top/pkg/sub.py": "from top.pkg import other  # a sibling: not through its own package\nX = 1\n",
         "top/pkg/other.py": "import os\n",
         "top/e.py": "from .pkg import other\n",
-        "top/c.py": "from typing import TYPE_CHECKING\nif TYPE_CHECKING:\n    import top.d\n",
-        "top/d.py": "import top.c\n",
+        # c names d only for a type checker (a string annotation): still an edge, so c <-> d is a cycle.
+        "top/c.py": "from __future__ import annotations\nfrom typing import TYPE_CHECKING\nif TYPE_CHECKING:\n"
+                    "    from top.d import D\n\n\ndef f(x: 'D') -> D:\n    return x\n",
+        "top/d.py": "import top.c\nD = int\n",
     })
     graph = import_graph(modules)
     assert graph["top.a"] == {"top.pkg", "top.pkg.sub"}
     assert graph["top.b"] == {"top.a"}
     assert graph["top.e"] == {"top.pkg", "top.pkg.other"} and graph["top.pkg.other"] == set()
-    assert graph["top.c"] == set() and graph["top.d"] == {"top.c"}
-    assert cycles(graph) == [["top.a", "top.b", "top.pkg"]]
+    assert graph["top.c"] == {"top.d"} and graph["top.d"] == {"top.c"}
+    assert cycles(graph) == [["top.a", "top.b", "top.pkg"], ["top.c", "top.d"]]
 
 
 def test_the_layer_check_names_each_import_from_a_higher_layer(tmp_path):
@@ -333,6 +328,47 @@ def test_drake_social_has_no_import_cycle():
     assert "drake_social.scenario" in graph["drake_social.arguments"]  # the walk sees the package's imports
     assert "drake_social.kinematics" in graph["drake_social.scenario.validate"]
     assert cycles(graph) == []
+
+
+def _annotation_names(tree: ast.AST) -> set[str]:
+    """The identifiers of every annotation of a module (string annotations' too)."""
+    notes = []
+    for node in ast.walk(tree):
+        if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)):
+            a = node.args
+            notes += [x.annotation for x in (*a.posonlyargs, *a.args, *a.kwonlyargs, a.vararg, a.kwarg) if x]
+            notes.append(node.returns)
+        elif isinstance(node, ast.AnnAssign):
+            notes.append(node.annotation)
+    out = set()
+    for note in filter(None, notes):
+        for node in ast.walk(note):
+            if isinstance(node, ast.Name):
+                out.add(node.id)
+            elif isinstance(node, ast.Attribute):
+                out.add(node.attr)
+            elif isinstance(node, ast.Constant) and isinstance(node.value, str):
+                out.update(re.findall(r"[A-Za-z_]\w*", node.value))
+    return out
+
+
+def test_kinematics_names_no_schema_type():
+    """The chain (``kinematics.py``) knows nothing of the scenario: no schema
+    type is imported (not even for a type checker), named in its code or in an
+    annotation; :mod:`drake_social.scenario.geometry` builds its
+    ``ArmGeometry`` from a scenario."""
+    from drake_social.scenario import schema
+
+    types = {n for n, v in vars(schema).items() if isinstance(v, type) and v.__module__ == schema.__name__}
+    assert {"Scenario", "Bar", "Robot"} <= types
+    tree = ast.parse((ROOT / "kinematics.py").read_text())
+    code = {n.id for n in ast.walk(tree) if isinstance(n, ast.Name)} | \
+        {n.attr for n in ast.walk(tree) if isinstance(n, ast.Attribute)} | \
+        {(a.asname or a.name).split(".")[-1] for n in ast.walk(tree) if isinstance(n, (ast.Import, ast.ImportFrom))
+         for a in n.names}
+    assert sorted(types & (code | _annotation_names(tree))) == []
+    graph = import_graph(_modules())
+    assert not any(t.startswith("drake_social.scenario") for t in graph["drake_social.kinematics"])
 
 
 def test_drake_social_imports_only_its_own_layer_or_lower_ones():

@@ -9,13 +9,8 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from drake_social.kinematics import (
-    ArmGeometry,
-    config_distance,
-    cumulative_distance,
-    object_interest_points,
-    object_polyline,
-)
+from drake_social.kinematics import ArmGeometry, config_distance, cumulative_distance
+from drake_social.scenario.geometry import arm_geometry, object_interest_points, object_polyline
 from drake_social.scenario import Bar, LShape, Polyline, Robot, Scenario
 
 PI = math.pi
@@ -23,7 +18,7 @@ PI = math.pi
 
 def geometry(obj) -> ArmGeometry:
     """The default robot (l1 = 0.6, l2 = 0.5, link width 0.08) holding ``obj``."""
-    return ArmGeometry.from_scenario(Scenario(robot=Robot(), object=obj))
+    return arm_geometry(Scenario(robot=Robot(), object=obj))
 
 
 BAR = geometry(Bar(length=1.5, thickness=0.05))

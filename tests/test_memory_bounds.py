@@ -21,6 +21,7 @@ from crowd_scenarios import crowd_scenario_text
 from drake_social.cost import SocialCost
 from drake_social.cost.agf import agf, agf_xy
 from drake_social.scenario import load_scenario
+from drake_social.scenario.geometry import arm_geometry
 from drake_social.viz.labels import ELLIPSIS, MAX_LABEL_CHARS, MAX_TITLE_CHARS, fit_text
 from drake_social.viz.world import field_grid, field_resolution
 
@@ -159,7 +160,7 @@ def test_metrics_of_a_long_run_among_many_people_hold_bounded_temporaries(walked
     whole = nav.run_metrics(scenario, times, q, log, None, False, 20.0)
     assert dut.keys() == whole.keys()
     assert all(dut[k] == whole[k] or (np.isnan(dut[k]) and np.isnan(whole[k])) for k in dut)
-    geometry = proximity.robot_distance_args(nav.ArmGeometry.from_scenario(scenario))
+    geometry = proximity.robot_distance_args(arm_geometry(scenario))
     robot = [proximity.robot_distance(geometry, q[k], log.positions[k], log.radii, log.present[k])
              for k in range(len(times))]
     assert dut["min_dist_robot"] == pytest.approx(min(robot), rel=1e-12)

@@ -18,7 +18,7 @@ import numpy as np
 import pytest
 
 from drake_social.cost import SocialCost
-from drake_social.kinematics import ArmGeometry
+from drake_social.scenario.geometry import arm_geometry
 from drake_social.collision.geometric import GeometricChecker
 from drake_social.maps import FREE, read_map
 from drake_social.scenario import Bar, LShape, load_scenario, validate_scenario
@@ -168,7 +168,7 @@ def test_generic_carrying_pose_makes_the_l_as_narrow_as_its_hull(generic):
     """In the start pose the L's extent across travel (y) equals the hull's
     minimal width: the altitude 3 * 2 / sqrt(3^2 + 2^2) = 1.664 m, plus the
     bar thickness; the base disc stays within that band."""
-    geo = ArmGeometry.from_scenario(generic)
+    geo = arm_geometry(generic)
     q = np.asarray(generic.start, float)
     seg = geo.segments(q)[2:]  # the two object bars
     ys = seg[..., 1]
@@ -198,7 +198,7 @@ def test_start_and_goal_hold_the_object_folded_over_the_base(name):
     """Link 2 is folded back: the gripper is within 0.3 m of the base centre
     (it could be up to l1 + l2 = 1.1 m away)."""
     scenario = load_scenario(SCENARIO_DIR / name)
-    geo = ArmGeometry.from_scenario(scenario)
+    geo = arm_geometry(scenario)
     for q in (scenario.start, scenario.goal):
         base, _, gripper = (p for p in geo.joints(np.asarray(q, float)))
         assert np.linalg.norm(gripper - base) < 0.3
@@ -223,7 +223,7 @@ def test_readme_example_scenario_loads_and_is_collision_free(tmp_path):
     assert len(dut.world.obstacles) == 2 and dut.world.obstacles[1].yaw == pytest.approx(0.3)
     assert [p.name for p in dut.people] == ["faces south", "at desk"]
     assert isinstance(dut.object, Bar) and dut.planner.algorithm == "social_rrt_star"
-    assert len(dut.social.weights) == ArmGeometry.from_scenario(dut).num_interest_points
+    assert len(dut.social.weights) == arm_geometry(dut).num_interest_points
     clearance = GeometricChecker(dut).clearances(np.array([dut.start, dut.goal], float))
     assert np.all(clearance > 0.05)
 
@@ -275,7 +275,7 @@ def _robot_gap(scenario, q, centres: np.ndarray, radius: float) -> float:
     """Smallest surface distance between the robot at configurations ``q`` (M, 4) and body discs at ``centres``."""
     from drake_social.people.proximity import part_distances
 
-    geometry = ArmGeometry.from_scenario(scenario)
+    geometry = arm_geometry(scenario)
     q = np.asarray(q, float).reshape(-1, 4)
     return float(part_distances(geometry, q, centres, np.full(len(centres), radius))["robot"].min())
 

@@ -30,7 +30,7 @@ from pydrake.systems.primitives import LogVectorOutput
 
 from drake_social.collision.drake_checker import make_checker
 from drake_social.control import saturate_norm, wheel_speeds
-from drake_social.kinematics import ArmGeometry
+from drake_social.scenario.geometry import arm_geometry
 from drake_social.planning.algorithms import plan
 from drake_social.scenario import Scenario, load_scenario
 from drake_social.sim.analysis import point_deviation
@@ -163,7 +163,7 @@ def run(scenario: Scenario, waypoints: np.ndarray, kp: float, feedforward: bool 
         "reached": bool(len(done)),
         "time_to_goal": float(times[done[0]]) if len(done) else None,
         "max_tracking_error": float(np.max(np.linalg.norm(reference[:, :2] - q[:, :2], axis=1))),
-        "max_point_deviation": point_deviation(ArmGeometry.from_scenario(scenario), waypoints, q)["max"],
+        "max_point_deviation": point_deviation(arm_geometry(scenario), waypoints, q)["max"],
         "speed": reference_speed(scenario),
         "times": times,
         "q": q,

@@ -49,7 +49,7 @@ from pydrake.common import Parallelism
 from pydrake.planning import LinearDistanceAndInterpolationProvider, SceneGraphCollisionChecker
 
 from drake_social.arguments import require_choice, require_scenario
-from drake_social.kinematics import ArmGeometry, configuration_limits, displacement_bound
+from drake_social.kinematics import ArmGeometry, displacement_bound
 from drake_social.model import plant
 from drake_social.model.plant import (
     ScenarioDiagram,
@@ -63,6 +63,7 @@ from drake_social.collision.geometric import CheckerBase, GeometricChecker
 from drake_social.collision.planar_checker import PlanarChecker
 from drake_social.collision.validity import Contact
 from drake_social.scenario import CHECKERS, Scenario, ScenarioError
+from drake_social.scenario.geometry import arm_geometry, configuration_limits
 
 __all__ = ["CHECKERS", "MAX_DRAKE_CHECKER_SHAPES", "Contact", "SceneGraphChecker", "check_start_goal", "local_checkers", "make_checker",
            "near_environment", "valid_configurations", "verify_path"]
@@ -293,7 +294,7 @@ def _near_function(scenario: Scenario, margin: float = 0.01, *, per_track: bool 
     (the room's discs and the robot's extent computed once); with
     ``per_track``, the function gives an (M, S) bool matrix instead: shape
     ``registration_order(scenario)[j]`` is near track i."""
-    geometry = ArmGeometry.from_scenario(scenario)
+    geometry = arm_geometry(scenario)
     extent = max(float(scenario.robot.base_radius), float(np.sum(geometry.lever(include_body=True))))
     discs = environment_discs(scenario)
     order = np.asarray(registration_order(scenario), int)

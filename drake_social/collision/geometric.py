@@ -39,11 +39,12 @@ from __future__ import annotations
 import numpy as np
 
 from drake_social.arguments import require_scenario
-from drake_social.kinematics import ArmGeometry, configuration_limits
+from drake_social.kinematics import ArmGeometry
 from drake_social.collision.broadphase import build_grid, cell_ranges
 from drake_social.collision.planar_kernel import MAX_STEPS, STEP_MARGIN, TOLERANCE
 from drake_social.people import people_model
 from drake_social.scenario import Scenario
+from drake_social.scenario.geometry import arm_geometry, configuration_limits
 from drake_social.world import world_model
 
 __all__ = ["CheckerBase", "GRID_MIN_BOXES", "GeometricChecker"]
@@ -125,7 +126,7 @@ class CheckerBase:
     def __init__(self, scenario: Scenario, resolution: float | None = None):
         require_scenario(scenario, type(self).__name__)
         self.scenario = scenario
-        self.geometry = ArmGeometry.from_scenario(scenario)
+        self.geometry = arm_geometry(scenario)
         self.resolution = float(scenario.planner.collision_resolution if resolution is None else resolution)
         if not self.resolution > 0:
             raise ValueError(f"resolution must be > 0 metres, got {resolution}")

@@ -10,7 +10,8 @@ The rules (those of the prediction and of issue 21's time-indexed safety):
 
 * at time t the sample k is ``floor((t - t0) / dt)`` clamped to [0, H - 1];
   a person's centre is interpolated linearly between samples k and k + 1
-  (the first / last sample holds before t0 / after the horizon);
+  (the first / last sample holds before t0 / after the horizon): the
+  prediction's own lookup, :mod:`drake_social.people.prediction_kernel`;
 * a person is *considered* at t when present at sample k and, beyond the
   horizon (``t > t0 + (H - 1) dt``), only when standing (``max_speeds == 0``):
   later replans see the moving ones;
@@ -36,7 +37,8 @@ _kernel_cache.ensure_fresh()  # before any cached kernel is loaded
 from numba import njit  # noqa: E402  (a dependency)
 
 from drake_social.collision.planar_kernel import (  # noqa: E402
-    capsule_spans, segment_disc_distance, world_capsules)
+    capsule_spans, queue_pop, queue_split, queue_start, segment_disc_distance, world_capsules)
+from drake_social.people.prediction_kernel import centre, slot  # noqa: E402
 
 __all__ = ["MAX_STEPS", "STEP_MARGIN", "TIME_SLACK", "TOLERANCE", "motion_clear_of_people", "people_clearance"]
 
@@ -52,29 +54,6 @@ MAX_STEPS = 100_000
 #: samples whose presence counts and the part within the horizon, so that the
 #: rounding of ``t_a + u (t_b - t_a)`` never reaches a sample left out.
 TIME_SLACK = 1e-9
-
-
-@njit(cache=True)
-def _slot(t, t0, dt, h):
-    """The sample k at or before t (clamped to [0, h - 1]) and the fraction to k + 1,
-    as :meth:`Prediction._slot <drake_social.people.prediction.Prediction>`."""
-    u = (t - t0) / dt
-    if not u > 0.0:
-        return 0, 0.0
-    if u >= h - 1:
-        return h - 1, 0.0
-    k = int(math.floor(u))
-    return k, u - k
-
-
-@njit(cache=True)
-def _centre(xy, p, k, f):
-    """Person p's interpolated centre at slot (k, f), as ``Prediction.state_at``."""
-    x, y = xy[k, p, 0], xy[k, p, 1]
-    if k + 1 < xy.shape[0]:
-        x = x + f * (xy[k + 1, p, 0] - x)
-        y = y + f * (xy[k + 1, p, 1] - y)
-    return x, y
 
 
 @njit(cache=True)
@@ -97,13 +76,13 @@ def people_clearance(q, t, bodies, robot, xy, present, radii, max_speeds, t0, dt
     h = xy.shape[0]
     horizon = t0 + (h - 1) * dt
     beyond = t > horizon
-    k, f = _slot(t, t0, dt, h)
+    k, f = slot(t, t0, dt, h)
     cap = world_capsules(q, bodies, robot)
     best = np.inf
     for p in range(xy.shape[1]):
         if not present[k, p] or (beyond and max_speeds[p] != 0.0):
             continue
-        cx, cy = _centre(xy, p, k, f)
+        cx, cy = centre(xy, p, k, f)
         for j in range(cap.shape[0]):
             best = min(best, _pair(cap, j, cx, cy, radii[p]))
     return best
@@ -129,11 +108,11 @@ def _probe(u, q_a, dq, t_a, span_t, bodies, robot, spans, span, xy, radii, max_s
     q = q_a + u * dq
     cap = world_capsules(q, bodies, robot)
     reach = _reach(cap, q[0], q[1])
-    k, f = _slot(t_a + u * span_t, t0, dt, xy.shape[0])
+    k, f = slot(t_a + u * span_t, t0, dt, xy.shape[0])
     tau = tau_max
     for i in range(n_keep):
         p = keep[i]
-        cx, cy = _centre(xy, p, k, f)
+        cx, cy = centre(xy, p, k, f)
         move = max_speeds[p] * span_t
         # Person-level broad phase: every capsule lies within `reach` of the base.
         bound = math.hypot(cx - q[0], cy - q[1]) - reach - radii[p] - safety - STEP_MARGIN
@@ -164,11 +143,11 @@ def _part_clear(q_a, dq, u_lo, u_hi, t_a, span_t, bodies, robot, spans, xy, radi
     # max_speeds[p] * span_t of their centre at t_a.
     cap = world_capsules(q_a, bodies, robot)
     reach = _reach(cap, q_a[0], q_a[1]) + span
-    k, f = _slot(t_a, t0, dt, xy.shape[0])
+    k, f = slot(t_a, t0, dt, xy.shape[0])
     n = 0
     for i in range(n_keep):
         p = keep[i]
-        cx, cy = _centre(xy, p, k, f)
+        cx, cy = centre(xy, p, k, f)
         lb = math.hypot(cx - q_a[0], cy - q_a[1]) - reach - radii[p] - max_speeds[p] * span_t - safety
         if not lb > TOLERANCE:
             keep[n] = p
@@ -186,30 +165,18 @@ def _part_clear(q_a, dq, u_lo, u_hi, t_a, span_t, bodies, robot, spans, xy, radi
     lo, hi = u_lo + tau_lo, u_hi - tau_hi  # [u_lo, lo) and (hi, u_hi] are cleared
     if lo > hi:
         return True
-    # The part not yet cleared, as a queue of closed intervals (planar_kernel.motion_valid's search).
-    size = 64
-    q_lo, q_hi = np.empty(size), np.empty(size)
-    q_lo[0], q_hi[0] = lo, hi
-    head, tail = 0, 1
+    # The part not yet cleared, searched coarse to fine (planar_kernel.queue_start: the planar check's queue).
+    buffer, ends = queue_start(lo, hi)
     for _ in range(MAX_STEPS):
-        if head == tail:
+        if ends[0] == ends[1]:
             return True
-        a, b = q_lo[head % size], q_hi[head % size]
-        head += 1
+        a, b = queue_pop(buffer, ends)
         u = 0.5 * (a + b)
         tau = _probe(u, q_a, dq, t_a, span_t, bodies, robot, spans, span, xy, radii, max_speeds, t0, dt, safety,
                      keep, n, 0.5 * (b - a) + 1e-12)
         if tau < 0.0:
             return False
-        for lo_, hi_ in ((a, u - tau), (u + tau, b)):
-            if lo_ <= hi_:
-                if tail - head == size:  # full: double it, in order
-                    n_lo, n_hi = np.empty(2 * size), np.empty(2 * size)
-                    for r in range(size):
-                        n_lo[r], n_hi[r] = q_lo[(head + r) % size], q_hi[(head + r) % size]
-                    q_lo, q_hi, head, tail, size = n_lo, n_hi, 0, size, 2 * size
-                q_lo[tail % size], q_hi[tail % size] = lo_, hi_
-                tail += 1
+        buffer = queue_split(buffer, ends, a, b, u, tau)
     return False
 
 
@@ -254,8 +221,8 @@ def motion_clear_of_people(q_a, q_b, t_a, t_b, bodies, robot, levers, xy, presen
         u_h = 1.0
         if t_b > horizon + TIME_SLACK:
             u_h = min(1.0, (horizon + TIME_SLACK - t_a) / span_t)
-        k_a, _ = _slot(t_a - TIME_SLACK, t0, dt, h)
-        k_b, _ = _slot(min(t_b, horizon) + TIME_SLACK, t0, dt, h)
+        k_a, _ = slot(t_a - TIME_SLACK, t0, dt, h)
+        k_b, _ = slot(min(t_b, horizon) + TIME_SLACK, t0, dt, h)
         n = 0
         for p in range(n_people):
             for k in range(k_a, k_b + 1):

@@ -91,6 +91,9 @@ __all__ = [
     "motions_valid",
     "motions_valid_plain",
     "pair_distances",
+    "queue_pop",
+    "queue_split",
+    "queue_start",
     "segment_box_distance",
     "segment_disc_distance",
     "valid",
@@ -651,6 +654,50 @@ def _keep_grid(env, grid, x, y, radius, span):
 
 
 @njit(cache=True)
+def queue_start(lo, hi):
+    """The conservative advancement's queue of the part ``[lo, hi]`` of a
+    motion not yet cleared: closed intervals of t, first in first out, in a
+    ring buffer (``buffer`` (size, 2), ``ends`` (2,) int64: head, tail) that
+    doubles when full. Each query at an interval's midpoint clears
+    ``(t - tau, t + tau)`` and queues what is left (:func:`queue_split`), so
+    the motion is searched coarse to fine (a collision is found after a few
+    queries) and each query clears both ways; the motion is cleared when the
+    queue is empty (``ends[0] == ends[1]``). The planar check and the
+    people's (:mod:`drake_social.collision.people_kernel`) run it."""
+    buffer = np.empty((64, 2))
+    buffer[0, 0], buffer[0, 1] = lo, hi
+    return buffer, np.array([0, 1], dtype=np.int64)
+
+
+@njit(cache=True)
+def queue_pop(buffer, ends):
+    """The queue's first interval (a, b), taken off it."""
+    head = ends[0] % buffer.shape[0]
+    ends[0] += 1
+    return buffer[head, 0], buffer[head, 1]
+
+
+@njit(cache=True)
+def queue_split(buffer, ends, a, b, t, tau):
+    """Queues what a query at t that cleared ``(t - tau, t + tau)`` leaves of
+    ``[a, b]``: ``[a, t - tau]``, then ``[t + tau, b]``, each when not empty.
+    Returns the buffer (a new one, twice as large and in order, when it was full)."""
+    for lo, hi in ((a, t - tau), (t + tau, b)):
+        if lo <= hi:
+            size = buffer.shape[0]
+            if ends[1] - ends[0] == size:  # full: double it, in order
+                larger = np.empty((2 * size, 2))
+                for r in range(size):
+                    larger[r, 0], larger[r, 1] = buffer[(ends[0] + r) % size, 0], buffer[(ends[0] + r) % size, 1]
+                buffer = larger
+                ends[0], ends[1] = 0, size
+            tail = ends[1] % buffer.shape[0]
+            buffer[tail, 0], buffer[tail, 1] = lo, hi
+            ends[1] += 1
+    return buffer
+
+
+@njit(cache=True)
 def _motion_valid_ends(q_a, q_b, c_a, c_b, lower, upper, bodies, robot, env, grid, levers, plain):
     if not (_in_limits(q_a, lower, upper) and _in_limits(q_b, lower, upper)):
         return False
@@ -687,35 +734,20 @@ def _motion_valid_ends(q_a, q_b, c_a, c_b, lower, upper, bodies, robot, env, gri
     for j in range(s_count):
         if spans[j] > 0.0:
             tau_far = min(tau_far, (FAR - STEP_MARGIN) / spans[j])
-    # The part [lo, hi] not yet cleared, as a queue of closed intervals: each
-    # query at an interval's midpoint clears (t - tau, t + tau) and leaves
-    # the rest of it, so the motion is searched coarse to fine (a collision
-    # is found after a few queries) and each query clears both ways.
-    size = 64
-    q_lo, q_hi = np.empty(size), np.empty(size)
-    q_lo[0], q_hi[0] = lo, hi
-    head, tail = 0, 1  # queue slots head .. tail - 1 (circular)
+    # The part [lo, hi] not yet cleared, searched coarse to fine (queue_start).
+    buffer, ends = queue_start(lo, hi)
     q = np.empty(4)
     for _ in range(MAX_STEPS):
-        if head == tail:
+        if ends[0] == ends[1]:
             return True
-        a, b = q_lo[head % size], q_hi[head % size]
-        head += 1
+        a, b = queue_pop(buffer, ends)
         t = 0.5 * (a + b)
         for i in range(4):
             q[i] = q_a[i] + t * dq[i]
         tau = _probe(world_capsules(q, bodies, robot), env, keep, n_keep, spans, min(tau_far, 0.5 * (b - a) + 1e-12))
         if tau < 0.0:
             return False
-        for lo_, hi_ in ((a, t - tau), (t + tau, b)):
-            if lo_ <= hi_:
-                if tail - head == size:  # full: double it, in order
-                    n_lo, n_hi = np.empty(2 * size), np.empty(2 * size)
-                    for r in range(size):
-                        n_lo[r], n_hi[r] = q_lo[(head + r) % size], q_hi[(head + r) % size]
-                    q_lo, q_hi, head, tail, size = n_lo, n_hi, 0, size, 2 * size
-                q_lo[tail % size], q_hi[tail % size] = lo_, hi_
-                tail += 1
+        buffer = queue_split(buffer, ends, a, b, t, tau)
     return False
 
 

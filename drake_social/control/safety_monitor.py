@@ -39,9 +39,10 @@ Example::
     from drake_social.kinematics import ArmGeometry
     from drake_social.people import StaticPeople
     from drake_social.scenario import load_scenario
+    from drake_social.scenario.geometry import arm_geometry
 
     scenario = load_scenario("scenarios/tiny.yaml")
-    monitor = SafetyMonitor(ArmGeometry.from_scenario(scenario), safety_distance=0.05, period=0.01)
+    monitor = SafetyMonitor(arm_geometry(scenario), safety_distance=0.05, period=0.01)
     context = monitor.CreateDefaultContext()
     monitor.GetInputPort("q").FixValue(context, [1.0, 2.5, 0.0, 1.5708])
     people = StaticPeople([[1.0, 1.92, 0.0]], [0.2]).state_at(0.0)  # 0.03 m from the base disc
@@ -180,7 +181,7 @@ class SafetyMonitor(LeafSystem):
     stop and go every period. 0 releases at the first clear sample.
 
     Args:
-        geometry: the robot and its object (``ArmGeometry.from_scenario``).
+        geometry: the robot and its object (``drake_social.scenario.geometry.arm_geometry``).
         safety_distance: metres (>= 0; 0 = stop on contact only).
         period: seconds between decisions (> 0; the control period).
         release_time: seconds clear before a release (>= 0; the scenario's

@@ -182,7 +182,7 @@ class SpeedLimit(LeafSystem):
     """Outputs the largest speed of the robot's fastest point near people (see the module docstring).
 
     Args:
-        geometry: the robot and its object (``ArmGeometry.from_scenario``).
+        geometry: the robot and its object (``drake_social.scenario.geometry.arm_geometry``).
         options: the scenario's ``execution`` section: ``safety_distance``,
             ``stop_margin``, ``slow_distance``, ``slow_speed``,
             ``release_time``, ``control_period`` (the update's period) and

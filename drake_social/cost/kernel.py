@@ -220,6 +220,62 @@ def _trapezoids(g, w, count, tau):
 
 
 @njit(cache=True)
+def _step_counts(q_a, q_b, lever, resolution):
+    """Per motion (E,) int64: the trapezoid step count n, the displacement
+    bound (``lever``: (c_shoulder, c_gripper)) over ``resolution``, at least 1;
+    and the largest of them. Raises ValueError beyond MAX_MOTION_STEPS
+    (SocialCost names the motion; the scenario check keeps planners clear)."""
+    steps = np.ones(q_a.shape[0], dtype=np.int64)
+    n_max = 1
+    max_span = MAX_MOTION_STEPS * resolution
+    for e in range(q_a.shape[0]):
+        d0, d1 = q_b[e, 0] - q_a[e, 0], q_b[e, 1] - q_a[e, 1]
+        d2, d3 = q_b[e, 2] - q_a[e, 2], q_b[e, 3] - q_a[e, 3]
+        span = math.hypot(d0, d1) + lever[0] * abs(d2) + lever[1] * abs(d2 + d3)
+        if not span <= max_span:
+            raise ValueError("a motion's displacement bound is not finite or needs more than MAX_MOTION_STEPS steps")
+        steps[e] = max(1, int(math.ceil(span / resolution - 1e-9)))
+        n_max = max(n_max, steps[e])
+    return steps, n_max
+
+
+@njit(cache=True)
+def _point_spans(d0, d1, d2, d3, point_levers, spans):
+    """spans[j] = how far interest point j moves at most per unit of t along
+    the motion (d0, d1, d2, d3) (:func:`_point_levers`' lever arms)."""
+    dxy, a1, a12 = math.sqrt(d0 * d0 + d1 * d1), abs(d2), abs(d2 + d3)
+    for j in range(spans.shape[0]):
+        spans[j] = dxy + point_levers[j, 0] * a1 + point_levers[j, 1] * a12
+
+
+@njit(cache=True)
+def _window_steps(t0, t1, n):
+    """The samples k0 < k1 of a motion of n steps that bracket the part [t0,
+    t1] of it (fractions, clamped to [0, 1]): at least one step, never past
+    the motion's end (t0 = 1: the last step)."""
+    t0 = min(max(t0, 0.0), 1.0)
+    t1 = min(max(t1, 0.0), 1.0)
+    k0 = int(math.floor(t0 * n))
+    k1 = min(int(math.ceil(t1 * n)), n)
+    k1 = min(max(k1, k0 + 1), n)
+    k0 = min(k0, k1 - 1)
+    return k0, k1
+
+
+@njit(cache=True)
+def _run_area(g, w, count, tau, vector_exp):
+    """The weighted threshold-aware trapezoid areas of a flat run of
+    ``count`` exponents ``g`` (exp(-g) taken in place first: :func:`exp_neg`,
+    or libm's where ``vector_exp`` is False) with step weights ``w``."""
+    if vector_exp:
+        exp_neg(g, count)
+    else:
+        for t in range(count):
+            g[t] = math.exp(-g[t])
+    return _trapezoids(g, w, count - 1, tau)
+
+
+@njit(cache=True)
 def msc_sums(
     q_a, q_b, people, l1, l2, obj, active, weights, lever, resolution, reaches, inv_front, inv_rear, inv_side, tau,
     point_reach, grid_cell, grid_x0, grid_y0, grid_nx, grid_ny, grid_start, grid_order,
@@ -263,7 +319,6 @@ def msc_sums(
     """
     e_count, h_count, k_count = q_a.shape[0], people.shape[0], active.shape[0]
     sums = np.zeros(e_count)
-    steps = np.ones(e_count, dtype=np.int64)
     cos_t = np.empty(h_count)  # of the candidates only (far people cost nothing)
     sin_t = np.empty(h_count)
     have = np.zeros(h_count, dtype=np.bool_)
@@ -284,16 +339,7 @@ def msc_sums(
     k1s = np.empty((h_count, k_count), dtype=np.int64)
     cull = math.isfinite(reach)
     radius = reach + point_reach + 1e-9
-    n_max = 1
-    max_span = MAX_MOTION_STEPS * resolution
-    for e in range(e_count):
-        d0, d1 = q_b[e, 0] - q_a[e, 0], q_b[e, 1] - q_a[e, 1]
-        d2, d3 = q_b[e, 2] - q_a[e, 2], q_b[e, 3] - q_a[e, 3]
-        span = math.hypot(d0, d1) + lever[0] * abs(d2) + lever[1] * abs(d2 + d3)
-        if not span <= max_span:  # SocialCost.motion_cost names the motion (the scenario check keeps planners clear)
-            raise ValueError("a motion's displacement bound is not finite or needs more than MAX_MOTION_STEPS steps")
-        steps[e] = max(1, int(math.ceil(span / resolution - 1e-9)))
-        n_max = max(n_max, steps[e])
+    steps, n_max = _step_counts(q_a, q_b, lever, resolution)
     xs = np.empty((k_count, n_max + 1))
     ys = np.empty((k_count, n_max + 1))
     g_buf = np.empty(256)  # exponents, then AGF values, of the flat run
@@ -338,10 +384,7 @@ def msc_sums(
                 cos_t[h], sin_t[h], have[h] = math.cos(people[h, 2]), math.sin(people[h, 2]), True
         _points(q_a[e, 0], q_a[e, 1], q_a[e, 2], q_a[e, 3], l1, l2, obj, active, xa, ya)
         _points(q_b[e, 0], q_b[e, 1], q_b[e, 2], q_b[e, 3], l1, l2, obj, active, xb, yb)
-        # Each point's own bound: it moves at most spans[j] per unit of t.
-        dxy, a1, a12 = math.sqrt(d0 * d0 + d1 * d1), abs(d2), abs(d2 + d3)
-        for j in range(k_count):
-            spans[j] = dxy + point_levers[j, 0] * a1 + point_levers[j, 1] * a12
+        _point_spans(d0, d1, d2, d3, point_levers, spans)  # each point moves at most spans[j] per unit of t
         # The window of samples where each (candidate, point) can matter:
         # outside it the point is farther than reach from the person, so the
         # term is <= threshold at both ends of every step and adds nothing.
@@ -373,17 +416,12 @@ def msc_sums(
                             k0s[i, j], k1s[i, j] = 0, -1
                             continue
                         t0, t1 = max(t0, ra / ls), min(t1, 1.0 - rb / ls)
-                    t0 = min(max(t0, 0.0), 1.0)
-                    t1 = min(max(t1, 0.0), 1.0)
                 elif da <= 0.0:  # a point that does not move, within reach (or no culling)
                     t0, t1 = 0.0, 1.0
                 else:
                     k0s[i, j], k1s[i, j] = 0, -1
                     continue
-                k0 = int(math.floor(t0 * n))
-                k1 = min(int(math.ceil(t1 * n)), n)
-                k1 = min(max(k1, k0 + 1), n)  # at least one step, never past q_b (t0 = 1: the last)
-                k0 = min(k0, k1 - 1)
+                k0, k1 = _window_steps(t0, t1, n)
                 k0s[i, j], k1s[i, j] = k0, k1
                 k_lo, k_hi = min(k_lo, k0), max(k_hi, k1)
         if k_hi < 0:
@@ -415,10 +453,5 @@ def msc_sums(
                     t += 1
                 if k1 >= k0:
                     w_buf[t - 1] = 0.0  # no step from a window's last sample to the next window's first
-        if vector_exp:
-            exp_neg(g_buf, count)
-        else:
-            for t in range(count):
-                g_buf[t] = math.exp(-g_buf[t])
-        sums[e] = _trapezoids(g_buf, w_buf, count - 1, tau)
+        sums[e] = _run_area(g_buf, w_buf, count, tau, vector_exp)
     return sums, steps

@@ -10,6 +10,7 @@ from drake_social.cost.agf import (PersonalSpace, agf_xy, gaussian, inverse_vari
 from drake_social.kinematics import ArmGeometry, config_distance, displacement_bound
 from drake_social.limits import MAX_MOTION_STEPS
 from drake_social.people import PeopleModel, PeopleState, Prediction, people_model
+from drake_social.scenario.geometry import arm_geometry
 
 __all__ = ["FIELD_CHUNK_ELEMENTS", "SocialCost", "interpolation_segments"]
 
@@ -126,7 +127,7 @@ class SocialCost:
         people = people.visible()
         sigmas = speed_scaled_sigmas(people.speeds(), s.side_ratio, s.rear_ratio) if s.speed_scaling else None
         return cls(
-            ArmGeometry.from_scenario(scenario),
+            arm_geometry(scenario),
             people.poses(),
             PersonalSpace.from_options(s),
             weights=s.weights if weights is None else weights,
@@ -180,7 +181,7 @@ class SocialCost:
         s = scenario.social
         sigmas = speed_scaled_sigmas(prediction.speeds, s.side_ratio, s.rear_ratio) if s.speed_scaling else None
         return cls(
-            ArmGeometry.from_scenario(scenario),
+            arm_geometry(scenario),
             np.column_stack([prediction.positions[0], prediction.headings[0]]),
             PersonalSpace.from_options(s),
             weights=s.weights if weights is None else weights,

@@ -7,10 +7,17 @@ the step count n of :func:`drake_social.cost.kernel.msc_sums`) is evaluated
 against the people of a :class:`~drake_social.people.prediction.Prediction`
 at t(u): positions interpolated linearly between its samples, heading and
 presence those of the sample at or before t(u) (clamped to the first and the
-last sample: before ``t0`` and beyond the horizon the people hold). An absent
+last sample: before ``t0`` and beyond the horizon the people hold; the
+prediction's own lookup, :mod:`drake_social.people.prediction_kernel`). An absent
 person adds nothing at that sample (their raw Gaussian counts as 0 there, so
 a step from an absent to a present sample is a threshold crossing). A
-static prediction gives :func:`msc_sums`'s sums (to rounding).
+static prediction gives :func:`msc_sums`'s sums to rounding (about 1e-14
+relative), not bit for bit: the static kernel skips more samples that add
+exactly nothing (its people grid, and a window bound in the AGF's own
+metric), and a motion's vectorised sum is ordered by the samples in its run.
+So the two kernels stay two, and share their stages: the step counts, the
+points' spans, the windows' steps and the run's areas
+(:mod:`drake_social.cost.kernel`).
 
 :meth:`drake_social.cost.social.SocialCost.timed_motion_cost` calls this
 kernel and keeps an independent numpy path as its reference; the tree's
@@ -25,34 +32,12 @@ import math
 import numpy as np
 
 from drake_social.cost import kernel
-from drake_social.limits import MAX_MOTION_STEPS
+from drake_social.people.prediction_kernel import centre, slot
 
 njit = kernel.njit
 AVAILABLE = kernel.AVAILABLE
 
 __all__ = ["AVAILABLE", "msc_sums_timed"]
-
-
-@njit(cache=True)
-def _slot(t, t0, dt, samples):
-    """The prediction's sample at or before time ``t`` (clamped to
-    0 .. samples - 1) and the fraction of the way to the next one (0 when
-    clamped), as :meth:`Prediction.state_at`."""
-    s = (t - t0) / dt
-    if not s > 0.0:
-        return 0, 0.0
-    if s >= samples - 1:
-        return samples - 1, 0.0
-    k = int(math.floor(s))
-    return k, s - k
-
-
-@njit(cache=True)
-def _position(xy, slot, frac, h):
-    """Person h's interpolated position at (slot, frac) of :func:`_slot`."""
-    x0, y0 = xy[slot, h, 0], xy[slot, h, 1]
-    nxt = min(slot + 1, xy.shape[0] - 1)
-    return x0 + frac * (xy[nxt, h, 0] - x0), y0 + frac * (xy[nxt, h, 1] - y0)
 
 
 @njit(cache=True)
@@ -104,7 +89,6 @@ def msc_sums_timed(
     e_count, k_count = q_a.shape[0], active.shape[0]
     s_count, p_count = xy.shape[0], xy.shape[1]
     sums = np.zeros(e_count)
-    steps = np.ones(e_count, dtype=np.int64)
     cos_t = np.empty((s_count, p_count))  # per (sample, person), computed when first needed
     sin_t = np.empty((s_count, p_count))
     have = np.zeros((s_count, p_count), dtype=np.bool_)
@@ -118,16 +102,7 @@ def msc_sums_timed(
     k1s = np.empty((p_count, k_count), dtype=np.int64)
     pa = np.empty((p_count, 2))  # each person at t_a and t_b
     pb = np.empty((p_count, 2))
-    n_max = 1
-    max_span = MAX_MOTION_STEPS * resolution
-    for e in range(e_count):
-        d0, d1 = q_b[e, 0] - q_a[e, 0], q_b[e, 1] - q_a[e, 1]
-        d2, d3 = q_b[e, 2] - q_a[e, 2], q_b[e, 3] - q_a[e, 3]
-        span = math.hypot(d0, d1) + lever[0] * abs(d2) + lever[1] * abs(d2 + d3)
-        if not span <= max_span:  # SocialCost.timed_motion_cost names the motion
-            raise ValueError("a motion's displacement bound is not finite or needs more than MAX_MOTION_STEPS steps")
-        steps[e] = max(1, int(math.ceil(span / resolution - 1e-9)))
-        n_max = max(n_max, steps[e])
+    steps, n_max = kernel._step_counts(q_a, q_b, lever, resolution)  # SocialCost.timed_motion_cost names a bad motion
     xs = np.empty((k_count, n_max + 1))
     ys = np.empty((k_count, n_max + 1))
     slots = np.empty(n_max + 1, dtype=np.int64)  # each sample's prediction sample and fraction
@@ -149,8 +124,8 @@ def msc_sums_timed(
         # differ from t_b in the last bit: its slot is the one that counts).
         ta, dtime = t_a[e], t_b[e] - t_a[e]
         duration = abs(dtime)
-        slot_a, frac_a = _slot(ta, t0, dt, s_count)
-        slot_b, frac_b = _slot(ta + dtime, t0, dt, s_count)
+        slot_a, frac_a = slot(ta, t0, dt, s_count)
+        slot_b, frac_b = slot(ta + dtime, t0, dt, s_count)
         lo_slot, hi_slot = min(slot_a, slot_b), max(slot_a, slot_b)
         # Candidate people, in ascending order.
         ax, ay, bx, by = q_a[e, 0], q_a[e, 1], q_b[e, 0], q_b[e, 1]
@@ -163,21 +138,19 @@ def msc_sums_timed(
                     break
             if not seen:
                 continue
-            pa[h, 0], pa[h, 1] = _position(xy, slot_a, frac_a, h)
+            pa[h, 0], pa[h, 1] = centre(xy, h, slot_a, frac_a)
             if math.isfinite(reaches[h]):
                 radius = reaches[h] + point_reach + max_speeds[h] * duration + 1e-9
                 if kernel._segment_distance(pa[h, 0], pa[h, 1], ax, ay, bx, by) > radius:
                     continue
-            pb[h, 0], pb[h, 1] = _position(xy, slot_b, frac_b, h)
+            pb[h, 0], pb[h, 1] = centre(xy, h, slot_b, frac_b)
             cand[m] = h
             m += 1
         if m == 0:
             continue
         kernel._points(q_a[e, 0], q_a[e, 1], q_a[e, 2], q_a[e, 3], l1, l2, obj, active, xa, ya)
         kernel._points(q_b[e, 0], q_b[e, 1], q_b[e, 2], q_b[e, 3], l1, l2, obj, active, xb, yb)
-        dxy, a1, a12 = math.sqrt(d0 * d0 + d1 * d1), abs(d2), abs(d2 + d3)
-        for j in range(k_count):
-            spans[j] = dxy + point_levers[j, 0] * a1 + point_levers[j, 1] * a12
+        kernel._point_spans(d0, d1, d2, d3, point_levers, spans)
         # The window of samples where each (candidate, point) can matter: the
         # point-person distance moves by at most rate per unit of u, so
         # outside it both are farther apart than the reach.
@@ -199,17 +172,13 @@ def msc_sums_timed(
                         if da + db > rate:
                             k0s[i, j], k1s[i, j] = 0, -1
                             continue
-                        w0 = min(max(da / rate, 0.0), 1.0)
-                        w1 = min(max(1.0 - db / rate, 0.0), 1.0)
+                        w0, w1 = da / rate, 1.0 - db / rate
                     elif da <= 0.0:  # neither moves, within reach
                         w0, w1 = 0.0, 1.0
                     else:
                         k0s[i, j], k1s[i, j] = 0, -1
                         continue
-                k0 = int(math.floor(w0 * n))
-                k1 = min(int(math.ceil(w1 * n)), n)
-                k1 = min(max(k1, k0 + 1), n)  # at least one step, never past q_b
-                k0 = min(k0, k1 - 1)
+                k0, k1 = kernel._window_steps(w0, w1, n)
                 k0s[i, j], k1s[i, j] = k0, k1
                 k_lo, k_hi = min(k_lo, k0), max(k_hi, k1)
         if k_hi < 0:
@@ -218,7 +187,7 @@ def msc_sums_timed(
         kernel.motion_samples(q_a[e, 0], q_a[e, 1], q_a[e, 2], q_a[e, 3], d0, d1, d2, d3, n, k_lo, k_hi, l1, l2,
                               obj, active, xs, ys)
         for k in range(k_lo, k_hi + 1):
-            slots[k], fracs[k] = _slot(ta + (k / n) * dtime, t0, dt, s_count)
+            slots[k], fracs[k] = slot(ta + (k / n) * dtime, t0, dt, s_count)
         # Each candidate at the samples of its windows.
         count = 0
         for i in range(m):
@@ -233,7 +202,7 @@ def msc_sums_timed(
                 pin[i, k] = present[s, h]
                 if not pin[i, k]:
                     continue
-                px[i, k], py[i, k] = _position(xy, s, fracs[k], h)
+                px[i, k], py[i, k] = centre(xy, h, s, fracs[k])
                 if not have[s, h]:
                     cos_t[s, h], sin_t[s, h], have[s, h] = math.cos(theta[s, h]), math.sin(theta[s, h]), True
                 pc[i, k], ps[i, k] = cos_t[s, h], sin_t[s, h]
@@ -260,10 +229,5 @@ def msc_sums_timed(
                     t += 1
                 if k1 >= k0:
                     w_buf[t - 1] = 0.0  # no step from a window's last sample to the next window's first
-        if vector_exp:
-            kernel.exp_neg(g_buf, count)
-        else:
-            for t in range(count):
-                g_buf[t] = math.exp(-g_buf[t])
-        sums[e] = kernel._trapezoids(g_buf, w_buf, count - 1, tau)
+        sums[e] = kernel._run_area(g_buf, w_buf, count, tau, vector_exp)
     return sums, steps

@@ -71,6 +71,7 @@ from drake_social.evaluation.records import path_costs
 from drake_social.kinematics import ArmGeometry, config_distance
 from drake_social.people import PeopleLog, people_model, proximity
 from drake_social.people.proximity import part_names
+from drake_social.scenario.geometry import arm_geometry
 
 __all__ = [
     "HEADING_STEP",
@@ -146,7 +147,7 @@ def trajectory_metrics(
         ``agf_max_<part>``, ``agf_mean_<part>`` for every part of :func:`part_names`.
     """
     q = np.asarray(q, float).reshape(-1, 4)
-    g = ArmGeometry.from_scenario(scenario)
+    g = arm_geometry(scenario)
     ones = np.ones(g.num_interest_points)
     if s is None:
         s = np.concatenate([[0.0], np.cumsum(config_distance(q[:-1], q[1:]))]) if len(q) else np.zeros(0)
@@ -208,7 +209,7 @@ def path_metrics(scenario, waypoints: np.ndarray, planner_weights: np.ndarray | 
     from drake_social.viz.path import sample_path  # the sampling of the cost-profile figure
 
     wp = np.asarray(waypoints, float).reshape(-1, 4)
-    n = ArmGeometry.from_scenario(scenario).num_interest_points
+    n = arm_geometry(scenario).num_interest_points
     out = path_costs(scenario, wp, planner_weights)
     out["irregularity"] = base_irregularity(wp[:, :2])
     s, q = sample_path(wp, SocialCost.from_scenario(scenario, np.ones(n)), refine)
@@ -225,7 +226,7 @@ def executed_metrics(scenario, times: np.ndarray, q: np.ndarray, people: PeopleL
     the scenario's people model (see :func:`trajectory_metrics`). ``F_multi``
     is the planner's cost function: against the people at t = 0."""
     q = np.asarray(q, float).reshape(-1, 4)
-    n = ArmGeometry.from_scenario(scenario).num_interest_points
+    n = arm_geometry(scenario).num_interest_points
     multi = SocialCost.from_scenario(scenario, np.ones(n))
     out = {
         "F_multi": float(multi.motion_cost(q[:-1], q[1:]).sum()) if len(q) > 1 else 0.0,

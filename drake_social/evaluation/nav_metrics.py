@@ -137,6 +137,7 @@ from drake_social.io.records import NAV_PREFIX
 from drake_social.kinematics import ArmGeometry
 from drake_social.people import people_model, proximity
 from drake_social.people.log import PeopleLog
+from drake_social.scenario.geometry import arm_geometry
 
 __all__ = ["RUN_PARTS", "execution_metrics", "run_metrics"]
 
@@ -245,7 +246,7 @@ def run_metrics(scenario, times: np.ndarray, q: np.ndarray, people: PeopleLog | 
                        ("slow_stopped", slow_stopped)):
         if flag is not None and np.asarray(flag).shape != (t,):
             raise ValueError(f"run_metrics: {name} must be (T,) = ({t},) booleans, got {np.asarray(flag).shape}")
-    g = ArmGeometry.from_scenario(scenario)
+    g = arm_geometry(scenario)
     duration = float(times[-1] - times[0])
     steps = np.diff(times)
 

@@ -17,9 +17,10 @@ import numpy as np
 
 from drake_social.cost.social import SocialCost
 from drake_social.io.records import PATH_FIELDS
-from drake_social.kinematics import ArmGeometry, config_distance
+from drake_social.kinematics import config_distance
 from drake_social.planning.algorithms import base_only_weights
 from drake_social.planning.objective import SocialObjective
+from drake_social.scenario.geometry import arm_geometry
 
 __all__ = ["path_costs", "run_record"]
 
@@ -39,7 +40,7 @@ def path_costs(scenario, waypoints: np.ndarray, planner_weights: np.ndarray | No
         ``path_length`` (configuration space, plain norm) and ``base_length`` (metres).
     """
     wp = np.asarray(waypoints, float).reshape(-1, 4)
-    n = ArmGeometry.from_scenario(scenario).num_interest_points
+    n = arm_geometry(scenario).num_interest_points
     multi = SocialCost.from_scenario(scenario, np.ones(n))
     a, b = wp[:-1], wp[1:]
 

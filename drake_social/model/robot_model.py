@@ -44,8 +44,8 @@ from pathlib import Path
 
 import numpy as np
 
-from drake_social.kinematics import object_interest_points, object_polyline
 from drake_social.scenario import Scenario
+from drake_social.scenario.geometry import object_interest_points, object_polyline
 
 __all__ = [
     "BODY_COLOURS",

@@ -24,6 +24,7 @@ from drake_social.people.social_force import (cap_speed, capsule_force, desired_
                                               obstacle_force, pedestrian_force)
 from drake_social.people.social_force_kernel import crowd_step
 from drake_social.scenario.crowd_rules import MAX_WALKING_SPEED, MIN_WALKING_SPEED, crowd_problems
+from drake_social.scenario.geometry import arm_geometry
 from drake_social.world import world_model
 
 __all__ = ["CROWD_SEED_TAG", "HEADING_SPEED", "STANDING_SPEED", "SocialForceCrowd", "crowd_model",
@@ -303,4 +304,4 @@ def crowd_model(scenario, *, compiled: bool = True) -> SocialForceCrowd | None:
     return SocialForceCrowd(
         starts=[[p.x, p.y] for p in people], goals=[p.goals for p in people], cycle=[p.cycle for p in people],
         radii=[p.radius for p in people], speeds=speeds, names=[p.name for p in people], params=crowd,
-        boxes=boxes, geometry=ArmGeometry.from_scenario(scenario), compiled=compiled)
+        boxes=boxes, geometry=arm_geometry(scenario), compiled=compiled)

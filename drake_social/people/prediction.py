@@ -4,10 +4,11 @@ A :class:`Prediction` holds the people at the sample times ``t0 + k dt``,
 k = 0 .. H - 1 (the last is the horizon's end). Between samples a person's
 position is interpolated linearly; heading and presence are those of the
 sample at or before the time. Before ``t0`` and after the horizon the first
-and the last samples hold. The arrays are the layout the compiled kernels
-read (:mod:`drake_social.cost.timed_kernel`,
+and the last samples hold: one rule, :mod:`drake_social.people.prediction_kernel`.
+The arrays are the layout the compiled kernels read
+(:mod:`drake_social.cost.timed_kernel`,
 :mod:`drake_social.collision.people_kernel`): they take the prediction's
-fields as plain arrays.
+fields as plain arrays and look them up with the same kernel.
 
 Two predictors:
 
@@ -26,6 +27,7 @@ import math
 
 import numpy as np
 
+from drake_social.people import prediction_kernel
 from drake_social.people.model import PeopleModel, PeopleState
 
 __all__ = ["DEFAULT_PREDICTION_STEP", "Prediction", "constant_velocity", "perfect_prediction", "predict"]
@@ -101,26 +103,16 @@ class Prediction:
         """True when nobody moves and nobody comes or goes over the horizon."""
         return bool(np.all(self.max_speeds == 0.0) and np.all(self.present == self.present[:1]))
 
-    def _slot(self, t: float) -> tuple[int, float]:
-        """The sample k at or before ``t`` (clamped) and the fraction to k + 1."""
-        u = (float(t) - self.t0) / self.dt
-        if not u > 0.0:
-            return 0, 0.0
-        if u >= self.samples - 1:
-            return self.samples - 1, 0.0
-        k = int(math.floor(u))
-        return k, u - k
-
     def state_at(self, t: float) -> PeopleState:
         """The predicted people at time ``t`` (velocities: those of the
-        interpolated motion there; zero past the horizon)."""
-        k, f = self._slot(t)
-        pos = self.positions[k]
+        interpolated motion there; zero past the horizon): the lookup of
+        :mod:`~drake_social.people.prediction_kernel`, which the compiled
+        kernels run too."""
+        k, f = prediction_kernel.slot(float(t), self.t0, self.dt, self.samples)
+        pos = prediction_kernel.centres(self.positions, k, f)
         vel = np.zeros_like(pos)
         if k + 1 < self.samples:
-            step = self.positions[k + 1] - pos
-            pos = pos + f * step
-            vel = step / self.dt
+            vel = (self.positions[k + 1] - self.positions[k]) / self.dt
         return PeopleState(t=float(t), positions=pos, headings=self.headings[k], velocities=vel,
                            radii=self.radii, names=self.names, present=self.present[k])
 

@@ -47,10 +47,10 @@ from drake_social.limits import MAX_ITERATIONS, MAX_REPLAN_BUDGET, MAX_REPLAN_IT
 from drake_social.people import people_model
 from drake_social.people.prediction import Prediction
 from drake_social.planning.algorithms import AlgorithmSpec, algorithm_spec, base_only_weights, make_objective
-from drake_social.planning.replan_eval import PathEvaluation, PathJudge
+from drake_social.planning.replan_eval import VERIFY_PATHS, PathEvaluation, PathJudge
 from drake_social.planning.replan_evade import LOOKAHEAD, escape, standing_clear
+from drake_social.planning.replan_search import SearchSetup, run_search, search_planner
 from drake_social.planning.replan_shortcut import shortcut
-from drake_social.planning.replan_search import VERIFY_PATHS, run_search, search_planner
 from drake_social.planning.rrt_star import compiled
 from drake_social.planning.space import ConfigurationSpace
 
@@ -238,9 +238,10 @@ class Replanner:
         self._weights = None if self.spec.objective == "length" else (
             base_only_weights(self.objective.social.geometry.num_interest_points)
             if self.spec.weights == "base_only" else None)
-        #: The RRT* every search runs (compiled, timed mode; its objective per prediction).
-        self.planner = search_planner(self)
-        supported, why = compiled.compiled_support(checker, self.objective, self.planner.options)
+        #: What every search reads: the RRT* (compiled, timed mode; its objective per prediction) and the rest.
+        self.search = SearchSetup(search_planner(p, self.spec, self.space, checker, self.objective), self.goal,
+                                  scenario.execution, safety, self.objective, float(scenario.social.length_weight))
+        supported, why = compiled.compiled_support(checker, self.objective, self.search.planner.options)
         if not supported:
             raise ValueError(f"{who}: the replanner's search runs the compiled tree loop only, and it cannot: {why}")
 
@@ -397,7 +398,7 @@ class Replanner:
                           "still safe: kept without a search", candidate_cost=cand_cost)
         stop = t_start + self.budget * (1.0 - VERIFY_RESERVE) if use_deadline else None
         iterations = self.initial_iterations if initial else self.iterations
-        search = run_search(self, q, t_now, prediction, candidate, iterations, stop,
+        search = run_search(self.search, judge.social, q, t_now, prediction, candidate, iterations, stop,
                             np.random.default_rng([self.seed, int(replan_index)]))
         best, best_eval = None, None
         for judged, path in enumerate(search.paths):

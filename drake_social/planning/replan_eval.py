@@ -8,7 +8,8 @@ length term is the objective's, and it is safe when the room's checker
 accepts it and no predicted person comes within the safety distance of the
 robot along it (:class:`~drake_social.collision.people_safety.PeopleSafety`).
 The search's tree costs are approximate once rewiring has moved a subtree in
-time; this module gives the numbers the replanner decides with.
+time; this module gives the numbers the replanner decides with, and how many
+of the search's paths it judges (:data:`VERIFY_PATHS`, :data:`MAX_JUDGED`).
 """
 
 from __future__ import annotations
@@ -24,7 +25,12 @@ from drake_social.kinematics import config_distance, nominal_path_times
 from drake_social.people.prediction import Prediction
 from drake_social.planning.objective import Objective
 
-__all__ = ["PathEvaluation", "PathJudge"]
+__all__ = ["MAX_JUDGED", "VERIFY_PATHS", "PathEvaluation", "PathJudge"]
+
+#: Goal connections of the search judged exactly, in ascending tree cost ...
+VERIFY_PATHS = 4
+#: ... and at most this many when none of the first ones is safe (within the budget).
+MAX_JUDGED = 16
 
 
 class PathEvaluation(NamedTuple):

@@ -1,36 +1,48 @@
 """The replanner's search: the timed RRT* from where the robot is, seeded
 with the path being driven, and its best goal connections.
 
+The search reads a :class:`SearchSetup` (the RRT*, the goal, the execution
+limits that time the tree's nodes, the safety distance and the static
+objective), not the replanner: the replanner builds one and passes it.
+
 The tree's costs are exact for the motions as they were costed; a subtree
 that rewiring moved in time keeps its edges' costs (approximate). The
 replanner therefore takes the best few goal connections in ascending tree
-cost (:data:`VERIFY_PATHS`, more up to :data:`MAX_JUDGED` while none is
-safe) and judges each exactly
-(:mod:`drake_social.planning.replan_eval`).
+cost and judges each exactly (:mod:`drake_social.planning.replan_eval`,
+whose :data:`~drake_social.planning.replan_eval.VERIFY_PATHS` and
+:data:`~drake_social.planning.replan_eval.MAX_JUDGED` say how many).
 """
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, NamedTuple
+from typing import NamedTuple
 
 import numpy as np
 
+from drake_social.collision.validity import CompiledSceneChecker
+from drake_social.cost.social import SocialCost
 from drake_social.people.prediction import Prediction
+from drake_social.planning.algorithms import AlgorithmSpec
 from drake_social.planning.objective import Objective, SocialObjective
+from drake_social.planning.replan_eval import MAX_JUDGED
 from drake_social.planning.result import PlanningInputError
 from drake_social.planning.rrt_star import RrtStar, RrtStarOptions
 from drake_social.planning.rrt_star import compiled
+from drake_social.planning.space import ConfigurationSpace
+from drake_social.scenario.schema import ExecutionOptions, PlannerOptions
 
-if TYPE_CHECKING:
-    from drake_social.planning.replan import Replanner
+__all__ = ["SearchOutcome", "SearchSetup", "run_search", "search_objective", "search_planner", "tree_path"]
 
-__all__ = ["MAX_JUDGED", "VERIFY_PATHS", "SearchOutcome", "run_search", "search_objective", "search_planner",
-           "tree_path"]
 
-#: Goal connections of the search judged exactly, in ascending tree cost ...
-VERIFY_PATHS = 4
-#: ... and at most this many when none of the first ones is safe (within the budget).
-MAX_JUDGED = 16
+class SearchSetup(NamedTuple):
+    """What every search of one replanner reads (built once, by the replanner)."""
+
+    planner: RrtStar  #: the RRT* every search runs (:func:`search_planner`)
+    goal: np.ndarray  #: (4,) the goal configuration
+    execution: ExecutionOptions  #: its max_base_speed and arm_max_velocity time the tree's nodes
+    safety: float  #: a motion coming within this many metres of a predicted person is invalid
+    objective: Objective  #: the static objective (a length objective's search runs it as it is)
+    length_weight: float  #: lambda of a social search's objective (:func:`search_objective`)
 
 
 class SearchOutcome(NamedTuple):
@@ -56,33 +68,36 @@ def tree_path(nodes: np.ndarray, parents: np.ndarray, node: int, goal: np.ndarra
     return np.ascontiguousarray(path, float)
 
 
-def search_planner(replanner: "Replanner") -> RrtStar:
-    """The RRT* of the replans: the replanner's algorithm and room, no
+def search_planner(options: PlannerOptions, spec: AlgorithmSpec, space: ConfigurationSpace,
+                   checker: CompiledSceneChecker, objective: Objective) -> RrtStar:
+    """The RRT* of the replans: the algorithm ``spec`` with the scenario's
+    planner ``options`` in the room (``space``, ``checker``), no
     optimisation (each search passes its own objective and iteration cap)."""
-    options = RrtStarOptions.from_scenario(replanner.scenario.planner, informed=replanner.spec.informed)
-    options.optimize = False
-    return RrtStar(replanner.space, replanner.checker, replanner.objective, options, name=replanner.spec.name)
+    rrt_options = RrtStarOptions.from_scenario(options, informed=spec.informed)
+    rrt_options.optimize = False
+    return RrtStar(space, checker, objective, rrt_options, name=spec.name)
 
 
-def search_objective(replanner: "Replanner", prediction: Prediction) -> Objective:
-    """The objective of one search: the replanner's, with this prediction's
-    people in its social cost (:meth:`SocialCost.for_prediction`)."""
-    social = replanner.social_for(prediction)
-    return replanner.objective if social is None else \
-        SocialObjective(social, replanner.scenario.social.length_weight)
+def search_objective(setup: SearchSetup, social: SocialCost | None) -> Objective:
+    """The objective of one search: the static one for the length objective
+    (``social`` None), else the social cost of this search's prediction
+    (:meth:`SocialCost.for_prediction`) with the setup's length weight."""
+    return setup.objective if social is None else SocialObjective(social, setup.length_weight)
 
 
-def run_search(replanner: "Replanner", q: np.ndarray, t_now: float, prediction: Prediction,
+def run_search(setup: SearchSetup, social: SocialCost | None, q: np.ndarray, t_now: float, prediction: Prediction,
                candidate: np.ndarray | None, iterations: int, stop: float | None,
                rng: np.random.Generator) -> SearchOutcome:
-    """The timed search from ``q`` at ``t_now`` to the goal, seeded with
-    ``candidate`` (or not), stopped at ``iterations`` samples or at the
-    ``time.perf_counter()`` value ``stop``; its best goal connections."""
-    goal = replanner.goal
-    timed = compiled.timed_params(prediction, replanner.scenario.execution, t_now, replanner.safety)
+    """The timed search from ``q`` at ``t_now`` to the goal among the people
+    of ``prediction`` (``social``: their social cost, None for the length
+    objective), seeded with ``candidate`` (or not), stopped at ``iterations``
+    samples or at the ``time.perf_counter()`` value ``stop``; its best goal
+    connections (at most :data:`~drake_social.planning.replan_eval.MAX_JUDGED`)."""
+    goal = setup.goal
+    timed = compiled.timed_params(prediction, setup.execution, t_now, setup.safety)
     try:
-        tree = replanner.planner.solve_timed(q, goal, rng, timed, seed_path=candidate, deadline=stop,
-                                             iterations=iterations, objective=search_objective(replanner, prediction))
+        tree = setup.planner.solve_timed(q, goal, rng, timed, seed_path=candidate, deadline=stop,
+                                         iterations=iterations, objective=search_objective(setup, social))
     except PlanningInputError as e:
         return SearchOutcome([], 0, False, f"no search: {e}")
     goal_nodes = np.asarray(tree.goal_nodes, np.int64)

@@ -14,6 +14,7 @@ import math
 import numpy as np
 
 from drake_social.kinematics import ArmGeometry
+from drake_social.scenario.geometry import arm_geometry
 from drake_social.scenario.map_rules import obstacle_arrays, obstacle_label
 
 __all__ = ["MAX_CROWD_TIME_STEP", "MAX_SPEED_FACTOR", "MAX_SPEED_STD", "MAX_WALKING_SPEED", "MIN_WALKING_SPEED",
@@ -130,7 +131,7 @@ def crowd_problems(scenario) -> list[tuple[str, str]]:
     x_min, y_min, x_max, y_max = (float(v) for v in scenario.world.bounds)
     boxes = obstacle_arrays(scenario.world)
     try:
-        geometry = ArmGeometry.from_scenario(scenario)
+        geometry = arm_geometry(scenario)
         robot_q = np.asarray(scenario.start, float).reshape(4)
     except (TypeError, ValueError):
         geometry = None

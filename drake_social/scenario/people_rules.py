@@ -38,6 +38,7 @@ import numpy as np
 from drake_social.errors import ScenarioError
 from drake_social.io.textfile import shorten
 from drake_social.kinematics import ArmGeometry
+from drake_social.scenario.geometry import arm_geometry
 from drake_social.scenario.map_rules import obstacle_arrays, obstacle_label
 from drake_social.scenario.heading import heading_knots
 from drake_social.scenario.people_file import read_people_file
@@ -166,7 +167,7 @@ def check_people(scenario, fail: Fail) -> None:
     robot, object and start are already valid; ``fail(field, message)`` raises."""
     w = scenario.world
     x_min, y_min, x_max, y_max = w.bounds
-    geometry = ArmGeometry.from_scenario(scenario)
+    geometry = arm_geometry(scenario)
     boxes = _boxes(w)
 
     starts: list[tuple[str, str, tuple[float, float], float, bool]] = []  # (field, what, centre, radius, at t = 0)

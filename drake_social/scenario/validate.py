@@ -17,7 +17,8 @@ import numpy as np
 
 from drake_social.errors import ScenarioError
 from drake_social.io.textfile import shorten
-from drake_social.kinematics import ArmGeometry, displacement_bound
+from drake_social.kinematics import displacement_bound
+from drake_social.scenario.geometry import arm_geometry
 from drake_social.limits import (ALGORITHMS, CONTACT_APPROXIMATIONS, INFORMED_ALGORITHMS, INTEGRATION_SCHEMES,
                                  MAX_CONTROL_STEPS, MAX_DYNAMIC_PLANT_TIME_STEP,
                                  MAX_ITERATIONS, MAX_MOTION_STEPS, MAX_OBJECT_POINTS, MAX_PLANT_STEPS,
@@ -128,7 +129,7 @@ def _longest_motion_bound(scenario: Scenario) -> float:
     x_min, y_min, x_max, y_max = scenario.world.bounds
     lower, upper = scenario.robot.joint_lower, scenario.robot.joint_upper
     extent = np.array([x_max - x_min, y_max - y_min, upper[0] - lower[0], upper[1] - lower[1]])
-    return float(displacement_bound(extent, ArmGeometry.from_scenario(scenario).lever()))
+    return float(displacement_bound(extent, arm_geometry(scenario).lever()))
 
 
 def plant_time_step_problem(execution: ExecutionOptions, mode: str) -> tuple[str, str] | None:

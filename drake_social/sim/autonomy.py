@@ -110,7 +110,7 @@ from drake_social.control import (
     arm_source_from_options,
     reference_source_from_options,
 )
-from drake_social.kinematics import ArmGeometry, configuration_limits
+from drake_social.scenario.geometry import arm_geometry, configuration_limits
 from drake_social.people import PeopleModel, people_model
 from drake_social.scenario import Scenario
 from drake_social.sim.checks import check_diagram_options, check_diagram_waypoints, resolve_replan
@@ -310,12 +310,12 @@ def autonomy_checked(scenario: Scenario, execution: str, path: PathSource, peopl
     safety = limiter = None
     if not people.static:  # hold the robot while a walking person is within the safety distance
         safety = builder.AddNamedSystem("safety", SafetyMonitor(
-            ArmGeometry.from_scenario(scenario), safety_distance=float(opts.safety_distance),
+            arm_geometry(scenario), safety_distance=float(opts.safety_distance),
             period=float(opts.control_period), release_time=float(opts.release_time)))
         builder.Connect(q, safety.GetInputPort("q"))
         people_inputs.append(safety.GetInputPort("people_state"))
         if synchronized and opts.slow_down:  # and slow down before that, on the path
-            limiter = builder.AddNamedSystem("speed_limit", SpeedLimit(ArmGeometry.from_scenario(scenario), opts))
+            limiter = builder.AddNamedSystem("speed_limit", SpeedLimit(arm_geometry(scenario), opts))
             builder.Connect(q, limiter.GetInputPort("q"))
             builder.Connect(sequencer.GetOutputPort("target"), limiter.GetInputPort("target"))
             builder.Connect(limiter.GetOutputPort("speed_limit"), track.source.GetInputPort("speed_limit"))
@@ -397,7 +397,7 @@ def _synchronized(builder: DiagramBuilder, scenario: Scenario, start: np.ndarray
     """One 4-DoF reference: the controller tracks its xy with its feed-forward, the arm its psi."""
     reference = builder.AddNamedSystem("reference", reference_source_from_options(
         scenario.execution, start, configuration_limits(scenario),
-        lever=ArmGeometry.from_scenario(scenario).lever(include_body=True)))
+        lever=arm_geometry(scenario).lever(include_body=True)))
     builder.Connect(sequencer.GetOutputPort("target"), reference.GetInputPort("target"))
     builder.Connect(sequencer.GetOutputPort("via"), reference.GetInputPort("via"))
     builder.Connect(reference.GetOutputPort("finished"), sequencer.GetInputPort("reference_done"))

@@ -26,7 +26,7 @@ import numpy as np
 from drake_social.arguments import real_array, require_checker, require_scenario
 from drake_social.collision.validity import ValidityChecker
 from drake_social.cost.social import SocialCost
-from drake_social.kinematics import ArmGeometry, configuration_limits
+from drake_social.scenario.geometry import arm_geometry, configuration_limits
 from drake_social.model.plant import ACTUATED_JOINTS
 from drake_social.people import people_model, without_people
 from drake_social.scenario import Scenario, ScenarioError
@@ -134,7 +134,7 @@ def analyze_execution(
         people_move = not people_model(scenario).static
     room = without_people(scenario) if people_move else scenario  # what the collisions are checked against
     planar = make_checker(room, "planar")
-    geometry = ArmGeometry.from_scenario(scenario)
+    geometry = arm_geometry(scenario)
     social = SocialCost.from_scenario(scenario)
     wp = waypoints
     planned = float(social.motion_cost(wp[:-1], wp[1:]).sum()) if len(wp) > 1 else 0.0

@@ -44,7 +44,7 @@ from pydrake.systems.analysis import ApplySimulatorConfig, InitializeParams, Sim
 from drake_social.arguments import require_callable, require_checker, require_instance, require_number, require_scenario
 from drake_social.collision.validity import ValidityChecker
 from drake_social.control import replanning_summary
-from drake_social.kinematics import configuration_limits
+from drake_social.scenario.geometry import configuration_limits
 from drake_social.model.plant import ACTUATED_JOINTS
 from drake_social.people import PeopleModel
 from drake_social.planning.result import PlannerResult

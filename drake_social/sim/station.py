@@ -117,7 +117,7 @@ from pydrake.systems.rendering import MultibodyPositionToGeometryPose
 
 from drake_social.arguments import real_array, require_instance
 from drake_social.control import MecanumDrive, PeopleGeometry, PeopleSource
-from drake_social.kinematics import configuration_limits
+from drake_social.scenario.geometry import configuration_limits
 from drake_social.model.plant import add_environment, add_robot
 from drake_social.people import PeopleModel, people_model
 from drake_social.scenario import (SERVO_BANDWIDTH, SERVO_BASE_TIME_CONSTANT, ExecutionOptions, Scenario,

@@ -16,7 +16,7 @@ from typing import Mapping, Sequence
 import numpy as np
 from matplotlib.figure import Figure
 
-from drake_social.kinematics import ArmGeometry
+from drake_social.scenario.geometry import arm_geometry
 from drake_social.people import PeopleState
 from drake_social.scenario import Scenario
 from drake_social.viz.labels import fit_width
@@ -129,7 +129,7 @@ def snapshots_figure(scenario: Scenario, traces: Mapping[str, Mapping], *, count
     marks = snapshot_times(duration, count)
     fig = Figure(figsize=(len(marks) * width + 0.4, rows * (width * aspect + 0.5) + 0.8), layout="constrained")
     axes = fig.subplots(rows, len(marks), squeeze=False, sharex=True, sharey=True)
-    geometry = ArmGeometry.from_scenario(scenario)
+    geometry = arm_geometry(scenario)
     for i, (label, tr) in enumerate(traces.items()):
         times = np.asarray(tr["times"], float)
         q = np.asarray(tr["q"], float).reshape(-1, 4)

@@ -13,6 +13,7 @@ from matplotlib.patches import Circle
 
 from drake_social.cost import SocialCost
 from drake_social.kinematics import ArmGeometry
+from drake_social.scenario.geometry import arm_geometry
 from drake_social.people import PeopleLog, people_model
 from drake_social.scenario import Scenario
 from drake_social.viz.labels import fit_width
@@ -97,7 +98,7 @@ def scene_with_field(scenario: Scenario, resolution: float | None = None) -> tup
     draw_social_field(ax, cost, scenario.world.bounds, resolution)
     draw_world(ax, scenario)
     draw_start_goal(ax, scenario)
-    return fig, ax, cost, ArmGeometry.from_scenario(scenario)
+    return fig, ax, cost, arm_geometry(scenario)
 
 
 def show_figure(scenario: Scenario, *, title: str | None = None, resolution: float | None = None,

@@ -12,7 +12,7 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from drake_social.cost import SocialCost
-from drake_social.kinematics import ArmGeometry
+from drake_social.scenario.geometry import arm_geometry
 from drake_social.scenario import Scenario
 from drake_social.viz.labels import fit_width
 from drake_social.viz.path import draw_path
@@ -104,7 +104,7 @@ def paths_side_by_side(scenario: Scenario, paths: Mapping[str, np.ndarray], *, t
     fig = Figure(figsize=(n * width + 0.6, map_h + 1.2), layout="constrained")
     axes = fig.subplots(1, n, sharex=True, sharey=True, squeeze=False)[0]
     cost = SocialCost.from_scenario(scenario)
-    geometry = ArmGeometry.from_scenario(scenario)
+    geometry = arm_geometry(scenario)
     vmax = None
     for ax, (label, wp) in zip(axes, paths.items()):
         image = draw_social_field(ax, cost, scenario.world.bounds, colorbar=False, vmax=vmax)
@@ -114,7 +114,7 @@ def paths_side_by_side(scenario: Scenario, paths: Mapping[str, np.ndarray], *, t
         wp = np.asarray(wp, float).reshape(-1, 4)
         own = (scenarios or {}).get(label, scenario)
         if len(wp):
-            draw_path(ax, ArmGeometry.from_scenario(own) if own is not scenario else geometry, wp,
+            draw_path(ax, arm_geometry(own) if own is not scenario else geometry, wp,
                       distance_weights=cost.distance_weights, numbers=False, labels=False)
         else:
             ax.text(0.5, 0.5, "no path", transform=ax.transAxes, ha="center", color="#b00000", fontsize=12)

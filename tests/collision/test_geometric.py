@@ -22,7 +22,7 @@ from drake_social.collision import geometric
 from drake_social.collision.geometric import GeometricChecker, _segment_box_sdf
 from drake_social.collision.planar_kernel import STEP_MARGIN, TOLERANCE
 from drake_social.collision.validity import ValidityChecker
-from drake_social.kinematics import ArmGeometry
+from drake_social.scenario.geometry import arm_geometry
 from drake_social.scenario import Bar, Box, LShape, Person, Polyline, Scenario, World
 
 # ---- an independent reference: polygon geometry by half-planes and edge distances
@@ -51,7 +51,7 @@ def _polygon_sdf(p: np.ndarray, corners: np.ndarray) -> np.ndarray:
 
 def _reference_clearance(scenario: Scenario, q: np.ndarray, samples: int = 2001) -> tuple[float, float]:
     """Dense-sampling clearance of one configuration and its worst-case sampling error."""
-    g = ArmGeometry.from_scenario(scenario)
+    g = arm_geometry(scenario)
     seg = g.segments(q)
     x0, y0, x1, y1 = scenario.world.bounds
     t = np.linspace(0.0, 1.0, samples)[:, None]

@@ -13,7 +13,7 @@ import pytest
 from drake_social.collision import people_kernel
 from drake_social.collision.people_safety import PeopleSafety
 from drake_social.collision.planar_checker import PlanarChecker
-from drake_social.kinematics import ArmGeometry
+from drake_social.scenario.geometry import arm_geometry
 from drake_social.people import without_people
 from drake_social.people.prediction import Prediction
 from drake_social.people.proximity import part_distances
@@ -27,7 +27,7 @@ SAFETY = 0.05
 def robot():
     scenario = load_scenario(SCENARIOS / "office_walkers.yaml")
     scene = PlanarChecker(without_people(scenario)).compiled_scene()
-    return scene, ArmGeometry.from_scenario(scenario)
+    return scene, arm_geometry(scenario)
 
 
 def _prediction(rng, people=4, samples=30, t0=2.0, dt=0.1, standing=1, absent_rate=0.0, spread=1.5):

@@ -129,3 +129,33 @@ def test_batched_calls_equal_single_calls(rng):
                                    for a, b in zip(q_a, q_b)])
     np.testing.assert_array_equal(dut.clearances(q_a, bodies, robot, env, build_grid(env)),
                                   [dut.clearance(q, bodies, robot, env, build_grid(env)) for q in q_a])
+
+
+def test_the_advancement_queue_is_first_in_first_out_through_its_growth():
+    """queue_start / queue_pop / queue_split (the planar and the people's
+    motion checks' search) against a deque: random queries clear random
+    steps; the queue holds more than its first 64 slots, doubles in order and
+    splits each interval into what the query leaves, empty parts dropped."""
+    from collections import deque
+
+    rng = np.random.default_rng(5)
+    buffer, ends = dut.queue_start(0.0, 1.0)
+    model = deque([(0.0, 1.0)])
+    largest = 0
+    for _ in range(3000):
+        if not model:
+            break
+        a, b = dut.queue_pop(buffer, ends)
+        assert (a, b) == model.popleft()
+        t = 0.5 * (a + b)
+        # Mostly tiny steps (the queue grows), sometimes one that clears the interval.
+        tau = (b - a) * (0.6 if rng.random() < 0.05 else 1e-3 * rng.random())
+        buffer = dut.queue_split(buffer, ends, a, b, t, tau)
+        model.extend(iv for iv in ((a, t - tau), (t + tau, b)) if iv[0] <= iv[1])
+        assert ends[1] - ends[0] == len(model)
+        largest = max(largest, len(model))
+    assert largest > 64 and buffer.shape[0] >= largest  # it grew
+    remaining = []
+    while ends[0] != ends[1]:
+        remaining.append(dut.queue_pop(buffer, ends))
+    assert remaining == list(model)

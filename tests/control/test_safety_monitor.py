@@ -10,6 +10,7 @@ import pytest
 from drake_social.control import SafetyMonitor, braking_travel
 from drake_social.control.safety_monitor import robot_reach
 from drake_social.kinematics import ArmGeometry
+from drake_social.scenario.geometry import arm_geometry
 from drake_social.people import PeopleState, StaticPeople
 from drake_social.people.proximity import part_distances
 from drake_social.scenario import load_scenario
@@ -23,7 +24,7 @@ Q = np.array([1.0, 2.5, 0.0, np.pi / 2])
 
 @pytest.fixture(scope="module")
 def geometry():
-    return ArmGeometry.from_scenario(load_scenario("scenarios/tiny.yaml"))
+    return arm_geometry(load_scenario("scenarios/tiny.yaml"))
 
 
 def _people(rows, radii, names=None, present=None, t=0.0):

@@ -11,13 +11,13 @@ import ruckig
 
 from drake_social.control import SpeedLimit
 from drake_social.control.speed_limit import allowed_speed, ramp_speed, stopping_distance, stopping_time
-from drake_social.kinematics import ArmGeometry
+from drake_social.scenario.geometry import arm_geometry
 from drake_social.people import StaticPeople
 from drake_social.scenario import ScenarioError, load_scenario, validate_scenario
 
 SCENARIO = load_scenario("scenarios/tiny.yaml")
 OPTS = SCENARIO.execution
-GEOMETRY = ArmGeometry.from_scenario(SCENARIO)
+GEOMETRY = arm_geometry(SCENARIO)
 # tiny.yaml's start: the bar along x at y = 3 from x = 0.85 to 2.35; heading east along x.
 Q = np.array([1.0, 2.5, 0.0, np.pi / 2])
 EAST = Q + [4.0, 0.0, 0.0, 0.0]

@@ -10,7 +10,8 @@ import pytest
 
 from drake_social.cost import PersonalSpace, SocialCost, kernel
 from drake_social.cost.social import interpolation_segments
-from drake_social.kinematics import ArmGeometry, config_distance
+from drake_social.kinematics import config_distance
+from drake_social.scenario.geometry import arm_geometry
 from drake_social.scenario import Bar, LShape, Polyline, Robot, Scenario
 
 pytestmark = pytest.mark.skipif(not kernel.AVAILABLE, reason="numba is not importable")
@@ -43,7 +44,7 @@ def edges(rng, n: int, spread: float = 4.0, length: float = 2.5):
     "weights", ["ones", "base_only", "object_only", "random"], ids=["ones", "base", "object", "random"]
 )
 def test_kernel_equals_numpy_reference(kind, weights, rng):
-    geometry = ArmGeometry.from_scenario(Scenario(robot=Robot(), object=OBJECTS[kind]))
+    geometry = arm_geometry(Scenario(robot=Robot(), object=OBJECTS[kind]))
     k = geometry.num_interest_points
     w = {
         "ones": np.ones(k),
@@ -59,7 +60,7 @@ def test_kernel_equals_numpy_reference(kind, weights, rng):
 
 
 def test_kernel_without_threshold_and_with_another_resolution(rng):
-    geometry = ArmGeometry.from_scenario(Scenario())
+    geometry = arm_geometry(Scenario())
     space = dc.replace(PersonalSpace(), threshold=0.0)
     dut = SocialCost(geometry, PEOPLE, space=space, resolution=0.37, distance_weights=[1, 2, 0.5, 1])
     q_a, q_b = edges(rng, 200)
@@ -69,7 +70,7 @@ def test_kernel_without_threshold_and_with_another_resolution(rng):
 
 
 def test_kernel_edge_cases(rng):
-    geometry = ArmGeometry.from_scenario(Scenario())
+    geometry = arm_geometry(Scenario())
     dut = SocialCost(geometry, PEOPLE)
     q = edges(rng, 5)[0]
     fast, reference = both(dut, q, q)  # zero-length motions
@@ -116,7 +117,7 @@ def test_windows_leave_out_only_terms_that_are_zero(kind, rng):
     reach but outside its narrower side and rear level sets (where the
     window in the exponent's own metric is the tighter one): the kernel
     equals every sample evaluated, with a narrow and a wide personal space."""
-    geometry = ArmGeometry.from_scenario(Scenario(robot=Robot(), object=OBJECTS[kind]))
+    geometry = arm_geometry(Scenario(robot=Robot(), object=OBJECTS[kind]))
     people = np.array([[0.0, 0.0, 0.0], [0.0, 2.5, math.pi / 2]])
     for space in (PersonalSpace(), dc.replace(PersonalSpace(), sigma_s=0.5, sigma_r=0.4)):
         dut = SocialCost(geometry, people, space=space)
@@ -137,7 +138,7 @@ def test_thresholds_below_the_vector_exps_range_keep_libms_exp():
     below VECTOR_EXP_MIN_THRESHOLD the kernel takes libm's exp, so a motion
     25 m from the only person still costs what the numpy path says (1e-34),
     not 0; at the threshold itself the vector exp is used, to the same result."""
-    geometry = ArmGeometry.from_scenario(Scenario())
+    geometry = arm_geometry(Scenario())
     for threshold, x in ((0.0, 25.0), (1e-40, 25.0), (kernel.VECTOR_EXP_MIN_THRESHOLD / 2, 14.0),
                          (kernel.VECTOR_EXP_MIN_THRESHOLD, 14.0)):
         q_a = np.array([[x, 0.0, 0.0, 0.0]])  # in front of the person, x m away
@@ -152,7 +153,7 @@ def test_thresholds_below_the_vector_exps_range_keep_libms_exp():
 def test_a_motion_too_short_for_its_span_to_survive_the_lipschitz_product():
     """lip * span underflows to 0 for a denormal arm motion: the metric window
     is skipped (no division by 0) and the cost equals the numpy path's."""
-    geometry = ArmGeometry.from_scenario(Scenario())
+    geometry = arm_geometry(Scenario())
     dut = SocialCost(geometry, np.array([[0.3, 0.0, 0.0]]), space=PersonalSpace(3.0, 3.0, 3.0))
     for k in (2, 3):
         q_b = np.zeros((1, 4))
@@ -168,7 +169,7 @@ def test_a_motion_too_long_to_sample_is_refused_by_name(backend):
     or whose ends are so far apart that their difference overflows, is a
     ValueError naming the motion, from either backend; the step limit
     itself is allowed."""
-    geometry = ArmGeometry.from_scenario(Scenario())
+    geometry = arm_geometry(Scenario())
     dut = SocialCost(geometry, PEOPLE)
     dut.backend = backend
     limit = kernel.MAX_MOTION_STEPS * dut.resolution

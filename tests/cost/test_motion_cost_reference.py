@@ -15,6 +15,7 @@ import pytest
 
 from drake_social.cost import SocialCost
 from drake_social.kinematics import ArmGeometry
+from drake_social.scenario.geometry import arm_geometry
 from drake_social.scenario import load_scenario
 
 PI = math.pi
@@ -22,7 +23,7 @@ PI = math.pi
 
 @pytest.fixture(scope="module")
 def geometry(tiny_scenario_path) -> ArmGeometry:
-    return ArmGeometry.from_scenario(load_scenario(tiny_scenario_path))
+    return arm_geometry(load_scenario(tiny_scenario_path))
 
 
 def paper_agf(dx: np.ndarray, dy: np.ndarray, theta: float, space) -> np.ndarray:

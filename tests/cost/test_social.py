@@ -19,6 +19,7 @@ from hypothesis import strategies as st
 from drake_social.cost import PersonalSpace, SocialCost, agf, agf_algorithm1, kernel
 from drake_social.cost.social import interpolation_segments
 from drake_social.kinematics import ArmGeometry, config_distance
+from drake_social.scenario.geometry import arm_geometry
 from drake_social.scenario import Bar, LShape, Robot, Scenario, load_scenario
 
 PI = math.pi
@@ -30,7 +31,7 @@ PEOPLE_3 = np.array([[0.0, 0.0, PI / 4], [3.0, 1.0, PI - 1e-9], [1.0, -3.0, 2 * 
 
 def l_shape_cost(**kwargs) -> SocialCost:
     """The 3 m x 2 m L-shape (6 interest points) among three people."""
-    geometry = ArmGeometry.from_scenario(Scenario(robot=Robot(), object=LShape(lengths=[3.0, 2.0])))
+    geometry = arm_geometry(Scenario(robot=Robot(), object=LShape(lengths=[3.0, 2.0])))
     weights = kwargs.pop("weights", np.array([1.0, 0.5, 1.0, 2.0, 1.0, 1.5]))
     return SocialCost(geometry, PEOPLE_3, weights=weights, **kwargs)
 
@@ -560,7 +561,7 @@ BASE_ONLY = np.array([1.0, 0.0, 0.0, 0.0, 0.0])
 @pytest.fixture(scope="module")
 def bar(tiny_scenario_path) -> ArmGeometry:
     """The tiny scenario's robot (links 0.6 m, 0.5 m) and its 1.5 m bar."""
-    return ArmGeometry.from_scenario(load_scenario(tiny_scenario_path))
+    return arm_geometry(load_scenario(tiny_scenario_path))
 
 
 def test_the_reach_used_here_is_the_paper_front_reach():
@@ -762,7 +763,7 @@ def test_kernel_culls_correctly_for_an_object_longer_than_the_reach(rng):
     reaches (3.6 m). The kernel's grid cells (reach plus that distance) and
     culling must still keep every person that matters (mutant _people_grid 21
     makes the cell side negative); the numpy path has no grid."""
-    geometry = ArmGeometry.from_scenario(Scenario(object=Bar(length=8.0)))
+    geometry = arm_geometry(Scenario(object=Bar(length=8.0)))
     people = np.column_stack([rng.uniform(-10, 10, (12, 2)), rng.uniform(-PI, PI, 12)])
     dut = SocialCost(geometry, people)
     assert dut._people_grid()[0] > dut.space.max_reach

@@ -20,7 +20,8 @@ import pytest
 
 from drake_social.cost import PersonalSpace, SocialCost, timed_kernel
 from drake_social.cost.agf import speed_scaled_sigmas
-from drake_social.kinematics import ArmGeometry, config_distance
+from drake_social.kinematics import config_distance
+from drake_social.scenario.geometry import arm_geometry
 from drake_social.people import PeopleState, Prediction, constant_velocity
 from drake_social.scenario import Bar, LShape, Robot, Scenario, SocialCostOptions
 
@@ -71,7 +72,7 @@ pytestmark = pytest.mark.skipif(not timed_kernel.AVAILABLE, reason="numba is not
 @pytest.mark.parametrize("weights", ["ones", "base", "object", "random"])
 @pytest.mark.parametrize("speed_scaling", [False, True], ids=["agf", "kirby"])
 def test_kernel_equals_numpy_reference(kind, weights, speed_scaling, rng):
-    k = ArmGeometry.from_scenario(scenario(kind)).num_interest_points
+    k = arm_geometry(scenario(kind)).num_interest_points
     w = {"ones": None, "base": [1.0] + [0.0] * (k - 1), "object": [0.0] * 3 + [1.0] * (k - 3),
          "random": list(rng.uniform(0, 2, k) * (rng.random(k) < 0.7))}[weights]
     for _ in range(3):

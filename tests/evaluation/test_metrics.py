@@ -15,7 +15,7 @@ from drake_social.evaluation.metrics import (
     path_metrics,
     zone_shares,
 )
-from drake_social.kinematics import ArmGeometry
+from drake_social.scenario.geometry import arm_geometry
 from drake_social.scenario import load_scenario
 
 # A 20 x 6 m empty room; one person at (10, 3.8) facing south, towards the
@@ -60,7 +60,7 @@ def test_straight_pass_minimum_distances_surface_to_surface(tmp_path):
         "object": 0.8 - 0.025 - 0.25,       # bar capsule, radius 0.025
         "robot": 0.8 - 0.04 - 0.25,
     }
-    assert set(part_names(ArmGeometry.from_scenario(scenario))) == set(expected)
+    assert set(part_names(arm_geometry(scenario))) == set(expected)
     for part, d in expected.items():
         assert dut[f"min_dist_{part}"] == pytest.approx(d, abs=2e-3), part
 
@@ -94,7 +94,7 @@ def test_straight_pass_agf_maxima_per_part(tmp_path):
     for part in ("object_1", "object_2"):
         assert dut[f"agf_max_{part}"] == pytest.approx(math.exp(-0.64 / (2 * sigma_h**2)), abs=1e-3)
     # agf_mean * length is each point's unweighted share of F (all weights 1).
-    shares = sum(dut[f"agf_mean_{p}"] for p in ArmGeometry.from_scenario(scenario).interest_names)
+    shares = sum(dut[f"agf_mean_{p}"] for p in arm_geometry(scenario).interest_names)
     assert shares * dut["path_length"] == pytest.approx(dut["F_multi"], rel=2e-2)
     assert dut["agf_mean_base"] * dut["path_length"] == pytest.approx(dut["F_base"], rel=2e-2)
     assert dut["path_length"] == pytest.approx(18.0) and dut["base_length"] == pytest.approx(18.0)
@@ -155,7 +155,7 @@ def test_arm_and_object_agf_use_the_speed_scaled_sigmas_of_the_points(speed):
     person = scenario.people[0]
     state = PeopleState(t=0.0, positions=[[person.x, person.y]], headings=[person.theta],
                         velocities=[[0.0, -v]], radii=[person.radius], names=(person.name,))
-    n = ArmGeometry.from_scenario(scenario).num_interest_points
+    n = arm_geometry(scenario).num_interest_points
     dut = part_agf(SocialCost.from_scenario(scenario, np.ones(n), people=state), np.array([3.0, 2.2, 0.0, 1.5708]))
     # sigma_h: the scenario's 2 m without scaling, max(2 v, 0.5) with it.
     sigma_h = 2.0 if speed is None else max(2.0 * v, 0.5)

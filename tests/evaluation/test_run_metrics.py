@@ -25,7 +25,7 @@ from drake_social.evaluation.metrics import (
     run_metrics,
     trajectory_metrics,
 )
-from drake_social.kinematics import ArmGeometry
+from drake_social.scenario.geometry import arm_geometry
 from drake_social.people import people_model
 from drake_social.people.log import PeopleLog
 from drake_social.scenario import load_scenario
@@ -329,7 +329,7 @@ def test_static_people_agree_with_the_trajectory_metrics(tmp_path):
 def _distances(scenario, q, log):
     from drake_social.people.proximity import part_distances
 
-    return part_distances(ArmGeometry.from_scenario(scenario), q, log.positions, log.radii, log.present)
+    return part_distances(arm_geometry(scenario), q, log.positions, log.radii, log.present)
 
 
 def test_bad_inputs_are_refused_with_the_rule(tmp_path):

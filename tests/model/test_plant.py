@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 from pydrake.geometry import Role
 
-from drake_social.kinematics import ArmGeometry
+from drake_social.scenario.geometry import arm_geometry
 from drake_social.model.plant import build_robot_diagram, environment_names
 from drake_social.model.robot_model import COLLISION_HEIGHT
 from drake_social.scenario import Bar, Box, LShape, Person, Polyline
@@ -28,7 +28,7 @@ OBJECTS = {
 @pytest.mark.parametrize("kind", list(OBJECTS))
 def test_drake_forward_kinematics_equals_numpy(tiny_scenario, kind, rng):
     scenario = dc.replace(tiny_scenario, object=OBJECTS[kind])
-    geometry = ArmGeometry.from_scenario(scenario)
+    geometry = arm_geometry(scenario)
     model = build_robot_diagram(scenario)
     plant = model.diagram.plant()
     context = plant.CreateDefaultContext()

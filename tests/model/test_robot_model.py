@@ -13,7 +13,7 @@ from pydrake.multibody.parsing import Parser
 from pydrake.multibody.plant import AddMultibodyPlantSceneGraph
 from pydrake.systems.framework import DiagramBuilder
 
-from drake_social.kinematics import ArmGeometry
+from drake_social.scenario.geometry import arm_geometry
 from drake_social.model.plant import build_robot_diagram
 from drake_social.model.robot_model import COLLISION_HEIGHT, ROBOT_BODIES, default_model_path, models_dir, robot_sdf
 from drake_social.scenario import Bar, LShape, Polyline, Scenario
@@ -111,7 +111,7 @@ def test_robot_shapes_are_exactly_the_numpy_discs_and_capsules(tiny_scenario, ki
     """SceneGraph's distance from random points to each body = the 2-D capsule distance."""
     scenario = dc.replace(tiny_scenario, object=OBJECTS[kind])
     q = np.array([4.0, 2.5, 0.4, 2.2])
-    geometry = ArmGeometry.from_scenario(scenario)
+    geometry = arm_geometry(scenario)
     seg = geometry.segments(q)
     radii = geometry.segment_radii
     body_of_segment = ["link1", "link2"] + ["object"] * (len(seg) - 2)

@@ -33,6 +33,7 @@ from matplotlib.figure import Figure
 
 from drake_social.cost import SocialCost
 from drake_social.kinematics import ArmGeometry
+from drake_social.scenario.geometry import arm_geometry
 from drake_social.collision.drake_checker import SceneGraphChecker
 from drake_social.collision.planar_checker import PlanarChecker
 from drake_social.model.plant import build_robot_diagram
@@ -77,7 +78,7 @@ def check_every_model(scenario, n_configs: int = 40, seed: int = 0) -> None:
 
     # The capsules read back from the SceneGraph are the scenario's segments
     # (the object's zero-length segments are discs in both).
-    geometry = ArmGeometry.from_scenario(scenario)
+    geometry = arm_geometry(scenario)
     q = qs[0]
     want = [(*s[0], *s[1], r) for s, r in zip(geometry.segments(q[None])[0], geometry.segment_radii)]
     want.append((q[0], q[1], q[0], q[1], geometry.base_radius))

@@ -12,7 +12,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from drake_social.kinematics import ArmGeometry
+from drake_social.scenario.geometry import arm_geometry
 from drake_social.people import PeopleState, StaticPeople
 from drake_social.people.compose import ScenarioPeople, concat_states, people_model
 from drake_social.people.proximity import part_distances, robot_distance, robot_distance_args
@@ -24,7 +24,7 @@ SCENARIOS = ("tiny", "office_bar", "office_walkers", "lobby_crowd")
 
 @pytest.mark.parametrize("name", SCENARIOS)
 def test_robot_distance_is_part_distances_robot(name):
-    geometry = ArmGeometry.from_scenario(load_scenario(f"scenarios/{name}.yaml"))
+    geometry = arm_geometry(load_scenario(f"scenarios/{name}.yaml"))
     args = robot_distance_args(geometry)
     rng = np.random.default_rng(20)
     for _ in range(500):
@@ -40,7 +40,7 @@ def test_robot_distance_is_part_distances_robot(name):
 
 
 def test_robot_distance_touching_and_overlapping():
-    geometry = ArmGeometry.from_scenario(load_scenario("scenarios/tiny.yaml"))
+    geometry = arm_geometry(load_scenario("scenarios/tiny.yaml"))
     q = np.array([1.0, 2.5, 0.0, np.pi / 2])  # base disc of radius 0.35 at (1, 2.5)
     for gap in (0.0, -0.1, 0.03):
         d = robot_distance(geometry, q, [[1.0, 2.5 - 0.35 - 0.2 - gap]], [0.2])

@@ -15,7 +15,7 @@ from drake_social.people.crowd import (CROWD_SEED_TAG, SocialForceCrowd, crowd_m
                                        draw_speeds)
 from drake_social.people.model import PeopleState, StaticPeople
 from drake_social.people.proximity import part_distances
-from drake_social.kinematics import ArmGeometry
+from drake_social.scenario.geometry import arm_geometry
 from drake_social.scenario.schema import Box, Crowd, CrowdPerson, Person, Scenario, World
 from drake_social.scenario.validate import validate_scenario
 
@@ -129,7 +129,7 @@ def test_a_person_steps_aside_from_a_bar_swinging_towards_them():
     assert lateral.max() > 0.3  # away from the bar (+y), by far more than the still arm causes
     assert still[:, 1, 0].max() - 6.6 < 0.1
     assert lateral.min() > -0.01  # never pulled towards it
-    geometry = ArmGeometry.from_scenario(sc)
+    geometry = arm_geometry(sc)
     qs = np.array([swing(k) for k in range(201)])
     gap = part_distances(geometry, qs, swung[:, :2, 0][:, None, :], np.array([0.25]))["robot"]
     assert gap.min() > 0  # never touched

@@ -20,6 +20,8 @@ ROOT = Path(drake_social.__file__).resolve().parent
 COST_PEOPLE = {
     ("cost/social.py", "self.people"),
     ("planning/rrt_star/compiled.py", "sc.people"),
+    # The compiled loop's SocialParams: the standing people's array that compiled.py packed from sc.people.
+    ("planning/rrt_star/tree_kernel.py", "s.people"),
     # A SimulationResult's people log (a PeopleLog over the run), not a scenario's list.
     ("sim/run.py", "result.people"),
     # The station's people source (a PeopleSource, which answers from the people model).

@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from drake_social.kinematics import ArmGeometry
+from drake_social.scenario.geometry import arm_geometry
 from drake_social.people.proximity import part_distances
 from drake_social.scenario import ScenarioError, load_scenario
 from drake_social.scenario.people_rules import robot_clearance, segment_box_distance
@@ -111,7 +111,7 @@ def test_segment_box_distance_matches_dense_sampling():
 
 def test_robot_clearance_is_the_proximity_modules_robot_distance():
     from drake_social.scenario import Scenario
-    geometry = ArmGeometry.from_scenario(Scenario())
+    geometry = arm_geometry(Scenario())
     rng = np.random.default_rng(7)
     for _ in range(50):
         q = np.concatenate([rng.uniform(0, 3, 2), rng.uniform(-math.pi, math.pi, 2)])

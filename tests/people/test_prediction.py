@@ -169,3 +169,54 @@ def test_bad_arguments(walkers):
     other = _state()
     with pytest.raises(ValueError, match="perfect_prediction: the model has 10 people, the state 2"):
         perfect_prediction(walkers, other, 1.0)
+
+
+def test_the_lookup_at_the_sample_times_and_the_ends():
+    """prediction_kernel.slot at t0, at a sample, between, at the horizon and
+    either side of each; centre there equals the samples' own interpolation."""
+    from drake_social.people.prediction_kernel import centre, centres, slot
+
+    pred = _by_hand([[True, True]] * 4)  # t0 = 1, dt = 0.5, H = 4: horizon 2.5
+    ulp = math.ulp(1.0)
+    assert slot(1.0, 1.0, 0.5, 4) == (0, 0.0)
+    assert slot(1.0 - ulp, 1.0, 0.5, 4) == (0, 0.0)  # before t0: the first sample holds
+    k, f = slot(1.0 + 2 * ulp, 1.0, 0.5, 4)
+    assert k == 0 and f == pytest.approx(4 * ulp, rel=1e-12)
+    assert slot(2.0, 1.0, 0.5, 4) == (2, 0.0)  # exactly sample 2
+    k, f = slot(2.0 - 2 * ulp, 1.0, 0.5, 4)
+    assert k == 1 and 1.0 - f == pytest.approx(4 * ulp, rel=1e-12)
+    assert slot(2.5, 1.0, 0.5, 4) == (3, 0.0)  # the horizon: the last sample
+    k, f = slot(2.5 - 4 * ulp, 1.0, 0.5, 4)
+    assert k == 2 and 1.0 - f == pytest.approx(8 * ulp, rel=1e-12)
+    assert slot(2.5 + 4 * ulp, 1.0, 0.5, 4) == (3, 0.0)
+    assert slot(1.2, 1.0, 0.5, 1) == (0, 0.0)  # one sample: it holds at every time
+    assert centre(pred.positions, 0, 0, 0.4) == (0.2, 0.0)
+    assert centre(pred.positions, 0, 3, 0.0) == (1.0, 0.0)
+    np.testing.assert_array_equal(centres(pred.positions, 1, 0.5), [[0.75, 0.0], [5.0, 5.0]])
+    for t in (0.0, 1.0, 1.2, 1.75, 2.0, 2.4999, 2.5, 9.0):
+        k, f = slot(t, 1.0, 0.5, 4)
+        np.testing.assert_array_equal(pred.state_at(t).positions, centres(pred.positions, k, f))
+
+
+def test_the_lookup_is_written_once():
+    """``(t - t0) / dt`` of a prediction's sample times is computed in
+    prediction_kernel.slot alone: the Prediction and the compiled kernels call
+    it (the time-indexed cost's numpy reference keeps its own, batched: it is
+    the independent check of the kernel)."""
+    import ast
+
+    import drake_social
+
+    root = Path(drake_social.__file__).resolve().parent
+
+    def name(node):
+        return node.id if isinstance(node, ast.Name) else node.attr if isinstance(node, ast.Attribute) else ""
+
+    homes = set()
+    for path in root.rglob("*.py"):
+        for node in ast.walk(ast.parse(path.read_text())):
+            if (isinstance(node, ast.BinOp) and isinstance(node.op, ast.Div) and name(node.right) == "dt"
+                    and isinstance(node.left, ast.BinOp) and isinstance(node.left.op, ast.Sub)
+                    and name(node.left.right) == "t0"):
+                homes.add(str(path.relative_to(root)))
+    assert homes == {"people/prediction_kernel.py", "cost/social.py"}

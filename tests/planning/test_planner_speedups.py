@@ -242,10 +242,10 @@ def test_far_people_change_no_motion_cost(tiny_scenario, rng):
 
 def test_grid_culling_agrees_with_the_numpy_batch(rng):
     """Many people over a large area (many grid cells), rotated, some close."""
-    from drake_social.kinematics import ArmGeometry
+    from drake_social.scenario.geometry import arm_geometry
     from drake_social.scenario import Scenario
 
-    geometry = ArmGeometry.from_scenario(Scenario())
+    geometry = arm_geometry(Scenario())
     people = np.column_stack([rng.uniform(-20, 20, 80), rng.uniform(-20, 20, 80), rng.uniform(-PI, PI, 80)])
     dut = SocialCost(geometry, people, weights=np.array([1.0, 0.5, 2.0, 1.0, 1.5]))
     q_a = np.column_stack([rng.uniform(-20, 20, (400, 2)), rng.uniform(-PI, PI, (400, 2))])

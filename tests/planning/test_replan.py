@@ -23,7 +23,8 @@ import numpy as np
 import pytest
 
 from drake_social.collision.drake_checker import make_checker
-from drake_social.kinematics import ArmGeometry, config_distance
+from drake_social.kinematics import config_distance
+from drake_social.scenario.geometry import arm_geometry
 from drake_social.limits import MAX_REPLAN_BUDGET, MAX_REPLAN_ITERATIONS
 from drake_social.people import PeopleState, constant_velocity, people_model, without_people
 from drake_social.people.prediction import Prediction
@@ -91,7 +92,7 @@ def min_distance(scenario, waypoints, t0, prediction, scripts, samples=400) -> f
     """The robot's least surface distance to the walkers along the path driven
     from t0, sampled densely; the walkers placed by np.interp of their scripts."""
     ex = scenario.execution
-    geometry = ArmGeometry.from_scenario(scenario)
+    geometry = arm_geometry(scenario)
     wp = np.asarray(waypoints, float)
     best, t = math.inf, float(t0)
     for a, b in zip(wp[:-1], wp[1:]):
@@ -239,7 +240,7 @@ def test_person_at_the_robot_waits(corridor, room, first):
     person = [(2.0, q_now[0], q_now[1] + 0.62)]
     res = rp.plan(q_now, 2.0, walkers(2.0, [person]), previous, replan_index=1)
     assert res.status == "wait"
-    near = part_distances(ArmGeometry.from_scenario(corridor), q_now[None], np.array([person[0][1:]]),
+    near = part_distances(arm_geometry(corridor), q_now[None], np.array([person[0][1:]]),
                           np.array([0.25]))["robot"][0]
     assert near <= 0.02 + 1e-12
     assert f"{near:.3f} m from the robot now" in res.reason
@@ -443,7 +444,7 @@ def test_no_search_keeps_a_safe_candidate_and_searches_an_unsafe_one(corridor, r
 def clear_until(scenario, q_a, q_b, t0, horizon, scripts) -> float:
     """The least distance to the walkers driving q_a -> q_b from t0 (nominal
     time), then standing at q_b until ``horizon``; independent of the kernel."""
-    geometry = ArmGeometry.from_scenario(scenario)
+    geometry = arm_geometry(scenario)
     arrive = t0 + math.hypot(*(q_b[:2] - q_a[:2])) / scenario.execution.max_base_speed
     u = np.linspace(0.0, 1.0, 400)
     ts = np.concatenate([t0 + u * (arrive - t0), np.linspace(arrive, horizon, 400)])

@@ -10,7 +10,8 @@ import numpy as np
 import pytest
 
 from drake_social.cost import SocialCost
-from drake_social.kinematics import ArmGeometry, config_distance
+from drake_social.kinematics import config_distance
+from drake_social.scenario.geometry import arm_geometry
 from drake_social.collision.planar_checker import PlanarChecker
 from drake_social.collision.geometric import GeometricChecker
 from drake_social.planning.objective import PathLengthObjective, SocialObjective
@@ -201,7 +202,7 @@ def test_social_rrt_star_ends_with_lower_social_cost_than_rrt_star(corridor):
 def _closest_object_approach(scenario, waypoints, person) -> float:
     """Smallest distance (metres) from an object interest point to the person,
     over the path sampled 40 times per segment."""
-    geometry = ArmGeometry.from_scenario(scenario)
+    geometry = arm_geometry(scenario)
     wp = np.asarray(waypoints)
     t = np.linspace(0.0, 1.0, 40)[None, :, None]
     q = (wp[:-1, None, :] + t * (wp[1:] - wp[:-1])[:, None, :]).reshape(-1, 4)

@@ -172,12 +172,11 @@ def test_the_seed_path_is_in_the_tree_and_bounds_the_best(tiny):
     t = nominal_path_times(seed, scenario.execution.max_base_speed, scenario.execution.arm_max_velocity, 0.0)
     np.testing.assert_allclose(tree.tnode[:m], t, rtol=0, atol=1e-12)
     # The chain's cost: the timed objective motion by motion, independently (one motion per call).
-    from drake_social.planning.rrt_star.tree_kernel import _timed_costs
+    from drake_social.planning.rrt_star.tree_kernel import _motion_costs
 
     params = compiled.grow_params(planner.space, checker, objective, planner.options, planner.gamma, start, goal,
                                   timed)
-    edges = [_timed_costs(seed[k:k + 1], seed[k + 1:k + 2], t[k:k + 1], t[k + 1:k + 2], params.kind,
-                          params.length_weight, params.distance_weights, params.social, params.grid, timed)[0]
+    edges = [_motion_costs(seed[k:k + 1], seed[k + 1:k + 2], t[k:k + 1], t[k + 1:k + 2], params.objective, timed)[0]
              for k in range(m - 1)]
     np.testing.assert_allclose(np.diff(tree.costs[:m]), edges, rtol=1e-9, atol=1e-12)
     assert m - 1 in tree.goal_nodes  # the seed ends at the goal: connected at cost 0

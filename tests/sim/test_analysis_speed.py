@@ -8,7 +8,7 @@ import time
 import numpy as np
 import pytest
 
-from drake_social.kinematics import ArmGeometry
+from drake_social.scenario.geometry import arm_geometry
 from drake_social.sim import analysis_kernel
 from drake_social.sim.analysis import body_points, densify, point_deviation
 
@@ -21,7 +21,7 @@ def _random_case(rng, scenario, waypoints: int, samples: int, noise: float):
     x0, y0, x1, y1 = scenario.world.bounds
     planned = np.column_stack([rng.uniform(x0 + 1, x1 - 1, waypoints), rng.uniform(y0 + 1, y1 - 1, waypoints),
                                rng.uniform(-2.5, 2.5, waypoints), rng.uniform(-2.0, 2.0, waypoints)])
-    geometry = ArmGeometry.from_scenario(scenario)
+    geometry = arm_geometry(scenario)
     dense = densify(geometry, planned, 0.01)
     executed = dense[np.sort(rng.choice(len(dense), min(samples, len(dense)), replace=False))]
     phase = rng.uniform(0, 2 * np.pi, 4)
@@ -59,7 +59,7 @@ def test_compiled_search_on_the_path_itself_is_zero(tiny_scenario, rng):
 def test_compiled_search_measures_a_known_offset(tiny_scenario):
     """A base moved 3 cm sideways off a straight path with the arm fixed: every
     body point is 3 cm off its (straight) curve."""
-    geometry = ArmGeometry.from_scenario(tiny_scenario)
+    geometry = arm_geometry(tiny_scenario)
     planned = np.array([[1.0, 2.5, 0.4, -0.3], [6.0, 2.5, 0.4, -0.3]])
     executed = densify(geometry, planned, 0.05)[3:-3] + [0.0, 0.03, 0.0, 0.0]
     dut = point_deviation(geometry, planned, executed, compiled=True)

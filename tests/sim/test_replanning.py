@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 from pydrake.systems.analysis import Simulator
 
-from drake_social.kinematics import ArmGeometry
+from drake_social.scenario.geometry import arm_geometry
 from drake_social.people.proximity import part_distances
 from drake_social.scenario import load_scenario
 from drake_social.scenario.load import load_scenario_text
@@ -213,7 +213,7 @@ def walked():
 @pytest.mark.slow
 def test_the_robot_never_comes_within_the_safety_distance_of_the_walker(walked):
     scenario, route, (run, _) = walked
-    geometry = ArmGeometry.from_scenario(scenario)
+    geometry = arm_geometry(scenario)
     d = np.array([part_distances(geometry, q[None], run.people.positions[k], run.people.radii)["robot"].min()
                   for k, q in enumerate(run.q)])
     assert d.min() > scenario.execution.safety_distance

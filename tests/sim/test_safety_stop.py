@@ -10,7 +10,7 @@ import pytest
 
 from drake_social.control import braking_travel
 from drake_social.evaluation.nav_metrics import execution_metrics
-from drake_social.kinematics import ArmGeometry
+from drake_social.scenario.geometry import arm_geometry
 from drake_social.people import PeopleState
 from drake_social.people.proximity import part_distances
 from drake_social.scenario import load_scenario
@@ -58,7 +58,7 @@ def setting():
 
 
 def _distances(scenario, walker, run):
-    geometry = ArmGeometry.from_scenario(scenario)
+    geometry = arm_geometry(scenario)
     return np.array([part_distances(geometry, q[None], walker.position(t)[None], [walker.radius])["robot"][0]
                      for t, q in zip(run.times, run.q)])
 
@@ -100,7 +100,7 @@ def test_walker_crossing_stops_the_robot_which_goes_on_after(setting, execution,
     # was clear one or two samples before, so it is within at most the braking travel of both.
     moved = np.r_[False, np.any(np.abs(run.q[1:] - run.q[:-1]) > 1e-12, axis=1)]
     opts = scenario.execution
-    bound = SAFETY - braking_travel(ArmGeometry.from_scenario(scenario), max_base_speed=opts.max_base_speed,
+    bound = SAFETY - braking_travel(arm_geometry(scenario), max_base_speed=opts.max_base_speed,
                                     arm_max_velocity=opts.arm_max_velocity, period=period,
                                     execution=execution) - (1 + lag) * period * walker.speed
     assert d[moved].min() >= bound
@@ -162,7 +162,7 @@ def test_a_standing_person_closer_than_the_safety_distance_does_not_hold_the_rob
     waypoints = np.array([scenario.start, scenario.goal], float)
     s = np.linspace(0.0, 1.0, 2001)[:, None]
     q = waypoints[0] + s * (waypoints[1] - waypoints[0])
-    d = part_distances(ArmGeometry.from_scenario(scenario), q, np.array([[4.0, 3.3]]), [person.radius])["robot"]
+    d = part_distances(arm_geometry(scenario), q, np.array([[4.0, 3.3]]), [person.radius])["robot"]
     assert 0.0 < d.min() < SAFETY and d.min() == pytest.approx(3.3 - 0.25 - 3.0 - 0.04, abs=1e-5)
     built = build_diagram(scenario, waypoints=waypoints)
     assert "stop" not in built.output_port_names() and "stop" not in built.loggers

@@ -13,7 +13,7 @@ import tracemalloc
 import numpy as np
 import pytest
 
-from drake_social.kinematics import ArmGeometry
+from drake_social.scenario.geometry import arm_geometry
 from drake_social.collision.drake_checker import make_checker
 from drake_social.planning.algorithms import plan
 from drake_social.sim.analysis import body_points, config_deviation, densify, point_deviation
@@ -255,7 +255,7 @@ def test_config_deviation_memory_does_not_grow_with_the_pairs(rng):
 
 
 def test_point_deviation_of_the_path_itself_is_within_half_the_spacing(tiny_scenario, tiny_path):
-    geometry = ArmGeometry.from_scenario(tiny_scenario)
+    geometry = arm_geometry(tiny_scenario)
     on_path = densify(geometry, tiny_path, 0.037)  # other samples of the same segments
     dev = point_deviation(geometry, tiny_path, on_path)
     assert dev["max"] <= 1e-9
@@ -267,7 +267,7 @@ def test_point_deviation_of_the_path_itself_is_within_half_the_spacing(tiny_scen
 
 
 def test_densify_bounds_the_motion_between_checked_configurations(tiny_scenario, tiny_path):
-    geometry = ArmGeometry.from_scenario(tiny_scenario)
+    geometry = arm_geometry(tiny_scenario)
     dense = densify(geometry, tiny_path, 0.05)
     step = geometry.max_displacement(dense[:-1], dense[1:], include_body=True)
     assert step.max() <= 0.05 + 1e-12
@@ -279,7 +279,7 @@ def test_densify_bounds_the_motion_between_checked_configurations(tiny_scenario,
 
 
 def test_densify_owner_names_the_configuration_each_sample_follows(tiny_scenario, tiny_path):
-    geometry = ArmGeometry.from_scenario(tiny_scenario)
+    geometry = arm_geometry(tiny_scenario)
     dense, owner = densify(geometry, tiny_path, 0.05, return_owner=True)
     assert len(owner) == len(dense) and owner[0] == 0 and owner[-1] == len(tiny_path) - 1
     assert np.all(np.diff(owner) >= 0)
@@ -309,7 +309,7 @@ def test_point_deviation_memory_does_not_grow_with_the_path(tiny_scenario):
     """A long path (review: 10,000 rows of start, goal densified to 11 M
     configurations, 3 GB) is searched in pieces; the figures are those of
     the curves it traces."""
-    geometry = ArmGeometry.from_scenario(tiny_scenario)
+    geometry = arm_geometry(tiny_scenario)
     start, goal = np.array(tiny_scenario.start, float), np.array(tiny_scenario.goal, float)
     executed = densify(geometry, np.array([start, goal]), 0.2) + [0.0, 0.03, 0.01, -0.02]
     # The same segment back and forth: every figure is that of the one segment.
@@ -333,7 +333,7 @@ def test_point_deviation_memory_does_not_grow_with_one_long_segment(tiny_scenari
     cut into parts of at most ``block`` samples: memory is that of a piece,
     not of the whole segment, and the figures are those of searching the
     whole segment at once."""
-    geometry = ArmGeometry.from_scenario(tiny_scenario)
+    geometry = arm_geometry(tiny_scenario)
     start = np.array(tiny_scenario.start, float)
     far = start + [2000.0, 0.0, 0.0, 0.0]
     planned = np.array([start, far])

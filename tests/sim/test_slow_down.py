@@ -9,7 +9,7 @@ import pytest
 from test_safety_stop import Walker
 
 from drake_social.evaluation.time_series import derivative_magnitudes
-from drake_social.kinematics import ArmGeometry
+from drake_social.scenario.geometry import arm_geometry
 from drake_social.people import PeopleState
 from drake_social.people.proximity import part_distances
 from drake_social.scenario import load_scenario
@@ -26,7 +26,7 @@ def _scenario(**execution):
 
 
 def _distances(scenario, walker, run):
-    geometry = ArmGeometry.from_scenario(scenario)
+    geometry = arm_geometry(scenario)
     return np.array([part_distances(geometry, q[None], walker.position(t)[None], [walker.radius])["robot"][0]
                      for t, q in zip(run.times, run.q)])
 

@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from drake_social.cost import SocialCost
-from drake_social.kinematics import ArmGeometry
+from drake_social.scenario.geometry import arm_geometry
 from drake_social.collision.geometric import GeometricChecker
 from drake_social.planning.result import PlannerResult
 from drake_social.planning.algorithms import plan
@@ -109,7 +109,7 @@ def test_draw_path_draws_robots_at_the_even_poses_with_opaque_ends(tiny_scenario
     from matplotlib.figure import Figure
 
     ax = Figure().add_subplot()
-    geometry = ArmGeometry.from_scenario(tiny_scenario)
+    geometry = arm_geometry(tiny_scenario)
     dut = draw_path(ax, geometry, planned.waypoints, poses=6)
     expected = poses_along(planned.waypoints, 6)
     centres = np.array([r["base"][0].center for r in dut["robots"]])
@@ -186,7 +186,7 @@ def test_intermediate_poses_are_numbered_in_order_along_the_path(tiny_scenario, 
     from matplotlib.figure import Figure
 
     ax = Figure().add_subplot()
-    dut = draw_path(ax, ArmGeometry.from_scenario(tiny_scenario), planned.waypoints, poses=5)
+    dut = draw_path(ax, arm_geometry(tiny_scenario), planned.waypoints, poses=5)
     assert [t.get_text() for t in dut["numbers"]] == ["2", "3", "4"]
     expected = poses_along(planned.waypoints, 5)[1:-1, :2]
     np.testing.assert_allclose([t.get_position() for t in dut["numbers"]], expected, atol=1e-12)

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 from matplotlib.figure import Figure
 
-from drake_social.kinematics import ArmGeometry
+from drake_social.scenario.geometry import arm_geometry
 from drake_social.scenario import LShape
 from drake_social.viz import capsule_outline, draw_robot
 
@@ -40,7 +40,7 @@ def test_capsule_outline_of_a_point_is_a_circle():
 def _draw(scenario, q, **kwargs):
     fig = Figure()
     ax = fig.add_subplot()
-    geometry = ArmGeometry.from_scenario(scenario)
+    geometry = arm_geometry(scenario)
     return geometry, draw_robot(ax, geometry, np.asarray(q, float), **kwargs), ax
 
 

@@ -7,7 +7,7 @@ import types
 import numpy as np
 import pytest
 
-from drake_social.kinematics import ArmGeometry
+from drake_social.scenario.geometry import arm_geometry
 from drake_social.people import PeopleLog
 from drake_social.viz.tracking import people_distances, tracking_figure
 
@@ -29,7 +29,7 @@ def _person_ahead(times):
 
 
 def test_base_distance_is_the_gap_between_the_discs(tiny_scenario):
-    geometry = ArmGeometry.from_scenario(tiny_scenario)
+    geometry = arm_geometry(tiny_scenario)
     run = _run(None)
     people = _person_ahead(run.times)
     d = people_distances(geometry, run.times, run.q, people)
@@ -46,7 +46,7 @@ def test_base_distance_is_the_gap_between_the_discs(tiny_scenario):
 
 
 def test_tracking_figure_gets_a_fifth_panel_only_with_people(tiny_scenario):
-    geometry = ArmGeometry.from_scenario(tiny_scenario)
+    geometry = arm_geometry(tiny_scenario)
     assert len(tracking_figure(_run(None), geometry=geometry).axes) == 4
     run = _run(None)
     run.people = _person_ahead(run.times)

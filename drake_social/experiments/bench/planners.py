@@ -275,16 +275,7 @@ def run_bench(
         (all runs) and of the costs and lengths (successful runs).
     """
     algorithms = list(ALGORITHMS if algorithms is None else algorithms)
-    unknown = [a for a in algorithms if a not in ALGORITHMS]
-    if unknown or not algorithms:
-        raise ValueError(f"algorithms {unknown or '[]'} not allowed; allowed: {', '.join(ALGORITHMS)}")
-    for label, value in (("checker", checker), ("ompl_checker", ompl_checker)):
-        if value not in CHECKERS:
-            raise ValueError(f"{label} {value!r} not allowed; allowed: {', '.join(CHECKERS)}")
-    if iterations < 1 or seeds < 1 or repeats < 1:
-        raise ValueError(f"iterations, seeds and repeats must be >= 1, got {iterations}, {seeds}, {repeats}")
-    if replan_runs < 0 or replan_count < 1:
-        raise ValueError(f"replan_runs must be >= 0 and replan_count >= 1, got {replan_runs}, {replan_count}")
+    _check_arguments(algorithms, checker, ompl_checker, iterations, seeds, repeats, replan_runs, replan_count)
     paths = [Path(p) for p in scenario_paths]
     if not paths:
         raise ValueError("scenario_paths is empty")
@@ -316,77 +307,11 @@ def run_bench(
     for path, scenario in zip(paths, loaded):
         for algorithm in algorithms:
             validate_planner_choice(scenario, algorithm, source=f"{path} with the bench's algorithm {algorithm}")
-    scenarios = {}
-    for path, scenario in zip(paths, loaded):
-        _make_checker(scenario, checker, path)  # a start or goal in collision: a clear error naming the file
-        # Warm-up, untimed: loads (or compiles) the motion-cost kernel and each
-        # planner's loop (numba's cache is read on the first call: about 0.15 s
-        # that would otherwise land in the first timed run).
-        make_objective(scenario, "social_rrt_star").motion_cost(np.array(scenario.start), np.array(scenario.goal))
-        for algorithm in algorithms:
-            plan(scenario, _make_checker(scenario, checker), algorithm=algorithm, iterations=10, seed=0)
-        entry = {"algorithms": {}, "ompl": {}, "ompl_same_checker": {},
-                 # The planner options that change how paths are made (see PlannerOptions).
-                 "planner_options": {"near_radius_mode": scenario.planner.near_radius_mode,
-                                     "near_radius_gamma": scenario.planner.near_radius_gamma,
-                                     "optimize": scenario.planner.optimize}}
-        for algorithm in algorithms:
-            objective = make_objective(scenario, algorithm)
-            runs = []
-            for seed in range(seeds):
-                chk = _make_checker(scenario, checker)
-                (result,), times = _repeated(
-                    lambda: (plan(scenario, chk, algorithm=algorithm, iterations=iterations, seed=seed),), repeats)
-                runs.append({**_record(scenario, result, objective, chk, iterations), "planning_times": times})
-                tick(f"{path.stem} {algorithm} seed {seed}")
-            entry["algorithms"][algorithm] = {"runs": runs, "summary": summarize(runs)}
-        for field, ompl_chk in ompl_sets:
-            for key in keys:
-                entry[field][key] = _plan_ompl_runs(scenario, key, iterations, seeds, ompl_chk,
-                                                    lambda label: tick(f"{path.stem} {label} ({ompl_chk})"), repeats)
-        for algorithm, data in entry["algorithms"].items():
-            for field in ("ompl", "ompl_same_checker"):
-                base = entry[field].get(ompl_counterpart(algorithm))
-                data[f"vs_{field}"] = None if base is None else {
-                    "ompl": f"ompl_rrt_star[{ompl_counterpart(algorithm)}]", "ompl_checker": base["checker"],
-                    **{f: _ratio(data["summary"], base["summary"], g)
-                       for f, g in (("time", "planning_time"), ("social_cost", "F_multi"),
-                                    ("objective", "objective"))},
-                }
-        scenarios[path.name] = entry
-
-    checker_bench = None
-    if include_checker:
-        from drake_social.experiments.bench.checkers import run_checker_bench
-
-        checker_bench = run_checker_bench(scenario_paths=paths, num_configs=2000, num_edges=200, repeats=1)
-        tick("checker bench")
-
-    sim_bench = None
-    if sim_runs > 0:
-        from drake_social.experiments.bench.execution import run_sim_bench
-
-        sim_bench = run_sim_bench(scenario_paths=paths, runs=sim_runs, progress=tick)
-
-    scaling_bench = None
-    if scaling:
-        from drake_social.experiments.bench.scaling import run_scaling_bench
-
-        scaling_bench = run_scaling_bench(scenario_paths=paths, checker=checker, progress=tick)
-
-    replan_bench = None
-    if replan_runs > 0:
-        from drake_social.experiments.bench.replanning import REPLAN_SCENARIO, run_replan_bench
-
-        replan_bench = run_replan_bench(REPLAN_SCENARIO if replan_scenario is None else replan_scenario,
-                                        count=replan_count, runs=replan_runs, progress=tick)
-
-    map_out = None
-    if map_bench:
-        from drake_social.experiments.bench.maps import run_map_bench
-
-        map_out = run_map_bench(paths[0], iterations=iterations, progress=tick)
-
+    scenarios = {path.name: _scenario_runs(path, scenario, algorithms, keys, ompl_sets, checker, iterations, seeds,
+                                           repeats, tick)
+                 for path, scenario in zip(paths, loaded)}
+    extras = _other_benches(paths, include_checker, sim_runs, scaling, checker, replan_runs, replan_count,
+                            replan_scenario, map_bench, iterations, tick)
     out = {
         "settings": {"scenario_paths": [str(p) for p in paths], "algorithms": algorithms, "iterations": iterations,
                      "seeds": list(range(seeds)), "checker": checker, "ompl_checker": ompl_checker,
@@ -394,17 +319,104 @@ def run_bench(
         "machine": {**machine, "load_average_end": _load_average()},
         "ompl": {"requested": include_ompl, "available": ompl_available(), "objectives": keys},
         "scenarios": scenarios,
-        "checker_bench": checker_bench,
-        "sim_bench": sim_bench,
-        "scaling_bench": scaling_bench,
-        "replan_bench": replan_bench,
-        "map_bench": map_out,
+        **extras,
     }
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     write_json(out_dir / "bench.json", out, indent=1)
     (out_dir / "bench.md").write_text(_markdown(out))
     _log.info("bench written to %s", out_dir)
+    return out
+
+
+def _check_arguments(algorithms: list[str], checker: str, ompl_checker: str, iterations: int, seeds: int,
+                     repeats: int, replan_runs: int, replan_count: int) -> None:
+    """:func:`run_bench`'s arguments in range, or a ValueError naming the one that is not."""
+    unknown = [a for a in algorithms if a not in ALGORITHMS]
+    if unknown or not algorithms:
+        raise ValueError(f"algorithms {unknown or '[]'} not allowed; allowed: {', '.join(ALGORITHMS)}")
+    for label, value in (("checker", checker), ("ompl_checker", ompl_checker)):
+        if value not in CHECKERS:
+            raise ValueError(f"{label} {value!r} not allowed; allowed: {', '.join(CHECKERS)}")
+    if iterations < 1 or seeds < 1 or repeats < 1:
+        raise ValueError(f"iterations, seeds and repeats must be >= 1, got {iterations}, {seeds}, {repeats}")
+    if replan_runs < 0 or replan_count < 1:
+        raise ValueError(f"replan_runs must be >= 0 and replan_count >= 1, got {replan_runs}, {replan_count}")
+
+
+def _scenario_runs(path: Path, scenario: Scenario, algorithms: list[str], keys: list[str],
+                   ompl_sets: list[tuple[str, str]], checker: str, iterations: int, seeds: int, repeats: int,
+                   tick: Callable[[str], None]) -> dict:
+    """One scenario's entry of ``bench.json``'s ``scenarios``: our planners'
+    runs with ``checker``, OMPL's with each of ``ompl_sets`` (for the OMPL
+    objectives ``keys``), and each planner's ratios to OMPL's."""
+    _make_checker(scenario, checker, path)  # a start or goal in collision: a clear error naming the file
+    # Warm-up, untimed: loads (or compiles) the motion-cost kernel and each
+    # planner's loop (numba's cache is read on the first call: about 0.15 s
+    # that would otherwise land in the first timed run).
+    make_objective(scenario, "social_rrt_star").motion_cost(np.array(scenario.start), np.array(scenario.goal))
+    for algorithm in algorithms:
+        plan(scenario, _make_checker(scenario, checker), algorithm=algorithm, iterations=10, seed=0)
+    entry = {"algorithms": {}, "ompl": {}, "ompl_same_checker": {},
+             # The planner options that change how paths are made (see PlannerOptions).
+             "planner_options": {"near_radius_mode": scenario.planner.near_radius_mode,
+                                 "near_radius_gamma": scenario.planner.near_radius_gamma,
+                                 "optimize": scenario.planner.optimize}}
+    for algorithm in algorithms:
+        objective = make_objective(scenario, algorithm)
+        runs = []
+        for seed in range(seeds):
+            chk = _make_checker(scenario, checker)
+            (result,), times = _repeated(
+                lambda: (plan(scenario, chk, algorithm=algorithm, iterations=iterations, seed=seed),), repeats)
+            runs.append({**_record(scenario, result, objective, chk, iterations), "planning_times": times})
+            tick(f"{path.stem} {algorithm} seed {seed}")
+        entry["algorithms"][algorithm] = {"runs": runs, "summary": summarize(runs)}
+    for field, ompl_chk in ompl_sets:
+        for key in keys:
+            entry[field][key] = _plan_ompl_runs(scenario, key, iterations, seeds, ompl_chk,
+                                                lambda label: tick(f"{path.stem} {label} ({ompl_chk})"), repeats)
+    for algorithm, data in entry["algorithms"].items():
+        for field in ("ompl", "ompl_same_checker"):
+            base = entry[field].get(ompl_counterpart(algorithm))
+            data[f"vs_{field}"] = None if base is None else {
+                "ompl": f"ompl_rrt_star[{ompl_counterpart(algorithm)}]", "ompl_checker": base["checker"],
+                **{f: _ratio(data["summary"], base["summary"], g)
+                   for f, g in (("time", "planning_time"), ("social_cost", "F_multi"),
+                                ("objective", "objective"))},
+            }
+    return entry
+
+
+def _other_benches(paths: list[Path], include_checker: bool, sim_runs: int, scaling: bool, checker: str,
+                   replan_runs: int, replan_count: int, replan_scenario: str | Path | None, map_bench: bool,
+                   iterations: int, tick: Callable[[str], None]) -> dict:
+    """The benchmarks :func:`run_bench` was asked for beside the planners'
+    (``checker_bench``, ``sim_bench``, ``scaling_bench``, ``replan_bench``,
+    ``map_bench``; None where not asked for)."""
+    out = {"checker_bench": None, "sim_bench": None, "scaling_bench": None, "replan_bench": None, "map_bench": None}
+    if include_checker:
+        from drake_social.experiments.bench.checkers import run_checker_bench
+
+        out["checker_bench"] = run_checker_bench(scenario_paths=paths, num_configs=2000, num_edges=200, repeats=1)
+        tick("checker bench")
+    if sim_runs > 0:
+        from drake_social.experiments.bench.execution import run_sim_bench
+
+        out["sim_bench"] = run_sim_bench(scenario_paths=paths, runs=sim_runs, progress=tick)
+    if scaling:
+        from drake_social.experiments.bench.scaling import run_scaling_bench
+
+        out["scaling_bench"] = run_scaling_bench(scenario_paths=paths, checker=checker, progress=tick)
+    if replan_runs > 0:
+        from drake_social.experiments.bench.replanning import REPLAN_SCENARIO, run_replan_bench
+
+        out["replan_bench"] = run_replan_bench(REPLAN_SCENARIO if replan_scenario is None else replan_scenario,
+                                               count=replan_count, runs=replan_runs, progress=tick)
+    if map_bench:
+        from drake_social.experiments.bench.maps import run_map_bench
+
+        out["map_bench"] = run_map_bench(paths[0], iterations=iterations, progress=tick)
     return out
 
 

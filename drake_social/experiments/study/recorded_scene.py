@@ -51,6 +51,7 @@ import numpy as np
 
 from drake_social.errors import ScenarioError
 from drake_social.kinematics import ArmGeometry
+from drake_social.scenario.geometry import arm_geometry
 from drake_social.map_tools import CARRYING_ARM
 from drake_social.people.eth_ucy import Recording, convert, people_csv_text
 from drake_social.people.proximity import part_distances
@@ -141,7 +142,7 @@ def robot_geometry(sets: tuple[str, ...] = ()) -> ArmGeometry:
     text = ("description: \"the robot of a recorded-crowd window\"\nworld: {bounds: [-10.0, -10.0, 10.0, 10.0]}\n"
             + ROBOT_YAML + f"start: [0.0, 0.0, {CARRYING_ARM[0]!r}, {CARRYING_ARM[1]!r}]\n"
             f"goal: [1.0, 0.0, {CARRYING_ARM[0]!r}, {CARRYING_ARM[1]!r}]\n")
-    return ArmGeometry.from_scenario(load_scenario_text(text, "every window's scenario", list(sets),
+    return arm_geometry(load_scenario_text(text, "every window's scenario", list(sets),
                                                         overrides_name="--set"))
 
 

@@ -32,10 +32,12 @@ from drake_social.collision.validity import CompiledSceneChecker
 from drake_social.cost import kernel as cost_kernel
 from drake_social.cost import timed_kernel
 from drake_social.interrupts import DeferredSignals
+from drake_social.people import prediction_kernel
 from drake_social.planning.objective import Objective
 from drake_social.planning.rrt_star import tree_kernel
 from drake_social.planning.rrt_star.options import RrtStarOptions
-from drake_social.planning.rrt_star.tree_kernel import GrowParams, InformedParams, PeopleGrid, SocialParams, TimedParams
+from drake_social.planning.rrt_star.tree_kernel import (GrowParams, InformedParams, ObjectiveParams, PeopleGrid,
+                                                       SocialParams, TimedParams)
 from drake_social.planning.sampling import EllipseSampler
 from drake_social.planning.space import ConfigurationSpace
 
@@ -91,7 +93,7 @@ def kernel_dispatchers() -> dict[str, object]:
     """Every compiled function of the kernels the planner calls, by
     ``module.function`` (numba dispatchers; empty without numba)."""
     out = {}
-    for module in (cost_kernel, timed_kernel, planar_kernel, people_kernel, tree_kernel):
+    for module in (cost_kernel, timed_kernel, prediction_kernel, planar_kernel, people_kernel, tree_kernel):
         for name, value in vars(module).items():
             if hasattr(value, "stats") and hasattr(value, "signatures"):
                 out[f"{module.__name__}.{name}"] = value
@@ -150,7 +152,9 @@ def timed_params(prediction, execution_options, t_root: float, safety: float) ->
     if not (base_speed > 0 and arm_speed.shape == (2,) and np.all(arm_speed > 0)):
         raise ValueError(f"timed_params: execution_options need max_base_speed > 0 and two arm_max_velocity > 0, "
                          f"got {base_speed!r} and {execution_options.arm_max_velocity!r}")
-    f = np.ascontiguousarray
+    def f(values, dtype):  # writable, as STATIC's: one compiled loop for both modes (numba types read-only apart)
+        return np.require(values, dtype, ["C_CONTIGUOUS", "WRITEABLE"])
+
     return TimedParams(True, float(t_root), base_speed, arm_speed, f(prediction.positions, float),
                        f(prediction.headings, float), f(prediction.present, bool), float(prediction.t0),
                        float(prediction.dt), f(prediction.radii, float), f(prediction.max_speeds, float), float(safety))
@@ -182,8 +186,9 @@ def grow_params(space: ConfigurationSpace, checker: CompiledSceneChecker, object
     return GrowParams(
         f(goal), f(space.lower), f(space.upper), f(space.weights), float(options.planning_range),
         float(options.near_radius), float(options.goal_bias), options.near_radius_mode == "shrinking",
-        float(gamma), kind, float(objective.length_weight), f(objective.distance_weights, float), social, grid,
-        checker.compiled_scene(), informed, bool(options.lazy_costs), timed,
+        float(gamma), ObjectiveParams(kind, float(objective.length_weight), f(objective.distance_weights, float), social,
+                                      grid),
+        bool(options.lazy_costs), checker.compiled_scene(), informed, timed,
     )
 
 

@@ -59,8 +59,8 @@ from drake_social.cost import timed_kernel
 njit = cost_kernel.njit
 AVAILABLE = cost_kernel.AVAILABLE
 
-__all__ = ["AVAILABLE", "GrowParams", "InformedParams", "PeopleGrid", "SocialParams", "TimedParams", "TreeState",
-           "grow", "init_state", "seed_chain"]
+__all__ = ["AVAILABLE", "GrowParams", "InformedParams", "Motions", "ObjectiveParams", "ParentChoice", "PeopleGrid",
+           "SocialParams", "TimedParams", "TreeState", "grow", "init_state", "reserve", "seed_chain"]
 
 
 class SocialParams(NamedTuple):
@@ -127,6 +127,17 @@ class TimedParams(NamedTuple):
     safety: float  #: a motion is invalid where the robot comes within this of a person, metres
 
 
+class ObjectiveParams(NamedTuple):
+    """The objective's compiled form (:class:`drake_social.planning.objective.Objective`'s
+    motion cost): what the motion costs read."""
+
+    kind: int  #: 0 = path length, 1 = social
+    length_weight: float  #: lambda
+    distance_weights: np.ndarray  #: (4,) the objective's distance weights
+    social: SocialParams  #: the social cost's inputs (empty for the length objective)
+    grid: PeopleGrid  #: the standing people bucketed in cells
+
+
 class GrowParams(NamedTuple):
     """Everything :func:`grow` reads but never changes (configuration-space units)."""
 
@@ -139,19 +150,16 @@ class GrowParams(NamedTuple):
     goal_bias: float  #: probability of sampling the goal
     shrinking: bool  #: the near radius shrinks as min(r_near, gamma (log n / n)^(1/4))
     gamma: float
-    kind: int  #: objective: 0 = path length, 1 = social
-    length_weight: float  #: lambda
-    distance_weights: np.ndarray  #: (4,) the objective's distance weights
-    social: SocialParams
-    grid: PeopleGrid
+    objective: ObjectiveParams  #: what a motion's cost reads
+    lazy: bool  #: lazy motion costs
     scene: PlanarScene  #: the checker's compiled scene
     informed: InformedParams
-    lazy: bool  #: lazy motion costs
     timed: TimedParams  #: the timed mode (disabled: the static loop)
 
 
 class TreeState(NamedTuple):
-    """A run's tree between chunks of :func:`grow` (arrays grow by doubling)."""
+    """A run's tree between chunks of :func:`grow` (arrays grow at least
+    doubling, before each chunk: :func:`reserve`)."""
 
     q: np.ndarray  #: (cap, 4) node configurations
     parent: np.ndarray  #: (cap,) int64, -1 for the start
@@ -176,6 +184,492 @@ class TreeState(NamedTuple):
     goal_t: np.ndarray  #: the node time at which each goal connection was checked and costed (timed mode)
 
 
+class Motions(NamedTuple):
+    """The candidate motions near -> new of one sample (slot s: from ``near[s]``)."""
+
+    near: np.ndarray  #: (m,) int64 the near nodes, ascending (the nearest node last when outside r)
+    q_a: np.ndarray  #: (m, 4) their configurations
+    q_b: np.ndarray  #: (m, 4) the new configuration in every row
+    t_a: np.ndarray  #: (m,) the motions' times, seconds (timed mode; zeros otherwise)
+    t_b: np.ndarray
+    f_near: np.ndarray  #: (m,) the near nodes' costs from the start
+
+
+class ParentChoice(NamedTuple):
+    """One sample's parent choice (:func:`_choose_parent`)."""
+
+    slot: int  #: the chosen slot of the :class:`Motions`, -1 when none is valid
+    phi: np.ndarray  #: (m,) the motions' costs (inf where the lazy choice never integrated one)
+    bound: np.ndarray  #: (m,) lower bounds of phi (lazy: lambda * length), or phi itself
+    checked: np.ndarray  #: (m,) int8 their static checks: 0 not made, 1 valid, 2 invalid
+
+
+# ---- the loop ---------------------------------------------------------------------------------
+#
+# The compile time shapes the helpers. numba counts every array of a tuple
+# argument in and out at each call, so a helper takes the records it reads
+# (ObjectiveParams, PlanarScene, TimedParams), not GrowParams whole. Every
+# compiled function re-optimises the kernels it calls (the social costs,
+# the planar and the people's checks), so the steps of an iteration are
+# inlined into the loop (``inline="always"``) and only the costs, the
+# people's check, the timed rewiring and the timed goal connections' redo
+# are compiled apart, as they were when the loop was one function.
+
+
+@njit(cache=True)
+def grow(rng, it_start, it_stop, params, state):
+    """Iterations ``it_start .. it_stop - 1`` of the RRT* run (-1: the start's
+    goal connection, before the first sample) with the :class:`GrowParams`
+    ``params`` on the :class:`TreeState` ``state`` from :func:`init_state` or
+    the previous chunk; returns the new state (its arrays are replaced when
+    they need room: :func:`reserve`). Each iteration is OMPL's
+    ``RRTstar::solve``'s: sample, nearest, steer, check, near set, choose
+    parent, insert, rewire, goal connection, best solution."""
+    obj, scene, tp, lazy = params.objective, params.scene, params.timed, params.lazy
+    goal, w, r_near = params.goal, params.weights, params.near_radius
+    state = reserve(state, it_stop - max(it_start, 0) + 1)  # at most one node and one goal connection per iteration
+    near = np.empty(state.q.shape[0], dtype=np.int64)  # the near set's work array
+    stack = np.empty(state.q.shape[0], dtype=np.int64)  # the cost propagation's
+    for it in range(it_start, it_stop):
+        i_new = 0  # before the first sample: the start's goal connection
+        if it >= 0:
+            q_rand = _sample(rng, goal, params.lower, params.upper, params.goal_bias, params.informed,
+                             state.floats[1])
+            i_near, d = _nearest(state.q, q_rand, w, state.g_head, state.g_next, state.g_geom)
+            i_new = -1
+            if d != 0.0:
+                q_new = _steer(state.q[i_near], q_rand, d, params.planning_range)
+                state.counts[0] += 1
+                caps = _clearances(q_new, scene)
+                if _valid(q_new, caps, scene.lower, scene.upper):
+                    r = _near_radius(state.ints[0], r_near, params.shrinking, params.gamma)
+                    m = _near(q_new, i_near, r, state, w, near)
+                    motions = _motions_to(near[:m].copy(), q_new, state, tp)
+                    choice = _choose_parent(motions, q_new, caps, state, obj, lazy, scene, tp)
+                    if choice.slot >= 0:
+                        s = choice.slot
+                        i_new = _add_node(q_new, caps, motions.near[s], choice.phi[s], motions.t_b[s], state, w)
+                        _rewire(i_new, motions, choice, caps, state, obj, lazy, scene, tp, stack)
+        if i_new >= 0:
+            _connect_goal(i_new, state, goal, w, r_near, obj, scene, tp)
+        if it >= 0:
+            _update_best(it, i_new, state, goal, w, params.informed, obj, scene, tp)
+    return state
+
+
+# ---- one iteration's steps ----------------------------------------------------------------------
+
+
+@njit(inline="always", cache=True)
+def _sample(rng, goal, lower, upper, goal_bias, informed, ellipse_c):
+    """The sample: the goal with probability goal_bias, else uniform in the
+    bounds, its base position in the informed ellipse of diameter
+    ``ellipse_c`` once there is one (RrtStar's draws, in its order)."""
+    if rng.random() < goal_bias:
+        return goal.copy()
+    q_rand = np.empty(4)
+    for c in range(4):
+        q_rand[c] = rng.random()
+    q_rand = lower + q_rand * (upper - lower)
+    if informed.informed and math.isfinite(ellipse_c):
+        _ellipse_xy(rng, q_rand, ellipse_c, informed.centre, informed.rotation, informed.focal, lower, upper)
+    return q_rand
+
+
+@njit(inline="always", cache=True)
+def _steer(q_near, q_rand, d, delta):
+    """q_rand, or the point ``delta`` from q_near towards it (d: their distance)."""
+    if d <= delta:
+        return q_rand.copy()
+    return q_near + (q_rand - q_near) * (delta / d)
+
+
+@njit(inline="always", cache=True)
+def _near_radius(n, r_near, shrinking, gamma):
+    """The near set's radius in a tree of n nodes: r_near, or with the
+    shrinking radius ``min(r_near, gamma (log(n + 1) / (n + 1))^(1/4))``."""
+    if shrinking and n + 1 > 1:
+        return min(r_near, gamma * (math.log(n + 1) / (n + 1)) ** 0.25)
+    return r_near
+
+
+@njit(inline="always", cache=True)
+def _near(q_new, i_near, r, state, w, out):
+    """The near set of q_new into ``out``, its size returned: the nodes within
+    r, ascending, then the nearest node ``i_near`` when it is not among them."""
+    m = _within(state.q, q_new, w, r, r * r, state.g_head, state.g_next, state.g_geom, out)
+    for s in range(m):
+        if out[s] == i_near:
+            return m
+    out[m] = i_near
+    return m + 1
+
+
+@njit(inline="always", cache=True)
+def _motions_to(near, q_new, state, tp):
+    """The :class:`Motions` from the ``near`` nodes to q_new (timed mode: from
+    each near node's time, for its nominal duration)."""
+    m = near.shape[0]
+    q_a = np.empty((m, 4))
+    q_b = np.empty((m, 4))
+    for s in range(m):
+        q_a[s] = state.q[near[s]]
+        q_b[s] = q_new
+    t_a = np.zeros(m)
+    t_b = np.zeros(m)
+    if tp.enabled:
+        for s in range(m):
+            t_a[s] = state.tnode[near[s]]
+            t_b[s] = t_a[s] + _duration(q_a[s], q_new, tp.base_speed, tp.arm_speed)
+    f_near = np.empty(m)
+    for s in range(m):
+        f_near[s] = state.cost[near[s]]
+    return Motions(near, q_a, q_b, t_a, t_b, f_near)
+
+
+@njit(inline="always", cache=True)
+def _choose_parent(mo, q_new, caps, state, obj, lazy, scene, tp):
+    """The :class:`ParentChoice`: the candidate of least F + Msc (the lowest
+    slot on ties) whose motion to q_new (capsule clearances ``caps``) is
+    valid, statically and, in timed mode, against the predicted people. The
+    motions are all costed, then checked in that order; with ``lazy`` costs
+    (social, lambda > 0) a motion is costed only when its bound F + lambda *
+    length can still win (the same choice, fewer integrals)."""
+    m = mo.near.shape[0]
+    checked = np.zeros(m, dtype=np.int8)
+    if lazy and obj.kind == 1 and obj.length_weight > 0:
+        return _choose_parent_lazy(mo, q_new, caps, checked, state, obj, scene, tp)
+    phi = _motion_costs(mo.q_a, mo.q_b, mo.t_a, mo.t_b, obj, tp)
+    state.counts[2] += m
+    order = np.argsort(mo.f_near + phi, kind="mergesort")
+    for o in range(m):
+        if _parent_ok(order[o], mo, q_new, caps, checked, state.clear, state.counts, scene, tp):
+            return ParentChoice(order[o], phi, phi, checked)
+    return ParentChoice(-1, phi, phi, checked)
+
+
+@njit(inline="always", cache=True)
+def _choose_parent_lazy(mo, q_new, caps, checked, state, obj, scene, tp):
+    """:func:`_choose_parent` with lazy costs (RrtStar._extend's): a candidate
+    is integrated once its bound F + lambda * length is no larger than the
+    cheapest integrated candidate not yet checked; the same candidates, order
+    and checks."""
+    m = mo.near.shape[0]
+    phi = np.full(m, np.inf)
+    bound = np.empty(m)
+    for s in range(m):
+        bound[s] = obj.length_weight * math.sqrt(_d2(q_new, mo.q_a[s], obj.distance_weights))
+    low = mo.f_near + bound
+    by_bound = np.argsort(low, kind="mergesort")
+    is_open = np.zeros(m, dtype=np.bool_)
+    n_open, pos = 0, 0
+    while True:
+        if n_open == 0:
+            if pos == m:
+                break
+            _cost_slots(by_bound[pos:pos + 1], phi, mo.q_a, mo.q_b, mo.t_a, mo.t_b, state.counts, obj, tp)
+            is_open[by_bound[pos]] = True
+            n_open += 1
+            pos += 1
+        t_min = np.inf
+        for s in range(m):
+            if is_open[s]:
+                t_min = min(t_min, mo.f_near[s] + phi[s])
+        stop = pos
+        while stop < m and low[by_bound[stop]] <= t_min:
+            stop += 1
+        if stop > pos:
+            _cost_slots(by_bound[pos:stop], phi, mo.q_a, mo.q_b, mo.t_a, mo.t_b, state.counts, obj, tp)
+            for t in range(pos, stop):
+                is_open[by_bound[t]] = True
+            n_open += stop - pos
+            pos = stop
+        slot, best_total = -1, np.inf
+        for s in range(m):  # the cheapest open candidate, the lowest slot on ties
+            if is_open[s] and (slot < 0 or mo.f_near[s] + phi[s] < best_total):
+                slot, best_total = s, mo.f_near[s] + phi[s]
+        is_open[slot] = False
+        n_open -= 1
+        if _parent_ok(slot, mo, q_new, caps, checked, state.clear, state.counts, scene, tp):
+            return ParentChoice(slot, phi, bound, checked)
+    return ParentChoice(-1, phi, bound, checked)
+
+
+@njit(inline="always", cache=True)
+def _parent_ok(s, mo, q_new, caps, checked, clear, counts, scene, tp):
+    """Whether the motion of slot s (near -> q_new) is valid: statically
+    (the verdict kept in ``checked[s]``), then in timed mode against the people."""
+    counts[1] += 1
+    ok = _static_ok(mo.q_a[s], q_new, clear[mo.near[s]], caps, scene)
+    checked[s] = 1 if ok else 2
+    if ok and tp.enabled:
+        ok = _people_ok(mo.q_a[s], q_new, mo.t_a[s], mo.t_b[s], scene, tp)
+    return ok
+
+
+@njit(inline="always", cache=True)
+def _add_node(q_new, caps, p, c, t, state, w):
+    """Adds q_new (capsule clearances ``caps``) as the child of node p by a
+    motion of cost c, reached at time t (timed mode); returns its index.
+    The arrays must have room (:func:`reserve`)."""
+    i = state.ints[0]
+    state.ints[0] = i + 1
+    state.q[i] = q_new
+    _insert(i, state.q, w, state.g_head, state.g_next, state.g_geom)
+    state.clear[i] = caps
+    state.parent[i] = p
+    state.edge[i] = c
+    state.cost[i] = state.cost[p] + c
+    _link(i, p, state.first_child, state.next_sib, state.prev_sib)
+    state.tnode[i] = t
+    return i
+
+
+@njit(inline="always", cache=True)
+def _rewire(i_new, mo, choice, caps, state, obj, lazy, scene, tp, stack):
+    """OMPL's rewiring of the near nodes through the new node ``i_new``
+    (capsule clearances ``caps``; ``mo`` and ``choice`` from its parent
+    choice): :func:`_rewire_static`, or :func:`_rewire_timed` in timed mode."""
+    if tp.enabled:
+        _rewire_timed(i_new, mo, choice, caps, state, obj, scene, tp, stack)
+    else:
+        _rewire_static(i_new, mo, choice, caps, state, obj, lazy, scene, tp, stack)
+
+
+@njit(inline="always", cache=True)
+def _rewire_static(i_new, mo, choice, caps, state, obj, lazy, scene, tp, stack):
+    """The rewiring through the new node ``i_new`` (capsule clearances
+    ``caps``): each near node that the motion new -> near makes cheaper
+    (its cost taken as phi's near -> new) gets the new node as its parent,
+    its static check reused from the parent choice where made; its subtree's
+    costs follow. With lazy costs the motions whose bound can improve a near
+    node are integrated first."""
+    phi, bound, checked, near = choice.phi, choice.bound, choice.checked, mo.near
+    m = near.shape[0]
+    c_new = state.cost[i_new]
+    if lazy and obj.kind == 1 and obj.length_weight > 0:
+        todo = np.empty(m, dtype=np.int64)
+        nt = 0
+        for s in range(m):
+            if c_new + bound[s] < state.cost[near[s]] and np.isinf(phi[s]):
+                todo[nt] = s
+                nt += 1
+        if nt > 0:
+            _cost_slots(todo[:nt], phi, mo.q_a, mo.q_b, mo.t_a, mo.t_b, state.counts, obj, tp)
+    cand = np.empty(m, dtype=np.int64)
+    nc = 0
+    for s in range(m):
+        if c_new + phi[s] < state.cost[near[s]]:
+            cand[nc] = s
+            nc += 1
+    for ci in range(nc):
+        s = cand[ci]
+        j = near[s]
+        if j == state.parent[i_new] or not state.cost[i_new] + phi[s] < state.cost[j]:
+            continue
+        if checked[s] == 0:
+            state.counts[1] += 1
+            ok = _static_ok(state.q[i_new], state.q[j], caps, state.clear[j], scene)
+        else:
+            ok = checked[s] == 1
+        if ok:
+            _reparent(j, i_new, phi[s], state, scene, tp, stack)
+
+
+@njit(cache=True)
+def _rewire_timed(i_new, mo, choice, caps, state, obj, scene, tp, stack):
+    """The timed mode's rewiring through the new node ``i_new``: each motion
+    new -> near is costed and people-checked from ``tnode[i_new]``, only where
+    ``c_new + lambda * length`` (a lower bound of its cost, the social part
+    >= 0) can improve the near node, lazy or not (the same rewiring, fewer
+    integrals); the parent choice's static checks are reused. A re-parented
+    subtree's costs and times follow (:func:`_reparent`)."""
+    near, checked = mo.near, choice.checked
+    m = near.shape[0]
+    q_new = state.q[i_new]
+    c_new = state.cost[i_new]
+    t_new = state.tnode[i_new]
+    ta = np.full(m, t_new)
+    tb = np.empty(m)
+    for s in range(m):
+        tb[s] = t_new + _duration(q_new, mo.q_a[s], tp.base_speed, tp.arm_speed)
+    phi = np.full(m, np.inf)
+    todo = np.empty(m, dtype=np.int64)
+    nt = 0
+    for s in range(m):
+        j = near[s]
+        if j != state.parent[i_new] and \
+                c_new + obj.length_weight * math.sqrt(_d2(q_new, mo.q_a[s], obj.distance_weights)) < state.cost[j]:
+            todo[nt] = s
+            nt += 1
+    if nt > 0:
+        _cost_slots(todo[:nt], phi, mo.q_b, mo.q_a, ta, tb, state.counts, obj, tp)
+    cand = np.empty(m, dtype=np.int64)
+    nc = 0
+    for s in range(m):
+        if c_new + phi[s] < state.cost[near[s]]:
+            cand[nc] = s
+            nc += 1
+    for ci in range(nc):
+        s = cand[ci]
+        j = near[s]
+        if j == state.parent[i_new] or not state.cost[i_new] + phi[s] < state.cost[j]:
+            continue
+        state.counts[1] += 1
+        if checked[s] == 0:
+            ok = _static_ok(q_new, state.q[j], caps, state.clear[j], scene)
+        else:
+            ok = checked[s] == 1
+        if ok:
+            ok = _people_ok(q_new, state.q[j], ta[s], tb[s], scene, tp)
+        if ok:
+            _reparent(j, i_new, phi[s], state, scene, tp, stack)
+
+
+@njit(inline="always", cache=True)
+def _reparent(j, i_new, c, state, scene, tp, stack):
+    """Node j becomes the child of ``i_new`` by a motion of cost c; its
+    subtree's costs are recomputed from its parents (edge costs kept). In
+    timed mode its times too, and a moved descendant's motion is
+    people-checked again at its new times and cut off (edge cost inf) when
+    invalid, so every node of finite cost has a tree path valid at its
+    current times."""
+    _unlink(j, state.parent[j], state.first_child, state.next_sib, state.prev_sib)
+    _link(j, i_new, state.first_child, state.next_sib, state.prev_sib)
+    state.parent[j] = i_new
+    state.edge[j] = c
+    parent, tnode, edge, cost, q = state.parent, state.tnode, state.edge, state.cost, state.q
+    stack[0] = j
+    top = 1
+    while top > 0:
+        top -= 1
+        k = stack[top]
+        if k == i_new:
+            raise RuntimeError("rewiring a node under its descendant")
+        if tp.enabled:
+            t_old = tnode[k]
+            tnode[k] = tnode[parent[k]] + _duration(q[parent[k]], q[k], tp.base_speed, tp.arm_speed)
+            if k != j and tnode[k] != t_old and edge[k] < np.inf:
+                # A moved descendant's motion, checked again at its new times: cut off when invalid.
+                state.counts[1] += 1
+                if not _people_ok(q[parent[k]], q[k], tnode[parent[k]], tnode[k], scene, tp):
+                    edge[k] = np.inf
+        cost[k] = cost[parent[k]] + edge[k]
+        c = state.first_child[k]
+        while c >= 0:
+            stack[top] = c
+            top += 1
+            c = state.next_sib[c]
+
+
+@njit(inline="always", cache=True)
+def _connect_goal(i, state, goal, w, r_near, obj, scene, tp):
+    """Tries the motion node i -> goal when the goal is within r_near: costed
+    (in timed mode from node i's time), then checked statically and against
+    the people; a valid one is a goal connection (0 for a node at the goal;
+    the goal arrays must have room: :func:`reserve`)."""
+    d = math.sqrt(_d2(goal, state.q[i], w))
+    if not d <= r_near:
+        return
+    c_goal = 0.0
+    ok = True
+    if d != 0.0:
+        state.counts[2] += 1
+        a = np.empty((1, 4))
+        b = np.empty((1, 4))
+        a[0] = state.q[i]
+        b[0] = goal
+        ta = np.full(1, state.tnode[i])
+        tb = np.full(1, state.tnode[i])
+        if tp.enabled:
+            tb[0] = state.tnode[i] + _duration(state.q[i], goal, tp.base_speed, tp.arm_speed)
+        c_goal = _motion_costs(a, b, ta, tb, obj, tp)[0]
+        state.counts[1] += 1
+        ok = _static_ok(state.q[i], goal, state.clear[i], state.goal_clear, scene)
+        if ok and tp.enabled:
+            ok = _people_ok(state.q[i], goal, ta[0], tb[0], scene, tp)
+    if ok:
+        g = state.ints[1]
+        state.goal_nodes[g] = i
+        state.goal_edges[g] = c_goal
+        state.goal_t[g] = state.tnode[i]
+        state.ints[1] = g + 1
+
+
+@njit(inline="always", cache=True)
+def _update_best(it, i_new, state, goal, w, informed, obj, scene, tp):
+    """After iteration ``it`` (``i_new``: its new node, -1 for none): the best
+    goal connection, when the tree changed or the start's own connection
+    (made before the first sample) is not yet reported; the informed
+    ellipse's diameter; the history. In timed mode a connection made before
+    its node's time moved is redone before it can be the best (invalid =>
+    inf), and none finite means no solution (yet, or again)."""
+    ints, floats = state.ints, state.floats
+    if ints[1] > 0 and (i_new >= 0 or ints[2] < 0):
+        if tp.enabled:
+            g, total = _best_goal_timed(state, goal, w, obj, scene, tp)
+        else:
+            g, total = _best_goal(state.cost, state.goal_nodes, state.goal_edges, ints[1])
+        if g < 0:
+            floats[0], ints[2] = np.inf, -1
+        else:
+            floats[0], ints[2] = total, state.goal_nodes[g]
+            if ints[3] < 0:
+                ints[3] = it + 1
+        if informed.informed:
+            if g < 0:
+                floats[1] = np.inf
+            elif informed.mode == 0:  # "paper": the XY length of the best path's base
+                floats[1] = _xy_length(state.q, state.parent, ints[2], goal)
+            else:  # "admissible": best cost / (lambda min(w_x, w_y))
+                floats[1] = floats[0] / informed.xy_scale if informed.xy_scale > 0 else np.inf
+    state.history[it] = floats[0]
+    if informed.informed:
+        state.diameters[it] = floats[1]
+
+
+@njit(inline="always", cache=True)
+def _best_goal(cost, goal_nodes, goal_edges, count):
+    """(slot, total): the goal connection (of the first ``count``) of least
+    tree cost + motion cost (the first on ties), (-1, inf) when none is finite."""
+    best, g = np.inf, -1
+    for t in range(count):
+        total = cost[goal_nodes[t]] + goal_edges[t]
+        if total < best:
+            best, g = total, t
+    return g, best
+
+
+@njit(cache=True)
+def _best_goal_timed(state, goal, w, obj, scene, tp):
+    """:func:`_best_goal` of the connections checked and costed at their
+    node's time now: the best one made at an earlier time is redone first
+    (its cost, or inf when the motion is not valid then; 0 at the goal)."""
+    while True:
+        g, total = _best_goal(state.cost, state.goal_nodes, state.goal_edges, state.ints[1])
+        if g < 0 or state.goal_t[g] == state.tnode[state.goal_nodes[g]]:
+            return g, total
+        i = state.goal_nodes[g]
+        state.goal_t[g] = state.tnode[i]
+        state.goal_edges[g] = 0.0
+        if _d2(goal, state.q[i], w) != 0.0:
+            a = np.empty((1, 4))
+            b = np.empty((1, 4))
+            a[0] = state.q[i]
+            b[0] = goal
+            ta = np.full(1, state.tnode[i])
+            tb = np.full(1, state.tnode[i] + _duration(state.q[i], goal, tp.base_speed, tp.arm_speed))
+            state.counts[1] += 1
+            if not _people_ok(state.q[i], goal, ta[0], tb[0], scene, tp):
+                state.goal_edges[g] = np.inf
+            else:
+                state.counts[2] += 1
+                state.goal_edges[g] = _timed_costs(a, b, ta, tb, obj, tp)[0]
+
+
+# ---- costs and checks ---------------------------------------------------------------------------
+
+
 @njit(cache=True)
 def _d2(a, b, w):
     d0 = (a[0] - b[0]) * w[0]
@@ -183,33 +677,6 @@ def _d2(a, b, w):
     d2 = (a[2] - b[2]) * w[2]
     d3 = (a[3] - b[3]) * w[3]
     return (d0 * d0 + d2 * d2) + (d1 * d1 + d3 * d3)
-
-
-@njit(cache=True)
-def _costs(q_a, q_b, kind, lam, dw, soc, grid):
-    """Objective motion costs (E,) of q_a[e] -> q_b[e], as Objective.motion_cost."""
-    e_count = q_a.shape[0]
-    out = np.zeros(e_count)
-    length = np.empty(e_count)
-    for e in range(e_count):
-        length[e] = math.sqrt(_d2(q_b[e], q_a[e], dw))
-    if kind == 1:
-        (people, l1, l2, obj, active, weights, lever, resolution, reaches, inv_f, inv_r, inv_s, tau) = soc
-        if people.shape[0] > 0 and active.shape[0] > 0:
-            point_reach, cell, gx0, gy0, gnx, gny, gstart, gorder = grid
-            sums, n = cost_kernel.msc_sums(
-                q_a, q_b, people, l1, l2, obj, active, weights, lever, resolution, reaches, inv_f, inv_r, inv_s, tau,
-                point_reach, cell, gx0, gy0, gnx, gny, gstart, gorder,
-            )
-            for e in range(e_count):
-                out[e] += sums[e] * (length[e] / n[e])
-        if lam > 0:
-            for e in range(e_count):
-                out[e] = out[e] + lam * length[e]
-    else:
-        for e in range(e_count):
-            out[e] = lam * length[e]
-    return out
 
 
 @njit(cache=True)
@@ -221,23 +688,60 @@ def _duration(q_a, q_b, base_speed, arm_speed):
     return max(base, arm)
 
 
+@njit(inline="always", cache=True)
+def _motion_costs(q_a, q_b, t_a, t_b, obj, tp):
+    """Objective motion costs (E,) of q_a[e] -> q_b[e], as Objective.motion_cost:
+    :func:`_static_costs`, or in timed mode :func:`_timed_costs` (the motions
+    driven from t_a[e] to t_b[e])."""
+    if tp.enabled:
+        return _timed_costs(q_a, q_b, t_a, t_b, obj, tp)
+    return _static_costs(q_a, q_b, obj)
+
+
 @njit(cache=True)
-def _timed_costs(q_a, q_b, t_a, t_b, kind, lam, dw, soc, grid, tp):
-    """Objective motion costs (E,) of q_a[e] -> q_b[e] driven from t_a[e] to
-    t_b[e]: :func:`_costs` with the social integral against the predicted
-    people (:func:`drake_social.cost.timed_kernel.msc_sums_timed`)."""
+def _static_costs(q_a, q_b, obj):
+    """Objective motion costs (E,) of q_a[e] -> q_b[e]: lambda times the
+    weighted length, plus for the social objective the motion social cost
+    against the standing people (:func:`drake_social.cost.kernel.msc_sums`)."""
+    s, g = obj.social, obj.grid
+    if obj.kind == 1 and s.people.shape[0] > 0 and s.active.shape[0] > 0:
+        sums, n = cost_kernel.msc_sums(q_a, q_b, s.people, s.l1, s.l2, s.object_interest, s.active, s.weights,
+                                       s.lever, s.resolution, s.reaches, s.inv_front, s.inv_rear, s.inv_side,
+                                       s.threshold, g.point_reach, g.cell, g.x0, g.y0, g.nx, g.ny, g.start, g.order)
+        return _objective(q_a, q_b, sums, n, obj.kind, obj.length_weight, obj.distance_weights)
+    return _objective(q_a, q_b, np.zeros(0), np.zeros(0, dtype=np.int64), obj.kind, obj.length_weight,
+                      obj.distance_weights)
+
+
+@njit(cache=True)
+def _timed_costs(q_a, q_b, t_a, t_b, obj, tp):
+    """:func:`_static_costs` with the social cost against the predicted
+    people, the motions driven from t_a[e] to t_b[e]
+    (:func:`drake_social.cost.timed_kernel.msc_sums_timed`)."""
+    s = obj.social
+    if obj.kind == 1 and tp.xy.shape[1] > 0 and s.active.shape[0] > 0:
+        sums, n = timed_kernel.msc_sums_timed(q_a, q_b, t_a, t_b, tp.xy, tp.theta, tp.present, tp.t0, tp.dt,
+                                              tp.max_speeds, s.l1, s.l2, s.object_interest, s.active, s.weights,
+                                              s.lever, s.resolution, s.reaches, s.inv_front, s.inv_rear, s.inv_side,
+                                              s.threshold, obj.grid.point_reach)
+        return _objective(q_a, q_b, sums, n, obj.kind, obj.length_weight, obj.distance_weights)
+    return _objective(q_a, q_b, np.zeros(0), np.zeros(0, dtype=np.int64), obj.kind, obj.length_weight,
+                      obj.distance_weights)
+
+
+@njit(inline="always", cache=True)
+def _objective(q_a, q_b, sums, n, kind, lam, dw):
+    """The objective's costs (E,) of the motions given their social sums and
+    step counts (empty: no social part): the social objective's (``kind``
+    1) ``sums * (length / n)`` plus lambda times the length when lambda > 0,
+    the length objective's lambda times the length."""
     e_count = q_a.shape[0]
     out = np.zeros(e_count)
     length = np.empty(e_count)
     for e in range(e_count):
         length[e] = math.sqrt(_d2(q_b[e], q_a[e], dw))
     if kind == 1:
-        (people, l1, l2, obj, active, weights, lever, resolution, reaches, inv_f, inv_r, inv_s, tau) = soc
-        if tp.xy.shape[1] > 0 and active.shape[0] > 0:
-            sums, n = timed_kernel.msc_sums_timed(
-                q_a, q_b, t_a, t_b, tp.xy, tp.theta, tp.present, tp.t0, tp.dt, tp.max_speeds, l1, l2, obj, active,
-                weights, lever, resolution, reaches, inv_f, inv_r, inv_s, tau, grid.point_reach,
-            )
+        if sums.shape[0] > 0:
             for e in range(e_count):
                 out[e] += sums[e] * (length[e] / n[e])
         if lam > 0:
@@ -247,6 +751,35 @@ def _timed_costs(q_a, q_b, t_a, t_b, kind, lam, dw, soc, grid, tp):
         for e in range(e_count):
             out[e] = lam * length[e]
     return out
+
+
+@njit(inline="always", cache=True)
+def _cost_slots(slots, phi, q_a, q_b, t_a, t_b, counts, obj, tp):
+    """phi[slots] = the motion costs q_a[slots] -> q_b[slots] (RrtStar._extend's
+    cost()); in timed mode driven from t_a[slots] to t_b[slots]."""
+    k = slots.shape[0]
+    a, b = np.empty((k, 4)), np.empty((k, 4))
+    ta, tb = np.empty(k), np.empty(k)
+    for t in range(k):
+        a[t], b[t] = q_a[slots[t]], q_b[slots[t]]
+        ta[t], tb[t] = t_a[slots[t]], t_b[slots[t]]
+    out = _motion_costs(a, b, ta, tb, obj, tp)
+    for t in range(k):
+        phi[slots[t]] = out[t]
+    counts[2] += k
+
+
+@njit(inline="always", cache=True)
+def _clearances(q, scene):
+    """The capsule clearances (S,) of q in the planar scene."""
+    return planar_kernel.capsule_clearances(q, scene.bodies, scene.robot, scene.env, scene.grid)
+
+
+@njit(inline="always", cache=True)
+def _static_ok(q_a, q_b, c_a, c_b, scene):
+    """The planar check of the motion q_a -> q_b given its ends' capsule clearances."""
+    return planar_kernel.motion_valid_ends(q_a, q_b, c_a, c_b, scene.lower, scene.upper, scene.bodies, scene.robot,
+                                           scene.env, scene.grid, scene.levers)
 
 
 @njit(cache=True)
@@ -264,444 +797,7 @@ def _people_ok(q_a, q_b, t_a, t_b, scene, tp):
                                                 tp.radii, tp.max_speeds, tp.t0, tp.dt, tp.safety)
 
 
-@njit(cache=True)
-def grow(rng, it_start, it_stop, params, state):
-    """Iterations ``it_start .. it_stop - 1`` of the RRT* run (-1: the start's
-    goal connection, before the first sample) with the :class:`GrowParams`
-    ``params`` on the :class:`TreeState` ``state`` from :func:`init_state` or
-    the previous chunk; returns the new state (arrays may be replaced as they grow)."""
-    goal, lower, upper, w = params.goal, params.lower, params.upper, params.weights
-    delta, r_near, goal_bias = params.planning_range, params.near_radius, params.goal_bias
-    shrinking, gamma, lazy = params.shrinking, params.gamma, params.lazy
-    kind, lam, dw, soc, grid = params.kind, params.length_weight, params.distance_weights, params.social, params.grid
-    c_lower, c_upper, bodies, robot, env, levers, env_grid = params.scene
-    (informed, mode, f1, f2, centre, rot, focal, xy_scale) = params.informed
-    tp = params.timed
-    timed = tp.enabled
-    (q, parent, cost, edge, first_child, next_sib, prev_sib, clear, g_next, goal_nodes, goal_edges,
-     counts, history, diameters, g_head, g_geom, goal_clear, ints, floats, tnode, goal_t) = state
-    n, n_goal, best_node, first_iteration = ints[0], ints[1], ints[2], ints[3]
-    best_cost, ellipse_c = floats[0], floats[1]
-    cap = q.shape[0]
-    s_count = robot.shape[0]
-    one = np.empty((1, 4))
-    gq = np.empty((1, 4))
-    gq[0] = goal
-    tg_a = np.empty(1)
-    tg_b = np.empty(1)
-    near = np.empty(cap, dtype=np.int64)
-    stack = np.empty(cap, dtype=np.int64)
-
-    for it in range(it_start, it_stop):
-        i_new = 0
-        if it >= 0:
-            # ---- sample
-            if rng.random() < goal_bias:
-                q_rand = goal.copy()
-            else:
-                q_rand = np.empty(4)
-                for c in range(4):
-                    q_rand[c] = rng.random()
-                q_rand = lower + q_rand * (upper - lower)
-                if informed and math.isfinite(ellipse_c):
-                    _ellipse_xy(rng, q_rand, ellipse_c, centre, rot, focal, lower, upper)
-            # ---- nearest, steer, check
-            i_near, d_best = _nearest(q, q_rand, w, g_head, g_next, g_geom)
-            i_new = -1
-            if d_best != 0.0:
-                if d_best <= delta:
-                    q_new = q_rand.copy()
-                else:
-                    q_new = q[i_near] + (q_rand - q[i_near]) * (delta / d_best)
-                counts[0] += 1
-                c_new_caps = planar_kernel.capsule_clearances(q_new, bodies, robot, env, env_grid)
-                if _valid(q_new, c_new_caps, c_lower, c_upper):
-                    # ---- near set
-                    r = r_near
-                    if shrinking and n + 1 > 1:
-                        r = min(r, gamma * (math.log(n + 1) / (n + 1)) ** 0.25)
-                    r2 = r * r
-                    m = _within(q, q_new, w, r, r2, g_head, g_next, g_geom, near)
-                    has_nearest = False
-                    for s in range(m):
-                        if near[s] == i_near:
-                            has_nearest = True
-                    if not has_nearest:
-                        near[m] = i_near
-                        m += 1
-                    near_idx = near[:m].copy()
-                    q_a = np.empty((m, 4))
-                    q_b = np.empty((m, 4))
-                    for s in range(m):
-                        q_a[s] = q[near[s]]
-                        q_b[s] = q_new
-                    t_a = np.zeros(m)  # the motions' times near -> new (timed mode)
-                    t_b = np.zeros(m)
-                    if timed:
-                        for s in range(m):
-                            t_a[s] = tnode[near[s]]
-                            t_b[s] = t_a[s] + _duration(q_a[s], q_new, tp.base_speed, tp.arm_speed)
-                    checked = np.zeros(m, dtype=np.int8)  # 0 unknown, 1 valid, 2 invalid (the static check)
-                    p_slot = -1
-                    f_near = np.empty(m)
-                    for s in range(m):
-                        f_near[s] = cost[near[s]]
-                    if lazy and kind == 1 and lam > 0:
-                        # Lazy costs (RrtStar._extend): integrate a candidate only once its
-                        # bound F + lambda * length is no larger than the cheapest integrated
-                        # candidate not yet checked; the same candidates, order and checks.
-                        phi = np.full(m, np.inf)
-                        bound = np.empty(m)
-                        for s in range(m):
-                            bound[s] = lam * math.sqrt(_d2(q_new, q_a[s], dw))
-                        low = f_near + bound
-                        by_bound = np.argsort(low, kind="mergesort")
-                        is_open = np.zeros(m, dtype=np.bool_)
-                        n_open, pos = 0, 0
-                        while True:
-                            if n_open == 0:
-                                if pos == m:
-                                    break
-                                _cost_slots(by_bound[pos:pos + 1], phi, q_a, q_b, t_a, t_b, kind, lam, dw, soc, grid,
-                                            tp, counts)
-                                is_open[by_bound[pos]] = True
-                                n_open += 1
-                                pos += 1
-                            t_min = np.inf
-                            for s in range(m):
-                                if is_open[s]:
-                                    t_min = min(t_min, f_near[s] + phi[s])
-                            stop = pos
-                            while stop < m and low[by_bound[stop]] <= t_min:
-                                stop += 1
-                            if stop > pos:
-                                _cost_slots(by_bound[pos:stop], phi, q_a, q_b, t_a, t_b, kind, lam, dw, soc, grid, tp,
-                                            counts)
-                                for t in range(pos, stop):
-                                    is_open[by_bound[t]] = True
-                                n_open += stop - pos
-                                pos = stop
-                            slot, best_total = -1, np.inf
-                            for s in range(m):  # the cheapest open candidate, the lowest slot on ties
-                                if is_open[s] and (slot < 0 or f_near[s] + phi[s] < best_total):
-                                    slot, best_total = s, f_near[s] + phi[s]
-                            is_open[slot] = False
-                            n_open -= 1
-                            counts[1] += 1
-                            ok = planar_kernel.motion_valid_ends(q_a[slot], q_new, clear[near[slot]], c_new_caps,
-                                                                 c_lower, c_upper, bodies, robot, env, env_grid, levers)
-                            checked[slot] = 1 if ok else 2
-                            if ok and timed:
-                                ok = _people_ok(q_a[slot], q_new, t_a[slot], t_b[slot], params.scene, tp)
-                            if ok:
-                                p_slot = slot
-                                break
-                    else:
-                        if timed:
-                            phi = _timed_costs(q_a, q_b, t_a, t_b, kind, lam, dw, soc, grid, tp)
-                        else:
-                            phi = _costs(q_a, q_b, kind, lam, dw, soc, grid)
-                        bound = phi
-                        counts[2] += m
-                        order = np.argsort(f_near + phi, kind="mergesort")
-                        for o in range(m):
-                            s = order[o]
-                            counts[1] += 1
-                            ok = planar_kernel.motion_valid_ends(q_a[s], q_new, clear[near[s]], c_new_caps, c_lower,
-                                                                 c_upper, bodies, robot, env, env_grid, levers)
-                            checked[s] = 1 if ok else 2
-                            if ok and timed:
-                                ok = _people_ok(q_a[s], q_new, t_a[s], t_b[s], params.scene, tp)
-                            if ok:
-                                p_slot = s
-                                break
-                    if p_slot >= 0:
-                        # ---- insert
-                        if n == cap:
-                            cap *= 2
-                            q2 = np.empty((cap, 4))
-                            q2[:n] = q[:n]
-                            q = q2
-                            c2 = np.empty((cap, s_count))
-                            c2[:n] = clear[:n]
-                            clear = c2
-                            parent = np.concatenate((parent, np.full(cap - n, -1, dtype=np.int64)))
-                            cost = np.concatenate((cost, np.zeros(cap - n)))
-                            edge = np.concatenate((edge, np.zeros(cap - n)))
-                            first_child = np.concatenate((first_child, np.full(cap - n, -1, dtype=np.int64)))
-                            next_sib = np.concatenate((next_sib, np.full(cap - n, -1, dtype=np.int64)))
-                            prev_sib = np.concatenate((prev_sib, np.full(cap - n, -1, dtype=np.int64)))
-                            near = np.empty(cap, dtype=np.int64)
-                            g_next = np.concatenate((g_next, np.full(cap - n, -1, dtype=np.int64)))
-                            stack = np.empty(cap, dtype=np.int64)
-                            tnode = np.concatenate((tnode, np.zeros(cap - n)))
-                        i_new = n
-                        n += 1
-                        p = near_idx[p_slot]
-                        q[i_new] = q_new
-                        _insert(i_new, q, w, g_head, g_next, g_geom)
-                        clear[i_new] = c_new_caps
-                        parent[i_new] = p
-                        edge[i_new] = phi[p_slot]
-                        cost[i_new] = cost[p] + phi[p_slot]
-                        _link(i_new, p, first_child, next_sib, prev_sib)
-                        tnode[i_new] = t_b[p_slot]
-                        # ---- rewire
-                        c_new = cost[i_new]
-                        if timed:
-                            _rewire_timed(i_new, m, near_idx, q_a, q_b, bound, checked, c_new_caps, q, parent, cost,
-                                          edge, first_child, next_sib, prev_sib, clear, tnode, stack, counts, params)
-                        elif lazy and kind == 1 and lam > 0:
-                            todo = np.empty(m, dtype=np.int64)
-                            nt = 0
-                            for s in range(m):
-                                if c_new + bound[s] < cost[near_idx[s]] and np.isinf(phi[s]):
-                                    todo[nt] = s
-                                    nt += 1
-                            if nt > 0:
-                                _cost_slots(todo[:nt], phi, q_a, q_b, t_a, t_b, kind, lam, dw, soc, grid, tp, counts)
-                        if not timed:
-                            cand = np.empty(m, dtype=np.int64)
-                            nc = 0
-                            for s in range(m):
-                                if c_new + phi[s] < cost[near_idx[s]]:
-                                    cand[nc] = s
-                                    nc += 1
-                            for ci in range(nc):
-                                s = cand[ci]
-                                j = near_idx[s]
-                                if j == parent[i_new] or not cost[i_new] + phi[s] < cost[j]:
-                                    continue
-                                if checked[s] == 0:
-                                    counts[1] += 1
-                                    ok = planar_kernel.motion_valid_ends(q_new, q[j], c_new_caps, clear[j], c_lower,
-                                                                         c_upper, bodies, robot, env, env_grid, levers)
-                                else:
-                                    ok = checked[s] == 1
-                                if ok:
-                                    _unlink(j, parent[j], first_child, next_sib, prev_sib)
-                                    _link(j, i_new, first_child, next_sib, prev_sib)
-                                    parent[j] = i_new
-                                    edge[j] = phi[s]
-                                    top = 0
-                                    stack[0] = j
-                                    top = 1
-                                    while top > 0:
-                                        top -= 1
-                                        k = stack[top]
-                                        if k == i_new:
-                                            raise RuntimeError("rewiring a node under its descendant")
-                                        cost[k] = cost[parent[k]] + edge[k]
-                                        c = first_child[k]
-                                        while c >= 0:
-                                            stack[top] = c
-                                            top += 1
-                                            c = next_sib[c]
-                    else:
-                        i_new = -1
-                else:
-                    i_new = -1
-        # ---- goal connection of node i_new (the start before the first iteration)
-        if i_new >= 0:
-            d = math.sqrt(_d2(goal, q[i_new], w))
-            if d <= r_near:
-                c_goal = 0.0
-                ok = True
-                if d != 0.0:
-                    counts[2] += 1
-                    one[0] = q[i_new]
-                    if timed:
-                        tg_a[0] = tnode[i_new]
-                        tg_b[0] = tnode[i_new] + _duration(q[i_new], goal, tp.base_speed, tp.arm_speed)
-                        c_goal = _timed_costs(one, gq, tg_a, tg_b, kind, lam, dw, soc, grid, tp)[0]
-                    else:
-                        c_goal = _costs(one, gq, kind, lam, dw, soc, grid)[0]
-                    counts[1] += 1
-                    ok = planar_kernel.motion_valid_ends(q[i_new], goal, clear[i_new], goal_clear, c_lower, c_upper,
-                                                         bodies, robot, env, env_grid, levers)
-                    if ok and timed:
-                        ok = _people_ok(q[i_new], goal, tg_a[0], tg_b[0], params.scene, tp)
-                if ok:
-                    if n_goal == goal_nodes.shape[0]:
-                        goal_nodes = np.concatenate((goal_nodes, np.empty(n_goal, dtype=np.int64)))
-                        goal_edges = np.concatenate((goal_edges, np.empty(n_goal)))
-                        goal_t = np.concatenate((goal_t, np.zeros(n_goal)))
-                    goal_nodes[n_goal] = i_new
-                    goal_edges[n_goal] = c_goal
-                    goal_t[n_goal] = tnode[i_new]
-                    n_goal += 1
-        # The best goal connection, when the tree changed, or when the start's own
-        # connection (made before the first sample) is not yet reported.
-        if timed and it >= 0 and n_goal > 0 and (i_new >= 0 or best_node < 0):
-            # The cheapest goal connection whose check and cost are at its node's
-            # time now (a connection made before its node's time moved is redone
-            # first: invalid => inf); none finite => no solution (yet, again).
-            while True:
-                g_best, g = np.inf, -1
-                for t in range(n_goal):
-                    tot = cost[goal_nodes[t]] + goal_edges[t]
-                    if tot < g_best:
-                        g_best, g = tot, t
-                if g < 0 or goal_t[g] == tnode[goal_nodes[g]]:
-                    break
-                goal_edges[g] = _goal_edge(goal_nodes[g], q, tnode, counts, params)
-                goal_t[g] = tnode[goal_nodes[g]]
-            if g < 0:
-                best_cost, best_node = np.inf, -1
-            else:
-                best_cost, best_node = g_best, goal_nodes[g]
-                if first_iteration < 0:
-                    first_iteration = it + 1
-            if informed:
-                if g < 0:
-                    ellipse_c = np.inf
-                elif mode == 0:
-                    ellipse_c = _xy_length(q, parent, best_node, goal)
-                else:
-                    ellipse_c = best_cost / xy_scale if xy_scale > 0 else np.inf
-        elif it >= 0 and n_goal > 0 and (i_new >= 0 or best_node < 0):
-            g_best, g = np.inf, -1
-            for t in range(n_goal):
-                tot = cost[goal_nodes[t]] + goal_edges[t]
-                if tot < g_best:
-                    g_best, g = tot, t
-            best_cost, best_node = g_best, goal_nodes[g]
-            if first_iteration < 0:
-                first_iteration = it + 1
-            if informed:
-                if mode == 0:  # "paper": the XY length of the best path's base
-                    ellipse_c = _xy_length(q, parent, best_node, goal)
-                else:  # "admissible": best cost / (lambda min(w_x, w_y))
-                    ellipse_c = best_cost / xy_scale if xy_scale > 0 else np.inf
-        if it >= 0:
-            history[it] = best_cost
-            if informed:
-                diameters[it] = ellipse_c
-    ints[0], ints[1], ints[2], ints[3] = n, n_goal, best_node, first_iteration
-    floats[0], floats[1] = best_cost, ellipse_c
-    return TreeState(q, parent, cost, edge, first_child, next_sib, prev_sib, clear, g_next, goal_nodes, goal_edges,
-                     counts, history, diameters, g_head, g_geom, goal_clear, ints, floats, tnode, goal_t)
-
-
-@njit(cache=True)
-def _rewire_timed(i_new, m, near_idx, q_a, q_b, bound, checked, c_new_caps, q, parent, cost, edge, first_child,
-                  next_sib, prev_sib, clear, tnode, stack, counts, params):
-    """The timed mode's rewiring of the near nodes (slots 0 .. m - 1 of
-    ``near_idx``, configurations ``q_a``; ``q_b`` rows are the new node's)
-    through the new node ``i_new``: each motion new -> near is costed and
-    people-checked from ``tnode[i_new]``, only where ``c_new + lambda *
-    length`` (a lower bound of its cost, the social part >= 0) can improve
-    the near node, lazy or not (the same rewiring, fewer integrals); the
-    static checks of the parent choice (``checked``) are reused. A
-    re-parented subtree's costs and times are recomputed from its parents
-    (its edge costs kept); a moved descendant's motion is people-checked
-    again at its new times and cut off (edge cost inf) when invalid, so every
-    node of finite cost has a tree path valid at its current times."""
-    tp = params.timed
-    kind, lam, dw, soc, grid = params.kind, params.length_weight, params.distance_weights, params.social, params.grid
-    c_lower, c_upper, bodies, robot, env, levers, env_grid = params.scene
-    q_new = q[i_new]
-    c_new = cost[i_new]
-    t_new = tnode[i_new]
-    ta = np.full(m, t_new)
-    tb = np.empty(m)
-    for s in range(m):
-        tb[s] = t_new + _duration(q_new, q_a[s], tp.base_speed, tp.arm_speed)
-    phi = np.full(m, np.inf)
-    todo = np.empty(m, dtype=np.int64)
-    nt = 0
-    for s in range(m):
-        j = near_idx[s]
-        if j != parent[i_new] and c_new + lam * math.sqrt(_d2(q_new, q_a[s], dw)) < cost[j]:
-            todo[nt] = s
-            nt += 1
-    if nt > 0:
-        _cost_slots(todo[:nt], phi, q_b, q_a, ta, tb, kind, lam, dw, soc, grid, tp, counts)
-    cand = np.empty(m, dtype=np.int64)
-    nc = 0
-    for s in range(m):
-        if c_new + phi[s] < cost[near_idx[s]]:
-            cand[nc] = s
-            nc += 1
-    for ci in range(nc):
-        s = cand[ci]
-        j = near_idx[s]
-        if j == parent[i_new] or not cost[i_new] + phi[s] < cost[j]:
-            continue
-        counts[1] += 1
-        if checked[s] == 0:
-            ok = planar_kernel.motion_valid_ends(q_new, q[j], c_new_caps, clear[j], c_lower, c_upper, bodies, robot,
-                                                 env, env_grid, levers)
-        else:
-            ok = checked[s] == 1
-        if ok:
-            ok = _people_ok(q_new, q[j], ta[s], tb[s], params.scene, tp)
-        if ok:
-            _unlink(j, parent[j], first_child, next_sib, prev_sib)
-            _link(j, i_new, first_child, next_sib, prev_sib)
-            parent[j] = i_new
-            edge[j] = phi[s]
-            stack[0] = j
-            top = 1
-            while top > 0:
-                top -= 1
-                k = stack[top]
-                if k == i_new:
-                    raise RuntimeError("rewiring a node under its descendant")
-                t_old = tnode[k]
-                tnode[k] = tnode[parent[k]] + _duration(q[parent[k]], q[k], tp.base_speed, tp.arm_speed)
-                if k != j and tnode[k] != t_old and edge[k] < np.inf:
-                    # A moved descendant's motion, checked again at its new times: cut off when invalid.
-                    counts[1] += 1
-                    if not _people_ok(q[parent[k]], q[k], tnode[parent[k]], tnode[k], params.scene, tp):
-                        edge[k] = np.inf
-                cost[k] = cost[parent[k]] + edge[k]
-                c = first_child[k]
-                while c >= 0:
-                    stack[top] = c
-                    top += 1
-                    c = next_sib[c]
-
-
-@njit(cache=True)
-def _goal_edge(i, q, tnode, counts, params):
-    """The timed mode's goal connection of node i redone at ``tnode[i]``: its
-    cost, or inf when the motion is not valid then (0 for a node at the goal)."""
-    goal, tp = params.goal, params.timed
-    if _d2(goal, q[i], params.weights) == 0.0:
-        return 0.0
-    a = np.empty((1, 4))
-    b = np.empty((1, 4))
-    a[0] = q[i]
-    b[0] = goal
-    ta = np.full(1, tnode[i])
-    tb = np.full(1, tnode[i] + _duration(q[i], goal, tp.base_speed, tp.arm_speed))
-    counts[1] += 1
-    if not _people_ok(q[i], goal, ta[0], tb[0], params.scene, tp):
-        return np.inf
-    counts[2] += 1
-    return _timed_costs(a, b, ta, tb, params.kind, params.length_weight, params.distance_weights, params.social,
-                        params.grid, tp)[0]
-
-
-@njit(cache=True)
-def _cost_slots(slots, phi, q_a, q_b, t_a, t_b, kind, lam, dw, soc, grid, tp, counts):
-    """phi[slots] = the motion costs q_a[slots] -> q_b[slots] (RrtStar._extend's
-    cost()); in timed mode driven from t_a[slots] to t_b[slots]."""
-    k = slots.shape[0]
-    a, b = np.empty((k, 4)), np.empty((k, 4))
-    for t in range(k):
-        a[t], b[t] = q_a[slots[t]], q_b[slots[t]]
-    if tp.enabled:
-        ta, tb = np.empty(k), np.empty(k)
-        for t in range(k):
-            ta[t], tb[t] = t_a[slots[t]], t_b[slots[t]]
-        out = _timed_costs(a, b, ta, tb, kind, lam, dw, soc, grid, tp)
-    else:
-        out = _costs(a, b, kind, lam, dw, soc, grid)
-    for t in range(k):
-        phi[slots[t]] = out[t]
-    counts[2] += k
+# ---- the tree's state -----------------------------------------------------------------------------
 
 
 @njit(cache=True)
@@ -709,62 +805,83 @@ def init_state(start, iterations, params):
     """The :class:`TreeState` of a run of ``iterations`` iterations with the
     :class:`GrowParams` ``params`` before its first chunk: the tree of the
     start alone."""
-    goal, lower, upper, w, r_near = params.goal, params.lower, params.upper, params.weights, params.near_radius
-    informed = params.informed.informed
-    bodies, robot, env, env_grid = params.scene.bodies, params.scene.robot, params.scene.env, params.scene.grid
-    s_count = robot.shape[0]
+    w, scene, tp, informed = params.weights, params.scene, params.timed, params.informed.informed
     cap = 256
-    q = np.empty((cap, 4))
-    parent = np.full(cap, -1, dtype=np.int64)
-    cost = np.zeros(cap)
-    edge = np.zeros(cap)
-    first_child = np.full(cap, -1, dtype=np.int64)
-    next_sib = np.full(cap, -1, dtype=np.int64)
-    prev_sib = np.full(cap, -1, dtype=np.int64)
-    clear = np.empty((cap, s_count))  # every node's capsule clearances (motion ends)
-    counts = np.zeros(3, dtype=np.int64)
-    history = np.full(iterations, np.inf)
-    diameters = np.full(iterations if informed else 0, np.inf)
-    goal_nodes = np.empty(16, dtype=np.int64)
-    goal_edges = np.empty(16)
     # Nodes bucketed by their weighted (x, y) in square cells (linked lists),
     # so that nearest and near queries visit the nodes of nearby cells only.
-    g_geom = _grid_geometry(lower, upper, w, r_near)
-    g_head = np.full(int(g_geom[3]) * int(g_geom[4]), -1, dtype=np.int64)
-    g_next = np.full(cap, -1, dtype=np.int64)
-    q[0] = start
-    _insert(0, q, w, g_head, g_next, g_geom)
-    clear[0] = planar_kernel.capsule_clearances(start, bodies, robot, env, env_grid)
-    goal_clear = planar_kernel.capsule_clearances(goal, bodies, robot, env, env_grid)
-    ints = np.array([1, 0, -1, -1], dtype=np.int64)  # n, goal nodes, best node, first solution iteration
-    floats = np.array([np.inf, np.inf])  # best cost, ellipse diameter
-    tnode = np.zeros(cap)
-    goal_t = np.zeros(16)
-    if params.timed.enabled:
-        tnode[0] = params.timed.t_root
-    return TreeState(q, parent, cost, edge, first_child, next_sib, prev_sib, clear, g_next, goal_nodes, goal_edges,
-                     counts, history, diameters, g_head, g_geom, goal_clear, ints, floats, tnode, goal_t)
+    g_geom = _grid_geometry(params.lower, params.upper, w, params.near_radius)
+    diameters = np.full(iterations if informed else 0, np.inf)
+    state = TreeState(
+        q=np.empty((cap, 4)), parent=np.full(cap, -1, dtype=np.int64), cost=np.zeros(cap), edge=np.zeros(cap),
+        first_child=np.full(cap, -1, dtype=np.int64), next_sib=np.full(cap, -1, dtype=np.int64),
+        prev_sib=np.full(cap, -1, dtype=np.int64), clear=np.empty((cap, scene.robot.shape[0])),
+        g_next=np.full(cap, -1, dtype=np.int64), goal_nodes=np.empty(16, dtype=np.int64), goal_edges=np.empty(16),
+        counts=np.zeros(3, dtype=np.int64), history=np.full(iterations, np.inf), diameters=diameters,
+        g_head=np.full(int(g_geom[3]) * int(g_geom[4]), -1, dtype=np.int64), g_geom=g_geom,
+        goal_clear=_clearances(params.goal, scene),
+        ints=np.array([1, 0, -1, -1], dtype=np.int64),  # n, goal nodes, best node, first solution iteration
+        floats=np.array([np.inf, np.inf]),  # best cost, ellipse diameter
+        tnode=np.zeros(cap), goal_t=np.zeros(16),
+    )
+    state.q[0] = start
+    _insert(0, state.q, w, state.g_head, state.g_next, g_geom)
+    state.clear[0] = _clearances(start, scene)
+    if tp.enabled:
+        state.tnode[0] = tp.t_root
+    return state
+
+
+@njit(inline="always", cache=True)
+def reserve(state, count):
+    """``state`` with room for ``count`` more nodes and as many more goal
+    connections (an array that grows at least doubles, so that a run's
+    copies stay linear in its size); the same state when it has the room."""
+    if state.ints[0] + count > state.q.shape[0]:
+        state = _enlarge(state, max(2 * state.q.shape[0], state.ints[0] + count))
+    if state.ints[1] + count > state.goal_nodes.shape[0]:
+        state = _enlarge_goals(state, max(2 * state.goal_nodes.shape[0], state.ints[1] + count))
+    return state
 
 
 @njit(cache=True)
 def _enlarge(state, cap):
     """``state`` with room for ``cap`` nodes (the node arrays copied into larger ones)."""
-    (q, parent, cost, edge, first_child, next_sib, prev_sib, clear, g_next, goal_nodes, goal_edges,
-     counts, history, diameters, g_head, g_geom, goal_clear, ints, floats, tnode, goal_t) = state
-    n = ints[0]
-    q2 = np.empty((cap, 4))
-    q2[:n] = q[:n]
-    c2 = np.empty((cap, clear.shape[1]))
-    c2[:n] = clear[:n]
+    n = state.ints[0]
+    q = np.empty((cap, 4))
+    q[:n] = state.q[:n]
+    clear = np.empty((cap, state.clear.shape[1]))
+    clear[:n] = state.clear[:n]
     extra = cap - n
-    return TreeState(q2, np.concatenate((parent[:n], np.full(extra, -1, dtype=np.int64))),
-                     np.concatenate((cost[:n], np.zeros(extra))), np.concatenate((edge[:n], np.zeros(extra))),
-                     np.concatenate((first_child[:n], np.full(extra, -1, dtype=np.int64))),
-                     np.concatenate((next_sib[:n], np.full(extra, -1, dtype=np.int64))),
-                     np.concatenate((prev_sib[:n], np.full(extra, -1, dtype=np.int64))), c2,
-                     np.concatenate((g_next[:n], np.full(extra, -1, dtype=np.int64))), goal_nodes, goal_edges, counts,
-                     history, diameters, g_head, g_geom, goal_clear, ints, floats,
-                     np.concatenate((tnode[:n], np.zeros(extra))), goal_t)
+    none = np.full(extra, -1, dtype=np.int64)
+    return TreeState(
+        q=q, parent=np.concatenate((state.parent[:n], none)), cost=np.concatenate((state.cost[:n], np.zeros(extra))),
+        edge=np.concatenate((state.edge[:n], np.zeros(extra))),
+        first_child=np.concatenate((state.first_child[:n], none)),
+        next_sib=np.concatenate((state.next_sib[:n], none)), prev_sib=np.concatenate((state.prev_sib[:n], none)),
+        clear=clear, g_next=np.concatenate((state.g_next[:n], none)), goal_nodes=state.goal_nodes,
+        goal_edges=state.goal_edges, counts=state.counts, history=state.history, diameters=state.diameters,
+        g_head=state.g_head, g_geom=state.g_geom, goal_clear=state.goal_clear, ints=state.ints, floats=state.floats,
+        tnode=np.concatenate((state.tnode[:n], np.zeros(extra))), goal_t=state.goal_t,
+    )
+
+
+@njit(cache=True)
+def _enlarge_goals(state, cap):
+    """``state`` with room for ``cap`` goal connections (the goal arrays copied into larger ones)."""
+    g = state.ints[1]
+    nodes = np.empty(cap, dtype=np.int64)
+    nodes[:g] = state.goal_nodes[:g]
+    edges = np.empty(cap)
+    edges[:g] = state.goal_edges[:g]
+    times = np.zeros(cap)
+    times[:g] = state.goal_t[:g]
+    return TreeState(
+        q=state.q, parent=state.parent, cost=state.cost, edge=state.edge, first_child=state.first_child,
+        next_sib=state.next_sib, prev_sib=state.prev_sib, clear=state.clear, g_next=state.g_next, goal_nodes=nodes,
+        goal_edges=edges, counts=state.counts, history=state.history, diameters=state.diameters, g_head=state.g_head,
+        g_geom=state.g_geom, goal_clear=state.goal_clear, ints=state.ints, floats=state.floats, tnode=state.tnode,
+        goal_t=times,
+    )
 
 
 @njit(cache=True)
@@ -777,16 +894,8 @@ def seed_chain(seed, params, state):
     would; the chain stops before the first invalid waypoint. The last
     inserted node's goal connection is tried as :func:`grow` tries a new
     node's. Counted in ``counts`` as the loop counts. Returns the new state."""
-    goal, w, r_near = params.goal, params.weights, params.near_radius
-    kind, lam, dw, soc, grid = params.kind, params.length_weight, params.distance_weights, params.social, params.grid
-    c_lower, c_upper, bodies, robot, env, levers, env_grid = params.scene
-    tp = params.timed
-    timed = tp.enabled
-    if state.ints[0] + seed.shape[0] > state.q.shape[0]:
-        state = _enlarge(state, state.ints[0] + seed.shape[0])
-    (q, parent, cost, edge, first_child, next_sib, prev_sib, clear, g_next, goal_nodes, goal_edges,
-     counts, history, diameters, g_head, g_geom, goal_clear, ints, floats, tnode, goal_t) = state
-    n, n_goal = ints[0], ints[1]
+    obj, scene, tp, w = params.objective, params.scene, params.timed, params.weights
+    state = reserve(state, seed.shape[0])
     a = np.empty((1, 4))
     b = np.empty((1, 4))
     ta = np.zeros(1)
@@ -794,72 +903,31 @@ def seed_chain(seed, params, state):
     prev = 0
     for k in range(1, seed.shape[0]):
         qk = seed[k].copy()
-        if _d2(qk, q[prev], w) == 0.0:
+        if _d2(qk, state.q[prev], w) == 0.0:
             continue
-        counts[0] += 1
-        caps = planar_kernel.capsule_clearances(qk, bodies, robot, env, env_grid)
-        if not _valid(qk, caps, c_lower, c_upper):
+        state.counts[0] += 1
+        caps = _clearances(qk, scene)
+        if not _valid(qk, caps, scene.lower, scene.upper):
             break
-        a[0] = q[prev]
+        a[0] = state.q[prev]
         b[0] = qk
-        if timed:
-            ta[0] = tnode[prev]
-            tb[0] = ta[0] + _duration(q[prev], qk, tp.base_speed, tp.arm_speed)
-        counts[1] += 1
-        ok = planar_kernel.motion_valid_ends(q[prev], qk, clear[prev], caps, c_lower, c_upper, bodies, robot, env,
-                                             env_grid, levers)
-        if ok and timed:
-            ok = _people_ok(q[prev], qk, ta[0], tb[0], params.scene, tp)
+        if tp.enabled:
+            ta[0] = state.tnode[prev]
+            tb[0] = ta[0] + _duration(state.q[prev], qk, tp.base_speed, tp.arm_speed)
+        state.counts[1] += 1
+        ok = _static_ok(state.q[prev], qk, state.clear[prev], caps, scene)
+        if ok and tp.enabled:
+            ok = _people_ok(state.q[prev], qk, ta[0], tb[0], scene, tp)
         if not ok:
             break
-        counts[2] += 1
-        if timed:
-            c = _timed_costs(a, b, ta, tb, kind, lam, dw, soc, grid, tp)[0]
-        else:
-            c = _costs(a, b, kind, lam, dw, soc, grid)[0]
-        i = n
-        n += 1
-        q[i] = qk
-        _insert(i, q, w, g_head, g_next, g_geom)
-        clear[i] = caps
-        parent[i] = prev
-        edge[i] = c
-        cost[i] = cost[prev] + c
-        _link(i, prev, first_child, next_sib, prev_sib)
-        tnode[i] = tb[0]
-        prev = i
+        state.counts[2] += 1
+        prev = _add_node(qk, caps, prev, _motion_costs(a, b, ta, tb, obj, tp)[0], tb[0], state, w)
     if prev > 0:  # the chain's last node's goal connection
-        d = math.sqrt(_d2(goal, q[prev], w))
-        if d <= r_near:
-            c_goal = 0.0
-            ok = True
-            if d != 0.0:
-                counts[2] += 1
-                a[0] = q[prev]
-                b[0] = goal
-                if timed:
-                    ta[0] = tnode[prev]
-                    tb[0] = ta[0] + _duration(q[prev], goal, tp.base_speed, tp.arm_speed)
-                    c_goal = _timed_costs(a, b, ta, tb, kind, lam, dw, soc, grid, tp)[0]
-                else:
-                    c_goal = _costs(a, b, kind, lam, dw, soc, grid)[0]
-                counts[1] += 1
-                ok = planar_kernel.motion_valid_ends(q[prev], goal, clear[prev], goal_clear, c_lower, c_upper, bodies,
-                                                     robot, env, env_grid, levers)
-                if ok and timed:
-                    ok = _people_ok(q[prev], goal, ta[0], tb[0], params.scene, tp)
-            if ok:
-                if n_goal == goal_nodes.shape[0]:
-                    goal_nodes = np.concatenate((goal_nodes, np.empty(n_goal, dtype=np.int64)))
-                    goal_edges = np.concatenate((goal_edges, np.empty(n_goal)))
-                    goal_t = np.concatenate((goal_t, np.zeros(n_goal)))
-                goal_nodes[n_goal] = prev
-                goal_edges[n_goal] = c_goal
-                goal_t[n_goal] = tnode[prev]
-                n_goal += 1
-    ints[0], ints[1] = n, n_goal
-    return TreeState(q, parent, cost, edge, first_child, next_sib, prev_sib, clear, g_next, goal_nodes, goal_edges,
-                     counts, history, diameters, g_head, g_geom, goal_clear, ints, floats, tnode, goal_t)
+        _connect_goal(prev, state, params.goal, w, params.near_radius, obj, scene, tp)
+    return state
+
+
+# ---- geometry and the node grid ---------------------------------------------------------------------
 
 
 @njit(cache=True)
