@@ -30,7 +30,7 @@ demo: install
 	$(VENV)/bin/drake-social plan scenarios/office_bar.yaml --algorithm social_rrt_star --out $(OUT)/office_bar
 	$(VENV)/bin/drake-social simulate scenarios/office_bar.yaml --path $(OUT)/office_bar/path.csv --out $(OUT)/office_bar
 	@echo "outputs in $(OUT)/office_bar/: scene.png path.png cost_profile.png convergence.png path.csv result.json" \
-	  "replay.html executed.csv tracking.png sim.json"
+	  "replay.html executed.csv tracking.png motion.png sim.json"
 	@echo "watch the transport: open $(abspath $(OUT))/office_bar/replay.html in a browser"
 
 # Headless Chromium for the replay tests (tests/sim/browser.py): installed from

@@ -36,7 +36,7 @@ LAYERS = [
     ("front end", "#d9d2e9", [("cli.py", "argparse and printing only")]),
     ("application", "#c9daf8", [("app.py", "run_show, run_plan, run_simulate, run_study; map_tools.py"),
                                 ("experiments/", "the runners: bench/, study/ (sweeps, paper, crowd)")]),
-    ("execution, measures and figures", "#d0e0e3", [("sim/", "station diagram, simulate, analysis, replay"),
+    ("execution, measures and figures", "#d0e0e3", [("sim/", "station, autonomy, build_diagram, simulate, replay"),
                                                     ("evaluation/", "metrics of a plan or a run: per part, over time"),
                                                     ("viz/", "matplotlib figures")]),
     ("Drake model and systems", "#d9ead3", [("model/", "plant and SceneGraph of a scenario"),
@@ -103,7 +103,7 @@ AUTONOMY = {
     "robot_state_split": (0, 0), "planner": (4, 2.6), "path": (4, 2.6), "sequencer": (8, 0), "reference": (12, 0),
     "target_split": (12, 0), "reference_feedforward_split": (16, 1.4), "reference_config": (16, 1.4),
     "reference_state_split": (16, -1.4), "arm": (16, -1.4), "controller": (20, 0), "arm_command": (20, -2.6),
-    "safety": (4, -2.6), "held": (12, -2.8), "base_position_split": (16, 3.2),
+    "safety": (4, -2.6), "held": (12, -2.8), "base_position_split": (16, 3.2), "speed_limit": (8, -4.4),
 }
 BOX_W, BOX_H = 2.9, 0.75
 X_SCALE = 1.2  # the positions' x units, stretched so that a label fits between two boxes of a row

@@ -65,7 +65,7 @@ __all__ += ["run_crowd_experiment", "run_recorded_experiment"]
 PLAN_OUTPUTS = ("path.csv", "result.json", "path.png", "cost_profile.png", "convergence.png")
 #: The files ``simulate`` may write into ``out`` (replay.html when Meshcat records).
 SIMULATE_OUTPUTS = ("replay.html", "executed.csv", "people.csv", "replans.csv", "replans.png", "path.png",
-                    "tracking.png", "sim.json")
+                    "tracking.png", "motion.png", "sim.json")
 
 #: A progress callback: ``progress(done, total, status)`` (steps done of
 #: ``total``, and a short text such as ``"best 5.1"`` or ``"t = 3.2 s"``).
@@ -503,6 +503,9 @@ def run_simulate(*, scenario: Scenario | str | Path, out: str | Path, overrides:
             # With replanning (run.replans not empty) each distinct plan and wait is drawn over its time.
             draw_overlays(meshcat, loaded, run.waypoints if len(run.waypoints) else None,
                           people=getattr(run, "people", None), replans=run.replans)
+            from drake_social.sim.replay_speed import animate_slow_down
+
+            animate_slow_down(meshcat, run, float(loaded.execution.replay_fps))  # the base's colour: limited, held
             fit = set_top_view(meshcat, loaded)
             size = write_replay_html(meshcat, outputs.path("replay.html"), fit=fit)
             files.append("replay.html")
@@ -525,13 +528,33 @@ def run_simulate(*, scenario: Scenario | str | Path, out: str | Path, overrides:
                               geometry=arm_geometry(loaded), safety_distance=opts.safety_distance,
                               title=f"{_title(loaded, file)}\n{run.mode} / {run.execution}: {run.message}")
         fig.savefig(outputs.path("tracking.png"), dpi=130)
+        _write_motion_figure(outputs.path("motion.png"), loaded, run, _title(loaded, file))
         record = {"scenario": file, "overrides": list(overrides or []),
                   "path": None if path is None else str(path), "checker": checker,
                   **run.to_json_dict(), **finite_or_none(execution_metrics(loaded, run)),
                   "waypoints": np.asarray(run.waypoints).tolist()}
         outputs.write_text("sim.json", json_lines(record))
-        files += ["tracking.png", "sim.json"]
+        files += ["tracking.png", "motion.png", "sim.json"]
     return SimulateRun(record, run, files, size)
+
+
+def _write_motion_figure(path: Path, scenario: Scenario, run: SimulationResult, title: str) -> None:
+    """Writes ``motion.png``: the speed, acceleration and jerk of the base and of the
+    object's fastest point over time, with the slow-down's limit and the stops."""
+    from drake_social.evaluation.time_series import motion_profile
+    from drake_social.scenario.geometry import arm_geometry
+    from drake_social.viz.motion import motion_figure
+
+    profiles = {}
+    if len(run.times) > 1:
+        profiles = {"base": motion_profile(run.times, run.q[:, :2]),
+                    "object (fastest point)": motion_profile(
+                        run.times, arm_geometry(scenario).interest_points(run.q)[:, 3:])}
+    e = scenario.execution
+    fig = motion_figure(run.times, profiles, speed_limit=run.speed_limit, stops=run.stops, slow_stops=run.slow_stops,
+                        limits=(e.max_base_speed, e.max_base_acceleration, e.max_base_jerk),
+                        title=f"{title}\n{run.mode} / {run.execution}: speed, acceleration and jerk")
+    fig.savefig(path, dpi=130)
 
 
 def _write_path_figure(path: Path, scenario: Scenario, run: SimulationResult, title: str) -> None:

@@ -117,7 +117,8 @@ def _add_simulate(subparsers) -> None:
         "replan), DIR/people.csv (t,id,x,y,theta,v: where the "
         "people were, when the scenario has people), DIR/path.png (when people move: their tracks and the "
         "executed base track), DIR/tracking.png (references against actual "
-        "over time) and DIR/sim.json. Exit code 3 no path, 5 goal not reached "
+        "over time), DIR/motion.png (speed, acceleration and jerk, the slow-down near people) and DIR/sim.json. "
+        "Exit code 3 no path, 5 goal not reached "
         "within execution.time_limit, 6 the executed trajectory collides, 7 it "
         "passes a joint limit or a room bound (files are written in every case; stderr names each finding).",
     )
@@ -126,8 +127,9 @@ def _add_simulate(subparsers) -> None:
                    help="kinematic (the base integrates its velocity, fast) or dynamic (the MultibodyPlant "
                         "driven by a computed-torque servo); default: the scenario's execution.mode")
     p.add_argument("--execution", choices=EXECUTIONS,
-                   help="synchronized (one phase-synchronized reference per segment, stays on the planned "
-                        "segment) or paper (independent base P-control and arm trajectory, the paper's); "
+                   help="synchronized (one jerk-limited reference along the planned segments, at rest only "
+                        "where the path turns, slowing down near people) or paper (independent base P-control "
+                        "and arm trajectory, the paper's); "
                         "default: the scenario's execution.execution")
     p.add_argument("--replan", action="store_true", default=None,
                    help="replan while executing: every 1/planner.replan_rate s from the robot's configuration "

@@ -130,7 +130,7 @@ def test_run_simulate_follows_a_planned_path_csv(planned, tmp_path, tiny_scenari
                            progress=lambda done, total, status: calls.append((done, total)))
     record = dut.record
     # tiny has a person: people.csv beside executed.csv.
-    assert dut.files == ["executed.csv", "people.csv", "tracking.png", "sim.json"] and dut.replay_bytes is None
+    assert dut.files == ["executed.csv", "people.csv", "tracking.png", "motion.png", "sim.json"] and dut.replay_bytes is None
     assert record["path"] == str(path) and record["mode"] == "kinematic" and "planner" not in record
     assert json.loads((tmp_path / "sim.json").read_text()) == record
     np.testing.assert_array_equal(np.array(record["waypoints"]), np.loadtxt(path, delimiter=",", skiprows=1))

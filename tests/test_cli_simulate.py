@@ -44,7 +44,7 @@ def test_simulate_writes_its_files(simulated, planned):
     # The page to open is the folder's link, which stays valid after the next run.
     assert stdout.splitlines()[-1] == f"open {(out.resolve() / 'replay.html').as_uri()} in a browser to watch the replay"
     names = sorted(p.name for p in out.iterdir() if not p.name.startswith("."))
-    assert names == ["executed.csv", "people.csv", "replay.html", "sim.json", "tracking.png"]
+    assert names == ["executed.csv", "motion.png", "people.csv", "replay.html", "sim.json", "tracking.png"]
     record = json.loads((out / "sim.json").read_text())
     assert record["reached"] and record["collision_free"]
     assert record["mode"] == "kinematic" and record["execution"] == "synchronized"
@@ -56,6 +56,7 @@ def test_simulate_writes_its_files(simulated, planned):
     np.testing.assert_allclose(executed[-1, 1:5], record["waypoints"][-1], atol=0.06)
     assert record["time_to_goal"] == pytest.approx(executed[-2, 0])
     assert imread(out / "tracking.png").shape[0] > 500
+    assert imread(out / "motion.png").shape[0] > 500
 
 
 def test_replay_shows_the_executed_trajectory(simulated):
@@ -157,7 +158,7 @@ def test_a_joint_limit_pass_exits_7_and_is_named_apart_from_collisions(tmp_path,
 
 
 @pytest.mark.parametrize("name", ["sim.json", "executed.csv", "people.csv", "path.png", "tracking.png",
-                                  "replay.html"])
+                                  "motion.png", "replay.html"])
 def test_a_folder_named_like_an_output_is_refused_before_simulating(tmp_path, tiny_scenario_path, planned, capsys,
                                                                     name):
     out = tmp_path / "out"
@@ -236,7 +237,8 @@ def test_replan_writes_replans_csv_and_the_summary(tmp_path, tiny_scenario_path,
     record = json.loads((tmp_path / "sim.json").read_text())
     assert code == (0 if record["reached"] else 5)
     names = sorted(p.name for p in tmp_path.iterdir() if not p.name.startswith("."))
-    assert names == ["executed.csv", "people.csv", "replans.csv", "replans.png", "sim.json", "tracking.png"]
+    assert names == ["executed.csv", "motion.png", "people.csv", "replans.csv", "replans.png", "sim.json",
+                     "tracking.png"]
     lines = (tmp_path / "replans.csv").read_text().splitlines()
     assert lines[0] == "t,plan_time,cost,changed,status,searched,iterations,deadline_hit"
     rows = [line.split(",") for line in lines[1:]]
@@ -290,7 +292,8 @@ def test_a_replanning_robot_that_never_leaves_its_start_exits_5_with_its_outputs
     assert captured.err == ("drake-social: goal not reached within the time limit of 2 s "
                             "(the last replan: wait)\n")
     names = sorted(p.name for p in out.iterdir() if not p.name.startswith("."))
-    assert names == ["executed.csv", "people.csv", "replans.csv", "replans.png", "sim.json", "tracking.png"]
+    assert names == ["executed.csv", "motion.png", "people.csv", "replans.csv", "replans.png", "sim.json",
+                     "tracking.png"]
     rows = [line.split(",") for line in (out / "replans.csv").read_text().splitlines()[1:]]
     # The first plan and the replans at t = 0.2 .. 1.8 s (the one due at 2 s is past the run's end).
     assert [float(r[0]) for r in rows] == pytest.approx(np.arange(10) * 0.2) and {r[4] for r in rows} == {"wait"}

@@ -11,7 +11,8 @@
 * :class:`PeopleSource` outputs where the people are at the context's time
   (and steps a crowd fed back the robot); :class:`PeopleGeometry` moves their
   bodies in SceneGraph.
-* :class:`SafetyMonitor` stops the robot while a person is too close.
+* :class:`SafetyMonitor` stops the robot while a person is too close;
+  :class:`SpeedLimit` slows it down near people before that.
 """
 
 from drake_social.control.holonomic import (
@@ -35,6 +36,7 @@ from drake_social.control.ruckig_source import (
 )
 from drake_social.control.safety_monitor import SafetyMonitor, Stop, braking_travel
 from drake_social.control.sequencer import WaypointSequencer
+from drake_social.control.speed_limit import SpeedLimit
 
 __all__ = [
     "HolonomicPController",
@@ -49,6 +51,7 @@ __all__ = [
     "RuckigSegment",
     "RuckigTrajectorySource",
     "SafetyMonitor",
+    "SpeedLimit",
     "Stop",
     "WaypointSequencer",
     "arm_source_from_options",

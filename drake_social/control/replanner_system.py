@@ -30,6 +30,16 @@ or follows a wait. What a replan decides:
 
 ``hold`` also ends on ``"kept"``, ``"new"`` and ``"evade"``.
 
+A new path that does not start with the motion being driven (an ``"evade"``,
+or a ``"new"`` one after a wait, made from the robot's configuration) is
+taken only from rest: while the ``velocity`` input is not zero (above
+:data:`MOVING_SPEED`) it becomes a ``"wait"`` ("braking on the path before a
+new one"), the robot brakes along the segments it is on, and a later replan
+makes the way from where it stopped. Every path is then driven from rest or
+continues the motion being driven, and the robot keeps to the judged
+segments (a reference turning from its velocity towards a new waypoint
+would leave them by up to v^2 / (2 a)).
+
 Everything of a run is in one abstract state, an immutable
 :class:`ReplanState` (the path, version, hold, the latest result, the log of
 every result, the path followed so far): a second context, or a cloned one,
@@ -43,7 +53,9 @@ Ports:
 * inputs ``q`` (4: ``[x, y, psi1, psi2]``, metres, radians), ``people_state``
   (abstract :class:`~drake_social.people.PeopleState`, e.g.
   :class:`~drake_social.control.PeopleSource`'s), ``index`` (1: the
-  sequencer's ``index``; unconnected = 0);
+  sequencer's ``index``; unconnected = 0), ``velocity`` (4: the velocity
+  of the motion being driven, the synchronized reference's; unconnected =
+  at rest);
 * outputs ``waypoints`` (abstract (N, 4): the path to follow, from the
   configuration at the replan that chose it to the goal; ``[q]`` (1, 4) when
   no path was ever found), ``version`` (1: 0 for the first plan, +1 at each
@@ -83,9 +95,22 @@ from drake_social.arguments import require_instance, require_scenario
 from drake_social.people import PeopleModel, PeopleState, people_model, predict
 from drake_social.scenario import Scenario, replan_rate_problem
 
-__all__ = ["ReplanState", "ReplanningPlannerSystem", "replanning_summary"]
+__all__ = ["MOVING_SPEED", "ReplanState", "ReplanningPlannerSystem", "replanning_summary"]
 
 _log = logging.getLogger(__name__)
+
+#: Speed (m/s or rad/s, any coordinate of the ``velocity`` input) above which
+#: the motion being driven is under way. A reference at rest, or held at the
+#: end of a stop, outputs exactly 0.
+MOVING_SPEED = 1e-9
+
+
+def _braking_first(result, q: np.ndarray):
+    """``result``, a new path that does not start with the motion being
+    driven, turned into a wait while the robot moves: it brakes along the
+    judged segments it is on, and a later replan, from rest, takes the way."""
+    return dc.replace(result, waypoints=q[None], cost=math.inf, changed=False, status="wait",
+                      reason=f"braking on the path before a new one ({result.status}: {result.reason})")
 
 
 def _frozen(a) -> np.ndarray:
@@ -202,6 +227,7 @@ class ReplanningPlannerSystem(LeafSystem):
             "people_state", AbstractValue.Make(PeopleState(0.0, np.zeros((0, 2)), np.zeros(0), np.zeros((0, 2)),
                                                            np.zeros(0), ())))
         self._index_port = self.DeclareVectorInputPort("index", 1)
+        self._velocity_port = self.DeclareVectorInputPort("velocity", 4)
         self._state_index = self.DeclareAbstractState(AbstractValue.Make(ReplanState()))
         self.DeclareInitializationUnrestrictedUpdateEvent(self._FirstPlan)
         self.DeclarePeriodicUnrestrictedUpdateEvent(self._period, self._period, self._Replan)
@@ -260,6 +286,13 @@ class ReplanningPlannerSystem(LeafSystem):
                              self._horizon)
         return q, t, prediction
 
+    def _moving(self, context: Context) -> bool:
+        """Whether the motion being driven is under way: the ``velocity`` input
+        (the reference's) is not zero; unconnected: at rest."""
+        if not self._velocity_port.HasValue(context):
+            return False
+        return bool(np.any(np.abs(self._velocity_port.Eval(context)) > MOVING_SPEED))
+
     def _FirstPlan(self, context: Context, state: State) -> None:
         q, t, prediction = self._inputs(context)
         result = self._replanner.plan(q, t, prediction, None, replan_index=0, deadline=False)
@@ -285,8 +318,11 @@ class ReplanningPlannerSystem(LeafSystem):
         # Moving along the path (not held): the motion to the sequencer's target is committed.
         # A search while the path stays safe every replan_search_period s, and always after a wait.
         search = old.hold or t - old.searched_at >= self._search_period - 1e-9
+        committed = old.planned and not old.hold
         result = self._replanner.plan(q, t, prediction, previous, replan_index=len(old.log), deadline=True,
-                                      commit=old.planned and not old.hold, search=search)
+                                      commit=committed, search=search)
+        if result.changed and (result.status == "evade" or not committed) and self._moving(context):
+            result = _braking_first(result, q)
         log = old.log + (result,)
         if result.status == "wait":
             new = dc.replace(old, hold=True, result=result, log=log)

@@ -64,7 +64,9 @@ Example::
 
 from __future__ import annotations
 
-from typing import Sequence
+import functools
+import math
+from typing import Callable, Sequence
 
 import numpy as np
 import ruckig
@@ -72,6 +74,9 @@ from pydrake.common.value import AbstractValue
 from pydrake.systems.framework import EventStatus, BasicVector, Context, LeafSystem, State, ValueProducer
 
 from drake_social.arguments import real_array, require_execution_options
+from drake_social.control.path_motion import (PathProfile, Polyline, path_speed_factor, run_limits, speed_cap,
+                                              synchronized_limits)
+from drake_social.kinematics import displacement_bound
 from drake_social.scenario import ExecutionOptions
 
 __all__ = [
@@ -97,6 +102,12 @@ _SHARE_FLOOR = 1e-6
 # units, relative to max(1, |limit|)) is within it, and its outputs are
 # clipped to the limits, which removes only that rounding.
 _LIMIT_ROUNDING = 1e-12
+
+# A speed limit that rises re-plans a motion along a path only when the cap
+# of its speed rises by more than this share (a lower one re-plans at once):
+# a limit that changes every period near a person does not re-plan the
+# profile every period for a gain of nothing.
+_CAP_RAISE = 1e-3
 
 
 class RuckigSegment:
@@ -161,9 +172,11 @@ class RuckigSegment:
         if t - self.t0 >= duration:
             # Exactly at rest at the target (at_time(duration) leaves ~1e-16
             # residues, which would make the next rest-to-rest segment
-            # non-collinear and Ruckig fall back from phase to time sync).
-            zero = np.zeros_like(self.target)
-            return self.target.copy(), zero, zero.copy()
+            # non-collinear and Ruckig fall back from phase to time sync);
+            # a motion along a path at rest where it ends (a stop mid-run).
+            end = getattr(self.trajectory, "end", None)
+            zero = np.zeros_like(self.rest)
+            return (self.target.copy() if end is None else np.array(end, float)), zero, zero.copy()
         # at_time extrapolates for t < t0: clamp.
         p, v, a = self.trajectory.at_time(max(t - self.t0, 0.0))
         if self.clip is not None:  # rounding only: see _LIMIT_ROUNDING (plain floats: this runs every step)
@@ -189,25 +202,6 @@ def _direction_share(*vectors: np.ndarray) -> np.ndarray:
         if norm > 1e-12 * scale:
             share = np.maximum(share, np.abs(u) / norm)
     return share
-
-
-class _LineTrajectory:
-    """A motion on a straight segment: a 1-DoF ``ruckig.Trajectory`` of the
-    distance s along the unit vector ``u`` from ``start``;
-    the part of ``ruckig.Trajectory`` that :class:`RuckigSegment` uses."""
-
-    __slots__ = ("_trajectory", "_start", "_u", "duration")
-
-    def __init__(self, trajectory, start: np.ndarray, u: np.ndarray):
-        self._trajectory = trajectory
-        self._start = [float(x) for x in start]
-        self._u = [float(x) for x in u]
-        self.duration = float(trajectory.duration)
-
-    def at_time(self, t: float) -> tuple[list[float], list[float], list[float]]:
-        (s,), (sd,), (sdd,) = self._trajectory.at_time(t)
-        return ([p + s * u for p, u in zip(self._start, self._u)], [sd * u for u in self._u],
-                [sdd * u for u in self._u])
 
 
 class RuckigTrajectorySource(LeafSystem):
@@ -256,6 +250,21 @@ class RuckigTrajectorySource(LeafSystem):
             preview`` along the current segment: the feed-forward that makes
             a controller sampled every ``preview`` seconds (behind a
             zero-order hold) land exactly on the reference at the next sample.
+        via: declare the abstract input port ``via`` ((m, n) positions, m >=
+            0; unconnected = none): with ``synchronization="phase"`` a
+            segment from rest runs along the polyline from the rest position
+            through them to the target (a :class:`~drake_social.control.path_motion.PathProfile`:
+            one profile of the distance travelled, so the speed is carried
+            through them), on its straight segments exactly.
+        point_speed: a function of a unit direction u (n,) giving the speed
+            of the robot's fastest point per unit of speed along u (e.g.
+            :func:`~drake_social.kinematics.displacement_bound` with the arm's
+            levers); declares the input port ``speed_limit`` (1: the largest
+            speed of that point, m/s; unconnected or +inf = none), which caps
+            the speed of a motion along a path: a lower limit re-plans the
+            profile from the current state at once (jerk-limited braking on
+            the path), a higher one when it rises by more than
+            ``_CAP_RAISE``; a limit of 0 brakes to rest on the path.
 
     Raises:
         ValueError: limits not positive or of the wrong length, unknown
@@ -278,6 +287,8 @@ class RuckigTrajectorySource(LeafSystem):
         xy_max_abs_sum: float | None = None,
         position_limits: tuple[Sequence[float], Sequence[float]] | None = None,
         preview: float | None = None,
+        via: bool = False,
+        point_speed: Callable[[np.ndarray], float] | None = None,
     ):
         super().__init__()
         initial = np.array(initial_position, float).reshape(-1)
@@ -338,6 +349,12 @@ class RuckigTrajectorySource(LeafSystem):
 
         self._target_port = self.DeclareVectorInputPort("target", n)
         self._hold_port = self.DeclareVectorInputPort("hold", 1)
+        self._via_port = self.DeclareAbstractInputPort("via", AbstractValue.Make(np.zeros((0, n)))) if via else None
+        if point_speed is not None and not callable(point_speed):
+            raise ValueError(f"RuckigTrajectorySource: point_speed must be a function of a direction, got "
+                             f"{point_speed!r}")
+        self._point_speed = point_speed
+        self._speed_port = self.DeclareVectorInputPort("speed_limit", 1) if point_speed is not None else None
         self._segment_index = self.DeclareAbstractState(AbstractValue.Make(self._RestSegment(0.0, initial)))
         self.DeclarePeriodicUnrestrictedUpdateEvent(period, 0.0, self._Retarget)
         # The same update on demand (CalcForcedUnrestrictedUpdate), for tests and scripts.
@@ -403,8 +420,11 @@ class RuckigTrajectorySource(LeafSystem):
             return EventStatus.DidNothing()  # no target yet (unconnected, unfixed): stay as is
         segment = self._Segment(context)
         target = self._target_port.Eval(context)
-        if segment.target is not None and target.tolist() == segment.target_list and not segment.held:
-            return EventStatus.DidNothing()  # the common case, every period: keep it cheap
+        if segment.target is not None and target.tolist() == segment.target_list:
+            if not segment.held:
+                return self._Recap(context, state, segment)  # the common case, every period: keep it cheap
+            if isinstance(segment.trajectory, PathProfile):  # released: on along the same path
+                return self._Replan(context, state, segment)
         target = np.asarray(target, float)
         if not np.all(np.isfinite(target)):
             raise RuntimeError(f"{self.get_name()}: the target input must be finite, got {target}")
@@ -416,7 +436,7 @@ class RuckigTrajectorySource(LeafSystem):
                                f"position limits [{limits[0].tolist()}, {limits[1].tolist()}]")
         at_rest = not (np.any(v) or np.any(a))
         if at_rest and self._synchronization == ruckig.Synchronization.Phase:
-            trajectory = self._Line(t, p, target)
+            trajectory = self._Path(context, p, self._Via(context, t), target)
         else:
             trajectory = self._Calculate(t, p, v, a, target, self._synchronization)
             if limits is not None and not self._WithinLimits(trajectory):
@@ -424,7 +444,7 @@ class RuckigTrajectorySource(LeafSystem):
                     # The current segment stays within the limits and ends at rest;
                     # the next update after that starts a rest-to-rest segment.
                     return EventStatus.DidNothing()
-                trajectory = self._Line(t, p, target)  # between two points of the box: within it
+                trajectory = self._Path(context, p, np.zeros((0, self._n)), target)  # in the box: within it
         if trajectory is None:  # already there
             state.get_mutable_abstract_state(self._segment_index).set_value(RuckigSegment(t, None, target, target))
             return None
@@ -432,63 +452,98 @@ class RuckigTrajectorySource(LeafSystem):
             RuckigSegment(t, trajectory, p, target, clip=None if limits is None else self._limit_lists))
 
     def _Hold(self, context: Context, state: State) -> None:
-        """Stops the reference where it is (once; then keeps it while held)."""
+        """Stops the reference where it is (once; then keeps it while held).
+
+        A motion along a path stops on it and keeps the path, so the release
+        goes on along it (:meth:`_Replan`)."""
         segment = self._Segment(context)
         if segment.held:
             return EventStatus.DidNothing()
         t = context.get_time()
         p = segment.at(t)[0]
-        state.get_mutable_abstract_state(self._segment_index).set_value(
-            RuckigSegment(t, None, p, segment.target, held=True))
+        if isinstance(segment.trajectory, PathProfile):
+            held = RuckigSegment(t, segment.trajectory.resting(t - segment.t0), p, segment.target,
+                                 clip=segment.clip, held=True)
+        else:
+            held = RuckigSegment(t, None, p, segment.target, held=True)
+        state.get_mutable_abstract_state(self._segment_index).set_value(held)
         return None
 
-    def _Line(self, t: float, p: np.ndarray, target: np.ndarray) -> "_LineTrajectory | None":
-        """The time-optimal rest-to-rest motion on the straight segment p -> target (None if p == target).
+    def _Cap(self, context: Context) -> float:
+        """The ``speed_limit`` input, m/s of the fastest point (+inf: none, or unconnected)."""
+        if self._speed_port is None or not self._speed_port.HasValue(context):
+            return math.inf
+        value = float(self._speed_port.Eval(context)[0])
+        if math.isnan(value):
+            raise RuntimeError(f"{self.get_name()}: the speed_limit input is NaN at t = {context.get_time()} s")
+        return value
 
-        A 1-DoF Ruckig profile of the distance s along the unit direction u,
-        with each limit the tightest of the DoFs': ``max_i / |u_i|`` for a
-        per-DoF limit, ``max / |u_g|`` for the norm of the ``xy_norm_dofs``
-        group g and ``xy_max_abs_sum / sum_g |u_i|``. Unlike an n-DoF phase
+    def _Recap(self, context: Context, state: State, segment: RuckigSegment):
+        """Re-plans a motion along a path whose speed cap the ``speed_limit`` input changed."""
+        profile = segment.trajectory
+        if self._speed_port is None or not isinstance(profile, PathProfile):
+            return EventStatus.DidNothing()
+        cap = speed_cap(profile.limits, self._Cap(context), path_speed_factor(profile.path, self._point_speed))
+        if cap < profile.cap:  # lower: at once, unless at rest at the end
+            arrived = context.get_time() - segment.t0 >= profile.duration and profile.arrives
+            if arrived:
+                return EventStatus.DidNothing()
+        elif not (cap > 0.0 == profile.cap or cap > profile.cap * (1.0 + _CAP_RAISE)):
+            return EventStatus.DidNothing()  # the same, or not risen enough to matter
+        return self._Replan(context, state, segment, cap)
+
+    def _Replan(self, context: Context, state: State, segment: RuckigSegment, cap: float | None = None):
+        """A new profile along the segment's path from its state at the context's time."""
+        profile = segment.trajectory
+        t = context.get_time()
+        if cap is None:
+            cap = speed_cap(profile.limits, self._Cap(context), path_speed_factor(profile.path, self._point_speed))
+        s, sd, sdd = profile.state(t - segment.t0)
+        try:
+            new = PathProfile.plan(profile.path, profile.limits, cap, s, sd, sdd)
+        except RuntimeError as error:
+            raise RuntimeError(f"{self.get_name()}: at t = {t} s: {error}") from error
+        state.get_mutable_abstract_state(self._segment_index).set_value(
+            RuckigSegment(t, new, segment.at(t)[0], segment.target, clip=segment.clip))
+        return None
+
+    def _Via(self, context: Context, t: float) -> np.ndarray:
+        """The ``via`` input as an (m, n) array (none when undeclared or unconnected)."""
+        if self._via_port is None or not self._via_port.HasValue(context):
+            return np.zeros((0, self._n))
+        via = np.asarray(self._via_port.Eval(context), float).reshape(-1, self._n)
+        if not np.all(np.isfinite(via)):
+            raise RuntimeError(f"{self.get_name()}: the via input must be finite, got {via.tolist()} at t = {t} s")
+        limits = self._position_limits
+        if limits is not None and not np.all((via >= limits[0]) & (via <= limits[1])):
+            raise RuntimeError(f"{self.get_name()}: a via position {via.tolist()} at t = {t} s is outside the "
+                               f"position limits [{limits[0].tolist()}, {limits[1].tolist()}]")
+        return via
+
+    def _Path(self, context: Context, p: np.ndarray, via: np.ndarray, target: np.ndarray) -> PathProfile | None:
+        """The time-optimal motion from rest at p through ``via`` to rest at the target (None if p == target).
+
+        One 1-DoF Ruckig profile of the distance s along the polyline (a
+        :class:`~drake_social.control.path_motion.PathProfile`), with each
+        limit the tightest of the DoFs' on every segment
+        (:func:`~drake_social.control.path_motion.line_limits`) and the
+        speed capped by the ``speed_limit`` input. Unlike an n-DoF phase
         synchronization, which Ruckig silently turns into a time
         synchronization off the segment when the DoFs' profiles differ in
         shape, it exists for every pair of limits.
         """
-        d = target - p
-        length = float(np.linalg.norm(d))
-        if length == 0.0:
+        t = context.get_time()
+        points = np.vstack([p[None], via, target[None]])
+        if not np.any(points != p):
             return None
-        u = d / length
-        scale = np.abs(u)
-        free = np.ones(self._n, bool)
-        limits = []
-        for per_dof in (self._max_velocity, self._max_acceleration, self._max_jerk):
-            bounds = []
-            if self._norm_dofs is not None:
-                g = self._norm_dofs
-                free[g] = False
-                norm = float(np.linalg.norm(u[g]))
-                if norm > 0:
-                    # The group's limits bound its norm (the per-DoF values of the group are equal).
-                    bounds.append(float(np.min(per_dof[g])) / norm)
-            moving = free & (scale > 0)
-            bounds.extend((per_dof[moving] / scale[moving]).tolist())
-            limits.append(min(bounds))
-        if self._max_abs_sum is not None:
-            l1 = float(np.sum(scale[self._norm_dofs]))
-            if l1 > 0:
-                limits[0] = min(limits[0], self._max_abs_sum / l1)
-        inp = ruckig.InputParameter(1)
-        inp.current_position, inp.current_velocity, inp.current_acceleration = [0.0], [0.0], [0.0]
-        inp.target_position, inp.target_velocity, inp.target_acceleration = [length], [0.0], [0.0]
-        inp.max_velocity, inp.max_acceleration, inp.max_jerk = [limits[0]], [limits[1]], [limits[2]]
-        trajectory = ruckig.Trajectory(1)
+        path = Polyline(points)
+        limits = run_limits(path, (self._max_velocity, self._max_acceleration, self._max_jerk, self._norm_dofs,
+                                   self._max_abs_sum))
+        cap = speed_cap(limits, self._Cap(context), path_speed_factor(path, self._point_speed))
         try:
-            result = ruckig.Ruckig(1).calculate(inp, trajectory)
-        except ruckig.RuckigError as error:
-            raise RuntimeError(f"{self.get_name()}: Ruckig failed at t = {t} s: {error}") from error
-        if result != ruckig.Result.Working:
-            raise RuntimeError(f"{self.get_name()}: Ruckig failed at t = {t} s with {result}; input:\n{inp}")
-        return _LineTrajectory(trajectory, p, u)
+            return PathProfile.plan(path, limits, cap)
+        except RuntimeError as error:
+            raise RuntimeError(f"{self.get_name()}: at t = {t} s: {error}") from error
 
     def _Calculate(self, t: float, p: np.ndarray, v: np.ndarray, a: np.ndarray, target: np.ndarray,
                    synchronization: ruckig.Synchronization):
@@ -552,7 +607,8 @@ class RuckigTrajectorySource(LeafSystem):
 
     def _CalcFinished(self, context: Context, output: BasicVector) -> None:
         segment = self._Segment(context)
-        finished = not segment.held and context.get_time() - segment.t0 >= segment.duration
+        finished = (not segment.held and context.get_time() - segment.t0 >= segment.duration
+                    and getattr(segment.trajectory, "arrives", True))
         output.SetAtIndex(0, 1.0 if finished else 0.0)
 
 
@@ -582,6 +638,7 @@ def arm_source_from_options(
 def reference_source_from_options(
     execution_options: ExecutionOptions, initial_q: Sequence[float],
     position_limits: tuple[Sequence[float], Sequence[float]] | None = None,
+    lever: Sequence[float] | None = None,
 ) -> RuckigTrajectorySource:
     """The synchronized reference of the whole configuration ``[x, y, psi1, psi2]``.
 
@@ -594,25 +651,35 @@ def reference_source_from_options(
     :func:`~drake_social.control.holonomic.wheel_limited_speed` and the
     wheels are never asked for more than they give. Its ``mean_velocity``
     previews one ``control_period``, the feed-forward of the sampled base
-    controller.
+    controller. From rest it runs through the ``via`` input's positions
+    (the sequencer's waypoints where the path goes straight on) to the
+    target, carrying its speed through them.
 
     Args:
         execution_options: a scenario's ``execution`` section.
         initial_q: (4,) initial configuration (metres, radians).
         position_limits: (lower, upper) limits of ``[x, y, psi1, psi2]`` the
             reference keeps to (the room bounds and the joint limits), or None.
+        lever: the levers ``(c_s, c_g)`` of the robot's points
+            (``ArmGeometry.lever(include_body=True)``, metres): when given,
+            the input ``speed_limit`` caps the speed of the fastest point,
+            ``|v_xy| + c_s |psi1'| + c_g |psi1' + psi2'|``
+            (:func:`~drake_social.kinematics.displacement_bound`).
     """
     require_execution_options(execution_options, "reference_source_from_options")
     e = execution_options
+    max_velocity, max_acceleration, max_jerk, _, abs_sum = synchronized_limits(e)
     return RuckigTrajectorySource(
-        xy_max_abs_sum=e.max_wheel_speed * e.wheel_radius,
+        xy_max_abs_sum=abs_sum,
         position_limits=position_limits,
         initial_position=real_array(initial_q, "reference_source_from_options", "initial_q", (4,), layout="[x, y, psi1, psi2]"),
-        max_velocity=[e.max_base_speed, e.max_base_speed, *e.arm_max_velocity],
-        max_acceleration=[e.max_base_acceleration, e.max_base_acceleration, *e.arm_max_acceleration],
-        max_jerk=[e.max_base_jerk, e.max_base_jerk, *e.arm_max_jerk],
+        max_velocity=max_velocity,
+        max_acceleration=max_acceleration,
+        max_jerk=max_jerk,
         period=e.control_period,
         synchronization="phase",
         xy_norm_dofs=(0, 1),
         preview=e.control_period,
+        via=True,
+        point_speed=None if lever is None else functools.partial(displacement_bound, lever=np.asarray(lever, float)),
     )

@@ -10,6 +10,8 @@ robot (the base disc, the two link capsules, the object's capsules) is within
 distance; every period its compiled single-configuration form
 :func:`~drake_social.people.proximity.robot_distance`, the same numbers), and clears it when every part is farther: a safety field, as on
 real mobile robots. ``safety_distance = 0`` stops on contact (or overlap) only.
+A stop is released only once every part has been clear for ``release_time``
+seconds (a minimum hold, against stop-and-go at the boundary).
 
 The flag is state, so ``stop`` has no direct feedthrough from ``q``: the
 loop monitor -> controller -> robot -> monitor has no algebraic loop. The
@@ -17,7 +19,9 @@ decision is an unrestricted update, which Drake's Simulator applies before
 the discrete updates of the same instant: the sampled base command (a
 zero-order hold) and the sequencer read the new flag at once, while another
 unrestricted update (a Ruckig reference) reads it one ``period`` later (see
-:func:`braking_travel` for what the robot may travel meanwhile).
+:func:`braking_travel` for what the robot may travel meanwhile; in the
+synchronized execution the base follows that reference, so that base and arm
+stop together on the planned segment).
 
 State (one abstract value, an immutable :class:`SafetyRecord`): the flag and
 every stop so far (:class:`Stop`: start, end, nearest person, part,
@@ -105,10 +109,13 @@ class SafetyRecord:
     Attributes:
         stopped: the robot is held.
         stops: every stop in order; the last one has ``end = None`` while stopped.
+        clear_since: while stopped, the time of the first of the samples in a
+            row that found every part clear (None: the last one did not).
     """
 
     stopped: bool = False
     stops: tuple[Stop, ...] = ()
+    clear_since: float | None = None
 
     def __copy__(self):
         return self
@@ -125,20 +132,24 @@ def robot_reach(geometry: ArmGeometry) -> float:
     return max(geometry.base_radius, l1 + l2 + max(geometry.link_radius, obj))
 
 
-def braking_travel(geometry: ArmGeometry, *, max_base_speed: float, arm_max_velocity, period: float) -> float:
+def braking_travel(geometry: ArmGeometry, *, max_base_speed: float, arm_max_velocity, period: float,
+                   execution: str = "synchronized") -> float:
     """How far a point of the robot may move towards a person after the last clear sample, metres.
 
     The monitor decides every ``period``: at the last clear sample t_{k-1}
     every part is farther than the safety distance; the robot moves freely
-    until the next sample t_k, where the monitor sees it within. In the
-    diagram the base's sampled command reads the flag of t_k at t_k (zero
-    from then on), while the Ruckig references hold at t_{k+1}: the arm moves
-    one more period. A body point therefore moves at most ``period (v_base +
-    2 v_arm)`` with ``v_arm = w1 (l1 + l2 + e) + w2 (l2 + e)`` (``e`` the
+    until the next sample t_k, where the monitor sees it within. The Ruckig
+    references read the flag of t_k one period later and hold at t_{k+1}.
+    In ``synchronized`` execution the base follows the held reference, so
+    base and arm stop together at t_{k+1}, on the planned segment: a body
+    point moves at most ``2 period (v_base + v_arm)``. In ``paper``
+    execution the base's sampled command reads the flag at t_k (zero from
+    then on) while the arm moves one more period: ``period (v_base + 2
+    v_arm)``. Here ``v_arm = w1 (l1 + l2 + e) + w2 (l2 + e)`` (``e`` the
     object's reach beyond the gripper, its farthest point plus the capsule
-    radius, and ``w1``, ``w2`` the joint speed limits), so in ``kinematic``
+    radius, and ``w1``, ``w2`` the joint speed limits). So in ``kinematic``
     mode the robot never brings a part closer than ``safety_distance`` minus
-    this (and minus what the person walks in a period) to a person; a person
+    this (and minus what the person walks meanwhile) to a person; a person
     who walks on into the held robot comes closer by their own motion. In
     ``dynamic`` mode the servo's lag adds to it.
 
@@ -147,28 +158,41 @@ def braking_travel(geometry: ArmGeometry, *, max_base_speed: float, arm_max_velo
         max_base_speed: base speed limit, m/s.
         arm_max_velocity: (2,) joint speed limits, rad/s.
         period: the monitor's (and the controller's) period, seconds.
+        execution: ``"synchronized"`` or ``"paper"``.
     """
     l1, l2 = geometry.link_lengths
     e = max(geometry.link_radius,
             float(np.max(np.linalg.norm(geometry.object_points, axis=1))) + geometry.object_radius)
     w1, w2 = (float(w) for w in arm_max_velocity)
-    return period * (max_base_speed + 2.0 * (w1 * (l1 + l2 + e) + w2 * (l2 + e)))
+    arm = w1 * (l1 + l2 + e) + w2 * (l2 + e)
+    if execution == "paper":
+        return period * (max_base_speed + 2.0 * arm)
+    if execution != "synchronized":
+        raise ValueError(f"braking_travel: execution must be 'synchronized' or 'paper', got {execution!r}")
+    return 2.0 * period * (max_base_speed + arm)
 
 
 class SafetyMonitor(LeafSystem):
     """Sets ``stop`` while a part of the robot is within ``safety_distance`` of a person.
 
+    A stop is released by the first sample that has found every part clear
+    for ``release_time`` seconds (every sample from one at least that long
+    ago clear): a person lingering at the boundary does not make the robot
+    stop and go every period. 0 releases at the first clear sample.
+
     Args:
         geometry: the robot and its object (``drake_social.scenario.geometry.arm_geometry``).
         safety_distance: metres (>= 0; 0 = stop on contact only).
         period: seconds between decisions (> 0; the control period).
+        release_time: seconds clear before a release (>= 0; the scenario's
+            ``execution.release_time``).
 
     Raises:
         TypeError: ``geometry`` is not an ArmGeometry.
         ValueError: ``safety_distance`` or ``period`` out of range.
     """
 
-    def __init__(self, geometry: ArmGeometry, *, safety_distance: float, period: float):
+    def __init__(self, geometry: ArmGeometry, *, safety_distance: float, period: float, release_time: float = 0.0):
         super().__init__()
         if not isinstance(geometry, ArmGeometry):
             raise TypeError(f"SafetyMonitor: geometry must be a drake_social.kinematics.ArmGeometry, "
@@ -179,6 +203,10 @@ class SafetyMonitor(LeafSystem):
                              f"got {safety_distance!r}")
         if not (isinstance(period, (int, float)) and math.isfinite(period) and period > 0):
             raise ValueError(f"SafetyMonitor: period must be a finite number of seconds > 0, got {period!r}")
+        if not (isinstance(release_time, (int, float)) and math.isfinite(release_time) and release_time >= 0):
+            raise ValueError(f"SafetyMonitor: release_time must be a finite number of seconds >= 0, "
+                             f"got {release_time!r}")
+        self._release = float(release_time)
         self._geometry = geometry
         self._safety = float(safety_distance)
         self._robot_args = robot_distance_args(geometry)
@@ -233,16 +261,26 @@ class SafetyMonitor(LeafSystem):
         q = self._q_port.Eval(context)
         people = self._people_port.Eval(context)
         close = self.too_close(q, people)
-        if close == record.stopped:
-            return EventStatus.DidNothing()
         t = context.get_time()
-        if close:
+        if close and record.stopped:
+            if record.clear_since is None:
+                return EventStatus.DidNothing()
+            record = dc.replace(record, clear_since=None)  # not clear for long enough
+        elif not close and not record.stopped:
+            return EventStatus.DidNothing()
+        elif close:
             distance, index, part = self.nearest(q, people)
             name = people.names[index] or str(index)
             record = SafetyRecord(True, record.stops + (Stop(t, None, name, part, distance),))
-        else:
-            last = dc.replace(record.stops[-1], end=t)
-            record = SafetyRecord(False, record.stops[:-1] + (last,))
+        else:  # stopped and clear: released once clear for release_time (1e-9 s: periods summed apart)
+            since = t if record.clear_since is None else record.clear_since
+            if t - since < self._release - 1e-9:
+                if record.clear_since is not None:
+                    return EventStatus.DidNothing()
+                record = dc.replace(record, clear_since=since)
+            else:
+                last = dc.replace(record.stops[-1], end=t)
+                record = SafetyRecord(False, record.stops[:-1] + (last,))
         state.get_mutable_abstract_state(self._record_index).set_value(record)
         return None
 

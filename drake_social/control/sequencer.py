@@ -20,6 +20,18 @@ The outputs answer for the new path at once (the version input is among
 their prerequisites, so the target never shows the new path at the old
 index); the update stores the new version. Without it (or unconnected), nothing of this runs.
 
+With ``pass_through=True`` (the synchronized execution) the sequencer heads
+only for the waypoints where the path turns: from the waypoint the robot
+rests at (index i), the next target is :func:`next_rest` (i), the farthest
+later waypoint v such that every waypoint between lies within
+:data:`PASS_THROUGH_TOLERANCE` of the straight segment i -> v (in the
+planner's weighted configuration distance ``||W dq||``) and in order along
+it; the output ``via`` gives the waypoints between, which the reference
+goes through without stopping. The planned waypoints need not be free of
+such points (a given path, a raw path): they are gone through, not dropped.
+After a new path version the target is its waypoint 1 (the motion the
+replanner committed to), with nothing between.
+
 The decision is taken in a periodic discrete update (also declared as a
 forced update, so ``CalcForcedDiscreteVariableUpdate`` runs it); the outputs only read
 the state (and the waypoints), so ``target``, ``done`` and ``index`` have no
@@ -32,7 +44,9 @@ Ports:
   :class:`~drake_social.control.PlannerSystem`'s ``waypoints``; only when no
   fixed array is given), ``q`` (4), ``reference_done`` (1; only with
   ``wait_for_reference=True``), ``hold`` (1, optional), ``version`` (1, only with ``versioned=True``; optional);
-* outputs ``target`` (4), ``done`` (1, 0.0 or 1.0), ``index`` (1).
+* outputs ``target`` (4), ``done`` (1, 0.0 or 1.0), ``index`` (1), ``via``
+  (abstract (m, 4): the waypoints between the rest and the target; only
+  with ``pass_through=True``).
 
 Example::
 
@@ -58,10 +72,59 @@ from pydrake.systems.framework import EventStatus, BasicVector, Context, Discret
 from drake_social.arguments import require_execution_options
 from drake_social.scenario import ExecutionOptions
 
-__all__ = ["WaypointSequencer"]
+__all__ = ["PASS_THROUGH_TOLERANCE", "WaypointSequencer", "next_rest"]
 
-# Layout of the single discrete state group.
+# Layout of the single discrete state group (then the origin with pass_through).
 _INDEX, _DONE, _VERSION = 0, 1, 2
+
+#: Largest distance ``||W (q - s)||`` (metres and radians scaled by the
+#: planner's ``planner.distance_weights`` W) of a waypoint from the straight
+#: segment between the rest before it and a later waypoint, for the robot to
+#: go through it without stopping (:func:`next_rest`). The optimiser's
+#: collinear waypoints (equal parts of a subdivided motion) lie within a few
+#: ulp of a room's coordinates of their neighbours' segment (3.6e-15 on
+#: office_bar, whose nearest turning waypoint is 1.5e-3 off it): 1e-9 is a
+#: million times their rounding. The reference runs on the planned segments
+#: themselves whatever this is; the tolerance only bounds the turn it carries
+#: speed through (``2 tolerance / l`` radians between segments of length l).
+PASS_THROUGH_TOLERANCE = 1e-9
+
+
+def next_rest(waypoints: np.ndarray, i: int, weights: np.ndarray | None = None,
+              tolerance: float = PASS_THROUGH_TOLERANCE) -> int:
+    """The next waypoint to come to rest at after waypoint i.
+
+    The farthest v > i such that every waypoint strictly between i and v
+    lies within ``tolerance`` of the straight segment i -> v (the distance
+    ``||W (w - s)||`` to its nearest point s) and in order along it (their
+    positions on it do not go back); i + 1 when the next waypoint turns, i at
+    the last waypoint.
+
+    Args:
+        waypoints: (N, 4) the path.
+        i: the index the robot rests at, 0 <= i < N.
+        weights: (4,) the distance's per-coordinate scale W (the planner's
+            ``planner.distance_weights``); None = all ones.
+        tolerance: the largest distance, >= 0.
+    """
+    wp = np.asarray(waypoints, float)
+    w = np.ones(wp.shape[1]) if weights is None else np.asarray(weights, float)
+    if i >= len(wp) - 1:
+        return i
+    scaled = (wp[i:] - wp[i]) * w  # relative to the rest, scaled: rest at 0
+    v = i + 1
+    for j in range(2, len(scaled)):
+        d = scaled[j]
+        dd = float(d @ d)
+        if dd == 0.0:
+            break
+        between = scaled[1:j]
+        t = between @ d / dd
+        off = np.linalg.norm(between - np.clip(t, 0.0, 1.0)[:, None] * d, axis=1)
+        if not (np.all(off <= tolerance) and np.all(np.diff(np.concatenate([[0.0], t, [1.0]])) >= 0.0)):
+            break
+        v = i + j
+    return v
 
 
 def _checked_waypoints(waypoints, who: str) -> np.ndarray:
@@ -98,6 +161,10 @@ class WaypointSequencer(LeafSystem):
             the input port ``reference_done``).
         versioned: declare the input port ``version`` (a replanner's path
             version; see the module docstring).
+        pass_through: head only for the waypoints where the path turns
+            (:func:`next_rest`) and declare the output ``via``.
+        distance_weights: (4,) W of the pass-through tolerance's distance
+            (the planner's ``planner.distance_weights``); None = all ones.
 
     Raises:
         ValueError: a fixed array that is empty, not (N, 4) or not finite;
@@ -115,6 +182,8 @@ class WaypointSequencer(LeafSystem):
         period: float,
         wait_for_reference: bool = False,
         versioned: bool = False,
+        pass_through: bool = False,
+        distance_weights=None,
     ):
         super().__init__()
         for name, value in (("base_tolerance", base_tolerance), ("joint_tolerance", joint_tolerance),
@@ -124,6 +193,13 @@ class WaypointSequencer(LeafSystem):
         self._base_tolerance = float(base_tolerance)
         self._joint_tolerance = float(joint_tolerance)
         self._fixed = None if waypoints is None else _checked_waypoints(waypoints, "WaypointSequencer")
+        self._weights = None
+        if distance_weights is not None:
+            self._weights = np.array(distance_weights, float).reshape(-1)
+            if self._weights.shape != (4,) or not np.all(np.isfinite(self._weights)) or np.any(self._weights < 0):
+                raise ValueError(f"WaypointSequencer: distance_weights must be 4 finite numbers >= 0, "
+                                 f"got {distance_weights!r}")
+        self._pass_through = bool(pass_through)
 
         self._waypoints_port = None
         if self._fixed is None:
@@ -135,8 +211,10 @@ class WaypointSequencer(LeafSystem):
         self._hold_port = self.DeclareVectorInputPort("hold", 1)
         self._version_port = self.DeclareVectorInputPort("version", 1) if versioned else None
 
-        # [index, done] (+ version), all start at 0
-        self._state_index = self.DeclareDiscreteState(3 if versioned else 2)
+        # [index, done] (+ version) (+ origin: the rest before the target), all start at 0
+        size = 3 if versioned else 2
+        self._origin = size if pass_through else None
+        self._state_index = self.DeclareDiscreteState(size + (1 if pass_through else 0))
         self.DeclarePeriodicDiscreteUpdateEvent(period, 0.0, self._Advance)
         # The same decision on demand (CalcForcedDiscreteVariableUpdate), for tests and scripts.
         self.DeclareForcedDiscreteUpdateEvent(self._Advance)
@@ -151,11 +229,15 @@ class WaypointSequencer(LeafSystem):
         self.DeclareVectorOutputPort("target", 4, self._CalcTarget, prerequisites_of_calc=target_prereqs)
         self.DeclareVectorOutputPort("done", 1, self._CalcDone, prerequisites_of_calc=state)
         self.DeclareVectorOutputPort("index", 1, self._CalcIndex, prerequisites_of_calc=target_prereqs)
+        if pass_through:
+            self.DeclareAbstractOutputPort("via", lambda: AbstractValue.Make(np.zeros((0, 4))), self._CalcVia,
+                                           prerequisites_of_calc=target_prereqs)
 
     @classmethod
     def from_options(
         cls, execution_options: ExecutionOptions, waypoints: np.ndarray | None = None,
-        wait_for_reference: bool = False, versioned: bool = False,
+        wait_for_reference: bool = False, versioned: bool = False, pass_through: bool = False,
+        distance_weights=None,
     ) -> "WaypointSequencer":
         """A sequencer with the tolerances and period of a scenario's ``execution`` section."""
         require_execution_options(execution_options, "WaypointSequencer.from_options")
@@ -166,6 +248,8 @@ class WaypointSequencer(LeafSystem):
             period=execution_options.control_period,
             wait_for_reference=wait_for_reference,
             versioned=versioned,
+            pass_through=pass_through,
+            distance_weights=distance_weights,
         )
 
     # ---- helpers ---------------------------------------------------------------
@@ -207,6 +291,8 @@ class WaypointSequencer(LeafSystem):
             out.SetAtIndex(_INDEX, min(1, len(self._Waypoints(context)) - 1))
             out.SetAtIndex(_DONE, 0.0)
             out.SetAtIndex(_VERSION, version)
+            if self._origin is not None:
+                out.SetAtIndex(self._origin, 0.0)
             return None
         xd = context.get_discrete_state(self._state_index).value()
         if xd[_DONE] > 0.5:
@@ -226,8 +312,12 @@ class WaypointSequencer(LeafSystem):
             arrived = self._reference_done_port.Eval(context)[0] > 0.5
         if not arrived:
             return EventStatus.DidNothing()  # nothing changed (the outputs still recompute each period)
-        if index + 1 < len(waypoints):
-            out.SetAtIndex(_INDEX, index + 1)  # one step per update
+        if index + 1 < len(waypoints):  # one step per update
+            if self._origin is None:
+                out.SetAtIndex(_INDEX, index + 1)
+            else:
+                out.SetAtIndex(_INDEX, next_rest(waypoints, index, self._weights))
+                out.SetAtIndex(self._origin, index)
         else:
             out.SetAtIndex(_INDEX, index)
             out.SetAtIndex(_DONE, 1.0)
@@ -240,6 +330,14 @@ class WaypointSequencer(LeafSystem):
 
     def _CalcDone(self, context: Context, output: BasicVector) -> None:
         output.SetAtIndex(0, self._Done(context))
+
+    def _CalcVia(self, context: Context, output: AbstractValue) -> None:
+        waypoints = self._Waypoints(context)
+        index = self._Index(context, len(waypoints))
+        origin = 0
+        if self._NewVersion(context) is None:
+            origin = int(round(context.get_discrete_state(self._state_index).GetAtIndex(self._origin)))
+        output.set_value(waypoints[min(max(origin, 0), index) + 1:index].copy())
 
     def _CalcIndex(self, context: Context, output: BasicVector) -> None:
         if self._NewVersion(context) is not None:

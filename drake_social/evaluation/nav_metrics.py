@@ -41,12 +41,20 @@ key                                unit     definition
                                             differences of the base's XY samples
 ``accel_mean_base`` / ``_max``     m/s^2    the same of |a| (2 x second divided differences)
 ``jerk_mean_base`` / ``_max``      m/s^3    the same of |j| (6 x third divided differences)
-``speed_mean_object`` ... (6)      as above the same, pooled over the object's interest points
+``jerk_p95_base``                  m/s^3    the 95th percentile of those |j|
+``speed_mean_object`` ... (7)      as above the same, pooled over the object's interest points
 ``stopped_time``                   s        held time with ``stopped`` true (the safety
                                             monitor holding the robot); NaN when ``stopped``
                                             is None (not recorded)
 ``stop_count``                     count    runs of consecutive stopped samples; NaN likewise
 ``stopped_share``                  0..1     ``stopped_time / D``; NaN when D = 0 or not recorded
+``slowed_time``                    s        held time with the slow-down's speed limit in force
+                                            (finite); NaN when ``speed_limit`` is None (not
+                                            recorded)
+``slow_stop_count``                count    the slow-down's stops (runs of consecutive
+                                            ``slow_stopped`` samples: its limit 0); NaN when
+                                            ``slow_stopped`` is None
+``slow_stopped_time``              s        held time with ``slow_stopped`` true; NaN likewise
 ``people_count``                   count    people in the log (0 with no log)
 ``people_moving``                  0/1      1 when anyone moves, turns, enters or leaves
 ``min_dist_<part>``                m        min_k d_k; +inf when nobody is ever present
@@ -192,7 +200,8 @@ def _appearing_contacts(geometry: ArmGeometry, q: np.ndarray, people: PeopleLog,
 
 def run_metrics(scenario, times: np.ndarray, q: np.ndarray, people: PeopleLog | None, stopped: np.ndarray | None,
                 reached: bool, time_limit: float, *, time_to_goal: float | None = None,
-                zones: HallZones = ZONES, waiting: np.ndarray | None = None) -> dict[str, float]:
+                zones: HallZones = ZONES, waiting: np.ndarray | None = None,
+                speed_limit: np.ndarray | None = None, slow_stopped: np.ndarray | None = None) -> dict[str, float]:
     """The social-navigation metrics of an executed run against where people
     were (the table of the module docstring).
 
@@ -212,6 +221,10 @@ def run_metrics(scenario, times: np.ndarray, q: np.ndarray, people: PeopleLog | 
         waiting: (T,) True where the replanner holds the robot from sample k
             on (no safe path at its latest decision at or before t_k); None =
             no replanner (never waiting).
+        speed_limit: (T,) the slow-down's limit logged at the samples (m/s,
+            +inf where none); None = not recorded (``slowed_time`` NaN).
+        slow_stopped: (T,) True where the slow-down's limit holds the robot
+            at 0 from sample k on; None = not recorded (its stop metrics NaN).
 
     Returns:
         A flat dictionary of floats (keys of the module docstring's table).
@@ -229,7 +242,8 @@ def run_metrics(scenario, times: np.ndarray, q: np.ndarray, people: PeopleLog | 
     if people is not None and (len(people.times) != t or not np.allclose(people.times, times, rtol=0, atol=1e-9)):
         raise ValueError(f"run_metrics: the people log has {len(people.times)} samples at other times than the "
                          f"run's {t}; sample it at the run's times (PeopleLog.sample or the simulator's log)")
-    for name, flag in (("stopped", stopped), ("waiting", waiting)):
+    for name, flag in (("stopped", stopped), ("waiting", waiting), ("speed_limit", speed_limit),
+                       ("slow_stopped", slow_stopped)):
         if flag is not None and np.asarray(flag).shape != (t,):
             raise ValueError(f"run_metrics: {name} must be (T,) = ({t},) booleans, got {np.asarray(flag).shape}")
     g = arm_geometry(scenario)
@@ -255,6 +269,13 @@ def run_metrics(scenario, times: np.ndarray, q: np.ndarray, people: PeopleLog | 
     else:
         count, seconds = episodes(np.asarray(stopped, bool), times)
         out.update(stopped_time=seconds, stop_count=float(count), stopped_share=share(seconds))
+    out["slowed_time"] = (float("nan") if speed_limit is None else
+                          held_time(np.isfinite(np.asarray(speed_limit, float)), times))
+    if slow_stopped is None:
+        out.update(slow_stop_count=float("nan"), slow_stopped_time=float("nan"))
+    else:
+        count, seconds = episodes(np.asarray(slow_stopped, bool), times)
+        out.update(slow_stop_count=float(count), slow_stopped_time=seconds)
     out["people_count"] = float(people.count if people is not None else 0)
     out["people_moving"] = float(people is not None and people.count > 0 and not people.static)
     if people is None or people.count == 0:
@@ -332,9 +353,14 @@ def execution_metrics(scenario, result) -> dict[str, float]:
         people = PeopleLog.sample(people, times)
     stopped = getattr(result, "stopped", None)
     waiting = getattr(result, "waiting", None)
+    speed_limit = getattr(result, "speed_limit", None)
+    slow_stopped = getattr(result, "slow_stopped", None)
     metrics = run_metrics(scenario, times, result.q, people, None if stopped is None else np.asarray(stopped, bool),
                           bool(result.reached), float(scenario.execution.time_limit),
                           time_to_goal=result.time_to_goal,
-                          waiting=None if waiting is None else np.asarray(waiting, bool))
+                          waiting=None if waiting is None else np.asarray(waiting, bool),
+                          speed_limit=None if speed_limit is None or len(speed_limit) != len(times) else speed_limit,
+                          slow_stopped=None if slow_stopped is None or len(slow_stopped) != len(times)
+                          else np.asarray(slow_stopped, bool))
     return {NAV_PREFIX + k: v for k, v in metrics.items()}
 

@@ -21,7 +21,8 @@ import math
 
 import numpy as np
 
-__all__ = ["derivative_magnitudes", "episodes", "held_time", "motion_stats", "run_starts", "trapezoid_mean"]
+__all__ = ["derivative_magnitudes", "episodes", "held_time", "motion_profile", "motion_stats", "run_starts",
+           "trapezoid_mean"]
 
 
 def _steps(times: np.ndarray) -> np.ndarray:
@@ -98,8 +99,10 @@ def motion_stats(times: np.ndarray, xy: np.ndarray) -> dict[str, float]:
     Returns:
         ``speed_mean``, ``speed_max``, ``accel_mean``, ``accel_max``,
         ``jerk_mean``, ``jerk_max``: arithmetic mean and max over the
-        finite-difference windows; NaN when there are fewer samples than the
-        derivative's order + 1.
+        finite-difference windows, and ``jerk_p95``, their 95th percentile
+        (numpy's linear interpolation: a few jerks of a hard stop do not
+        move it); NaN when there are fewer samples than the derivative's
+        order + 1.
     """
     t = np.asarray(times, float).reshape(-1)
     xy = np.asarray(xy, float)
@@ -112,4 +115,31 @@ def motion_stats(times: np.ndarray, xy: np.ndarray) -> dict[str, float]:
         mags = np.concatenate([derivative_magnitudes(t, tracks[:, n], order) for n in range(tracks.shape[1])])
         out[f"{name}_mean"] = float(mags.mean())
         out[f"{name}_max"] = float(mags.max())
+    out["jerk_p95"] = float(np.percentile(mags, 95.0)) if len(t) > 3 else math.nan
+    return out
+
+
+def motion_profile(times: np.ndarray, xy: np.ndarray) -> dict[str, tuple[np.ndarray, np.ndarray]]:
+    """|v|, |a| and |j| of a track over time, for a figure.
+
+    Args:
+        times: (T,) strictly increasing seconds.
+        xy: (T, D) positions, metres; or (T, N, D) for N tracks (the largest
+            of the N at each window: the fastest point).
+
+    Returns:
+        ``{"speed": (t, |v|), "accel": (t, |a|), "jerk": (t, |j|)}``, each
+        value at the middle of its window of samples (as
+        :func:`derivative_magnitudes`); empty arrays when the track is too short.
+    """
+    t = np.asarray(times, float).reshape(-1)
+    xy = np.asarray(xy, float)
+    tracks = xy[:, None, :] if xy.ndim == 2 else xy
+    out = {}
+    for order, name in ((1, "speed"), (2, "accel"), (3, "jerk")):
+        if len(t) <= order:
+            out[name] = (np.zeros(0), np.zeros(0))
+            continue
+        mags = np.max([derivative_magnitudes(t, tracks[:, n], order) for n in range(tracks.shape[1])], axis=0)
+        out[name] = (0.5 * (t[order:] + t[:-order]), mags)
     return out

@@ -116,9 +116,14 @@ NAV_FIELDS: dict[str, str] = {
     "nav_accel_max_<body>": "max |a|, m/s^2",
     "nav_jerk_mean_<body>": "mean |j| (6 x third divided differences), m/s^3",
     "nav_jerk_max_<body>": "max |j|, m/s^3",
+    "nav_jerk_p95_<body>": "95th percentile of |j|, m/s^3",
     "nav_stopped_time": "seconds the safety monitor held the robot; null when the run recorded no stop flag",
     "nav_stop_count": "safety stops (runs of consecutive stopped samples); null likewise",
     "nav_stopped_share": "nav_stopped_time / nav_duration; null likewise or when no time passed",
+    "nav_slowed_time": "seconds the slow-down's speed limit was in force (execution.slow_down); null when the run "
+                       "recorded no limit",
+    "nav_slow_stop_count": "stops of the slow-down (its limit 0: a person too close ahead); null likewise",
+    "nav_slow_stopped_time": "seconds the slow-down's limit held the robot at 0; null likewise",
     "nav_people_count": "people in the run's log (present or not)",
     "nav_people_moving": "1 when anyone moved, turned, entered or left during the run, else 0",
     "nav_min_dist_<part>": "smallest distance of the part to any present person over the run, metres (null: "

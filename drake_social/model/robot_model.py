@@ -48,6 +48,7 @@ from drake_social.scenario import Scenario
 from drake_social.scenario.geometry import object_interest_points, object_polyline
 
 __all__ = [
+    "BODY_COLOURS",
     "COLLISION_HEIGHT",
     "MODEL_NAME",
     "ROBOT_BODIES",
@@ -68,7 +69,8 @@ ROBOT_BODIES = ("base", "link1", "link2", "object")
 
 # Visual layers: (z of the bottom, thickness), metres. Only for display.
 _VISUAL_LAYERS = {"base": (0.0, 0.30), "link1": (0.32, 0.05), "link2": (0.38, 0.05), "object": (0.44, 0.04)}
-_COLOURS = {
+#: Each robot body's display colour, "r g b a" (the visual geometry's diffuse colour).
+BODY_COLOURS = {
     "base": "0.10 0.15 0.45 1",
     "link1": "0.95 0.75 0.10 1",
     "link2": "0.95 0.45 0.10 1",
@@ -151,7 +153,7 @@ def _inertial(mass: float, points: np.ndarray, radius: float) -> str:
 def _link(name: str, parent: str, x: float, points: np.ndarray, radius: float) -> list[str]:
     """A body at (x, 0) in frame ``parent`` whose footprint is a stadium chain."""
     z0, thickness = _VISUAL_LAYERS[name]
-    colour = f"<material><diffuse>{_COLOURS[name]}</diffuse></material>"
+    colour = f"<material><diffuse>{BODY_COLOURS[name]}</diffuse></material>"
     return [
         f'    <link name="{name}">',
         f'      <pose relative_to="{parent}">{_pose(x)}</pose>',

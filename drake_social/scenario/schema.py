@@ -442,6 +442,26 @@ class ExecutionOptions:
     # of a person's body, surface to surface, and lets it go when clear,
     # metres (>= 0; 0 stops on contact only). Only in a scenario with people.
     safety_distance: float = 0.05
+    # Slowing down near people (synchronized execution, when people move; see
+    # docs/execution.md): a limit on the speed of the robot's fastest point
+    # that falls with the distance from its nearest part to the nearest
+    # person, so that it brakes (jerk-limited, on the path) and stops before
+    # the safety distance. false = the paper's behaviour: full speed until
+    # the safety monitor's stop.
+    slow_down: bool = True
+    # The limit plans the robot's rest this far outside safety_distance,
+    # metres (>= 0).
+    stop_margin: float = 0.05
+    # Within this distance of a person (surface to surface) the limit falls
+    # linearly from max_base_speed to slow_speed at safety_distance +
+    # stop_margin, metres (> safety_distance + stop_margin).
+    slow_distance: float = 1.0
+    # The ramp's speed at its near end and the speed the limit must allow
+    # before a stop is released, m/s (> 0, <= max_base_speed).
+    slow_speed: float = 0.2
+    # Minimum hold: the limit is the lowest of the last release_time seconds,
+    # so it rises only when the lower values are that old, seconds (>= 0).
+    release_time: float = 0.5
 
 
 @dc.dataclass

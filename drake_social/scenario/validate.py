@@ -47,6 +47,23 @@ __all__ = [
 # Validation. Each check names the field by its dotted path.
 
 
+def _check_slow_down(c: "_Checker", e) -> None:
+    """The slow-down's options (``execution.slow_down`` ... ``release_time``)."""
+    if not isinstance(e.slow_down, bool):
+        c.fail("execution.slow_down", f"must be true or false, got {_shown(e.slow_down)}")
+    c.nonnegative("execution.stop_margin", e.stop_margin)
+    c.nonnegative("execution.release_time", e.release_time)
+    c.finite("execution.slow_distance", e.slow_distance)
+    stop = e.safety_distance + e.stop_margin
+    if not e.slow_distance > stop:
+        c.fail("execution.slow_distance", f"must be > execution.safety_distance + execution.stop_margin = "
+                                          f"{stop:g} m, got {e.slow_distance}")
+    c.positive("execution.slow_speed", e.slow_speed)
+    if e.slow_speed > e.max_base_speed:
+        c.fail("execution.slow_speed", f"must be <= execution.max_base_speed {e.max_base_speed:g} m/s, "
+                                       f"got {e.slow_speed}")
+
+
 class _Checker:
     def __init__(self, source: str):
         self.source = source
@@ -412,6 +429,7 @@ def validate_scenario(scenario: Scenario, source: str = "<scenario>") -> None:
                  "plant_time_step", "time_limit", "replay_fps"):
         c.positive(f"execution.{name}", getattr(e, name))
     c.nonnegative("execution.safety_distance", e.safety_distance)  # 0 = stop on contact only
+    _check_slow_down(c, e)
     for name in ("arm_max_velocity", "arm_max_acceleration", "arm_max_jerk"):
         c.length(f"execution.{name}", getattr(e, name), 2)
         c.positive(f"execution.{name}", getattr(e, name))

@@ -48,7 +48,8 @@ people move)::
     [s] reference ─state─▶ reference_state_split ─xy─▶ controller; ─arm p, v, a─▶ arm_command
     [p] sequencer ─target─▶ target_split ─xy─▶ controller; ─psi─▶ arm (2-DoF Ruckig) ─state─▶ arm_command
     [h] safety (SafetyMonitor) ◀─ q, people_state; stop ─hold─▶ sequencer, controller, reference / arm
-    [r] q, people_state, sequencer.index ─▶ planner (ReplanningPlannerSystem) ─waypoints, version─▶ sequencer
+    [r] q, people_state, sequencer.index, [s] reference.velocity ─▶ planner (ReplanningPlannerSystem)
+        ─waypoints, version─▶ sequencer
     [r] planner.hold (waiting), [h] safety.stop ─▶ held (Adder) ─hold─▶ sequencer, controller, reference / arm
 
 In ``synchronized`` execution each segment's reference is one
@@ -104,6 +105,7 @@ from drake_social.control import (
     ReplanningPlannerSystem,
     RuckigTrajectorySource,
     SafetyMonitor,
+    SpeedLimit,
     WaypointSequencer,
     arm_source_from_options,
     reference_source_from_options,
@@ -176,6 +178,9 @@ class Autonomy(NamedPorts):
             (``planner``), or None (given waypoints, an external path).
         safety: the :class:`~drake_social.control.SafetyMonitor` (``safety``),
             or None (the people stand still).
+        speed_limit: the :class:`~drake_social.control.SpeedLimit`
+            (``speed_limit``), or None (the people stand still, the paper's
+            execution, or ``execution.slow_down`` false).
     """
 
     diagram: Diagram
@@ -186,6 +191,7 @@ class Autonomy(NamedPorts):
     controller: HolonomicPController
     planner: PlannerSystem | ReplanningPlannerSystem | None = None
     safety: SafetyMonitor | None = None
+    speed_limit: SpeedLimit | None = None
 
     @property
     def replanning(self) -> bool:
@@ -301,22 +307,31 @@ def autonomy_checked(scenario: Scenario, execution: str, path: PathSource, peopl
     track = (_synchronized if synchronized else _paper)(builder, scenario, start, sequencer, controller)
 
     people_inputs: list[InputPort] = []
-    safety = None
+    safety = limiter = None
     if not people.static:  # hold the robot while a walking person is within the safety distance
         safety = builder.AddNamedSystem("safety", SafetyMonitor(
             arm_geometry(scenario), safety_distance=float(opts.safety_distance),
-            period=float(opts.control_period)))
+            period=float(opts.control_period), release_time=float(opts.release_time)))
         builder.Connect(q, safety.GetInputPort("q"))
         people_inputs.append(safety.GetInputPort("people_state"))
+        if synchronized and opts.slow_down:  # and slow down before that, on the path
+            limiter = builder.AddNamedSystem("speed_limit", SpeedLimit(arm_geometry(scenario), opts))
+            builder.Connect(q, limiter.GetInputPort("q"))
+            builder.Connect(sequencer.GetOutputPort("target"), limiter.GetInputPort("target"))
+            builder.Connect(limiter.GetOutputPort("speed_limit"), track.source.GetInputPort("speed_limit"))
+            people_inputs.append(limiter.GetInputPort("people_state"))
     if isinstance(planner, ReplanningPlannerSystem):  # it reads the robot and the people
         builder.Connect(q, planner.GetInputPort("q"))
+        if synchronized:  # and takes a new path only from rest (the paper's execution leaves the segments anyway)
+            builder.Connect(track.source.GetOutputPort("velocity"), planner.GetInputPort("velocity"))
         people_inputs.append(planner.GetInputPort("people_state"))
     for k, port in enumerate(people_inputs):  # one exported input feeds them all
         if k == 0:
             builder.ExportInput(port, "people_state")
         else:
             builder.ConnectInput("people_state", port)
-    _hold(builder, safety, planner, (sequencer, controller, track.source))
+    # Synchronized, the base follows the held reference (base and arm stop together, on the path).
+    _hold(builder, safety, planner, (sequencer, track.source) if synchronized else (sequencer, controller, track.source))
 
     outputs = {
         "wheel_speeds": controller.GetOutputPort("wheel_speeds"),
@@ -331,6 +346,8 @@ def autonomy_checked(scenario: Scenario, execution: str, path: PathSource, peopl
         outputs["reference_feedforward"] = track.feedforward
     if safety is not None:
         outputs["stop"] = safety.GetOutputPort("stop")
+    if limiter is not None:
+        outputs["speed_limit"] = limiter.GetOutputPort("speed_limit")
     if isinstance(planner, ReplanningPlannerSystem):
         outputs["waiting"] = planner.GetOutputPort("hold")
         outputs["path_version"] = planner.GetOutputPort("version")
@@ -339,7 +356,7 @@ def autonomy_checked(scenario: Scenario, execution: str, path: PathSource, peopl
     diagram = builder.Build()
     diagram.set_name("autonomy")
     return Autonomy(diagram=diagram, path=path, execution=execution, sequencer=sequencer, reference=track.source,
-                    controller=controller, planner=planner, safety=safety)
+                    controller=controller, planner=planner, safety=safety, speed_limit=limiter)
 
 
 def _path(builder: DiagramBuilder, scenario: Scenario, path: PathSource, people: PeopleModel,
@@ -348,13 +365,15 @@ def _path(builder: DiagramBuilder, scenario: Scenario, path: PathSource, people:
     opts = scenario.execution
     if isinstance(path, GivenWaypoints):
         sequencer = builder.AddNamedSystem("sequencer", WaypointSequencer.from_options(
-            opts, waypoints=path.waypoints, wait_for_reference=synchronized))
+            opts, waypoints=path.waypoints, wait_for_reference=synchronized, pass_through=synchronized,
+            distance_weights=scenario.planner.distance_weights))
         builder.Connect(q, sequencer.GetInputPort("q"))
         source = builder.AddNamedSystem("path", ConstantValueSource(AbstractValue.Make(path.waypoints.copy())))
         return sequencer, None, source.get_output_port()
     replan = isinstance(path, Replan)
     sequencer = builder.AddNamedSystem("sequencer", WaypointSequencer.from_options(
-        opts, wait_for_reference=synchronized, versioned=replan))
+        opts, wait_for_reference=synchronized, versioned=replan, pass_through=synchronized,
+        distance_weights=scenario.planner.distance_weights))
     builder.Connect(q, sequencer.GetInputPort("q"))
     planner = None
     if replan:  # the room's planar checker of the replanner, not the one with the people at t = 0
@@ -377,8 +396,10 @@ def _synchronized(builder: DiagramBuilder, scenario: Scenario, start: np.ndarray
                   controller: HolonomicPController) -> _Tracking:
     """One 4-DoF reference: the controller tracks its xy with its feed-forward, the arm its psi."""
     reference = builder.AddNamedSystem("reference", reference_source_from_options(
-        scenario.execution, start, configuration_limits(scenario)))
+        scenario.execution, start, configuration_limits(scenario),
+        lever=arm_geometry(scenario).lever(include_body=True)))
     builder.Connect(sequencer.GetOutputPort("target"), reference.GetInputPort("target"))
+    builder.Connect(sequencer.GetOutputPort("via"), reference.GetInputPort("via"))
     builder.Connect(reference.GetOutputPort("finished"), sequencer.GetInputPort("reference_done"))
     # [xy, arm] x (position, velocity, acceleration) in one evaluation (a servo's, every plant step).
     state = builder.AddNamedSystem("reference_state_split", Demultiplexer([2] * 6))

@@ -30,8 +30,10 @@ target's xy with the arm trajectory), ``index`` (the target index), ``done``
 (the sequencer's flag), with a crowd ``crowd_state`` (the people source's
 discrete state, from which
 :meth:`~drake_social.control.PeopleSource.people_log` rebuilds the people),
-``stop`` (the safety monitor's flag; only when people move), and with
-replanning ``version`` (the path version) and ``waiting`` (the planner's hold).
+``stop`` (the safety monitor's flag; only when people move),
+``speed_limit`` (the slow-down's limit, m/s, +inf when none; only with it),
+and with replanning ``version`` (the path version) and ``waiting`` (the
+planner's hold).
 """
 
 from __future__ import annotations
@@ -245,7 +247,7 @@ def build_checked(
 
 #: Logger name -> the autonomy's output it logs (when the autonomy has it).
 _AUTONOMY_LOGS = {"target": "target", "reference": "reference", "index": "index", "done": "done", "stop": "stop",
-                  "version": "path_version", "waiting": "waiting"}
+                  "version": "path_version", "waiting": "waiting", "speed_limit": "speed_limit"}
 
 
 def _loggers(builder: DiagramBuilder, station: Diagram, autonomy: Diagram, period: float) -> dict[str, VectorLogSink]:
@@ -260,7 +262,7 @@ def _loggers(builder: DiagramBuilder, station: Diagram, autonomy: Diagram, perio
         ports["crowd_state"] = station.GetOutputPort("crowd_state")
     loggers = {}
     for name in ("q", "v", "wheel_speeds", "target", "reference", "index", "done", "crowd_state", "stop", "version",
-                 "waiting"):
+                 "waiting", "speed_limit"):
         if name in ports:
             logger = LogVectorOutput(ports[name], builder, publish_period=period)
             logger.set_name(f"{name}_log")

@@ -146,6 +146,15 @@ class SimulationResult:
         waiting: (T,) True at the sample times t_k the replanner holds the
             robot from (its latest decision at or before t_k found no safe
             path: status ``"wait"``), all False without replanning.
+        speed_limit: (T,) the slow-down's limit on the fastest point's speed
+            at the sample times (m/s; +inf where nothing limits, all +inf
+            without the slow-down; the logger publishes before the updates,
+            so sample k shows the limit decided at t_{k-1}).
+        slow_stops: one dict per stop of the slow-down (its limit 0), as
+            ``stops`` (the person that bound the limit, the part nearest to
+            them and its distance at the start).
+        slow_stopped: (T,) True at the sample times the slow-down's limit
+            holds the robot at 0 from (as ``stopped``), all False without it.
         stops: one dict per stop by the safety monitor, in order: ``start``
             and ``end`` (the times of the updates that stopped and released
             the robot, seconds; ``end`` None when still stopped at the end),
@@ -187,6 +196,9 @@ class SimulationResult:
     stopped: np.ndarray = dc.field(default_factory=lambda: np.zeros(0, bool))
     waiting: np.ndarray = dc.field(default_factory=lambda: np.zeros(0, bool))
     stops: list[dict] = dc.field(default_factory=list)
+    speed_limit: np.ndarray = dc.field(default_factory=lambda: np.zeros(0))
+    slow_stops: list[dict] = dc.field(default_factory=list)
+    slow_stopped: np.ndarray = dc.field(default_factory=lambda: np.zeros(0, bool))
     replans: tuple = ()
     replanning: dict | None = None
 
@@ -194,6 +206,11 @@ class SimulationResult:
     def stopped_time(self) -> float:
         """Seconds the safety monitor held the robot (the stops' durations summed)."""
         return float(sum(stop["duration"] or 0.0 for stop in self.stops))
+
+    @property
+    def slow_stopped_time(self) -> float:
+        """Seconds the slow-down's limit held the robot at 0 (its stops' durations summed)."""
+        return float(sum(stop["duration"] or 0.0 for stop in self.slow_stops))
 
     def summary(self) -> str:
         """One line for the terminal."""
@@ -207,6 +224,9 @@ class SimulationResult:
                      f"{'' if 'people' in r.collision_checked else ' (obstacles and walls; the people move)'}; "
                      + ("within the joint limits and room bounds" if r.within_limits else
                         "BEYOND A LIMIT: " + "; ".join(str(v) for v in r.limit_violations)))
+        if self.slow_stops:
+            n = len(self.slow_stops)
+            line += f"; {n} slow-down stop{'s' if n > 1 else ''} ({self.slow_stopped_time:.2f} s)"
         if self.stops:
             line += f"; {len(self.stops)} safety stop{'s' if len(self.stops) > 1 else ''} ({self.stopped_time:.2f} s)"
         if self.replanning is not None:
@@ -234,6 +254,8 @@ class SimulationResult:
             "num_samples": int(len(self.times)),
             "stops": [dict(stop) for stop in self.stops],
             "stopped_time": self.stopped_time,
+            "slow_stops": [dict(stop) for stop in self.slow_stops],
+            "slow_stopped_time": self.slow_stopped_time,
         }
         if self.report is not None:
             r = dc.asdict(self.report)

@@ -357,9 +357,12 @@ def _result(built: TransportDiagram, root, path: np.ndarray, planner_result: Pla
         realtime_factor=sim_time / wall if wall > 0 else math.inf, waypoints=path, times=times,
         q=data["q"], v=data["v"], wheel_speeds=data["wheel_speeds"], target=data["target"],
         reference=data["reference"], target_index=data["index"][:, 0].astype(int), planner=planner_result,
-        stops=_stops(built, root, end), replans=replans, replanning=replanning,
+        stops=_stops(built.autonomy.safety, root, end), replans=replans, replanning=replanning,
+        speed_limit=data["speed_limit"][:, 0] if "speed_limit" in data else np.full(len(times), np.inf),
+        slow_stops=_stops(built.autonomy.speed_limit, root, end),
     )
     result.stopped = _stopped(times, result.stops)
+    result.slow_stopped = _stopped(times, result.slow_stops)
     result.waiting = _waiting(times, replans)
     source = built.station.people
     if source.model.count and len(times):  # the open-loop people sampled; a crowd from its logged state
@@ -377,10 +380,10 @@ def _log_result(result: SimulationResult) -> None:
                   "until the end" if stop["end"] is None else f"until t = {stop['end']:.3f} s")
 
 
-def _stops(built: TransportDiagram, root, end_time: float) -> list[dict]:
-    """The safety monitor's stops up to ``end_time`` (the last kept sample), as dicts
-    (:attr:`SimulationResult.stops`); a stop released after ``end_time`` is still on at the end."""
-    monitor = built.autonomy.safety
+def _stops(monitor, root, end_time: float) -> list[dict]:
+    """The stops of ``monitor`` (the safety monitor, the slow-down's limiter or None) up to
+    ``end_time`` (the last kept sample), as dicts (:attr:`SimulationResult.stops`); a stop
+    released after ``end_time`` is still on at the end."""
     if monitor is None:
         return []
     out = []

@@ -12,6 +12,7 @@ import pytest
 from pydrake.systems.analysis import Simulator
 
 from drake_social.control import ReplanningPlannerSystem, WaypointSequencer, replanning_summary
+from drake_social.control.replanner_system import MOVING_SPEED
 from drake_social.people import StaticPeople
 from drake_social.scenario import load_scenario
 
@@ -103,12 +104,70 @@ def _outputs(dut, context):
 
 def test_ports_and_no_feedthrough(scenario):
     dut, _ = _system(scenario, {0: "initial"})
-    assert [dut.get_input_port(i).get_name() for i in range(dut.num_input_ports())] == ["q", "people_state", "index"]
+    assert [dut.get_input_port(i).get_name() for i in range(dut.num_input_ports())] == ["q", "people_state", "index",
+                                                                                       "velocity"]
     assert [dut.get_output_port(i).get_name() for i in range(dut.num_output_ports())] == [
         "waypoints", "version", "hold", "result", "replans"]
     for i in range(dut.num_input_ports()):
         for o in range(dut.num_output_ports()):
             assert not dut.HasDirectFeedthrough(i, o)
+
+
+def _moving(dut, context, speed):
+    dut.GetInputPort("velocity").FixValue(context, [0.0, 0.0, 0.0, speed])
+
+
+@pytest.mark.parametrize("status", ["evade", "new"])
+def test_a_new_path_not_starting_with_the_motion_waits_until_at_rest(scenario, status):
+    """An evasion (or a new path after a wait) made from the robot's
+    configuration while the reference moves: a wait (the robot stops on its
+    path); the same decision from rest is taken."""
+    script = {0: "initial", 1: "wait", 2: status, 3: status} if status == "new" else \
+        {0: "initial", 1: status, 2: status}
+    dut, double = _system(scenario, script)
+    context = _context(dut)
+    dut.ExecuteInitializationEvents(context)
+    first, _, _ = _outputs(dut, context)
+    _moving(dut, context, 0.3)
+    if status == "new":
+        _replan(dut, context)  # the wait: held, the next replan is not committed
+    _replan(dut, context)
+    waypoints, version, hold = _outputs(dut, context)
+    np.testing.assert_array_equal(waypoints, first)
+    assert (version, hold) == (0.0, 1.0)
+    last = dut.GetOutputPort("result").Eval(context)
+    assert last.status == "wait" and not last.changed and last.cost == math.inf
+    assert last.reason.startswith(f"braking on the path before a new one ({status}: ")
+    np.testing.assert_array_equal(last.waypoints, [[0.0, 0.0, 0.0, 0.0]])
+    _moving(dut, context, 0.0)
+    _replan(dut, context)
+    waypoints, version, hold = _outputs(dut, context)
+    assert (version, hold) == (1.0, 0.0)
+    assert dut.GetOutputPort("result").Eval(context).status == status
+
+
+def test_a_committed_new_path_is_taken_while_moving(scenario):
+    """A new path that starts with the motion being driven (commit=True: the
+    robot drives, no wait in force) is taken at once."""
+    dut, double = _system(scenario, {0: "initial", 1: "new"})
+    context = _context(dut)
+    dut.ExecuteInitializationEvents(context)
+    _moving(dut, context, 0.3)
+    _replan(dut, context)
+    assert double.calls[-1]["commit"] is True
+    assert _outputs(dut, context)[1:] == (1.0, 0.0)
+
+
+@pytest.mark.parametrize("speed, moving", [(MOVING_SPEED, False), (-MOVING_SPEED, False),
+                                           (np.nextafter(MOVING_SPEED, 1.0), True),
+                                           (-np.nextafter(MOVING_SPEED, 1.0), True), (0.0, False)])
+def test_moving_is_a_speed_above_the_bound(scenario, speed, moving):
+    dut, _ = _system(scenario, {0: "initial", 1: "evade"})
+    context = _context(dut)
+    dut.ExecuteInitializationEvents(context)
+    _moving(dut, context, speed)
+    _replan(dut, context)
+    assert dut.GetOutputPort("result").Eval(context).status == ("wait" if moving else "evade")
 
 
 def test_outputs_before_the_first_plan_say_so(scenario):

@@ -121,6 +121,33 @@ def test_stops_are_recorded_with_start_and_end(geometry):
         {"start": 0.04, "end": None, "duration": 0.06, "person": "0", "part": "base", "distance": 0.02})
 
 
+@pytest.mark.parametrize("release, ends", [
+    (0.0, [0.03]),            # no hold: released at the first clear sample
+    (0.05, [0.08]),           # clear at 0.03 ... 0.08: 0.05 s clear, released at 0.08
+    (0.05 + 1e-6, [None]),    # just longer than the run stays clear: still stopped
+])
+def test_a_stop_is_released_after_release_time_clear(geometry, release, ends):
+    monitor = SafetyMonitor(geometry, safety_distance=SAFETY, period=PERIOD, release_time=release)
+    context = monitor.CreateDefaultContext()
+    near, far = _people(*_below_base(0.02)), _people(*_below_base(0.2))
+    for k, people in enumerate([far, near, near] + [far] * 6):
+        _update(monitor, context, Q, people, t=round(0.01 * k, 10))
+    assert [stop.end for stop in monitor.stops(context)] == pytest.approx(ends)
+
+
+def test_a_person_lingering_at_the_boundary_does_not_make_the_robot_stop_and_go(geometry):
+    # In and out of the safety distance every other period for 2 s: one stop with the hold, 100 without.
+    near, far = _people(*_below_base(SAFETY - 0.005)), _people(*_below_base(SAFETY + 0.005))
+    counts = []
+    for release in (0.5, 0.0):
+        monitor = SafetyMonitor(geometry, safety_distance=SAFETY, period=PERIOD, release_time=release)
+        context = monitor.CreateDefaultContext()
+        for k in range(200):
+            _update(monitor, context, Q, near if k % 2 == 0 else far, t=round(0.01 * k, 10))
+        counts.append(len(monitor.stops(context)))
+    assert counts == [1, 100]
+
+
 def test_clone_and_reset_keep_their_own_record(geometry):
     monitor = _monitor(geometry)
     context = monitor.CreateDefaultContext()
@@ -165,14 +192,22 @@ def test_flag_equals_part_distances_on_random_scenes(geometry):
 def test_robot_reach_and_braking_travel_by_hand(geometry):
     # tiny.yaml: l1 = 0.6, l2 = 0.5; the 1.5 m bar is held at its middle: farthest point 0.75, radius 0.025.
     assert robot_reach(geometry) == pytest.approx(0.6 + 0.5 + 0.775)
+    arm = 1.0 * (1.1 + 0.775) + 2.0 * (0.5 + 0.775)
+    travel = braking_travel(geometry, max_base_speed=0.5, arm_max_velocity=[1.0, 2.0], period=0.01, execution="paper")
+    assert travel == pytest.approx(0.01 * (0.5 + 2 * arm))
+    # Synchronized: the base follows the held reference, one period after the paper's base command.
     travel = braking_travel(geometry, max_base_speed=0.5, arm_max_velocity=[1.0, 2.0], period=0.01)
-    assert travel == pytest.approx(0.01 * (0.5 + 2 * (1.0 * (1.1 + 0.775) + 2.0 * (0.5 + 0.775))))
+    assert travel == pytest.approx(2 * 0.01 * (0.5 + arm))
+    with pytest.raises(ValueError, match="execution must be 'synchronized' or 'paper', got 'fast'"):
+        braking_travel(geometry, max_base_speed=0.5, arm_max_velocity=[1.0, 2.0], period=0.01, execution="fast")
 
 
 @pytest.mark.parametrize("kwargs, match", [
     ({"safety_distance": -0.01, "period": PERIOD}, "safety_distance"),
     ({"safety_distance": float("nan"), "period": PERIOD}, "safety_distance"),
     ({"safety_distance": SAFETY, "period": 0.0}, "period"),
+    ({"safety_distance": SAFETY, "period": PERIOD, "release_time": -0.1}, "release_time"),
+    ({"safety_distance": SAFETY, "period": PERIOD, "release_time": float("inf")}, "release_time"),
 ])
 def test_bad_arguments_are_named(geometry, kwargs, match):
     with pytest.raises(ValueError, match=match):

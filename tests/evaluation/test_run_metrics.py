@@ -224,6 +224,19 @@ def test_stopped_time_and_episodes(tmp_path):
     assert all(math.isnan(unknown[k]) for k in ("stopped_time", "stop_count", "stopped_share"))
 
 
+def test_slow_down_time_and_stops(tmp_path):
+    scenario = _scenario(tmp_path)
+    times = np.array([0.0, 0.5, 1.0, 2.0, 2.5, 4.0, 5.0])
+    limit = np.array([np.inf, 0.3, 0.0, 0.0, np.inf, 0.0, 0.2])
+    slow_stopped = limit == 0.0
+    q = _q(np.linspace(1.0, 2.0, len(times)), 2.5)
+    dut = run_metrics(scenario, times, q, None, None, True, 10.0, speed_limit=limit, slow_stopped=slow_stopped)
+    assert dut["slowed_time"] == pytest.approx(0.5 + 1.0 + 0.5 + 1.0 + 0.0, abs=1e-12)
+    assert dut["slow_stop_count"] == 2.0 and dut["slow_stopped_time"] == pytest.approx(1.5 + 1.0, abs=1e-12)
+    unknown = run_metrics(scenario, times, q, None, None, True, 10.0)
+    assert all(math.isnan(unknown[k]) for k in ("slowed_time", "slow_stop_count", "slow_stopped_time"))
+
+
 def test_jerk_of_a_cubic_motion_is_six_a3_at_any_spacing(tmp_path):
     scenario = _scenario(tmp_path)
     times = np.cumsum(np.random.default_rng(3).uniform(0.01, 0.1, 60))

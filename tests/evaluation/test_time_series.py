@@ -11,6 +11,7 @@ from drake_social.evaluation.time_series import (
     derivative_magnitudes,
     episodes,
     held_time,
+    motion_profile,
     motion_stats,
     trapezoid_mean,
 )
@@ -58,3 +59,28 @@ def test_motion_stats_pool_tracks_and_are_nan_when_too_short():
     assert dut["accel_max"] == 0.0 and dut["jerk_max"] == 0.0
     short = motion_stats(t[:2], tracks[:2, 0])
     assert short["speed_max"] == 1.0 and math.isnan(short["accel_mean"]) and math.isnan(short["jerk_max"])
+
+
+def test_jerk_p95_is_the_95th_percentile_of_the_windows():
+    # Positions 0 except 1 at sample 10 of 41 at 1 s spacing: the third differences are 1, -3, 3, -1
+    # in the four windows around it (|j| = 1, 3, 3, 1 m/s^3), 0 in the other 34.
+    t = np.arange(41.0)
+    x = np.zeros(41)
+    x[10] = 1.0
+    dut = motion_stats(t, np.column_stack([x, 0 * x]))
+    # The 95th percentile of the 38: at rank 0.95 x 37 = 35.15 of the sorted values (1 and 3): 1.3.
+    assert dut["jerk_max"] == pytest.approx(3.0)
+    assert dut["jerk_p95"] == pytest.approx(1.3)
+    assert math.isnan(motion_stats(t[:3], np.zeros((3, 2)))["jerk_p95"])
+
+
+def test_motion_profile_is_the_fastest_track_at_mid_window():
+    t = np.array([0.0, 1.0, 2.0, 4.0])
+    tracks = np.stack([np.column_stack([t, 0 * t]), np.column_stack([0 * t, t**2])], axis=1)  # (T, 2, 2)
+    dut = motion_profile(t, tracks)
+    times, speed = dut["speed"]
+    np.testing.assert_allclose(times, [0.5, 1.5, 3.0])
+    np.testing.assert_allclose(speed, [1.0, 3.0, 6.0])  # track 1 (t^2) is the faster from the second step
+    np.testing.assert_allclose(dut["accel"][1], [2.0, 2.0])
+    np.testing.assert_allclose(dut["jerk"][0], [2.0])
+    assert len(motion_profile(t[:1], tracks[:1])["speed"][1]) == 0

@@ -76,7 +76,7 @@ _PROBE = r"""
     try {
       const animator = viewer.animator;
       animator.pause();
-      const result = {duration: animator.duration, positions: [], frames: [], overlays: []};
+      const result = {duration: animator.duration, positions: [], frames: [], overlays: [], colours: []};
       let node = null;
       if (path !== null) {
         node = viewer.scene_tree;
@@ -97,6 +97,12 @@ _PROBE = r"""
           let shown = true;
           for (let o = node.object; o; o = o.parent) shown = shown && o.visible;
           result.frames.push([t, Math.atan2(X.elements[1], X.elements[0]), shown, node.object.scale.x]);
+          // The colour of the node's geometry (its "<object>" child's material), when it has one.
+          const geometry = node.children["<object>"];
+          if (geometry && geometry.object.material && geometry.object.material.color) {
+            const c = geometry.object.material.color;
+            result.colours.push([t, c.r, c.g, c.b]);
+          }
         }
       }
       if ("drake_social" in viewer.scene_tree.children) {
@@ -185,10 +191,12 @@ def probe(html_path: str | os.PathLike, times: Sequence[float], path: str | None
 
     Returns:
         ``{"duration": s, "positions": [[t, x, y, z], ...], "frames": [[t,
-        yaw, visible, scale_x], ...], "overlays": [...]}`` (positions of
-        ``path`` in Drake's world frame, metres; its yaw about z, radians;
-        whether it and all its parents are visible; its own x scale;
-        overlays: the children of ``/drake_social``).
+        yaw, visible, scale_x], ...], "overlays": [...], "colours": [[t, r,
+        g, b], ...]}`` (positions of ``path`` in Drake's world frame,
+        metres; its yaw about z, radians; whether it and all its parents are
+        visible; its own x scale; overlays: the children of
+        ``/drake_social``; colours: its geometry's material colour, when
+        it has a geometry).
 
     Raises:
         RuntimeError: Chromium failed, or the page's script reported an error.

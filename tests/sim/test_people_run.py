@@ -89,7 +89,7 @@ def test_simulate_writes_people_csv(tiny_scenario_path, walking, tmp_path, monke
                         lambda ax, people, **kw: drawn.append((people, kw)) or original(ax, people, **kw))
     dut = app.run_simulate(scenario=tiny_scenario_path, out=tmp_path, mode="kinematic", checker="numpy",
                            replay=False)
-    assert dut.files == ["executed.csv", "people.csv", "path.png", "tracking.png", "sim.json"]
+    assert dut.files == ["executed.csv", "people.csv", "path.png", "tracking.png", "motion.png", "sim.json"]
     # path.png: the run's own log and executed trajectory, marked at 5 common times over the run.
     from matplotlib.image import imread
 

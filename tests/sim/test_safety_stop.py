@@ -46,10 +46,12 @@ SAFETY = 0.05
 
 @pytest.fixture(scope="module")
 def setting():
-    """tiny.yaml without its standing person; the robot drives straight east along y = 2.5 (its
-    1.5 m bar along x at y = 3 leads by 1.35 m) and a walker crosses its path southwards at x = 5.6
-    at 0.4 m/s, passing the bar's height y = 3 at t = 6.7 s, just when the bar's tip arrives."""
-    scenario = dc.replace(load_scenario("scenarios/tiny.yaml"), people=[])
+    """tiny.yaml without its standing person and without the slow-down (the paper's stop and go: the
+    monitor alone); the robot drives straight east along y = 2.5 (its 1.5 m bar along x at y = 3
+    leads by 1.35 m) and a walker crosses its path southwards at x = 5.6 at 0.4 m/s, passing the
+    bar's height y = 3 at t = 6.7 s, just when the bar's tip arrives."""
+    base = load_scenario("scenarios/tiny.yaml")
+    scenario = dc.replace(base, people=[], execution=dc.replace(base.execution, slow_down=False))
     waypoints = np.array([scenario.start, scenario.goal], float)
     walker = Walker([5.6, 4.8], [5.6, 0.3], 2.2, 2.2 + 4.5 / 0.4)
     return scenario, waypoints, walker
@@ -73,10 +75,15 @@ def test_walker_crossing_stops_the_robot_which_goes_on_after(setting, execution,
     (stop,) = run.stops
     assert (stop["person"], stop["part"]) == ("walker", "object")
     # The monitor decides from q and the people at each sample: the stop starts at the first sample
-    # within the safety distance and ends at the first one clear again, with the distance of its start.
+    # within the safety distance and ends release_time after the first one clear again (clear at
+    # every sample between), with the distance of its start.
     close = np.flatnonzero(d <= SAFETY)
     k_start = close[0]
-    k_end = k_start + np.flatnonzero(d[k_start:] > SAFETY)[0]
+    k_clear = k_start + np.flatnonzero(d[k_start:] > SAFETY)[0]
+    release = scenario.execution.release_time
+    assert release == 0.5
+    k_end = k_clear + int(round(release / period))
+    assert np.all(d[k_clear:k_end + 1] > SAFETY)
     assert stop["start"] == pytest.approx(run.times[k_start], abs=1e-9)
     assert stop["end"] == pytest.approx(run.times[k_end], abs=1e-9)
     assert stop["duration"] == pytest.approx(stop["end"] - stop["start"], abs=1e-12)
@@ -84,18 +91,21 @@ def test_walker_crossing_stops_the_robot_which_goes_on_after(setting, execution,
     assert stop["distance"] == pytest.approx(d[k_start], abs=1e-12)
     assert SAFETY - period * walker.speed - period * scenario.execution.max_base_speed < stop["distance"] <= SAFETY
     np.testing.assert_array_equal(run.stopped, (run.times >= stop["start"]) & (run.times < stop["end"]))
-    # Held: the base does not move from the stop's start to its end (its sampled command is zero at once).
-    held = run.q[k_start:k_end + 1]
-    np.testing.assert_array_equal(held, np.broadcast_to(run.q[k_start], held.shape))
+    # Held: the base does not move from the stop's start to its end: its sampled command is zero at once
+    # (paper), or it follows the reference, held one period later (synchronized).
+    lag = 1 if execution == "synchronized" else 0
+    held = run.q[k_start + lag:k_end + 1]  # (the base's P term on the rounding of the reference: 1e-14 m)
+    np.testing.assert_allclose(held, np.broadcast_to(run.q[k_start + lag], held.shape), rtol=0, atol=1e-12)
     # Only the robot's own motion counts against the field: wherever the robot moved into a sample, it
-    # was clear at the sample before, so it is within at most one period's travel of both.
-    moved = np.r_[False, np.any(run.q[1:] != run.q[:-1], axis=1)]
+    # was clear one or two samples before, so it is within at most the braking travel of both.
+    moved = np.r_[False, np.any(np.abs(run.q[1:] - run.q[:-1]) > 1e-12, axis=1)]
     opts = scenario.execution
     bound = SAFETY - braking_travel(arm_geometry(scenario), max_base_speed=opts.max_base_speed,
-                                    arm_max_velocity=opts.arm_max_velocity, period=period) - period * walker.speed
+                                    arm_max_velocity=opts.arm_max_velocity, period=period,
+                                    execution=execution) - (1 + lag) * period * walker.speed
     assert d[moved].min() >= bound
-    # ... the arm stands still here, so the tight bound is one period of the base and of the walker.
-    assert d[moved].min() >= SAFETY - period * (opts.max_base_speed + walker.speed) - 1e-12
+    # ... the arm stands still here, so the tight bound is one or two periods of the base and of the walker.
+    assert d[moved].min() >= SAFETY - (1 + lag) * period * (opts.max_base_speed + walker.speed) - 1e-12
     # It goes on after the walker passed and reaches the goal.
     assert run.time_to_goal > stop["end"] + 1.0
     np.testing.assert_allclose(run.q[-1, :2], scenario.goal[:2], atol=opts.base_tolerance)

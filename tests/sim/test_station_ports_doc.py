@@ -48,6 +48,7 @@ CONDITIONS = {
     "with Replan": lambda v: v.path == "replan",
     "when people move or with Replan": lambda v: v.moving or v.path == "replan",
     "with ExternalPath": lambda v: v.path == "external",
+    "with the slow-down": lambda v: v.moving and v.execution == "synchronized",
 }
 
 VARIANTS = [
