@@ -19,6 +19,12 @@ A :class:`Replanner` plans from the robot's configuration ``q_now`` at time
    candidate is no longer safe; when neither is safe the robot **waits**,
    with the reason in words.
 
+Every stage keeps to ``budget`` (:mod:`.replan_deadline`): the search
+stops early enough to leave time for the judgement (and for a way out of a
+person's path when one may be needed, :data:`EVADE_RESERVE`), and the
+judgement, the shortcut and the evasion check the deadline between small
+chunks, keeping the best answer judged by then.
+
 Every random choice comes from ``numpy.random.default_rng([seed,
 replan_index])``: a replan whose search stopped at the iteration cap is
 reproducible bit for bit; one stopped by the wall clock (``deadline_hit``)
@@ -316,9 +322,9 @@ class Replanner:
                 of it, kept for judging the search's paths (less
                 :data:`EVADE_RESERVE` too when the current path is not safe
                 and standing still would not be either), and the work after
-                it (judging, shortcut, evasion) stops at the budget with the
-                best answer judged by then; None = for every replan but the
-                initial one.
+                it (judging, shortcut, evasion) stops at the budget less
+                :data:`FINISH_RESERVE` with the best answer judged by then;
+                None = for every replan but the initial one.
             commit: the robot is moving towards ``previous``'s second row
                 and will reach it at rest (the sequencer's target): that
                 motion is kept as it is and the replan is made from its end,
