@@ -384,10 +384,13 @@ def replanning_summary(replans, rate: float, budget: float) -> dict:
         ``evasions`` (of them, those that stepped the robot aside),
         ``searches`` (of them, those that grew a search tree),
         ``search_time_median`` (seconds of those; None without any), ``plan_time_median``,
-        ``plan_time_p95``, ``plan_time_max`` (seconds of computation of
-        those replans; None without any), ``deadline_hits`` (those stopped by
-        the budget), ``rate``, ``budget``, and ``first_plan_time`` (seconds
-        of the first plan; None without it).
+        ``plan_time_p95``, ``plan_time_p99``, ``plan_time_max`` (seconds of
+        computation of those replans: the median, the 95th and 99th
+        percentiles, numpy's linear interpolation, and the largest; None
+        without any), ``deadline_hits`` (those the budget cut: their search,
+        judging, shortcut or evasion stopped at the deadline), ``rate``,
+        ``budget``, and ``first_plan_time`` (seconds of the first plan; None
+        without it).
     """
     replans = tuple(replans)
     first = [r for r in replans if r.status == "initial" or r.replan_index == 0]
@@ -407,6 +410,7 @@ def replanning_summary(replans, rate: float, budget: float) -> dict:
         "search_time_median": float(np.median(searched)) if len(searched) else None,
         "plan_time_median": stat(np.median(times) if len(times) else None),
         "plan_time_p95": stat(np.percentile(times, 95) if len(times) else None),
+        "plan_time_p99": stat(np.percentile(times, 99) if len(times) else None),
         "plan_time_max": stat(times.max() if len(times) else None),
         "deadline_hits": sum(1 for r in periodic if r.deadline_hit),
         "rate": float(rate),

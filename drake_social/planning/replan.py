@@ -19,6 +19,12 @@ A :class:`Replanner` plans from the robot's configuration ``q_now`` at time
    candidate is no longer safe; when neither is safe the robot **waits**,
    with the reason in words.
 
+Every stage keeps to ``budget`` (:mod:`.replan_deadline`): the search
+stops early enough to leave time for the judgement (and for a way out of a
+person's path when one may be needed, :data:`EVADE_RESERVE`), and the
+judgement, the shortcut and the evasion check the deadline between small
+chunks, keeping the best answer judged by then.
+
 Every random choice comes from ``numpy.random.default_rng([seed,
 replan_index])``: a replan whose search stopped at the iteration cap is
 reproducible bit for bit; one stopped by the wall clock (``deadline_hit``)
@@ -47,6 +53,7 @@ from drake_social.limits import MAX_ITERATIONS, MAX_REPLAN_BUDGET, MAX_REPLAN_IT
 from drake_social.people import people_model
 from drake_social.people.prediction import Prediction
 from drake_social.planning.algorithms import AlgorithmSpec, algorithm_spec, base_only_weights, make_objective
+from drake_social.planning.replan_deadline import Deadline
 from drake_social.planning.replan_eval import VERIFY_PATHS, PathEvaluation, PathJudge
 from drake_social.planning.replan_evade import LOOKAHEAD, escape, standing_clear
 from drake_social.planning.replan_search import SearchSetup, run_search, search_planner
@@ -54,7 +61,8 @@ from drake_social.planning.replan_shortcut import shortcut
 from drake_social.planning.rrt_star import compiled
 from drake_social.planning.space import ConfigurationSpace
 
-__all__ = ["REPLAN_STATUSES", "ReplanResult", "Replanner", "VERIFY_PATHS", "VERIFY_RESERVE"]
+__all__ = ["EVADE_RESERVE", "FINISH_RESERVE", "REPLAN_STATUSES", "ReplanResult", "Replanner", "VERIFY_PATHS",
+           "VERIFY_RESERVE"]
 
 #: Values of :attr:`ReplanResult.status`.
 REPLAN_STATUSES = ("initial", "new", "kept", "wait", "evade")
@@ -62,6 +70,12 @@ REPLAN_STATUSES = ("initial", "new", "kept", "wait", "evade")
 CHANGES = ("initial", "new", "evade")
 #: Fraction of the budget kept for the exact judgement after the search.
 VERIFY_RESERVE = 0.1
+#: ... and, when the current path is not safe and the robot standing still would not be either
+#: (the replan may end in a way out, :mod:`.replan_evade`), the fraction kept for the evasion.
+EVADE_RESERVE = 0.3
+#: Fraction of the budget kept for the last chunk of work started before the deadline and the result:
+#: the stages after the search stop at the budget less this.
+FINISH_RESERVE = 0.05
 
 
 @dc.dataclass(frozen=True, eq=False)
@@ -90,8 +104,11 @@ class ReplanResult:
         plan_time: wall-clock seconds of the whole replan (judging, search,
             judging again).
         iterations: samples the search drew.
-        deadline_hit: the search stopped at the wall-clock budget before the
-            iteration cap (the result then depends on the machine's speed).
+        deadline_hit: the wall-clock budget cut the replan: the search
+            stopped before the iteration cap, or the judgement of its paths,
+            their shortcut or the search for a way out (evasion) stopped
+            before it was done, with the best answer judged by then (the
+            result then depends on the machine's speed).
         candidate_cost: the candidate's exact cost when it is safe, inf when
             there is none or it is not safe.
         search_cost: the exact cost of the best safe search path judged, inf
@@ -301,9 +318,14 @@ class Replanner:
             replan_index: 0 for the initial plan (``initial_iterations``
                 samples, no deadline, status "initial"), then 1, 2, ...; it
                 seeds the generator with the replanner's seed.
-            deadline: stop the search at ``budget`` seconds of wall clock
-                (minus :data:`VERIFY_RESERVE` of it, kept for judging the
-                search's paths); None = for every replan but the initial one.
+            deadline: hold the replan to ``budget`` seconds of wall clock:
+                the search stops at the budget less :data:`VERIFY_RESERVE`
+                of it, kept for judging the search's paths (less
+                :data:`EVADE_RESERVE` too when the current path is not safe
+                and standing still would not be either), and the work after
+                it (judging, shortcut, evasion) stops at the budget less
+                :data:`FINISH_RESERVE` with the best answer judged by then;
+                None = for every replan but the initial one.
             commit: the robot is moving towards ``previous``'s second row
                 and will reach it at rest (the sequencer's target): that
                 motion is kept as it is and the replan is made from its end,
@@ -335,15 +357,16 @@ class Replanner:
         t_now = float(t_now)
         initial = replan_index == 0
         use_deadline = (not initial) if deadline is None else deadline
+        clock = Deadline(t_start + self.budget * (1.0 - FINISH_RESERVE),
+                         t_start + self.budget * (1.0 - VERIFY_RESERVE)) if use_deadline else Deadline()
         candidate = self._candidate(q, previous, who)
         judge = self.judge(prediction)
         if commit and candidate is not None and len(candidate) >= 2 and not initial:
-            return self._plan_committed(q, t_now, prediction, candidate, judge, t_start, replan_index,
-                                        use_deadline, search)
-        return self._plan_from(q, t_now, prediction, candidate, judge, t_start, replan_index, use_deadline, search)
+            return self._plan_committed(q, t_now, prediction, candidate, judge, t_start, replan_index, clock, search)
+        return self._plan_from(q, t_now, prediction, candidate, judge, t_start, replan_index, clock, search)
 
     def _plan_committed(self, q: np.ndarray, t_now: float, prediction: Prediction, candidate: np.ndarray,
-                        judge: PathJudge, t_start: float, replan_index: int, use_deadline: bool,
+                        judge: PathJudge, t_start: float, replan_index: int, clock: Deadline,
                         search: bool) -> ReplanResult:
         """A replan from the end of the committed motion ``candidate[0] -> candidate[1]``."""
         head = judge.evaluate(candidate[:2], t_now)
@@ -351,9 +374,9 @@ class Replanner:
             held = ReplanResult(t_now, q[None], math.inf, False, "wait",
                                 f"waiting: the motion being driven is not safe any more ({judge.unsafe_words(head)})",
                                 time.perf_counter() - t_start, 0, False, math.inf, math.inf, int(replan_index))
-            return self._hold_or_evade(held, q, t_now, judge, prediction, candidate, t_start)
+            return self._hold_or_evade(held, q, t_now, judge, prediction, candidate, t_start, clock)
         rest = self._plan_from(candidate[1], float(head.times[1]), prediction, candidate[1:], judge, t_start,
-                               replan_index, use_deadline, search, head_cost=float(head.cost))
+                               replan_index, clock, search, head_cost=float(head.cost), robot=(q, t_now))
         if rest.waiting or rest.status == "evade":
             t_b = float(head.times[1])
             if rest.waiting and standing_clear(judge, candidate[1], t_b, min(prediction.horizon,
@@ -367,19 +390,21 @@ class Replanner:
                 if rest.waiting else "waiting: standing at the end of the motion being driven would not be safe"
             held = dc.replace(rest, t=t_now, waypoints=q[None], status="wait", changed=False, cost=math.inf,
                               reason=why, plan_time=time.perf_counter() - t_start)
-            return self._hold_or_evade(held, q, t_now, judge, prediction, candidate, t_start)
+            return self._hold_or_evade(held, q, t_now, judge, prediction, candidate, t_start, clock)
         cost = head.cost
         return dc.replace(rest, t=t_now, waypoints=np.vstack([q[None], rest.waypoints]), cost=cost + rest.cost,
                           candidate_cost=cost + rest.candidate_cost, search_cost=cost + rest.search_cost,
                           plan_time=time.perf_counter() - t_start)
 
     def _plan_from(self, q: np.ndarray, t_now: float, prediction: Prediction, candidate: np.ndarray | None,
-                   judge: PathJudge, t_start: float, replan_index: int, use_deadline: bool,
-                   grow: bool, head_cost: float = 0.0) -> ReplanResult:
+                   judge: PathJudge, t_start: float, replan_index: int, clock: Deadline,
+                   grow: bool, head_cost: float = 0.0, robot: tuple | None = None) -> ReplanResult:
         """The replan from ``q`` at ``t_now`` (the module docstring's steps;
         ``grow`` False: no search while the candidate is safe). ``head_cost``:
         the cost of the committed motion before ``q``, part of both paths'
-        costs in the margin's comparison and in the reason's words."""
+        costs in the margin's comparison and in the reason's words.
+        ``robot``: ``(q, t)`` where a way out would start (None: ``q`` at
+        ``t_now``), for the evasion's share of the budget."""
         initial = replan_index == 0
 
         def result(waypoints, cost, status, reason, iterations=0, deadline_hit=False, candidate_cost=math.inf,
@@ -396,23 +421,26 @@ class Replanner:
         if not grow and math.isfinite(cand_cost) and not initial:
             return result(candidate, cand_cost, "kept", f"the current path (cost {head_cost + cand_cost:.4g}) is "
                           "still safe: kept without a search", candidate_cost=cand_cost)
-        stop = t_start + self.budget * (1.0 - VERIFY_RESERVE) if use_deadline else None
+        stop = clock.search_stop
+        if stop is not None and candidate is not None and not math.isfinite(cand_cost) and not initial:
+            q_r, t_r = (q, t_now) if robot is None else robot
+            if not standing_clear(judge, q_r, t_r, min(prediction.horizon, t_r + self.lookahead)):
+                stop -= self.budget * EVADE_RESERVE  # the replan may end in a way out: time is kept for it
         iterations = self.initial_iterations if initial else self.iterations
         search = run_search(self.search, judge.social, q, t_now, prediction, candidate, iterations, stop,
                             np.random.default_rng([self.seed, int(replan_index)]))
         best, best_eval = None, None
         for judged, path in enumerate(search.paths):
-            if judged >= VERIFY_PATHS and (best is not None or (
-                    use_deadline and time.perf_counter() > t_start + self.budget)):
-                break  # the first few, and more only while none is safe and the budget lasts
+            if clock.passed() or (judged >= VERIFY_PATHS and best is not None):
+                break  # the first few, and more only while none is safe; all within the budget
             ev = judge.evaluate(path, t_now)
             if ev.safe and (best_eval is None or ev.cost < best_eval.cost):
                 best, best_eval = path, ev
         if best is not None:
-            best, best_eval = shortcut(judge, best, t_now, best_eval)
+            best, best_eval = shortcut(judge, best, t_now, best_eval, clock)
         search_cost = best_eval.cost if best_eval is not None else math.inf
-        common = dict(iterations=search.iterations, deadline_hit=search.deadline_hit, candidate_cost=cand_cost,
-                      search_cost=search_cost, searched=True)
+        common = dict(iterations=search.iterations, deadline_hit=search.deadline_hit or clock.hit,
+                      candidate_cost=cand_cost, search_cost=search_cost, searched=True)
         cand_safe = math.isfinite(cand_cost)
         whole_search, whole_cand = head_cost + search_cost, head_cost + cand_cost  # the paths from the robot
         if best is not None and (not cand_safe or whole_search < (1.0 - self.margin) * whole_cand):
@@ -433,24 +461,31 @@ class Replanner:
                     if best is not None else f"the search found no safe path ({search.message})"))
             return result(candidate, cand_cost, "initial" if initial else "kept", why, **common)
         held = result(q[None], math.inf, "wait", judge.wait_words(q, t_now, cand, search.message), **common)
-        return held if initial else self._hold_or_evade(held, q, t_now, judge, prediction, candidate, t_start)
+        return held if initial else self._hold_or_evade(held, q, t_now, judge, prediction, candidate, t_start,
+                                                        clock)
 
     def _hold_or_evade(self, held: ReplanResult, q: np.ndarray, t_now: float, judge: PathJudge,
-                       prediction: Prediction, candidate: np.ndarray | None, t_start: float) -> ReplanResult:
+                       prediction: Prediction, candidate: np.ndarray | None, t_start: float,
+                       clock: Deadline) -> ReplanResult:
         """``held`` (a wait at ``q``), or an escape (:mod:`.replan_evade`)
         when standing at ``q`` is not safe until the horizon and there is a
         path to come back to (``candidate``, from ``q`` to the goal): the new
-        path is ``[q, escape end] + candidate``, status "evade"."""
+        path is ``[q, escape end] + candidate``, status "evade". The search
+        for a way out stops at ``clock``'s deadline with the best escape
+        judged by then, or none (the robot holds); ``deadline_hit`` says so."""
         until = min(prediction.horizon, t_now + self.lookahead)
         if candidate is None or standing_clear(judge, q, t_now, until):
             return held
         current = candidate[1] if len(candidate) > 1 else None
-        way = escape(judge, self.space, q, t_now, until, current)
+        way = escape(judge, self.space, q, t_now, until, current, clock)
+        cut = "; the search for a way out stopped at the deadline" if clock.hit else ""
+        held = dc.replace(held, deadline_hit=held.deadline_hit or clock.hit)
         if way is None:
-            return dc.replace(held, reason=held.reason + "; no escape motion is clear either",
+            return dc.replace(held, reason=held.reason + ("; no escape motion is clear either" if not cut else
+                                                          cut + " with none found"),
                               plan_time=time.perf_counter() - t_start)
-        how = "(clear)" if way.clear else \
-            f"(the best effort: least clearance {way.clearance:.2f} m as predicted)"
+        how = ("(clear)" if way.clear else
+               f"(the best effort: least clearance {way.clearance:.2f} m as predicted)") + cut
         if way.q is current:  # driving on is the way out: the path stays
             return dc.replace(held, waypoints=candidate, changed=False, status="kept",
                               reason=f"evading: standing here is not safe before t = {until:.2f} s "

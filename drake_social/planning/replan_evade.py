@@ -25,6 +25,12 @@ path) is a candidate too, and is preferred: clear, it is taken at once; as
 a best effort, while its least clearance is within :data:`BETTER_BY` of the
 best one's (so that an escape under way is not swapped every replan for
 one barely better). None of either: the robot holds (and says why).
+
+The search is anytime: given the replan's
+:class:`~drake_social.planning.replan_deadline.Deadline`, it checks it
+before each candidate it judges (and before each distance's candidates are
+checked against the room) and, once the deadline has passed, stops with the
+best escape judged so far by the rules above, or none (the robot holds).
 """
 
 from __future__ import annotations
@@ -33,6 +39,8 @@ import math
 from typing import NamedTuple
 
 import numpy as np
+
+from drake_social.planning.replan_deadline import Deadline
 
 __all__ = ["BETTER_BY", "ESCAPE_DIRECTIONS", "ESCAPE_DISTANCES", "LOOKAHEAD", "SAMPLE_STEP", "Escape", "escape",
            "standing_clear"]
@@ -65,12 +73,15 @@ def standing_clear(judge, q: np.ndarray, t_from: float, t_to: float) -> bool:
     return bool(judge.people_safety.motion_clear(q, q, float(t_from), max(float(t_from), float(t_to))))
 
 
-def _candidates(judge, space, q: np.ndarray) -> list[tuple[np.ndarray, float]]:
-    """Every escape end the room allows, with its distance, shortest first."""
+def _candidates(judge, space, q: np.ndarray, deadline: Deadline) -> list[tuple[np.ndarray, float]]:
+    """Every escape end the room allows, with its distance, shortest first
+    (the distances reached before the deadline passed)."""
     angles = 2.0 * math.pi * np.arange(ESCAPE_DIRECTIONS) / ESCAPE_DIRECTIONS
     unit = np.stack([np.cos(angles), np.sin(angles)], axis=1)
     out = []
     for d in ESCAPE_DISTANCES:
+        if deadline.passed():
+            break
         ends = np.repeat(q[None], ESCAPE_DIRECTIONS, axis=0)
         ends[:, :2] += d * unit
         inside = np.asarray(space.contains(ends), bool).reshape(-1)
@@ -96,7 +107,7 @@ def _least_clearance(judge, q: np.ndarray, end: np.ndarray, t_now: float, t_end:
 
 
 def escape(judge, space, q: np.ndarray, t_now: float, t_horizon: float,
-           current: np.ndarray | None = None) -> Escape | None:
+           current: np.ndarray | None = None, deadline: Deadline | None = None) -> Escape | None:
     """The escape from ``q`` at ``t_now`` (see the module docstring), or None.
 
     Args:
@@ -109,8 +120,17 @@ def escape(judge, space, q: np.ndarray, t_now: float, t_horizon: float,
         current: (4,) the end of the motion being driven, or None (the
             returned escape's ``q`` is then this very array when chosen;
             left out when it is ``q`` or the room's checker rejects the motion).
+        deadline: the replan's :class:`~.replan_deadline.Deadline` (None:
+            none), checked before each candidate is judged: once it has
+            passed, the best escape judged so far by the rules above (a
+            clear one, else the best effort among those whose clearance was
+            computed), or None (the robot holds); ``deadline.hit`` then
+            says so.
     """
+    deadline = Deadline() if deadline is None else deadline
     q = np.asarray(q, float)
+    if deadline.passed():
+        return None
     if current is not None and (np.array_equal(current, q)
                                 or not bool(judge.checker.are_motions_valid(q[None], current[None])[0])):
         current = None  # no motion, or one the room does not allow
@@ -119,12 +139,16 @@ def escape(judge, space, q: np.ndarray, t_now: float, t_horizon: float,
         if (judge.people_safety.motion_clear(q, current, float(t_now), t_cur)
                 and standing_clear(judge, current, t_cur, t_horizon)):
             return Escape(current, t_cur, float(judge.people_safety.clearance(current, max(t_cur, t_horizon))), True)
-    ends = _candidates(judge, space, q)
-    timed = [(end, d, float(judge.times(np.stack([q, end]), t_now)[1])) for end, d in ends]
+    ends = _candidates(judge, space, q, deadline)
+    timed = []  # the candidates timed so far: all of them unless the deadline cut the clear ones
     best = None
-    for end, d, t_end in timed:  # 1. clear escapes, the shortest first
+    for end, d in ends:  # 1. clear escapes, the shortest first
         if best is not None and d > best[1]:
             break
+        if deadline.passed():
+            break
+        t_end = float(judge.times(np.stack([q, end]), t_now)[1])
+        timed.append((end, d, t_end))
         if not (judge.people_safety.motion_clear(q, end, float(t_now), t_end)
                 and standing_clear(judge, end, t_end, t_horizon)):
             continue
@@ -133,15 +157,22 @@ def escape(judge, space, q: np.ndarray, t_now: float, t_horizon: float,
             best = (Escape(end.copy(), t_end, clearance, True), d)
     if best is not None:
         return best[0]
+    if deadline.passed():
+        return None
     standing = _least_clearance(judge, q, q, t_now, t_now, t_horizon)  # 2. the best effort
+    driving_on = None  # (t_end, least clearance) of driving on, judged first
+    if current is not None and not deadline.passed():
+        t_cur = float(judge.times(np.stack([q, current]), t_now)[1])
+        driving_on = (t_cur, _least_clearance(judge, q, current, t_now, t_cur, t_horizon))
     effort = None
     for end, d, t_end in timed:
+        if deadline.passed():
+            break
         least = _least_clearance(judge, q, end, t_now, t_end, t_horizon)
         if least > standing + BETTER_BY and (effort is None or least > effort.clearance):
             effort = Escape(end.copy(), t_end, least, False)
-    if current is not None:
-        t_cur = float(judge.times(np.stack([q, current]), t_now)[1])
-        least = _least_clearance(judge, q, current, t_now, t_cur, t_horizon)
+    if driving_on is not None:
+        t_cur, least = driving_on
         if least > standing + BETTER_BY and (effort is None or least >= effort.clearance - BETTER_BY):
             return Escape(current, t_cur, least, False)
     return effort

@@ -168,7 +168,8 @@ class SimulationResult:
             reached are left out); empty without.
         replanning: with replanning, the summary of ``replans``
             (:func:`~drake_social.control.replanning_summary`: count, changed,
-            waits, plan times, deadline hits, rate, budget); None without.
+            waits, plan times (median, p95, p99, max), deadline hits, rate,
+            budget); None without.
             With replanning ``waypoints`` is the path followed: each path up
             to the waypoint it was heading for when a replan replaced it, then
             the last one.
@@ -275,7 +276,8 @@ def replanning_line(summary: dict) -> str:
             f"{summary['waits']} waited")
     if summary["count"]:
         line += (f"; plan time median {summary['plan_time_median'] * 1e3:.1f} ms, p95 "
-                 f"{summary['plan_time_p95'] * 1e3:.1f} ms, max {summary['plan_time_max'] * 1e3:.1f} ms "
+                 f"{summary['plan_time_p95'] * 1e3:.1f} ms, p99 {summary['plan_time_p99'] * 1e3:.1f} ms, "
+                 f"max {summary['plan_time_max'] * 1e3:.1f} ms "
                  f"(budget {summary['budget'] * 1e3:g} ms, {summary['deadline_hits']} deadline hits)")
     return line
 

@@ -316,10 +316,41 @@ def test_summary_counts_the_periodic_replans(scenario):
     # All at t = 0: only the replan after the wait (replan 3) searched.
     assert summary == {"count": 4, "changed": 2, "waits": 1, "evasions": 1, "searches": 1, "search_time_median": 0.004,
                        "plan_time_median": pytest.approx(np.median(times)),
-                       "plan_time_p95": pytest.approx(np.percentile(times, 95)), "plan_time_max": 0.005,
+                       "plan_time_p95": pytest.approx(np.percentile(times, 95)),
+                       "plan_time_p99": pytest.approx(np.percentile(times, 99)), "plan_time_max": 0.005,
                        "deadline_hits": 1, "rate": 10.0, "budget": 0.08, "first_plan_time": 0.001}
     empty = replanning_summary((), 10.0, 0.08)
     assert empty["count"] == 0 and empty["plan_time_median"] is None and empty["first_plan_time"] is None
+
+
+def test_summary_plan_time_percentiles_by_hand():
+    """100 replans taking 1, 2, ..., 100 ms (in a shuffled order) after a
+    first plan of 3 s: the p-th percentile of the linear interpolation
+    between the sorted times lies at rank p / 100 x 99, so the median is
+    50.5 ms, p95 95 + 0.05 = 95.05 ms, p99 99 + 0.01 = 99.01 ms, max 100 ms;
+    the first plan is left out. With 3 replans (10, 20, 40 ms): rank 1.9
+    for p95 (20 + 0.9 x 20 = 38 ms) and 1.98 for p99 (39.6 ms)."""
+    from drake_social.planning.replan import ReplanResult
+    from drake_social.sim.results import replanning_line
+
+    def result(index, plan_time, deadline_hit=False):
+        return ReplanResult(0.1 * index, np.zeros((1, 4)), 0.0, False, "initial" if index == 0 else "kept", "",
+                            plan_time, 0, deadline_hit, 0.0, math.inf, index)
+
+    order = np.random.default_rng(5).permutation(100)
+    replans = [result(0, 3.0)] + [result(i + 1, (k + 1) * 1e-3, deadline_hit=k >= 98) for i, k in enumerate(order)]
+    dut = replanning_summary(replans, 10.0, 0.08)
+    assert dut["count"] == 100 and dut["first_plan_time"] == 3.0 and dut["deadline_hits"] == 2
+    assert dut["plan_time_median"] == pytest.approx(0.0505, abs=1e-12)
+    assert dut["plan_time_p95"] == pytest.approx(0.09505, abs=1e-12)
+    assert dut["plan_time_p99"] == pytest.approx(0.09901, abs=1e-12)
+    assert dut["plan_time_max"] == 0.1
+    assert "median 50.5 ms, p95 95.0 ms, p99 99.0 ms, max 100.0 ms (budget 80 ms, 2 deadline hits)" in \
+        replanning_line(dut)
+    few = replanning_summary([result(0, 1.0), result(1, 0.04), result(2, 0.01), result(3, 0.02)], 10.0, 0.08)
+    assert (few["plan_time_median"], few["plan_time_p95"], few["plan_time_p99"], few["plan_time_max"]) == \
+        pytest.approx((0.02, 0.038, 0.0396, 0.04), abs=1e-12)
+    assert replanning_summary([result(0, 1.0)], 10.0, 0.08)["plan_time_p99"] is None
 
 
 # ---- the sequencer's version input ---------------------------------------------

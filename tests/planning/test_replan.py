@@ -520,6 +520,256 @@ def test_shortcut_straightens_a_zigzag_and_keeps_clear(corridor, room):
     assert min_distance(corridor, short, 0.0, blocked, [person]) > corridor.execution.safety_distance
 
 
+# ---- the anytime budget: every stage after the search stops at the deadline --------------------------
+
+
+class WorkClock:
+    """A stand-in for ``time.perf_counter``: time passes only in the people's
+    checks, ``tick`` seconds per motion or configuration checked (the work
+    whose amount grows with the people and the candidates), and in the search,
+    which runs until its deadline (as a loaded one does). A replan's time is
+    then its count of checks, the same on every machine; reading the clock is
+    free. ``work`` counts the checks made inside the search for a way out
+    (``escape``) and elsewhere; ``search_stop`` is the search's deadline."""
+
+    def __init__(self, tick: float):
+        self.now, self.tick = 1000.0, float(tick)
+        self.work = {"escape": 0, "other": 0}
+        self.inside = False
+        self.search_stop = None
+
+    def __call__(self) -> float:
+        return self.now
+
+    def spend(self, checks: int = 1) -> None:
+        self.now += self.tick * checks
+        self.work["escape" if self.inside else "other"] += checks
+
+    def restart(self) -> None:
+        self.now, self.work, self.search_stop = 1000.0, {"escape": 0, "other": 0}, None
+
+
+@pytest.fixture
+def work_clock(monkeypatch):
+    """Installs a WorkClock as time.perf_counter, ticking in PeopleSafety's checks and the search."""
+    import time
+
+    from drake_social.collision.people_safety import PeopleSafety
+    from drake_social.planning import replan as replan_module
+
+    clock = WorkClock(1e-4)
+    monkeypatch.setattr(time, "perf_counter", clock)
+    motion, one, many = PeopleSafety._motion, PeopleSafety.clearance, PeopleSafety.clearances
+    search, escape = replan_module.run_search, replan_module.escape
+
+    def counted_motion(self, *args):
+        clock.spend()
+        return motion(self, *args)
+
+    def counted_one(self, q, t):
+        clock.spend()
+        return one(self, q, t)
+
+    def counted_many(self, q, t):
+        clock.spend(len(q))
+        return many(self, q, t)
+
+    def until_its_deadline(replanner, q, t_now, prediction, candidate, iterations, stop, rng):
+        out = search(replanner, q, t_now, prediction, candidate, iterations, stop, rng)
+        if stop is not None:
+            clock.search_stop, clock.now = stop, max(clock.now, stop)
+        return out
+
+    def counted_escape(*args, **kwargs):
+        clock.inside = True
+        try:
+            return escape(*args, **kwargs)
+        finally:
+            clock.inside = False
+
+    monkeypatch.setattr(PeopleSafety, "_motion", counted_motion)
+    monkeypatch.setattr(PeopleSafety, "clearance", counted_one)
+    monkeypatch.setattr(PeopleSafety, "clearances", counted_many)
+    monkeypatch.setattr(replan_module, "run_search", until_its_deadline)
+    monkeypatch.setattr(replan_module, "escape", counted_escape)
+    return clock
+
+
+def crowd(q, kind: str, n: int = 120) -> list:
+    """Scripts of ``n`` people about the robot at q from t = 2 s, and the two
+    corridors blocked by people standing in them (no path to the goal).
+    "column": half walk in a column at 1 m/s from the east through the robot,
+    half stand on a ring 5 m away (ways out to the side stay clear);
+    "converging": each walks at 0.8 to 1.4 m/s from 1.5 to 4 m away straight
+    through the robot (no way out is clear)."""
+    x, y = q[:2]
+    scripts = [[(2.0, 6.0, NORTH_Y)], [(2.0, 6.0, SOUTH_Y)]]
+    if kind == "column":
+        scripts += [[(2.0, x + 2.0 + 0.7 * k, y), (32.0, x - 28.0 + 0.7 * k, y)] for k in range(n // 2)]
+        scripts += [[(2.0, x + 5.0 * math.cos(a), y + 5.0 * math.sin(a))]
+                    for a in 2.0 * math.pi * np.arange(n - n // 2) / (n - n // 2)]
+        return scripts
+    rng = np.random.default_rng(1)
+    for _ in range(n):
+        a, r, s = rng.uniform(0.0, 2.0 * math.pi), rng.uniform(1.5, 4.0), rng.uniform(0.8, 1.4)
+        sx, sy = x + r * math.cos(a), y + r * math.sin(a)
+        scripts.append([(2.0, sx, sy), (2.0 + r / s, x, y), (2.0 + 2.0 * r / s, 2.0 * x - sx, 2.0 * y - sy)])
+    return scripts
+
+
+def _same_but_time(a: ReplanResult, b: ReplanResult) -> bool:
+    return a == dc.replace(b, plan_time=a.plan_time)
+
+
+@pytest.mark.parametrize("kind, tick", [("column", 6e-4), ("converging", 8e-5)])
+def test_loaded_evasion_stops_at_the_deadline(corridor, room, first, work_clock, kind, tick):
+    """120 people about the robot, both corridors blocked: the search finds
+    nothing, standing still is not safe, and the robot looks for a way out
+    among up to 64 escape motions. Given a search that runs to its deadline
+    (brought forward by EVADE_RESERVE) and checks costly enough that the
+    evasion cannot judge every candidate in the 80 ms budget, the evasion
+    stops at the deadline (fewer checks than with the whole budget, the
+    replan's time within the budget, deadline_hit), and the way out is still
+    one the rules allow: a clear one, checked again independently, or a best
+    effort that beats standing still and is no better than the one found with
+    every candidate judged."""
+    from drake_social.planning.replan import EVADE_RESERVE, VERIFY_RESERVE
+    from drake_social.planning.replan_evade import BETTER_BY, _least_clearance
+
+    work_clock.tick = tick
+    q_now, previous = along(first, 2.0)
+    scripts = crowd(q_now, kind)
+    prediction = walkers(2.0, scripts, horizon=5.0)
+    safety = corridor.execution.safety_distance
+    full = replanner(corridor, room).plan(q_now, 2.0, prediction, previous, replan_index=1)
+    full_work = dict(work_clock.work)
+    assert full.status == "evade" and not full.deadline_hit, full.reason
+    work_clock.restart()
+    rp = Replanner(corridor, room)
+    assert rp.budget == 0.08  # the default
+    dut = rp.plan(q_now, 2.0, prediction, previous, replan_index=1)
+    assert dut.plan_time <= rp.budget
+    assert dut.deadline_hit and "the search for a way out stopped at the deadline" in dut.reason, dut.reason
+    assert work_clock.work["other"] == full_work["other"]  # the same judging before the evasion
+    assert 0 < work_clock.work["escape"] < full_work["escape"]
+    assert full_work["escape"] * tick > rp.budget * EVADE_RESERVE  # more than the evasion's share
+    assert work_clock.search_stop == pytest.approx(1000.0 + rp.budget * (1 - VERIFY_RESERVE - EVADE_RESERVE),
+                                                   abs=1e-12)
+    assert dut.status == "evade", dut.reason
+    wp = dut.waypoints
+    np.testing.assert_array_equal(wp[0], q_now)
+    np.testing.assert_array_equal(wp[1, 2:], q_now[2:])  # the arm as it is
+    np.testing.assert_array_equal(wp[2:], previous)
+    assert room.are_motions_valid(wp[:1], wp[1:2]).all()
+    judge = Replanner(corridor, room).judge(prediction)
+    until = min(prediction.horizon, 2.0 + 2.0)
+    if kind == "column":
+        assert "(clear)" in dut.reason
+        assert clear_until(corridor, q_now, wp[1], 2.0, until, scripts) > safety
+    else:
+        assert "the best effort" in dut.reason and "the best effort" in full.reason
+        t_end = float(judge.times(wp[:2], 2.0)[1])
+        least = _least_clearance(judge, q_now, wp[1], 2.0, t_end, until)
+        assert least > _least_clearance(judge, q_now, q_now, 2.0, 2.0, until) + BETTER_BY
+        t_full = float(judge.times(full.waypoints[:2], 2.0)[1])
+        assert least <= _least_clearance(judge, q_now, full.waypoints[1], 2.0, t_full, until)
+
+
+def test_evasion_after_the_deadline_holds(corridor, room, first, work_clock):
+    """The budget spent before the evasion starts: no escape is tried and the
+    robot holds (the documented fallback), saying so."""
+    q_now, previous = along(first, 2.0)
+    prediction = walkers(2.0, crowd(q_now, "column"), horizon=5.0)
+    work_clock.tick = 1.0  # the first check spends the budget
+    dut = Replanner(corridor, room).plan(q_now, 2.0, prediction, previous, replan_index=1)
+    assert dut.status == "wait" and dut.deadline_hit and not dut.changed
+    assert "the search for a way out stopped at the deadline with none found" in dut.reason
+    np.testing.assert_array_equal(dut.waypoints, q_now[None])
+    assert work_clock.work["escape"] == 0
+
+
+def test_judging_and_shortcut_stop_at_the_deadline(corridor, room, first, monkeypatch):
+    """The search's paths are judged, and the best one shortened, within the
+    budget: the clock past the deadline right after the search, no path of it
+    is judged (the current path is not safe: the robot waits); past it after
+    the first judgement, that path is returned as judged, not shortened."""
+    import time
+
+    from drake_social.planning import replan as replan_module
+    from drake_social.planning.replan_eval import PathJudge
+
+    yc = NORTH_Y if route(first.waypoints) == "north" else SOUTH_Y
+    prediction = walkers(2.0, [[(2.0, 6.0, yc)]])  # the route being driven blocked, the other one free
+    q_now, previous = along(first, 2.0)
+    full = replanner(corridor, room).plan(q_now, 2.0, prediction, previous, replan_index=1)
+    assert full.status == "new" and not full.deadline_hit, full.reason
+
+    clock = {"now": 1000.0, "jump_after_search": True, "jump_after_judging": False, "judged": []}
+    monkeypatch.setattr(time, "perf_counter", lambda: clock["now"])
+    search, evaluate = replan_module.run_search, PathJudge.evaluate
+
+    def searched(*args, **kwargs):
+        out = search(*args, **kwargs)
+        if clock["jump_after_search"]:
+            clock["now"] += 10.0
+        clock["after"] = True
+        return out
+
+    def judged(self, waypoints, t0):
+        ev = evaluate(self, waypoints, t0)
+        if clock.get("after"):
+            clock["judged"].append(np.array(waypoints))
+            if clock["jump_after_judging"]:
+                clock["now"] += 10.0
+        return ev
+
+    monkeypatch.setattr(replan_module, "run_search", searched)
+    monkeypatch.setattr(PathJudge, "evaluate", judged)
+    dut = Replanner(corridor, room, budget=1.0).plan(q_now, 2.0, prediction, previous, replan_index=1)
+    assert dut.status == "wait" and dut.deadline_hit and dut.search_cost == math.inf, dut.reason
+    assert clock["judged"] == [] and dut.iterations == full.iterations
+    # Past the deadline after the first judgement: that path, as judged (it was safe), not shortened.
+    clock.update(now=1000.0, jump_after_search=False, jump_after_judging=True, judged=[], after=False)
+    dut = Replanner(corridor, room, budget=1.0).plan(q_now, 2.0, prediction, previous, replan_index=1)
+    assert dut.status == "new" and dut.deadline_hit, dut.reason
+    assert len(clock["judged"]) == 1
+    np.testing.assert_array_equal(dut.waypoints, clock["judged"][0])
+    assert len(dut.waypoints) > len(full.waypoints)  # the shortcut would have shortened it
+    assert dut.search_cost == Replanner(corridor, room).evaluate(dut.waypoints, 2.0, prediction).cost
+    assert min_distance(corridor, dut.waypoints, 2.0, prediction, [[(2.0, 6.0, yc)]]) > \
+        corridor.execution.safety_distance
+
+
+def test_shortcut_with_a_passed_deadline_returns_its_input(corridor, room):
+    from drake_social.planning.replan_deadline import Deadline
+    from drake_social.planning.replan_shortcut import shortcut
+
+    s = np.asarray(corridor.start, float)
+    zig = np.array([s, [1.7, 4.4, *s[2:]], [2.1, 2.6, *s[2:]], [2.5, 4.4, *s[2:]], [2.9, 3.5, *s[2:]]])
+    judge = replanner(corridor, room).judge(nobody(0.0))
+    ev = judge.evaluate(zig, 0.0)
+    passed = Deadline(-math.inf)
+    short, sev = shortcut(judge, zig, 0.0, ev, passed)
+    assert short is zig and sev is ev and passed.hit
+    kept = Deadline(math.inf)
+    short, sev = shortcut(judge, zig, 0.0, ev, kept)
+    assert len(short) < len(zig) and not kept.hit
+    assert short.tobytes() == shortcut(judge, zig, 0.0, ev)[0].tobytes()
+
+
+def test_a_budget_that_is_not_reached_changes_nothing(corridor, room, first):
+    """With a budget far above the work, a replan with its deadline checks is
+    the replan without a deadline, bit for bit (the loaded evasion included)."""
+    q_now, previous = along(first, 2.0)
+    rp = replanner(corridor, room)
+    for kind in ("column", "converging"):
+        prediction = walkers(2.0, crowd(q_now, kind), horizon=5.0)
+        a = rp.plan(q_now, 2.0, prediction, previous, replan_index=1, deadline=True)
+        b = rp.plan(q_now, 2.0, prediction, previous, replan_index=1, deadline=False)
+        assert a.status == "evade" and not a.deadline_hit
+        assert _same_but_time(a, b) and a.waypoints.tobytes() == b.waypoints.tobytes()
+
+
 # ---- arguments ----------------------------------------------------------------------------------
 
 
