@@ -574,8 +574,8 @@ def work_clock(monkeypatch):
         clock.spend(len(q))
         return many(self, q, t)
 
-    def until_its_deadline(replanner, q, t_now, prediction, candidate, iterations, stop, rng):
-        out = search(replanner, q, t_now, prediction, candidate, iterations, stop, rng)
+    def until_its_deadline(setup, social, q, t_now, prediction, candidate, iterations, stop, rng):
+        out = search(setup, social, q, t_now, prediction, candidate, iterations, stop, rng)
         if stop is not None:
             clock.search_stop, clock.now = stop, max(clock.now, stop)
         return out
