@@ -19,7 +19,7 @@ predicts them). The rollout has no randomness.
 
 :func:`demands` says what one rollout asks of each person compared with
 another (the robot-free one): their largest deceleration beyond the
-reference's and their largest deviation from it, and the effort
+reference's and their largest deviation off their way, and the effort
 ``sum over people and samples of |deviation|^2 dt``.
 """
 
@@ -156,7 +156,9 @@ class Demands(NamedTuple):
 
     Attributes:
         deceleration: (P,) each person's largest rate of speed loss beyond the reference's, m/s^2 (>= 0).
-        deviation: (P,) each person's largest distance from their reference position, metres.
+        deviation: (P,) each person's largest distance off their way, metres: from their reference
+            position across the reference's walking direction at the same sample (the whole distance
+            while the reference stands).
         effort: ``sum over people and samples of |deviation|^2 dt``, m^2 s.
     """
 
@@ -169,7 +171,8 @@ def demands(induced: Prediction, induced_velocities: np.ndarray, reference: Pred
             reference_velocities: np.ndarray) -> Demands:
     """What ``induced`` asks of each present person compared with ``reference`` (the same people and times).
 
-    The speed deficit ``d_k = |v_ref,k| - |v_k|`` at each sample; the
+    Lagging behind along their way is braking (the deceleration), not a
+    deviation; the effort counts both (the whole displacement). The speed deficit ``d_k = |v_ref,k| - |v_k|`` at each sample; the
     deceleration is the largest ``(d_(k+1) - d_k) / dt`` (0 when the deficit
     never grows): how hard the person brakes beyond what they do anyway.
     People not present count for nothing.
@@ -180,7 +183,12 @@ def demands(induced: Prediction, induced_velocities: np.ndarray, reference: Pred
     present = induced.present[0]
     gap = induced.positions - reference.positions
     dev = np.hypot(gap[..., 0], gap[..., 1])
-    deviation = np.where(present, dev.max(axis=0), 0.0)
+    ref_speed = np.hypot(reference_velocities[..., 0], reference_velocities[..., 1])
+    moving = ref_speed > STANDING_SPEED
+    safe = np.where(moving, ref_speed, 1.0)
+    # Off their way: across the reference's walking direction (all of it for who stands there).
+    across = np.abs(gap[..., 0] * reference_velocities[..., 1] - gap[..., 1] * reference_velocities[..., 0]) / safe
+    deviation = np.where(present, np.where(moving, across, dev).max(axis=0), 0.0)
     deficit = (np.hypot(reference_velocities[..., 0], reference_velocities[..., 1])
                - np.hypot(induced_velocities[..., 0], induced_velocities[..., 1]))
     if len(deficit) > 1:
