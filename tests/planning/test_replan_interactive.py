@@ -165,29 +165,32 @@ def test_same_inputs_same_replan(scenario, room):
 
 
 def test_judging_stops_at_the_deadline(scenario, room, monkeypatch):
-    """Each rollout costs ``tick`` seconds of a fake clock and the search runs
+    """Each rollout costs 0.1 s of a fake clock and the search runs
     to its deadline: the judging after it starts no rollout past the
     replan's deadline (the budget less FINISH_RESERVE), however many
     candidates there are."""
     import time
 
     from drake_social.planning import replan as replan_module
-    from drake_social.planning.replan import FINISH_RESERVE
+    from drake_social.planning.replan import FINISH_RESERVE, INTERACTIVE_VERIFY_RESERVE
 
-    clock = {"now": 1000.0, "rollouts": [], "after": False}
+    clock = {"now": 1000.0, "rollouts": [], "after": False, "budget": 1.0}
     monkeypatch.setattr(time, "perf_counter", lambda: clock["now"])
     search, driving = replan_module.run_search, InteractivePeople.driving
 
     def to_its_deadline(setup, social, q, t_now, prediction, candidate, iterations, stop, rng):
         out = search(setup, social, q, t_now, prediction, candidate, iterations, stop, rng)
         assert len(out.paths) >= 4
-        clock["now"], clock["after"] = max(clock["now"], stop), True
+        if stop is not None:  # the search leaves the interactive judging its share of the budget
+            assert stop == pytest.approx(1000.0 + clock["budget"] * (1.0 - INTERACTIVE_VERIFY_RESERVE), abs=1e-9)
+            clock["now"] = max(clock["now"], stop)
+        clock["after"] = True
         return out
 
     def costly(self, waypoints, times):
         if clock["after"]:
             clock["rollouts"].append(clock["now"])
-        clock["now"] += 0.02
+        clock["now"] += 0.1
         return driving(self, waypoints, times)
 
     monkeypatch.setattr(replan_module, "run_search", to_its_deadline)
@@ -199,9 +202,9 @@ def test_judging_stops_at_the_deadline(scenario, room, monkeypatch):
     stop = 1000.0 + 1.0 * (1.0 - FINISH_RESERVE)
     assert dut.deadline_hit and dut.status == "new"
     assert clock["rollouts"] and max(clock["rollouts"]) <= stop
-    assert len(clock["rollouts"]) <= 3  # 0.05 s after the search's deadline, 0.02 s per rollout
+    assert len(clock["rollouts"]) <= 3  # 0.25 s after the search's deadline, 0.1 s per rollout
     # With time to spare the same replan judges more.
-    clock.update(now=1000.0, rollouts=[], after=False)
+    clock.update(now=1000.0, rollouts=[], after=False, budget=60.0)
     Replanner(scenario, room, budget=60.0).plan(np.asarray(scenario.start, float), 0.0,
                                                  constant_velocity(state, HORIZON), None, replan_index=3,
                                                  people=state)
