@@ -380,7 +380,7 @@ class Replanner:
         if self.interactive is not None:
             require_instance(people, PeopleState, who, "people", "a drake_social.people.PeopleState (the "
                              "interactive prediction rolls the people out from their state now)")
-            judge = self._interactive_judge(people, t_now, prediction, candidate[:2] if committed else q[None])
+            judge = self.interactive_judge(people, t_now, prediction, candidate[:2] if committed else q[None])
             prediction = judge.prediction
         else:
             judge = self.judge(prediction)
@@ -388,9 +388,18 @@ class Replanner:
             return self._plan_committed(q, t_now, prediction, candidate, judge, t_start, replan_index, clock, search)
         return self._plan_from(q, t_now, prediction, candidate, judge, t_start, replan_index, clock, search)
 
-    def _interactive_judge(self, people: PeopleState, t_now: float, prediction: Prediction,
+    def interactive_judge(self, people: PeopleState, t_now: float, prediction: Prediction,
                            prefix: np.ndarray) -> InteractiveJudge:
-        """The judge of the interactive prediction over ``prediction``'s samples, the robot committed to ``prefix``."""
+        """The judge of the interactive prediction (:class:`~.replan_interactive.InteractiveJudge`).
+
+        Args:
+            people: the people now.
+            t_now: the time now, seconds.
+            prediction: gives the samples (its ``dt`` and horizon); the people
+                are rolled out from ``people``.
+            prefix: (M, 4) the committed motion from the robot's configuration
+                (M = 1: none).
+        """
         p = self.scenario.planner
         state = people if people.t == t_now else people.at_time(t_now)
         packed = InteractivePeople(self.interactive, state, prediction.horizon - prediction.t0, prediction.dt)

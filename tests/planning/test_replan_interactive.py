@@ -138,7 +138,7 @@ def test_a_path_the_walker_must_brake_hard_for_is_refused(scenario, room):
     assert "courtesy: walker would have to brake at" in dut.reason and "planner.courtesy_deceleration 1.5" in \
         dut.reason
     if dut.status == "new":
-        judge = r._interactive_judge(state, 0.0, constant_velocity(state, HORIZON), q[None])
+        judge = r.interactive_judge(state, 0.0, constant_velocity(state, HORIZON), q[None])
         ev = judge.evaluate(dut.waypoints, 0.0)
         assert ev.safe and ev.cost == pytest.approx(dut.cost, rel=1e-12)
     # Under constant velocity the same path is judged without courtesy.
