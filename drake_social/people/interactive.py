@@ -29,8 +29,10 @@ import dataclasses as dc
 import math
 from typing import NamedTuple
 
+import numba
 import numpy as np
 
+from drake_social.interrupts import DeferredSignals
 from drake_social.kinematics import ArmGeometry
 from drake_social.people.crowd import HEADING_SPEED, STANDING_SPEED
 from drake_social.people.interactive_kernel import rollout
@@ -134,11 +136,21 @@ class InteractivePeople:
         s, h = self.state, len(self.times)
         has = robot_q is not None
         q = np.ascontiguousarray(robot_q if has else np.zeros((h, 4)), float).reshape(h, 4)
-        pos, vel, head = rollout(np.ascontiguousarray(s.positions, float), np.ascontiguousarray(s.velocities, float),
-                                 np.ascontiguousarray(s.headings, float), self._active,
-                                 np.ascontiguousarray(s.radii, float), self.preferred, self.max_speeds, self.goals,
-                                 self.walking, self.model.boxes, q, has,
-                                 np.ascontiguousarray(self.model.geometry.object_points, float), self._params)
+        args = (np.ascontiguousarray(s.positions, float), np.ascontiguousarray(s.velocities, float),
+                np.ascontiguousarray(s.headings, float), self._active, np.ascontiguousarray(s.radii, float),
+                self.preferred, self.max_speeds, self.goals, self.walking, self.model.boxes, q, has,
+                np.ascontiguousarray(self.model.geometry.object_points, float), self._params)
+        # A Ctrl-C raised inside numba's boxing of the result comes out as a SystemError: SIGINT and
+        # SIGTERM are held over the call (drake_social.interrupts), after compiling (or loading) the
+        # kernel, so that Ctrl-C stays live while that takes its tens of seconds.
+        if not rollout.signatures:
+            rollout.compile(tuple(numba.typeof(a) for a in args))
+        held = DeferredSignals()
+        try:
+            with held:
+                pos, vel, head = rollout(*args)
+        finally:  # also when the kernel raised: a Ctrl-C is not lost
+            held.reraise()
         step = np.diff(pos, axis=0)
         max_speeds = np.hypot(step[..., 0], step[..., 1]).max(axis=0) / self.dt if h > 1 else np.zeros(s.count)
         prediction = Prediction(t0=float(s.t), dt=self.dt, positions=pos, headings=head,

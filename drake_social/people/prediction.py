@@ -12,7 +12,7 @@ fields as plain arrays and look them up with the same kernel.
 
 Three predictors:
 
-* :func:`constant_velocity` (the default): every present person goes on at
+* :func:`constant_velocity`: every present person goes on at
   the velocity of the state now, facing the way they face now;
 * :func:`perfect_prediction`: the open-loop people of a
   :class:`~drake_social.people.compose.ScenarioPeople` (scripted and recorded)

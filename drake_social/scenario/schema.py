@@ -375,11 +375,12 @@ class PlannerOptions:
     # may take any of many near-zero-cost detours: the replan margin of a
     # route's cost by length alone is too small to hold it; docs/replanning.md).
     replan_length_weight: float = 0.1
-    # How people are predicted: "constant_velocity" (from their state now),
-    # "perfect" (scripted and recorded people as they will walk; a crowd at
-    # constant velocity) or "interactive" (a social-force rollout in which the
-    # people react to each judged path; docs/replanning.md, "Interactive prediction").
-    prediction: str = "constant_velocity"
+    # How people are predicted: "interactive" (a social-force rollout in
+    # which the people react to each judged path; docs/replanning.md,
+    # "Interactive prediction"), "constant_velocity" (from their state now)
+    # or "perfect" (scripted and recorded people as they will walk; a crowd
+    # at constant velocity).
+    prediction: str = "interactive"
     # Interactive prediction only: a path is not safe when it makes a person
     # brake harder than this beyond what they do without the robot, m/s^2
     # (in (0, MAX_COURTESY_DECELERATION]) ...
