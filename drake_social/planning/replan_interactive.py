@@ -59,7 +59,7 @@ class InteractiveJudge(PathJudge):
     def __init__(self, make_judge: Callable[[Prediction], PathJudge], people: InteractivePeople,
                  prefix: np.ndarray, t_now: float, deceleration: float, deviation: float, weight: float) -> None:
         self.make_judge = make_judge
-        self.people = people
+        self.rollouts = people  #: the people now, packed for rollouts
         self.reference, self._reference_velocities = people.rollout(None)
         base = make_judge(self.reference)  # the limits that time a path
         self.prefix = np.ascontiguousarray(prefix, float).reshape(-1, 4)
@@ -84,12 +84,12 @@ class InteractiveJudge(PathJudge):
     def induced(self, waypoints: np.ndarray, t0: float) -> tuple[Prediction, Demands]:
         """The people when the robot drives ``waypoints`` from ``t0``, and what that asks of them."""
         wp = np.ascontiguousarray(waypoints, float)
-        prediction, velocities = self.people.driving(*self.motion(wp, self.times(wp, t0)))
+        prediction, velocities = self.rollouts.driving(*self.motion(wp, self.times(wp, t0)))
         return prediction, demands(prediction, velocities, self.reference, self._reference_velocities)
 
     def courtesy_words(self, asked: Demands) -> str:
         """Why ``asked`` is too much (the worst person, relative to the bound), empty when it is not."""
-        names = self.people.state.names
+        names = self.rollouts.state.names
         worst, words = 1.0, ""
         for values, held, bound, say in (
                 (asked.deceleration, self.holding.deceleration, self.deceleration,

@@ -65,6 +65,17 @@ def _check_slow_down(c: "_Checker", e) -> None:
                                        f"got {e.slow_speed}")
 
 
+def _courtesy(c, p) -> None:
+    """The interactive prediction's courtesy bounds (``planner.courtesy_*``)."""
+    for name, most, unit in (("courtesy_deceleration", MAX_COURTESY_DECELERATION, "m/s^2"),
+                             ("courtesy_deviation", MAX_COURTESY_DEVIATION, "metres")):
+        value = getattr(p, name)
+        c.finite(f"planner.{name}", value)
+        if not 0.0 < value <= most:
+            c.fail(f"planner.{name}", f"must be in (0, {most:g}] {unit}, got {_shown(value)}")
+    c.weight("planner.courtesy_weight", p.courtesy_weight)
+
+
 class _Checker:
     def __init__(self, source: str):
         self.source = source
@@ -420,13 +431,7 @@ def validate_scenario(scenario: Scenario, source: str = "<scenario>") -> None:
         c.fail("planner.replan_search_period", f"must be >= 0 seconds, got {p.replan_search_period}")
     if p.prediction not in PREDICTIONS:
         c.fail("planner.prediction", f"unknown prediction {_shown(p.prediction)}; allowed: {', '.join(PREDICTIONS)}")
-    for name, most, unit in (("courtesy_deceleration", MAX_COURTESY_DECELERATION, "m/s^2"),
-                             ("courtesy_deviation", MAX_COURTESY_DEVIATION, "metres")):
-        value = getattr(p, name)
-        c.finite(f"planner.{name}", value)
-        if not 0.0 < value <= most:
-            c.fail(f"planner.{name}", f"must be in (0, {most:g}] {unit}, got {_shown(value)}")
-    c.weight("planner.courtesy_weight", p.courtesy_weight)
+    _courtesy(c, p)
     e = scenario.execution
     if e.mode not in SIM_MODES:
         c.fail("execution.mode", f"unknown mode {_shown(e.mode)}; allowed: {', '.join(SIM_MODES)}")
