@@ -136,6 +136,13 @@ class ReplanState:
             path up to the target it was heading for when it was replaced,
             then the current path (its row ``offset`` is the current path's row 0).
         offset: the row of ``followed`` where the current path starts.
+        judged: (K, 4) the segments driven on, as one polyline: as
+            ``followed``, but each replaced path kept up to and including the
+            target it was heading for (the robot may have passed the point
+            where the next path starts on that segment: a jerk-limited stop
+            runs a little past its rest and back), then the current path;
+            the executed motion's deviation is measured from it.
+        judged_offset: the row of ``judged`` where the current path starts.
         searched_at: the time of the last replan that grew a search tree
             (-inf before any).
     """
@@ -148,6 +155,8 @@ class ReplanState:
     log: tuple = ()
     followed: np.ndarray | None = None
     offset: int = 0
+    judged: np.ndarray | None = None
+    judged_offset: int = 0
     searched_at: float = -math.inf
 
     # Drake clones abstract state (Value[object] deep-copies): an immutable
@@ -268,6 +277,10 @@ class ReplanningPlannerSystem(LeafSystem):
         """(M, 4) the path followed so far (see :class:`ReplanState`)."""
         return self._planned(context).followed
 
+    def judged(self, context: Context) -> np.ndarray:
+        """(K, 4) the segments driven on (see :class:`ReplanState`)."""
+        return self._planned(context).judged
+
     def _planned(self, context: Context) -> ReplanState:
         state = self.state(context)
         if state.path is None:
@@ -301,7 +314,7 @@ class ReplanningPlannerSystem(LeafSystem):
         waiting = result.status == "wait"
         path = _frozen(result.waypoints)
         new = ReplanState(path=path, planned=not waiting, version=0, hold=waiting, result=result, log=(result,),
-                          followed=path, offset=0, searched_at=t)
+                          followed=path, offset=0, judged=path, judged_offset=0, searched_at=t)
         _log.info("first plan at t = %.2f s: %s", t, _describe(result))
         state.get_mutable_abstract_state(self._state_index).set_value(new)
 
@@ -328,14 +341,20 @@ class ReplanningPlannerSystem(LeafSystem):
             new = dc.replace(old, hold=True, result=result, log=log)
             if not old.planned:  # nothing to follow yet: stay where the robot is
                 path = _frozen(result.waypoints)
-                new = dc.replace(new, path=path, followed=path)
+                new = dc.replace(new, path=path, followed=path, judged=path)
         elif result.changed or not old.planned:
             path = _frozen(result.waypoints)
             cut = old.offset + index if old.planned else 0
             followed = np.vstack([old.followed[:cut], path]) if cut else path
             followed.flags.writeable = False
+            kept = old.judged[:old.judged_offset + index + 1] if old.planned else path[:0]
+            if len(kept) and np.array_equal(kept[-1], path[0]):
+                kept = kept[:-1]  # the new path starts at the target: one row
+            judged = np.vstack([kept, path]) if len(kept) else path
+            judged.flags.writeable = False
             new = ReplanState(path=path, planned=True, version=old.version + 1, hold=False, result=result, log=log,
-                              followed=followed, offset=cut, searched_at=old.searched_at)
+                              followed=followed, offset=cut, judged=judged, judged_offset=len(kept),
+                              searched_at=old.searched_at)
         else:
             new = dc.replace(old, hold=False, result=result, log=log)
         if getattr(result, "searched", True):

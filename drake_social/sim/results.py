@@ -173,6 +173,10 @@ class SimulationResult:
             With replanning ``waypoints`` is the path followed: each path up
             to the waypoint it was heading for when a replan replaced it, then
             the last one.
+        judged: the polyline the deviation is measured from: ``waypoints``,
+            or with replanning each replaced path up to and including the
+            waypoint it was heading for (:class:`~drake_social.control.ReplanState`'s
+            ``judged``).
     """
 
     mode: str
@@ -202,6 +206,7 @@ class SimulationResult:
     slow_stopped: np.ndarray = dc.field(default_factory=lambda: np.zeros(0, bool))
     replans: tuple = ()
     replanning: dict | None = None
+    judged: np.ndarray | None = None
 
     @property
     def stopped_time(self) -> float:
