@@ -500,9 +500,11 @@ def run_simulate(*, scenario: Scenario | str | Path, out: str | Path, overrides:
             from drake_social.sim.replay import draw_overlays, set_top_view, write_replay_html
 
             # Walking people (SimulationResult.people, a PeopleLog) get animated arrows and heat-map quads.
-            # With replanning (run.replans not empty) each distinct plan and wait is drawn over its time.
+            # With replanning (run.replans not empty) each distinct plan and wait is drawn over its time,
+            # with the people its replan predicted and why it began (run.predicted).
             draw_overlays(meshcat, loaded, run.waypoints if len(run.waypoints) else None,
-                          people=getattr(run, "people", None), replans=run.replans)
+                          people=getattr(run, "people", None), replans=run.replans,
+                          predicted=getattr(run, "predicted", ()))
             from drake_social.sim.replay_speed import animate_slow_down
 
             animate_slow_down(meshcat, run, float(loaded.execution.replay_fps))  # the base's colour: limited, held
