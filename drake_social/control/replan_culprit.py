@@ -10,8 +10,13 @@ distance to the robot
 * driving the replaced path (timed from the replan at the execution limits,
   as the replanner times it) at :data:`WINDOW_SAMPLES` times over the
   reason's ``t = a .. b s``;
-* or, when the reason names no window, standing where it is from the
-  replan's time over :data:`STANDING_LOOKAHEAD` seconds.
+* or, when the reason says a person is near the robot now, where it is at
+  the replan's time;
+* or, when the reason names no such window but a person (or the robot
+  steps aside: standing was not clear of them), standing where it is from
+  the replan's time over :data:`STANDING_LOOKAHEAD` seconds.
+
+A path that collides with the room, or a cheaper route, has no culprit.
 
 The distances are those of the replanner's safety check
 (:func:`drake_social.collision.people_kernel.people_clearance`, one person
@@ -80,9 +85,10 @@ def culprit(result, prediction: Prediction, replaced: np.ndarray | None, q: np.n
         a, b = float(window.group(1)), float(window.group(2))
         times = np.linspace(a, max(a, b), WINDOW_SAMPLES)
         configs = robot_along(replaced, t0, times, max_base_speed, arm_max_velocity)
-    elif "person" in reason or "not safe" in reason:
-        times = np.linspace(t0, t0 + STANDING_LOOKAHEAD, WINDOW_SAMPLES)
-        configs = np.repeat(np.asarray(q, float).reshape(1, 4), WINDOW_SAMPLES, axis=0)
+    elif "person" in reason or kind == "evade":  # a person near the robot now, or standing would not be clear
+        times = np.array([t0]) if "from the robot now" in reason else \
+            np.linspace(t0, t0 + STANDING_LOOKAHEAD, WINDOW_SAMPLES)
+        configs = np.repeat(np.asarray(q, float).reshape(1, 4), len(times), axis=0)
     else:
         return -1
     bodies, robot = np.ascontiguousarray(scene.bodies, float), np.ascontiguousarray(scene.robot, float)

@@ -374,9 +374,8 @@ class ReplanningPlannerSystem(LeafSystem):
             new = dc.replace(old, hold=False, result=result, log=log)
         if getattr(result, "searched", True):
             new = dc.replace(new, searched_at=t)
-        predicted = self._kept(old.predicted, result, len(old.log), prediction, q, previous, old.hold)
-        if predicted is not old.predicted:
-            new = dc.replace(new, predicted=predicted)
+        new = dc.replace(new, predicted=self._kept(old.predicted, result, len(old.log), prediction, q, previous,
+                                                   old.hold))
         if new.hold != old.hold or new.version != old.version:
             _log.debug("replan %d at t = %.2f s: %s", len(old.log), t, _describe(result))
         state.get_mutable_abstract_state(self._state_index).set_value(new)
