@@ -110,7 +110,7 @@ def label_lines(result, predicted: PredictedPeople | None) -> list[str]:
     lines = [f"t = {float(result.t):.1f} s: {DECISION_LABELS[kind]}"]
     if predicted is not None and predicted.culprit >= 0:
         lines.append(f"because of {predicted.culprit_name!r} (orange: where the robot predicted them)")
-    reason = textwrap.wrap(str(result.reason), _LABEL_CHARS)
+    reason = textwrap.wrap(str(getattr(result, "reason", "")), _LABEL_CHARS)
     room = LABEL_LINES - len(lines)
     if len(reason) > room:
         reason = reason[:room]
