@@ -47,7 +47,7 @@ from drake_social.people.predicted import PredictedPeople
 from drake_social.planning.decisions import DECISION_LABELS, decision
 from drake_social.scenario import Scenario
 from drake_social.sim.replay_meshes import ARROW_Z, OVERLAY_PREFIX, PATH_Z, set_texture_properties, textured_quad
-from drake_social.sim.replay_plans import plan_spans
+from drake_social.sim.replay_plans import plan_spans, show_between
 
 __all__ = ["CULPRIT_HALO", "CULPRIT_RGBA", "LABEL_LINES", "LABEL_SECONDS", "PREDICTED", "PREDICTED_RGBA", "SAME_PLACE",
            "animate_predicted", "disc_mesh", "label_lines", "predicted_discs"]
@@ -151,17 +151,6 @@ def _label_place(scenario: Scenario, xy: np.ndarray, aspect: float) -> tuple[flo
     return left, bottom, left + width, bottom + height
 
 
-def _show(meshcat: Meshcat, node: str, first: int, last: int | None) -> None:
-    """``node`` visible from frame ``first`` until frame ``last`` (None: the end)."""
-    recording = meshcat.get_mutable_recording()
-    meshcat.SetProperty(node, "visible", first == 0)
-    if first > 0:
-        recording.SetProperty(0, node, "visible", False)
-    recording.SetProperty(first, node, "visible", True)
-    if last is not None:
-        recording.SetProperty(last, node, "visible", False)
-
-
 def animate_predicted(meshcat: Meshcat, scenario: Scenario, replans: Sequence, predicted: Sequence, fps: float, *,
                       prefix: str = OVERLAY_PREFIX) -> int:
     """Draws the predicted people of each plan and wait begun by a replan
@@ -203,7 +192,7 @@ def animate_predicted(meshcat: Meshcat, scenario: Scenario, replans: Sequence, p
                 continue
             radii = np.concatenate([np.full(len(c), r) for c, r in discs])
             meshcat.SetTriangleMesh(f"{node}/{name}", *disc_mesh(centres, radii, _PREDICTED_Z), rgba)
-        _show(meshcat, node, first, last)
+        show_between(meshcat, node, first, last)
         result = replans[span.replan]
         kind = decision(result)
         if kind != "initial":

@@ -44,7 +44,8 @@ class Replan:
 
 
 def log() -> list[Replan]:
-    """As test_replay_plans.log(): spans from replans 0 (t 0), 2 (1 s, new: unsafe), 3 (2 s, wait), 5 (2.5 s, new: cheaper)."""
+    """As test_replay_plans.log(): spans from replans 0 (t 0), 2 (1 s, new: unsafe), 3 (2 s, wait) and
+    5 (2.5 s, new: cheaper)."""
     return [Replan(0.0, KNOTS, True, "initial"), Replan(0.5, KNOTS[1:], False, "kept"),
             Replan(1.0, KNOTS[[1, 3]], True, "new", "the current path is not safe any more (motion 1, t = 1.20 .. "
                    "1.90 s comes within 0.05 m of a predicted person)"),
