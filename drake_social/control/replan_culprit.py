@@ -97,6 +97,7 @@ def culprit(result, prediction: Prediction, replaced: np.ndarray | None, q: np.n
     for p in range(prediction.count):
         present = np.zeros_like(prediction.present)
         present[:, p] = prediction.present[:, p]
+        present.flags.writeable = False  # the prediction's arrays are read-only: the kernel's compiled signature
         d = min(people_kernel.people_clearance(c, float(t), bodies, robot, xy, present, radii, speeds,
                                                float(prediction.t0), float(prediction.dt))
                 for c, t in zip(configs, times))
