@@ -53,7 +53,7 @@ class PredictedPeople:
         positions: (M, K, 2) the predicted body centres, metres.
         present: (M, K) bool: predicted in the scene.
         radii: (K,) body radii, metres.
-        people: (K,) each kept person's index among the prediction's people
+        indices: (K,) each kept person's index among the prediction's people
             (the run's people log has the same order), ascending.
         names: K labels.
         culprit: the index (along K) of the person who made the replaced path
@@ -66,7 +66,7 @@ class PredictedPeople:
     positions: np.ndarray
     present: np.ndarray
     radii: np.ndarray
-    people: np.ndarray
+    indices: np.ndarray
     names: tuple[str, ...]
     culprit: int = -1
 
@@ -74,7 +74,7 @@ class PredictedPeople:
         times = np.array(self.times, float).reshape(-1)
         m, k = len(times), len(self.names)
         shapes = {"positions": ((m, k, 2), float), "present": ((m, k), bool), "radii": ((k,), float),
-                  "people": ((k,), np.int64)}
+                  "indices": ((k,), np.int64)}
         if not 1 <= m <= MAX_PREDICTED_SAMPLES:
             raise ValueError(f"PredictedPeople.times must hold 1 to {MAX_PREDICTED_SAMPLES} times, got {m}")
         if k > MAX_PREDICTED_PEOPLE:
@@ -104,7 +104,7 @@ class PredictedPeople:
     @property
     def nbytes(self) -> int:
         """Bytes of the arrays."""
-        return sum(getattr(self, f).nbytes for f in ("times", "positions", "present", "radii", "people"))
+        return sum(getattr(self, f).nbytes for f in ("times", "positions", "present", "radii", "indices"))
 
     @property
     def culprit_name(self) -> str | None:
@@ -176,5 +176,5 @@ def predicted_people(prediction: Prediction, replan: int, *, near: np.ndarray | 
         order = np.sort(np.argsort(distance, kind="stable")[:max_people])
     return PredictedPeople(replan=int(replan), t=float(prediction.t0), times=prediction.t0 + prediction.dt * rows,
                            positions=positions[:, order], present=present[:, order], radii=prediction.radii[order],
-                           people=order, names=tuple(prediction.names[i] for i in order),
+                           indices=order, names=tuple(prediction.names[i] for i in order),
                            culprit=int(np.flatnonzero(order == culprit)[0]) if culprit >= 0 else -1)

@@ -62,7 +62,7 @@ def _log_index(predicted: PredictedPeople, people: PeopleLog) -> np.ndarray:
     """Each kept person's index in the people log (by index when the names
     agree, else by name; -1 when absent)."""
     out = np.full(len(predicted.names), -1)
-    for k, (i, name) in enumerate(zip(predicted.people, predicted.names)):
+    for k, (i, name) in enumerate(zip(predicted.indices, predicted.names)):
         if 0 <= i < len(people.names) and people.names[i] == name:
             out[k] = i
         elif name in people.names:

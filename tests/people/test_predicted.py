@@ -34,7 +34,7 @@ def test_kept_positions_are_the_prediction_at_the_kept_times():
         np.testing.assert_allclose(dut.positions[j], prediction.state_at(float(t)).positions, rtol=0, atol=1e-12)
         # ... and by hand: x = i, y = 0.1 (i + 1) (t - 2).
         np.testing.assert_allclose(dut.positions[j, :, 1], 0.1 * np.arange(1, 4) * (t - 2.0), atol=1e-12)
-    assert dut.present.all() and dut.radii.tolist() == [0.25] * 3 and dut.people.tolist() == [0, 1, 2]
+    assert dut.present.all() and dut.radii.tolist() == [0.25] * 3 and dut.indices.tolist() == [0, 1, 2]
 
 
 @pytest.mark.parametrize(("samples", "dt", "kept"), [
@@ -70,7 +70,7 @@ def test_at_most_max_people_the_nearest_kept(count):
     dut = predicted_people(prediction, 3, near=near)
     kept = min(count, MAX_PREDICTED_PEOPLE)
     assert len(dut.names) == kept and dut.positions.shape == (9, kept, 2)
-    assert dut.people.tolist() == list(range(count - kept, count))
+    assert dut.indices.tolist() == list(range(count - kept, count))
     assert dut.nbytes <= 9 * 16 * (2 * 8 + 1) + 9 * 8 + 16 * 16
 
 
@@ -79,9 +79,9 @@ def test_the_culprit_is_kept_however_far():
     prediction = constant_velocity(_state(count), horizon=5.0)
     near = np.array([[count + 10.0, -5.0], [count + 10.0, 5.0]])  # person 0 is the farthest
     dut = predicted_people(prediction, 1, near=near, culprit=0)
-    assert len(dut.names) == MAX_PREDICTED_PEOPLE and dut.people[0] == 0 and dut.culprit == 0
+    assert len(dut.names) == MAX_PREDICTED_PEOPLE and dut.indices[0] == 0 and dut.culprit == 0
     assert dut.culprit_name == "p0"
-    assert dut.people[1:].tolist() == list(range(count - MAX_PREDICTED_PEOPLE + 1, count))
+    assert dut.indices[1:].tolist() == list(range(count - MAX_PREDICTED_PEOPLE + 1, count))
 
 
 def test_refuses_more_than_its_bounds():
