@@ -27,7 +27,11 @@ The real people are the plant's red cylinders and their heat-map quads; the
 predicted discs lie flat just above the path ribbon, below the cylinders.
 The labels lie above everything else (the top view is orthographic): each is
 placed beside the robot, not over it.
-A label is a small PNG (about 10-20 kB of page each).
+The page grows with the plans drawn: on office_walkers (11 plans and waits
+with their predictions) by 0.7 MB over the 4.3 MB without (a label is about
+22 kB of base64, the discs of a span about 16 kB); a run with hundreds of
+path changes adds tens of MB (at most :data:`~drake_social.control.replanner_system.MAX_PREDICTED_REPLANS`
+spans have predictions).
 """
 
 from __future__ import annotations
@@ -71,7 +75,7 @@ LABEL_LINES = 5
 _LABEL_CHARS = 72
 _PREDICTED_Z = PATH_Z + 0.004
 _LABEL_Z = ARROW_Z + 0.05  # above the walls, the people and the arrows (the top view is orthographic)
-_DISC_SEGMENTS = 20
+_DISC_SEGMENTS = 12
 
 
 def disc_mesh(centres: np.ndarray, radii: np.ndarray, z: float,

@@ -27,7 +27,7 @@ from drake_social.sim import replay, replay_predicted
 from drake_social.sim.replay_predicted import CULPRIT_HALO, LABEL_SECONDS, SAME_PLACE
 
 NODE = "/drake_social/predicted"
-SEGMENTS = 20
+SEGMENTS = 12
 
 
 @dc.dataclass(frozen=True)
