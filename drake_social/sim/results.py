@@ -166,6 +166,12 @@ class SimulationResult:
             :class:`~drake_social.planning.replan.ReplanResult` of the run in
             order (the first plan's first; the replans after the goal was
             reached are left out); empty without.
+        predicted: with replanning, what the replans that changed the path
+            or began a wait predicted
+            (:class:`~drake_social.people.predicted.PredictedPeople`, each
+            naming its replan's index in ``replans``; at most
+            :data:`~drake_social.control.replanner_system.MAX_PREDICTED_REPLANS`);
+            empty without.
         replanning: with replanning, the summary of ``replans``
             (:func:`~drake_social.control.replanning_summary`: count, changed,
             waits, plan times (median, p95, p99, max), deadline hits, rate,
@@ -207,6 +213,7 @@ class SimulationResult:
     replans: tuple = ()
     replanning: dict | None = None
     judged: np.ndarray | None = None
+    predicted: tuple = ()
 
     @property
     def stopped_time(self) -> float:

@@ -340,11 +340,12 @@ def _result(built: TransportDiagram, root, path: np.ndarray, planner_result: Pla
     times, data, reached = _logs(built, root)
     reached_at = [float(times[max(len(times) - 2, 0)])] if reached else []
     end = float(times[-1]) if len(times) else 0.0
-    replans, replanning, judged = (), None, path
+    replans, replanning, judged, predicted = (), None, path, ()
     if built.replanning:
         planner = built.autonomy.planner
         planner_context = planner.GetMyContextFromRoot(root)
         replans = tuple(r for r in planner.replans(planner_context) if r.t <= end + 1e-9)
+        predicted = tuple(p for p in planner.predictions(planner_context) if p.replan < len(replans))
         path, judged = planner.followed(planner_context), planner.judged(planner_context)
         replanning = replanning_summary(replans, planner.rate, float(built.scenario.planner.replan_budget))
     message = (f"goal reached at t = {reached_at[0]:.2f} s" if reached
@@ -358,7 +359,7 @@ def _result(built: TransportDiagram, root, path: np.ndarray, planner_result: Pla
         realtime_factor=sim_time / wall if wall > 0 else math.inf, waypoints=path, times=times,
         q=data["q"], v=data["v"], wheel_speeds=data["wheel_speeds"], target=data["target"],
         reference=data["reference"], target_index=data["index"][:, 0].astype(int), planner=planner_result,
-        stops=_stops(built.autonomy.safety, root, end), replans=replans, replanning=replanning,
+        stops=_stops(built.autonomy.safety, root, end), replans=replans, replanning=replanning, predicted=predicted,
         speed_limit=data["speed_limit"][:, 0] if "speed_limit" in data else np.full(len(times), np.inf),
         slow_stops=_stops(built.autonomy.speed_limit, root, end), judged=judged,
     )
