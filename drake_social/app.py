@@ -64,8 +64,8 @@ __all__ += ["run_crowd_experiment", "run_recorded_experiment"]
 #: The files ``plan`` writes into ``out`` (a folder of such a name is refused before planning).
 PLAN_OUTPUTS = ("path.csv", "result.json", "path.png", "cost_profile.png", "convergence.png")
 #: The files ``simulate`` may write into ``out`` (replay.html when Meshcat records).
-SIMULATE_OUTPUTS = ("replay.html", "executed.csv", "people.csv", "replans.csv", "replans.png", "path.png",
-                    "tracking.png", "motion.png", "sim.json")
+SIMULATE_OUTPUTS = ("replay.html", "executed.csv", "people.csv", "replans.csv", "replans.png", "predictions.png",
+                    "path.png", "tracking.png", "motion.png", "sim.json")
 
 #: A progress callback: ``progress(done, total, status)`` (steps done of
 #: ``total``, and a short text such as ``"best 5.1"`` or ``"t = 3.2 s"``).
@@ -408,7 +408,9 @@ def run_simulate(*, scenario: Scenario | str | Path, out: str | Path, overrides:
     Simulator and writes ``out``: replay.html (with ``replay``),
     executed.csv, people.csv (when the scenario has people: where they were
     at the logged times), replans.csv (when replanning: one row per replan,
-    :func:`~drake_social.io.paths.write_replans_csv`), tracking.png and
+    :func:`~drake_social.io.paths.write_replans_csv`, and replans.png;
+    with people too, predictions.png: what the robot predicted,
+    :mod:`drake_social.viz.predictions`), tracking.png and
     sim.json (with replanning its ``replanning`` summary).
 
     Args:
@@ -500,9 +502,11 @@ def run_simulate(*, scenario: Scenario | str | Path, out: str | Path, overrides:
             from drake_social.sim.replay import draw_overlays, set_top_view, write_replay_html
 
             # Walking people (SimulationResult.people, a PeopleLog) get animated arrows and heat-map quads.
-            # With replanning (run.replans not empty) each distinct plan and wait is drawn over its time.
+            # With replanning (run.replans not empty) each distinct plan and wait is drawn over its time,
+            # with the people its replan predicted and why it began (run.predicted).
             draw_overlays(meshcat, loaded, run.waypoints if len(run.waypoints) else None,
-                          people=getattr(run, "people", None), replans=run.replans)
+                          people=getattr(run, "people", None), replans=run.replans,
+                          predicted=getattr(run, "predicted", ()))
             from drake_social.sim.replay_speed import animate_slow_down
 
             animate_slow_down(meshcat, run, float(loaded.execution.replay_fps))  # the base's colour: limited, held
@@ -518,6 +522,12 @@ def run_simulate(*, scenario: Scenario | str | Path, out: str | Path, overrides:
             write_replan_figure(run, outputs.folder, budget=float(loaded.planner.replan_budget),
                                 title=f"{_title(loaded, file)}: replans")
             files += ["replans.csv", "replans.png"]
+            if run.people is not None and len(getattr(run, "predicted", ())):
+                from drake_social.viz.predictions import write_predictions_figure
+
+                write_predictions_figure(run, loaded, outputs.folder,
+                                         title=f"{_title(loaded, file)}: what the robot predicted")
+                files.append("predictions.png")
         if run.people is not None:
             write_people_csv(outputs.path("people.csv"), run.people)
             files.append("people.csv")

@@ -237,8 +237,8 @@ def test_replan_writes_replans_csv_and_the_summary(tmp_path, tiny_scenario_path,
     record = json.loads((tmp_path / "sim.json").read_text())
     assert code == (0 if record["reached"] else 5)
     names = sorted(p.name for p in tmp_path.iterdir() if not p.name.startswith("."))
-    assert names == ["executed.csv", "motion.png", "people.csv", "replans.csv", "replans.png", "sim.json",
-                     "tracking.png"]
+    assert names == ["executed.csv", "motion.png", "people.csv", "predictions.png", "replans.csv", "replans.png",
+                     "sim.json", "tracking.png"]
     lines = (tmp_path / "replans.csv").read_text().splitlines()
     assert lines[0] == "t,plan_time,cost,changed,status,searched,iterations,deadline_hit"
     rows = [line.split(",") for line in lines[1:]]
@@ -292,8 +292,8 @@ def test_a_replanning_robot_that_never_leaves_its_start_exits_5_with_its_outputs
     assert captured.err == ("drake-social: goal not reached within the time limit of 2 s "
                             "(the last replan: wait)\n")
     names = sorted(p.name for p in out.iterdir() if not p.name.startswith("."))
-    assert names == ["executed.csv", "motion.png", "people.csv", "replans.csv", "replans.png", "sim.json",
-                     "tracking.png"]
+    assert names == ["executed.csv", "motion.png", "people.csv", "predictions.png", "replans.csv", "replans.png",
+                     "sim.json", "tracking.png"]
     rows = [line.split(",") for line in (out / "replans.csv").read_text().splitlines()[1:]]
     # The first plan and the replans at t = 0.2 .. 1.8 s (the one due at 2 s is past the run's end).
     assert [float(r[0]) for r in rows] == pytest.approx(np.arange(10) * 0.2) and {r[4] for r in rows} == {"wait"}

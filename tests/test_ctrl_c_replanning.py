@@ -141,8 +141,8 @@ def old_simulate(tmp_path_factory) -> tuple[Path, dict[str, str]]:
 @pytest.mark.parametrize("group", [False, True], ids=["process", "group"])
 def test_ctrl_c_stops_simulate_replan(tmp_path, old_simulate, group):
     out, before = old_simulate
-    assert set(before) == {"executed.csv", "people.csv", "path.png", "replans.csv", "replans.png", "sim.json",
-                           "tracking.png", "motion.png"}
+    assert set(before) == {"executed.csv", "people.csv", "path.png", "predictions.png", "replans.csv", "replans.png",
+                           "sim.json", "tracking.png", "motion.png"}
     rc, stdout, stderr, took = _interrupt(_simulate(_scenario(tmp_path, 120.0), out), out, "simulate", group,
                                           busy=3.0)
     assert rc == 130, stderr

@@ -326,6 +326,9 @@ ABOVE_100 = 100.00000000000001  # math.nextafter(100.0, inf): its period 1 / rat
     ("planner: {replan_horizon: 600.0000000000001}",
      "planner.replan_horizon: must be in (0, 600] seconds, got 600.0000000000001"),
     ("planner: {replan_budget: 1e9}", "planner.replan_budget: must be in (0, 60] seconds, got 1000000000.0"),
+    ("planner: {safety_horizon: 600.0000000000001}",
+     "planner.safety_horizon: must be in (0, 600] seconds, got 600.0000000000001"),
+    ("planner: {safety_horizon: 0.0}", "planner.safety_horizon: must be > 0, got 0.0"),
     (f"planner: {{replan_budget: {ABOVE_60!r}}}",
      "planner.replan_budget: must be in (0, 60] seconds, got 60.00000000000001"),
     ("planner: {replan_iterations: 10001}",
@@ -337,6 +340,13 @@ ABOVE_100 = 100.00000000000001  # math.nextafter(100.0, inf): its period 1 / rat
 ])
 def test_replanning_settings_beyond_their_bounds_are_refused_naming_the_field(override, message):
     assert _message(TINY, [override]) == f"{TINY} (--set {override!r}): {message}"
+
+
+def test_the_safety_horizon_at_and_within_its_bounds_loads():
+    import math
+
+    for value in (600.0, math.nextafter(600.0, 0.0), 5e-324, 2.0):
+        assert load_scenario(TINY, [f"planner: {{safety_horizon: {value!r}}}"]).planner.safety_horizon == value
 
 
 def test_replanning_settings_at_and_just_within_their_bounds_load():

@@ -42,7 +42,7 @@ would leave them by up to v^2 / (2 a)).
 
 Everything of a run is in one abstract state, an immutable
 :class:`ReplanState` (the path, version, hold, the latest result, the log of
-every result, the path followed so far): a second context, or a cloned one,
+every result, the path followed so far, what the deciding replans predicted): a second context, or a cloned one,
 runs on its own, and Drake's copies of the state share it instead of copying
 the log. The outputs read only that state (no direct feedthrough from ``q``,
 ``people_state`` or ``index``): closing the loop through the sequencer and
@@ -62,6 +62,18 @@ Ports:
   change), ``hold`` (1: 1.0 while waiting), ``result`` (the latest
   ReplanResult), ``replans`` (the tuple of every ReplanResult so far, the
   first plan's included).
+
+What the robot predicted is kept for the replay and the figures: for each
+replan that changed the path (status ``"initial"``, ``"new"``, ``"evade"``)
+or began a wait (``"wait"`` after a replan that did not wait), a
+:class:`~drake_social.people.predicted.PredictedPeople`: the prediction it
+judged against at a few times (at most 10, about 0.5 s apart or more), the
+16 people nearest the paths chosen and replaced, and the person who made the
+replaced path unsafe (:func:`~drake_social.control.replan_culprit.culprit`),
+in ``ReplanState.predicted`` (:meth:`ReplanningPlannerSystem.predictions`).
+A run keeps at most :data:`MAX_PREDICTED_REPLANS` of them (the first ones):
+at most 1,000 x 16 people x 10 samples, about 3 MB. Keeping them changes no
+decision: the replanner is called exactly as without.
 
 The replanner is any object with ``plan(q_now, t_now, prediction, previous,
 *, replan_index, deadline, commit, search) -> ReplanResult`` (the default:
@@ -91,12 +103,15 @@ import numpy as np
 from pydrake.common.value import AbstractValue
 from pydrake.systems.framework import BasicVector, Context, EventStatus, LeafSystem, State
 
-from drake_social.arguments import require_instance, require_scenario
+from drake_social.arguments import require_instance, require_int, require_scenario
+from drake_social.control.replan_culprit import culprit
 from drake_social.people import PeopleModel, PeopleState, people_model, predict
 from drake_social.people.interactive import InteractiveModel
+from drake_social.people.predicted import predicted_people
 from drake_social.scenario import Scenario, replan_rate_problem
 
-__all__ = ["MOVING_SPEED", "ReplanState", "ReplanningPlannerSystem", "replanning_summary"]
+__all__ = ["KEPT_PREDICTIONS", "MAX_PREDICTED_REPLANS", "MOVING_SPEED", "ReplanState", "ReplanningPlannerSystem",
+           "replanning_summary"]
 
 _log = logging.getLogger(__name__)
 
@@ -104,6 +119,10 @@ _log = logging.getLogger(__name__)
 #: the motion being driven is under way. A reference at rest, or held at the
 #: end of a stop, outputs exactly 0.
 MOVING_SPEED = 1e-9
+#: The statuses whose prediction is kept (a wait only when the replan before did not wait).
+KEPT_PREDICTIONS = ("initial", "new", "evade", "wait")
+#: Predictions kept in a run, at most (the first ones; see the module docstring).
+MAX_PREDICTED_REPLANS = 1000
 
 
 def _braking_first(result, q: np.ndarray):
@@ -137,8 +156,18 @@ class ReplanState:
             path up to the target it was heading for when it was replaced,
             then the current path (its row ``offset`` is the current path's row 0).
         offset: the row of ``followed`` where the current path starts.
+        judged: (K, 4) the segments driven on, as one polyline: as
+            ``followed``, but each replaced path kept up to and including the
+            target it was heading for (the robot may have passed the point
+            where the next path starts on that segment: a jerk-limited stop
+            runs a little past its rest and back), then the current path;
+            the executed motion's deviation is measured from it.
+        judged_offset: the row of ``judged`` where the current path starts.
         searched_at: the time of the last replan that grew a search tree
             (-inf before any).
+        predicted: the :class:`~drake_social.people.predicted.PredictedPeople`
+            of the replans that changed the path or began a wait, in order
+            (at most :data:`MAX_PREDICTED_REPLANS`).
     """
 
     path: np.ndarray | None = None
@@ -149,7 +178,10 @@ class ReplanState:
     log: tuple = ()
     followed: np.ndarray | None = None
     offset: int = 0
+    judged: np.ndarray | None = None
+    judged_offset: int = 0
     searched_at: float = -math.inf
+    predicted: tuple = ()
 
     # Drake clones abstract state (Value[object] deep-copies): an immutable
     # state is shared instead, so the log is never copied.
@@ -177,6 +209,8 @@ class ReplanningPlannerSystem(LeafSystem):
             None = :func:`~drake_social.people.people_model` of the scenario.
         rate: replans per second, at most one per ``execution.control_period``;
             None = ``planner.replan_rate``.
+        max_predicted: predictions kept in a run, at most (0 to
+            :data:`MAX_PREDICTED_REPLANS`; see the module docstring).
 
     Raises:
         TypeError, ValueError: an argument of the wrong kind or value (named).
@@ -193,6 +227,7 @@ class ReplanningPlannerSystem(LeafSystem):
         *,
         people: PeopleModel | None = None,
         rate: float | None = None,
+        max_predicted: int = MAX_PREDICTED_REPLANS,
     ):
         super().__init__()
         require_scenario(scenario, "ReplanningPlannerSystem")
@@ -224,6 +259,9 @@ class ReplanningPlannerSystem(LeafSystem):
         self._horizon = float(scenario.planner.replan_horizon)
         self._period = 1.0 / rate
         self._search_period = float(scenario.planner.replan_search_period)
+        require_int(max_predicted, "ReplanningPlannerSystem", "max_predicted", minimum=0,
+                    maximum=MAX_PREDICTED_REPLANS)
+        self._max_predicted = int(max_predicted)
 
         self._q_port = self.DeclareVectorInputPort("q", 4)
         self._people_port = self.DeclareAbstractInputPort(
@@ -267,9 +305,17 @@ class ReplanningPlannerSystem(LeafSystem):
         """Every ReplanResult so far in ``context``, the first plan's first."""
         return self.state(context).log
 
+    def predictions(self, context: Context) -> tuple:
+        """What the deciding replans predicted so far in ``context`` (see :class:`ReplanState`)."""
+        return self.state(context).predicted
+
     def followed(self, context: Context) -> np.ndarray:
         """(M, 4) the path followed so far (see :class:`ReplanState`)."""
         return self._planned(context).followed
+
+    def judged(self, context: Context) -> np.ndarray:
+        """(K, 4) the segments driven on (see :class:`ReplanState`)."""
+        return self._planned(context).judged
 
     def _planned(self, context: Context) -> ReplanState:
         state = self.state(context)
@@ -308,7 +354,8 @@ class ReplanningPlannerSystem(LeafSystem):
         waiting = result.status == "wait"
         path = _frozen(result.waypoints)
         new = ReplanState(path=path, planned=not waiting, version=0, hold=waiting, result=result, log=(result,),
-                          followed=path, offset=0, searched_at=t)
+                          followed=path, offset=0, judged=path, judged_offset=0, searched_at=t,
+                          predicted=self._kept((), result, 0, prediction, q, None, False))
         _log.info("first plan at t = %.2f s: %s", t, _describe(result))
         state.get_mutable_abstract_state(self._state_index).set_value(new)
 
@@ -335,22 +382,48 @@ class ReplanningPlannerSystem(LeafSystem):
             new = dc.replace(old, hold=True, result=result, log=log)
             if not old.planned:  # nothing to follow yet: stay where the robot is
                 path = _frozen(result.waypoints)
-                new = dc.replace(new, path=path, followed=path)
+                new = dc.replace(new, path=path, followed=path, judged=path)
         elif result.changed or not old.planned:
             path = _frozen(result.waypoints)
             cut = old.offset + index if old.planned else 0
             followed = np.vstack([old.followed[:cut], path]) if cut else path
             followed.flags.writeable = False
+            kept = old.judged[:old.judged_offset + index + 1] if old.planned else path[:0]
+            if len(kept) and np.array_equal(kept[-1], path[0]):
+                kept = kept[:-1]  # the new path starts at the target: one row
+            judged = np.vstack([kept, path]) if len(kept) else path
+            judged.flags.writeable = False
             new = ReplanState(path=path, planned=True, version=old.version + 1, hold=False, result=result, log=log,
-                              followed=followed, offset=cut, searched_at=old.searched_at)
+                              followed=followed, offset=cut, judged=judged, judged_offset=len(kept),
+                              searched_at=old.searched_at)
         else:
             new = dc.replace(old, hold=False, result=result, log=log)
         if getattr(result, "searched", True):
             new = dc.replace(new, searched_at=t)
+        new = dc.replace(new, predicted=self._kept(old.predicted, result, len(old.log), prediction, q, previous,
+                                                   old.hold))
         if new.hold != old.hold or new.version != old.version:
             _log.debug("replan %d at t = %.2f s: %s", len(old.log), t, _describe(result))
         state.get_mutable_abstract_state(self._state_index).set_value(new)
         return EventStatus.Succeeded()
+
+    def _kept(self, kept: tuple, result, index: int, prediction, q: np.ndarray, replaced: np.ndarray | None,
+              waiting: bool) -> tuple:
+        """``kept`` with the prediction of replan ``index`` added when it
+        changed the path or began a wait (``waiting``: the replan before
+        waited), within :data:`MAX_PREDICTED_REPLANS`."""
+        status = result.status
+        if status not in KEPT_PREDICTIONS or (status == "wait" and waiting) or len(kept) >= self._max_predicted:
+            return kept
+        checker = getattr(self._replanner, "checker", None)
+        scene = checker.compiled_scene() if callable(getattr(checker, "compiled_scene", None)) else None
+        ex = self._scenario.execution
+        who = culprit(result, prediction, replaced, q, scene, ex.max_base_speed, ex.arm_max_velocity)
+        chosen = np.asarray(result.waypoints, float).reshape(-1, 4)[:, :2]
+        near = chosen if replaced is None else np.vstack([replaced[::-1, :2], chosen])
+        if len(kept) + 1 == self._max_predicted:
+            _log.info("kept the predictions of %d replans: no more are kept this run", self._max_predicted)
+        return kept + (predicted_people(prediction, index, near=near, culprit=who),)
 
     # ---- outputs ---------------------------------------------------------------
 

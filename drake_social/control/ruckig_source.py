@@ -264,7 +264,11 @@ class RuckigTrajectorySource(LeafSystem):
             the speed of a motion along a path: a lower limit re-plans the
             profile from the current state at once (jerk-limited braking on
             the path), a higher one when it rises by more than
-            ``_CAP_RAISE``; a limit of 0 brakes to rest on the path.
+            ``_CAP_RAISE``; a limit of 0 brakes to rest on the path. It also
+            declares the input ``brake`` (1; unconnected = never): above 0.5
+            the limit is 0, so the motion brakes to rest on its path,
+            jerk-limited (a replanner's wait, where ``hold`` is the safety
+            stop's instant one), and goes on along it when released.
 
     Raises:
         ValueError: limits not positive or of the wrong length, unknown
@@ -355,6 +359,7 @@ class RuckigTrajectorySource(LeafSystem):
                              f"{point_speed!r}")
         self._point_speed = point_speed
         self._speed_port = self.DeclareVectorInputPort("speed_limit", 1) if point_speed is not None else None
+        self._brake_port = self.DeclareVectorInputPort("brake", 1) if point_speed is not None else None
         self._segment_index = self.DeclareAbstractState(AbstractValue.Make(self._RestSegment(0.0, initial)))
         self.DeclarePeriodicUnrestrictedUpdateEvent(period, 0.0, self._Retarget)
         # The same update on demand (CalcForcedUnrestrictedUpdate), for tests and scripts.
@@ -470,7 +475,11 @@ class RuckigTrajectorySource(LeafSystem):
         return None
 
     def _Cap(self, context: Context) -> float:
-        """The ``speed_limit`` input, m/s of the fastest point (+inf: none, or unconnected)."""
+        """The ``speed_limit`` input, m/s of the fastest point (+inf: none, or
+        unconnected); 0 while the ``brake`` input is above 0.5."""
+        if self._brake_port is not None and self._brake_port.HasValue(context) and \
+                self._brake_port.Eval(context)[0] > 0.5:
+            return 0.0
         if self._speed_port is None or not self._speed_port.HasValue(context):
             return math.inf
         value = float(self._speed_port.Eval(context)[0])

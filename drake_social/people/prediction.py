@@ -105,6 +105,24 @@ class Prediction:
         """True when nobody moves and nobody comes or goes over the horizon."""
         return bool(np.all(self.max_speeds == 0.0) and np.all(self.present == self.present[:1]))
 
+    def until(self, seconds: float) -> "Prediction":
+        """The first ``seconds`` of this prediction: its samples up to
+        ``t0 + seconds`` (the one at or after it included, so that the
+        horizon covers it; all of them when it is longer). Beyond the
+        shorter horizon moving people are not safety obstacles, as beyond
+        any horizon (:mod:`~drake_social.collision.people_kernel`);
+        ``max_speeds`` are kept (they bound the shorter motion too). A time
+        within 1e-9 of a step of a sample is that sample's, as the sample
+        times of a horizon round."""
+        if not seconds > 0:
+            raise ValueError(f"Prediction.until: seconds must be > 0, got {seconds!r}")
+        k = self.samples if not math.isfinite(seconds) else \
+            min(self.samples, int(math.ceil(seconds / self.dt - 1e-9)) + 1)
+        if k == self.samples:
+            return self
+        return Prediction(self.t0, self.dt, self.positions[:k], self.headings[:k], self.present[:k], self.radii,
+                          self.speeds, self.max_speeds, self.names)
+
     def state_at(self, t: float) -> PeopleState:
         """The predicted people at time ``t`` (velocities: those of the
         interpolated motion there; zero past the horizon): the lookup of

@@ -252,6 +252,8 @@ class Replanner:
         self.budget = p.replan_budget if budget is None else float(budget)
         self.margin = margin
         self.safety = safety
+        #: seconds of a prediction over which paths must keep the safety distance (planner.safety_horizon)
+        self.safety_horizon = float(scenario.planner.safety_horizon)
         self.lookahead = float(lookahead)
         self.seed = scenario.random_seed if seed is None else int(seed)
         self.goal = np.asarray(scenario.goal, float)
@@ -263,7 +265,8 @@ class Replanner:
             if self.spec.weights == "base_only" else None)
         #: What every search reads: the RRT* (compiled, timed mode; its objective per prediction) and the rest.
         self.search = SearchSetup(search_planner(p, self.spec, self.space, checker, self.objective), self.goal,
-                                  scenario.execution, safety, self.objective, float(scenario.social.length_weight))
+                                  scenario.execution, safety, self.objective, float(scenario.social.length_weight),
+                                  self.safety_horizon)
         #: The world of the interactive prediction's rollouts (None for the other predictions).
         self.interactive = InteractiveModel.from_scenario(scenario) if p.prediction == "interactive" else None
         supported, why = compiled.compiled_support(checker, self.objective, self.search.planner.options)
@@ -282,7 +285,7 @@ class Replanner:
         """The exact judge of paths under ``prediction`` (:class:`~.replan_eval.PathJudge`)."""
         ex = self.scenario.execution
         return PathJudge(self.objective, self.social_for(prediction), self.checker, prediction, self.safety,
-                         ex.max_base_speed, ex.arm_max_velocity)
+                         ex.max_base_speed, ex.arm_max_velocity, safety_horizon=self.safety_horizon)
 
     def evaluate(self, waypoints: np.ndarray, t0: float, prediction: Prediction) -> PathEvaluation:
         """A path's exact nominal times, time-indexed cost and safety.

@@ -14,6 +14,7 @@ of the search's paths it judges (:data:`VERIFY_PATHS`, :data:`MAX_JUDGED`).
 
 from __future__ import annotations
 
+import math
 from typing import NamedTuple
 
 import numpy as np
@@ -88,10 +89,14 @@ class PathJudge:
         prediction: the people predicted over the horizon.
         safety: the smallest allowed robot-to-body distance, metres.
         max_base_speed, arm_max_velocity: the execution limits that time a path.
+        safety_horizon: seconds of ``prediction`` over which a path must keep
+            ``safety`` from everyone (:meth:`Prediction.until`); the cost
+            looks over all of it.
     """
 
     def __init__(self, objective: Objective, social: SocialCost | None, checker: CompiledSceneChecker,
-                 prediction: Prediction, safety: float, max_base_speed: float, arm_max_velocity) -> None:
+                 prediction: Prediction, safety: float, max_base_speed: float, arm_max_velocity, *,
+                 safety_horizon: float = math.inf) -> None:
         self.objective = objective
         self.social = social
         self.checker = checker
@@ -99,7 +104,8 @@ class PathJudge:
         self.safety = float(safety)
         self.max_base_speed = float(max_base_speed)
         self.arm_max_velocity = np.asarray(arm_max_velocity, float).reshape(2)
-        self.people_safety = PeopleSafety(checker.compiled_scene(), prediction, self.safety)
+        self.safety_horizon = float(safety_horizon)
+        self.people_safety = PeopleSafety(checker.compiled_scene(), prediction.until(self.safety_horizon), self.safety)
 
     def times(self, waypoints: np.ndarray, t0: float) -> np.ndarray:
         """The nominal time (N,) of each waypoint, driven from ``t0``."""

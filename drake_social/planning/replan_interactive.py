@@ -71,7 +71,7 @@ class InteractiveJudge(PathJudge):
         self.weight = float(weight)
         judge = make_judge(basis)
         super().__init__(judge.objective, judge.social, judge.checker, basis, judge.safety, judge.max_base_speed,
-                         judge.arm_max_velocity)
+                         judge.arm_max_velocity, safety_horizon=judge.safety_horizon)
 
     def motion(self, waypoints: np.ndarray, times: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """The robot's whole motion when it drives ``waypoints`` at ``times``: the committed motion first

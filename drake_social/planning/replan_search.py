@@ -15,6 +15,8 @@ whose :data:`~drake_social.planning.replan_eval.VERIFY_PATHS` and
 
 from __future__ import annotations
 
+import math
+
 from typing import NamedTuple
 
 import numpy as np
@@ -43,6 +45,7 @@ class SearchSetup(NamedTuple):
     safety: float  #: a motion coming within this many metres of a predicted person is invalid
     objective: Objective  #: the static objective (a length objective's search runs it as it is)
     length_weight: float  #: lambda of a social search's objective (:func:`search_objective`)
+    safety_horizon: float = math.inf  #: seconds of the prediction the safety check considers
 
 
 class SearchOutcome(NamedTuple):
@@ -94,7 +97,7 @@ def run_search(setup: SearchSetup, social: SocialCost | None, q: np.ndarray, t_n
     samples or at the ``time.perf_counter()`` value ``stop``; its best goal
     connections (at most :data:`~drake_social.planning.replan_eval.MAX_JUDGED`)."""
     goal = setup.goal
-    timed = compiled.timed_params(prediction, setup.execution, t_now, setup.safety)
+    timed = compiled.timed_params(prediction, setup.execution, t_now, setup.safety, setup.safety_horizon)
     try:
         tree = setup.planner.solve_timed(q, goal, rng, timed, seed_path=candidate, deadline=stop,
                                          iterations=iterations, objective=search_objective(setup, social))

@@ -361,6 +361,10 @@ class PlannerOptions:
     # Beyond it the safety check ignores them and the cost holds them where
     # they are predicted at the horizon.
     replan_horizon: float = 5.0
+    # Seconds of the prediction over which a path must keep the safety
+    # distance from everyone (> 0; the hard safety horizon: min(safety_horizon,
+    # replan_horizon)). The social cost looks over the whole replan_horizon.
+    safety_horizon: float = 2.0
     # A new path replaces the current one only when its cost is lower by at
     # least this fraction of the current one's (in [0, 1)).
     replan_margin: float = 0.05

@@ -412,11 +412,12 @@ def validate_scenario(scenario: Scenario, source: str = "<scenario>") -> None:
     c.positive("planner.collision_resolution", p.collision_resolution)
     if not isinstance(p.replan, bool):
         c.fail("planner.replan", f"must be true or false, got {_shown(p.replan)}")
-    for name in ("replan_rate", "replan_budget", "replan_horizon"):
+    for name in ("replan_rate", "replan_budget", "replan_horizon", "safety_horizon"):
         c.positive(f"planner.{name}", getattr(p, name))
     if not 1 / p.replan_rate < math.inf:  # a period of 1e-320 Hz overflows
         c.fail("planner.replan_rate", f"must have a finite period 1 / replan_rate, got {p.replan_rate}")
-    for name, most in (("replan_budget", MAX_REPLAN_BUDGET), ("replan_horizon", MAX_REPLAN_HORIZON)):
+    for name, most in (("replan_budget", MAX_REPLAN_BUDGET), ("replan_horizon", MAX_REPLAN_HORIZON),
+                       ("safety_horizon", MAX_REPLAN_HORIZON)):
         if getattr(p, name) > most:
             c.fail(f"planner.{name}", f"must be in (0, {most:g}] seconds, got {getattr(p, name)}")
     if not 1 <= p.replan_iterations <= MAX_REPLAN_ITERATIONS:

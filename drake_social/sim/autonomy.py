@@ -50,7 +50,8 @@ people move)::
     [h] safety (SafetyMonitor) ◀─ q, people_state; stop ─hold─▶ sequencer, controller, reference / arm
     [r] q, people_state, sequencer.index, [s] reference.velocity ─▶ planner (ReplanningPlannerSystem)
         ─waypoints, version─▶ sequencer
-    [r] planner.hold (waiting), [h] safety.stop ─▶ held (Adder) ─hold─▶ sequencer, controller, reference / arm
+    [r] planner.hold (waiting), [h] safety.stop ─▶ held (Adder) ─hold─▶ sequencer, [p] controller, arm
+    [s] [r] planner.hold ─brake─▶ reference; [h] safety.stop ─hold─▶ reference
 
 In ``synchronized`` execution each segment's reference is one
 phase-synchronized Ruckig trajectory of all four coordinates, so it runs on
@@ -67,12 +68,16 @@ reference.
 With :class:`Replan` the planner plans at initialization, then every
 ``1 / planner.replan_rate`` seconds from the robot's configuration among the
 predicted people; a new path comes with a new ``version``, on which the
-sequencer heads for the new path's waypoint 1 and the jerk-limited reference
-turns towards it from its current position, velocity and acceleration (no
-jump in either). While no path is safe the planner's ``hold`` is 1 and the
-robot stops as on a safety stop (the systems held read ``hold`` > 0.5: the
-sum of the two flags). With standing people there is no safety monitor and
-the planner's hold alone holds.
+sequencer heads for the new path's waypoint 1 (a new path starts with the
+motion being driven, or is taken from rest: see
+:class:`~drake_social.control.ReplanningPlannerSystem`). While no path is
+safe the planner's ``hold`` is 1: the sequencer stays (the systems held read
+``hold`` > 0.5: the sum of the two flags) and, in synchronized execution, the
+reference brakes to rest on its path, jerk-limited (its ``brake`` input),
+and goes on along it when the wait ends; only the safety monitor's stop
+holds the reference at once. In the paper's execution the wait holds the
+controller and the arm as a safety stop does. With standing people there is
+no safety monitor and the planner's hold alone holds.
 
 ``[h]``: only when the people move (``execution.safety_distance`` >= 0; 0
 stops on contact only). People who stand still are obstacles the planner
@@ -331,7 +336,8 @@ def autonomy_checked(scenario: Scenario, execution: str, path: PathSource, peopl
         else:
             builder.ConnectInput("people_state", port)
     # Synchronized, the base follows the held reference (base and arm stop together, on the path).
-    _hold(builder, safety, planner, (sequencer, track.source) if synchronized else (sequencer, controller, track.source))
+    _hold(builder, safety, planner, (sequencer, track.source) if synchronized else (sequencer, controller, track.source),
+          brake=track.source if synchronized else None)
 
     outputs = {
         "wheel_speeds": controller.GetOutputPort("wheel_speeds"),
@@ -431,11 +437,19 @@ def _paper(builder: DiagramBuilder, scenario: Scenario, start: np.ndarray, seque
     return _Tracking(arm, tracked.get_output_port(0), arm.GetOutputPort("state"), None)
 
 
-def _hold(builder: DiagramBuilder, safety: SafetyMonitor | None, planner, held: tuple) -> None:
+def _hold(builder: DiagramBuilder, safety: SafetyMonitor | None, planner, held: tuple,
+          brake: RuckigTrajectorySource | None = None) -> None:
     """The safety stop and the replanner's wait hold the sequencer, the
-    controller and the reference: each flag alone, or their sum (> 0.5: either)."""
+    controller and the reference: each flag alone, or their sum (> 0.5: either).
+    With ``brake`` (the synchronized reference) the replanner's wait brakes it
+    on its path (its ``brake`` input) instead, and only the safety stop holds it."""
     ports = [safety.GetOutputPort("stop")] if safety is not None else []
     if isinstance(planner, ReplanningPlannerSystem):
+        if brake is not None:
+            builder.Connect(planner.GetOutputPort("hold"), brake.GetInputPort("brake"))
+            if safety is not None:
+                builder.Connect(safety.GetOutputPort("stop"), brake.GetInputPort("hold"))
+            held = tuple(system for system in held if system is not brake)
         ports.append(planner.GetOutputPort("hold"))
     if not ports:
         return

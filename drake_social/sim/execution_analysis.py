@@ -90,6 +90,7 @@ def analyze_execution(
     checker: ValidityChecker | None = None,
     *,
     people_move: bool | None = None,
+    judged: np.ndarray | None = None,
 ) -> ExecutionReport:
     """Checks and measures an executed trajectory against its planned path.
 
@@ -116,6 +117,9 @@ def analyze_execution(
         people_move: whether the scenario's people move (None = ask its
             people model). When they do, the check and the clearance cover
             the obstacles and walls only (:data:`CHECKED_ROOM`).
+        judged: (K, 4) the polyline the deviations are measured from
+            (None = ``waypoints``): a replanning run's segments driven on
+            (:attr:`~drake_social.sim.results.SimulationResult.judged`).
 
     Raises:
         TypeError: an argument of the wrong kind (named).
@@ -137,6 +141,7 @@ def analyze_execution(
     geometry = arm_geometry(scenario)
     social = SocialCost.from_scenario(scenario)
     wp = waypoints
+    segments = wp if judged is None else waypoint_array(judged, "analyze_execution: judged", fewest=1)
     planned = float(social.motion_cost(wp[:-1], wp[1:]).sum()) if len(wp) > 1 else 0.0
     executed = float(social.motion_cost(q[:-1], q[1:]).sum()) if len(q) > 1 else 0.0
 
@@ -156,8 +161,8 @@ def analyze_execution(
     return ExecutionReport(
         planned_social_cost=planned,
         executed_social_cost=executed,
-        max_point_deviation=point_deviation(geometry, wp, q),
-        max_config_deviation=config_deviation(wp, q),
+        max_point_deviation=point_deviation(geometry, segments, q),
+        max_config_deviation=config_deviation(segments, q),
         min_clearance=float(clearance),
         collision_free=bool(valid.all()),
         first_collision_time=first,

@@ -16,6 +16,9 @@ visualizer deletes at initialization):
 * ``<prefix>/people/<i>``: an arrow along each person's facing ``theta``;
 * ``<prefix>/path``: the planned base path as a flat ribbon (``SetLine``
   ignores its width in WebGL);
+* ``<prefix>/plans/<k>`` and ``<prefix>/predicted/<k>``: with replanning,
+  each plan and wait over its time, the people its replan predicted and why
+  (:mod:`drake_social.sim.replay_plans`, :mod:`drake_social.sim.replay_predicted`);
 * ``<prefix>/walkers/<i>``: when people walk (``draw_overlays(...,
   people=log)``), each walker's arrow and personal-space quad, animated in
   the recording (:mod:`drake_social.sim.replay_people`); the field and the
@@ -73,6 +76,7 @@ from drake_social.sim.replay_map import draw_map_mesh
 from drake_social.sim.replay_pack import compact_page
 from drake_social.sim.replay_people import animate_people, standing_mask, standing_people
 from drake_social.sim.replay_plans import animate_plans, path_width
+from drake_social.sim.replay_predicted import animate_predicted
 from drake_social.viz.world import (  # noqa: F401  (FIELD_MAX_CELLS, field_resolution: re-exported)
     FIELD_MAX_CELLS,
     FIELD_MIN_RESOLUTION,
@@ -173,6 +177,7 @@ def draw_overlays(
     prefix: str = OVERLAY_PREFIX,
     people: PeopleLog | None = None,
     replans: Sequence | None = None,
+    predicted: Sequence = (),
 ) -> None:
     """Draws the heat map, the people's facing arrows and the planned path.
 
@@ -200,6 +205,10 @@ def draw_overlays(
             from its time until the next (:func:`animate_plans`, at
             ``scenario.execution.replay_fps``), and ``waypoints`` is not
             drawn; None or empty: the one path ``waypoints``.
+        predicted: with ``replans``, what its deciding replans predicted
+            (``SimulationResult.predicted``): the predicted people of each
+            plan and wait, and why it began
+            (:func:`~drake_social.sim.replay_predicted.animate_predicted`).
     """
     if not prefix.startswith("/"):
         raise ValueError(f"prefix must be an absolute Meshcat path (start with '/'), got {prefix!r}")
@@ -236,6 +245,9 @@ def draw_overlays(
         animate_people(meshcat, scenario, people, float(scenario.execution.replay_fps), prefix=prefix, vmax=vmax)
     if replanned:
         animate_plans(meshcat, scenario, replans, float(scenario.execution.replay_fps), prefix=prefix)
+        if len(predicted):
+            animate_predicted(meshcat, scenario, replans, predicted, float(scenario.execution.replay_fps),
+                              prefix=prefix)
 
 
 def top_view_frame(scenario: Scenario, *, aspect: float | None = 16 / 9,

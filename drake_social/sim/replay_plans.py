@@ -34,7 +34,7 @@ from pydrake.geometry import Meshcat, Rgba
 from drake_social.scenario import Scenario
 from drake_social.sim.replay_meshes import OVERLAY_PREFIX, PATH_RGBA, PATH_WIDTH, PATH_Z, ribbon_mesh
 
-__all__ = ["PLANS", "WAIT_RGBA", "PlanSpan", "animate_plans", "path_width", "plan_spans", "ring_mesh"]
+__all__ = ["PLANS", "WAIT_RGBA", "PlanSpan", "animate_plans", "path_width", "plan_spans", "ring_mesh", "show_between"]
 
 _log = logging.getLogger(__name__)
 
@@ -138,6 +138,19 @@ def _mesh(scenario: Scenario, span: PlanSpan) -> tuple[np.ndarray, np.ndarray, R
     return (*ribbon_mesh(xy, path_width(scenario), PATH_Z), PATH_RGBA)
 
 
+def show_between(meshcat: Meshcat, node: str, first: int, last: int | None) -> None:
+    """``node`` visible in the recording from frame ``first`` until frame
+    ``last`` (None: the end). The static state (the page before the
+    animation plays) shows it only when it begins at frame 0."""
+    recording = meshcat.get_mutable_recording()
+    meshcat.SetProperty(node, "visible", first == 0)
+    if first > 0:
+        recording.SetProperty(0, node, "visible", False)
+    recording.SetProperty(first, node, "visible", True)
+    if last is not None:
+        recording.SetProperty(last, node, "visible", False)
+
+
 def animate_plans(meshcat: Meshcat, scenario: Scenario, replans: Sequence, fps: float, *,
                   prefix: str = OVERLAY_PREFIX) -> int:
     """Draws each distinct plan and wait of ``replans`` (:func:`plan_spans`),
@@ -161,7 +174,6 @@ def animate_plans(meshcat: Meshcat, scenario: Scenario, replans: Sequence, fps: 
         raise ValueError(f"fps must be > 0 frames per second, got {fps}")
     spans = plan_spans(replans)
     frames = [int(round(s.start * fps)) for s in spans]
-    recording = meshcat.get_mutable_recording()
     drawn = 0
     for k, span in enumerate(spans):
         first, last = frames[k], frames[k + 1] if k + 1 < len(spans) else None
@@ -172,13 +184,7 @@ def animate_plans(meshcat: Meshcat, scenario: Scenario, replans: Sequence, fps: 
             continue
         node = f"{prefix}/{PLANS}/{k}"
         meshcat.SetTriangleMesh(node, *mesh)
-        # Static state = the page before the animation plays: only a span of frame 0 shows.
-        meshcat.SetProperty(node, "visible", first == 0)
-        if first > 0:
-            recording.SetProperty(0, node, "visible", False)
-        recording.SetProperty(first, node, "visible", True)
-        if last is not None:
-            recording.SetProperty(last, node, "visible", False)
+        show_between(meshcat, node, first, last)
         drawn += 1
     meshcat.PublishRecording()
     _log.info("drew %d plan(s) and wait(s) of %d replans (%d spans)", drawn, len(replans), len(spans))

@@ -166,6 +166,12 @@ class SimulationResult:
             :class:`~drake_social.planning.replan.ReplanResult` of the run in
             order (the first plan's first; the replans after the goal was
             reached are left out); empty without.
+        predicted: with replanning, what the replans that changed the path
+            or began a wait predicted
+            (:class:`~drake_social.people.predicted.PredictedPeople`, each
+            naming its replan's index in ``replans``; at most
+            :data:`~drake_social.control.replanner_system.MAX_PREDICTED_REPLANS`);
+            empty without.
         replanning: with replanning, the summary of ``replans``
             (:func:`~drake_social.control.replanning_summary`: count, changed,
             waits, plan times (median, p95, p99, max), deadline hits, rate,
@@ -173,6 +179,10 @@ class SimulationResult:
             With replanning ``waypoints`` is the path followed: each path up
             to the waypoint it was heading for when a replan replaced it, then
             the last one.
+        judged: the polyline the deviation is measured from: ``waypoints``,
+            or with replanning each replaced path up to and including the
+            waypoint it was heading for (:class:`~drake_social.control.ReplanState`'s
+            ``judged``).
     """
 
     mode: str
@@ -202,6 +212,8 @@ class SimulationResult:
     slow_stopped: np.ndarray = dc.field(default_factory=lambda: np.zeros(0, bool))
     replans: tuple = ()
     replanning: dict | None = None
+    judged: np.ndarray | None = None
+    predicted: tuple = ()
 
     @property
     def stopped_time(self) -> float:

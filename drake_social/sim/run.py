@@ -256,7 +256,8 @@ def run_checked(
     _log_result(result)
     if analyze:
         result.report = analyze_execution(scenario, result.waypoints, result.times, result.q, analysis_checker,
-                                          people_move=not built.station.people.model.static)
+                                          people_move=not built.station.people.model.static,
+                                          judged=result.judged)
     return result
 
 
@@ -339,12 +340,13 @@ def _result(built: TransportDiagram, root, path: np.ndarray, planner_result: Pla
     times, data, reached = _logs(built, root)
     reached_at = [float(times[max(len(times) - 2, 0)])] if reached else []
     end = float(times[-1]) if len(times) else 0.0
-    replans, replanning = (), None
+    replans, replanning, judged, predicted = (), None, path, ()
     if built.replanning:
         planner = built.autonomy.planner
         planner_context = planner.GetMyContextFromRoot(root)
         replans = tuple(r for r in planner.replans(planner_context) if r.t <= end + 1e-9)
-        path = planner.followed(planner_context)
+        predicted = tuple(p for p in planner.predictions(planner_context) if p.replan < len(replans))
+        path, judged = planner.followed(planner_context), planner.judged(planner_context)
         replanning = replanning_summary(replans, planner.rate, float(built.scenario.planner.replan_budget))
     message = (f"goal reached at t = {reached_at[0]:.2f} s" if reached
                else f"goal not reached within the time limit of {limit:g} s "
@@ -357,9 +359,9 @@ def _result(built: TransportDiagram, root, path: np.ndarray, planner_result: Pla
         realtime_factor=sim_time / wall if wall > 0 else math.inf, waypoints=path, times=times,
         q=data["q"], v=data["v"], wheel_speeds=data["wheel_speeds"], target=data["target"],
         reference=data["reference"], target_index=data["index"][:, 0].astype(int), planner=planner_result,
-        stops=_stops(built.autonomy.safety, root, end), replans=replans, replanning=replanning,
+        stops=_stops(built.autonomy.safety, root, end), replans=replans, replanning=replanning, predicted=predicted,
         speed_limit=data["speed_limit"][:, 0] if "speed_limit" in data else np.full(len(times), np.inf),
-        slow_stops=_stops(built.autonomy.speed_limit, root, end),
+        slow_stops=_stops(built.autonomy.speed_limit, root, end), judged=judged,
     )
     result.stopped = _stopped(times, result.stops)
     result.slow_stopped = _stopped(times, result.slow_stops)

@@ -259,6 +259,11 @@ def test_remainder_is_q_then_the_path_from_the_sequencers_index(scenario):
     followed = dut.followed(context)
     np.testing.assert_array_equal(followed, [[0, 0, 0, 0], [2.0, 1.0, 0, 0], [2.5, 0.5, 0, 0], [4.0, 1.0, 0, 0],
                                              GOAL])
+    # The segments driven on keep the replaced path up to and including its target (index 2, the goal);
+    # replan 1 replaced the first path at its index 0, the point it starts from: one row.
+    np.testing.assert_array_equal(dut.judged(context), [[0, 0, 0, 0], [2.0, 1.0, 0, 0], GOAL, [2.5, 0.5, 0, 0],
+                                                        [4.0, 1.0, 0, 0], GOAL])
+    assert dut.state(context).judged_offset == 3 and dut.state(context).offset == 2
 
 
 def test_no_path_at_first_waits_at_q_then_takes_the_first_path(scenario):

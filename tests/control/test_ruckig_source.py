@@ -466,3 +466,56 @@ def test_reference_base_speed_below_the_wheels_limit_is_unchanged():
     dut = reference_source_from_options(ExecutionOptions(), [0.0, 0.0, 0.0, 0.0])
     _, _, v, _, _ = _run(dut, [(0.0, [3.0, 3.0, 0.0, 0.0])], t_end=3.0)
     assert np.max(np.hypot(v[:, 0], v[:, 1])) == pytest.approx(0.5, rel=1e-9)
+
+
+def _braked_run(brake_at: float | None, release_at: float | None, t_end: float = 4.0):
+    """A 2-DoF synchronized reference along (0, 0) -> (2, 1) with its ``brake``
+    input switched on at ``brake_at`` and off at ``release_at`` (None: never)."""
+    dut = _source(synchronization="phase", via=True, point_speed=lambda u: 1.0)
+    simulator = Simulator(dut)
+    context = simulator.get_mutable_context()
+    dut.GetInputPort("target").FixValue(context, np.array([2.0, 1.0]))
+    dut.GetInputPort("brake").FixValue(context, [0.0])
+    simulator.AdvanceTo(0.0)
+    rows = []
+    for k in range(int(round(t_end / DT)) + 1):
+        t = k * DT
+        if k > 0:
+            simulator.AdvanceTo(t)
+        if brake_at is not None and abs(t - brake_at) < 1e-12:
+            dut.GetInputPort("brake").FixValue(context, [1.0])
+        if release_at is not None and abs(t - release_at) < 1e-12:
+            dut.GetInputPort("brake").FixValue(context, [0.0])
+        p, v, a, _ = _outputs(dut, context)
+        rows.append((t, p, v, a))
+    return (np.array([r[0] for r in rows]),) + tuple(np.array([r[i] for r in rows]) for i in (1, 2, 3))
+
+
+def test_brake_stops_on_the_path_jerk_limited_and_goes_on_when_released():
+    """The brake input (a replanner's wait): the reference brakes to rest on
+    its straight segment within the acceleration and jerk limits (no jump,
+    unlike the hold), stays at rest while braked, and goes on along the same
+    segment to the target when released."""
+    t, p, v, a = _braked_run(brake_at=0.8, release_at=2.5, t_end=7.0)
+    _assert_within_limits(p, v, a, VMAX, AMAX, JMAX)
+    direction = np.array([2.0, 1.0]) / np.sqrt(5.0)
+    off_line = p[:, 0] * direction[1] - p[:, 1] * direction[0]
+    assert np.max(np.abs(off_line)) <= 1e-9  # on the segment throughout
+    along = p @ direction
+    assert np.all(np.diff(along) >= -1e-12)  # never back
+    braked = (t >= 0.8 + PERIOD) & (t < 2.5)
+    moving_at_brake = np.abs(v[np.searchsorted(t, 0.8)]).max()
+    assert moving_at_brake > 0.1
+    rest = braked & (np.abs(v).max(axis=1) == 0.0)
+    assert rest.any()  # at rest exactly (the reference's velocity is 0: a replanner sees it at rest)
+    first_rest = np.flatnonzero(rest)[0]
+    assert np.all(rest[first_rest:np.flatnonzero(braked)[-1] + 1])  # and stays at rest while braked
+    np.testing.assert_array_equal(p[first_rest], p[np.flatnonzero(braked)[-1]])
+    np.testing.assert_allclose(p[-1], [2.0, 1.0], atol=1e-12)  # released: on to the target
+
+
+def test_without_the_brake_the_reference_is_unchanged():
+    t, p, v, a = _braked_run(brake_at=None, release_at=None)
+    t2, p2, v2, a2 = _braked_run(brake_at=5.0, release_at=None, t_end=4.0)  # connected, never on
+    np.testing.assert_array_equal(p, p2)
+    np.testing.assert_array_equal(v, v2)

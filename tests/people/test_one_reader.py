@@ -29,6 +29,7 @@ COST_PEOPLE = {
     ("app.py", "run.people"),
     ("experiments/study/runs.py", "run.people"),
     ("experiments/study/crowd_episode.py", "run.people"),
+    ("viz/predictions.py", "run.people"),
 }
 
 

@@ -220,3 +220,29 @@ def test_the_lookup_is_written_once():
                     and name(node.left.right) == "t0"):
                 homes.add(str(path.relative_to(root)))
     assert homes == {"people/prediction_kernel.py", "cost/social.py"}
+
+
+@pytest.mark.parametrize("seconds, samples", [
+    # one step, and either side of it: within 1e-9 of a step is that step, as the sample times round
+    (0.5, 2), (math.nextafter(0.5, 1.0), 2), (0.5 + 1e-6, 3), (math.nextafter(0.5, 0.0), 2),
+    (1.0, 3), (1.5, 4), (1.6, 4), (math.inf, 4), (0.1, 2)])
+def test_until_keeps_the_samples_up_to_the_one_covering_its_time(seconds, samples):
+    """The first ``seconds``: the samples at t0 + k dt for k dt < seconds and the
+    first at or after it (4 samples at t0 = 1, dt = 0.5 over 1.5 s)."""
+    full = _by_hand([[True, True]] * 4)
+    dut = full.until(seconds)
+    assert dut.samples == samples
+    np.testing.assert_array_equal(dut.positions, full.positions[:samples])
+    np.testing.assert_array_equal(dut.present, full.present[:samples])
+    np.testing.assert_array_equal(dut.headings, full.headings[:samples])
+    np.testing.assert_array_equal(dut.max_speeds, full.max_speeds)  # a bound on the shorter motion too
+    assert dut.t0 == full.t0 and dut.dt == full.dt and dut.names == full.names
+    assert dut.horizon >= min(full.t0 + seconds, full.horizon) - 1e-12
+    if samples == full.samples:
+        assert dut is full
+
+
+@pytest.mark.parametrize("seconds", [0.0, -1.0, math.nan])
+def test_until_needs_a_positive_time(seconds):
+    with pytest.raises(ValueError, match="Prediction.until: seconds must be > 0"):
+        _by_hand([[True, True]] * 4).until(seconds)

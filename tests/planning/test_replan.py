@@ -50,7 +50,7 @@ goal: [10.8, 3.5, -1.2292, 2.8]
 random_seed: 3
 social: {length_weight: 1.0}
 planner: {iterations: 1500, planning_range: 2.0, near_radius: 3.0, replan_iterations: 400, replan_length_weight: 0.0,
-          prediction: constant_velocity}
+          prediction: constant_velocity, safety_horizon: 60.0}
 """
 NORTH_Y, SOUTH_Y = 6.0, 1.0  # corridor centre lines
 HORIZON = 60.0  # seconds: longer than any path here
@@ -187,6 +187,31 @@ def test_evaluate_times_and_safety(corridor, room, first):
     x, y = wp[2, :2]
     ev = rp.evaluate(wp, 0.0, walkers(0.0, [[(0.0, x, y)]]))
     assert not ev.safe and 0 <= ev.people_bad <= 2 and ev.static_bad == -1
+
+
+def test_safety_is_hard_over_the_safety_horizon_only(corridor, room, first):
+    """A walker who comes to stand on the path's third waypoint some seconds
+    before the robot gets there: unsafe when the safety horizon reaches that
+    time, safe (left to later replans; the cost still sees it) when it ends
+    well before."""
+    import dataclasses as dc
+
+    wp = first.waypoints
+    times = replanner(corridor, room).evaluate(wp, 0.0, nobody(0.0)).times
+    x, y = wp[2, :2]
+    arrive = max(times[2] - 1.0, 1.0)
+    prediction = walkers(0.0, [[(0.0, 11.5, 0.3), (arrive, x, y)]])
+    verdicts = {}
+    for horizon in (60.0, min(arrive, times[1]) * 0.5):
+        scenario = dc.replace(corridor, planner=dc.replace(corridor.planner, safety_horizon=horizon))
+        judge = replanner(scenario, room).judge(prediction)
+        assert judge.people_safety.prediction.samples == prediction.until(horizon).samples
+        assert judge.prediction is prediction  # the cost looks over the whole horizon
+        verdicts[horizon] = judge.evaluate(wp, 0.0)
+    long, short = verdicts.values()
+    assert not long.safe and long.people_bad >= 0
+    assert short.safe
+    assert short.social == long.social  # the same cost
 
 
 def test_candidate_rows(corridor, room, first):

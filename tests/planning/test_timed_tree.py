@@ -145,6 +145,38 @@ def test_a_walker_crossing_never_comes_within_safety(tiny):
         for k in range(len(t) - 1))
 
 
+def test_a_safety_horizon_before_the_crossing_lets_the_tree_through_it(tiny):
+    """The walker crosses the blind plan's line after the safety horizon: the
+    tree's check (``_people_ok``) considers the horizon's samples only
+    (``safety_slots``, counted by hand) and accepts the motion through the
+    crossing that the full prediction's check refuses; every goal connection
+    of a tree grown so is clear over the horizon."""
+    scenario, checker, pred, objective, planner, safety = crossing_setup(tiny)
+    start, goal = ends(scenario)
+    assert timed_params(pred, scenario.execution, 0.0, safety).safety_slots == pred.samples
+    horizon = 0.5
+    timed = timed_params(pred, scenario.execution, 0.0, safety, safety_horizon=horizon)
+    assert timed.safety_slots == int(np.ceil(horizon / pred.dt - 1e-9)) + 1 == pred.until(horizon).samples
+    full = timed_params(pred, scenario.execution, 0.0, safety)
+    scene = checker.compiled_scene()
+    blind = planner.solve(start, goal, np.random.default_rng(2)).waypoints
+    t = nominal_path_times(blind, scenario.execution.max_base_speed, scenario.execution.arm_max_velocity, 0.0)
+    refused = [k for k in range(len(blind) - 1)
+               if not tree_kernel._people_ok(blind[k], blind[k + 1], t[k], t[k + 1], scene, full)]
+    assert refused and t[refused[0]] > horizon  # the crossing comes after the horizon
+    assert all(tree_kernel._people_ok(blind[k], blind[k + 1], t[k], t[k + 1], scene, timed) for k in refused)
+    tree = planner.solve_timed(start, goal, np.random.default_rng(2), timed, iterations=600, objective=objective)
+    short = pred.until(horizon)
+    for g, e in zip(tree.goal_nodes, tree.goal_edges):
+        if not np.isfinite(tree.costs[g] + e):
+            continue
+        wp = path_of(tree, g, goal)
+        tw = nominal_path_times(wp, scenario.execution.max_base_speed, scenario.execution.arm_max_velocity, 0.0)
+        assert all(people_kernel.motion_clear_of_people(
+            wp[k], wp[k + 1], tw[k], tw[k + 1], scene.bodies, scene.robot, scene.levers, short.positions,
+            short.present, short.radii, short.max_speeds, short.t0, short.dt, safety) for k in range(len(wp) - 1))
+
+
 def test_same_generator_same_tree_bit_for_bit(tiny):
     scenario, checker, pred, objective, planner, safety = crossing_setup(tiny)
     start, goal = ends(scenario)

@@ -100,19 +100,26 @@ def test_handover_keeps_the_reference_continuous_in_position_and_velocity(tiny):
     assert abs(v[change - 1, 1]) < 1e-12 and v[change + 30, 1] < 0  # heading south-east towards (3.5, 1.8), off the straight line y = 2.5
 
 
-def test_a_wait_holds_the_robot_and_the_path_resumes(tiny):
-    waits = range(5, 15)  # t = 0.5 .. 1.4 s
+def test_a_wait_brakes_the_robot_on_its_path_and_the_path_resumes(tiny):
+    waits = range(5, 20)  # t = 0.5 .. 1.9 s
     built = build_diagram(tiny, replan=True, replanner=Detour(tiny.goal, turn=-1, waits=waits))
-    times, p, v, version, root = _reference_log(built, 2.5)
-    held = (times > 0.52) & (times < 1.5)
-    np.testing.assert_array_equal(v[held], 0.0)  # the reference stands while waiting
+    times, p, v, version, root = _reference_log(built, 3.2)
+    # The wait brakes the reference on its path, jerk-limited: no jump in velocity ...
+    ex = tiny.execution
+    amax = np.array([ex.max_base_acceleration] * 2 + list(ex.arm_max_acceleration))
+    assert np.all(np.abs(np.diff(v, axis=0)) <= amax * ex.control_period * (1 + 1e-9) + 1e-12)
+    assert np.linalg.norm(v[np.searchsorted(times, 0.52), :2]) > 0.05  # moving when the wait began
+    # ... to rest, where it stands while waiting
+    held = (times > 1.5) & (times < 2.0)
+    np.testing.assert_array_equal(v[held], 0.0)
     assert np.ptp(p[held], axis=0).max() == 0.0
+    assert np.max(np.abs(p[:, 1] - 2.5)) < 1e-9  # on the straight segment throughout
     assert np.all(version == 0)  # a wait keeps the path
     assert np.linalg.norm(v[-1, :2]) > 0.1  # and goes on along it after
     assert abs(p[-1, 1] - 2.5) < 1e-9  # on the straight segment to the goal
     planner = built.autonomy.planner
     statuses = [r.status for r in planner.replans(planner.GetMyContextFromRoot(root))]
-    assert statuses[5:15] == ["wait"] * 10 and statuses[15] == "kept"
+    assert statuses[5:20] == ["wait"] * 15 and statuses[20] == "kept"
 
 
 def test_replan_with_given_waypoints_is_refused(tiny):

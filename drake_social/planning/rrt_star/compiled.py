@@ -57,7 +57,7 @@ DEADLINE_CHUNK = 16
 
 #: The timed mode off: the static loop (bit for bit as without a timed mode).
 STATIC = TimedParams(False, 0.0, 1.0, np.ones(2), np.zeros((1, 0, 2)), np.zeros((1, 0)), np.zeros((1, 0), bool),
-                     0.0, 1.0, np.zeros(0), np.zeros(0), 0.0)
+                     0.0, 1.0, np.zeros(0), np.zeros(0), 0.0, 1)
 
 _cold_cache_reported = False
 
@@ -124,7 +124,8 @@ def _social_params(objective: Objective) -> tuple[int, SocialParams, PeopleGrid]
     return 0, social, grid
 
 
-def timed_params(prediction, execution_options, t_root: float, safety: float) -> TimedParams:
+def timed_params(prediction, execution_options, t_root: float, safety: float,
+                 safety_horizon: float = math.inf) -> TimedParams:
     """The timed mode's inputs (:class:`~.tree_kernel.TimedParams`, enabled).
 
     Args:
@@ -139,6 +140,9 @@ def timed_params(prediction, execution_options, t_root: float, safety: float) ->
             metres of a considered person (``execution.safety_distance``);
             a negative value relaxes the check (tests use it to compare with
             the static loop).
+        safety_horizon: seconds of the prediction the safety check considers
+            (:meth:`~drake_social.people.prediction.Prediction.until`; the
+            cost looks at all of it).
 
     Raises:
         ValueError: a non-finite ``t_root`` or ``safety``, or speeds not > 0, named.
@@ -157,7 +161,8 @@ def timed_params(prediction, execution_options, t_root: float, safety: float) ->
 
     return TimedParams(True, float(t_root), base_speed, arm_speed, f(prediction.positions, float),
                        f(prediction.headings, float), f(prediction.present, bool), float(prediction.t0),
-                       float(prediction.dt), f(prediction.radii, float), f(prediction.max_speeds, float), float(safety))
+                       float(prediction.dt), f(prediction.radii, float), f(prediction.max_speeds, float), float(safety),
+                       prediction.until(safety_horizon).samples)
 
 
 def grow_params(space: ConfigurationSpace, checker: CompiledSceneChecker, objective: Objective,

@@ -125,6 +125,7 @@ class TimedParams(NamedTuple):
     radii: np.ndarray  #: (P,) body radii, metres
     max_speeds: np.ndarray  #: (P,) each person's largest predicted speed, m/s
     safety: float  #: a motion is invalid where the robot comes within this of a person, metres
+    safety_slots: int  #: the first samples the safety check considers (the safety horizon)
 
 
 class ObjectiveParams(NamedTuple):
@@ -785,15 +786,16 @@ def _static_ok(q_a, q_b, c_a, c_b, scene):
 @njit(cache=True)
 def _people_ok(q_a, q_b, t_a, t_b, scene, tp):
     """The motion q_a -> q_b driven from t_a to t_b keeps the robot farther
-    than ``tp.safety`` from every considered predicted person (its end
-    first: the cheap rejection)."""
+    than ``tp.safety`` from every considered predicted person over the
+    first ``tp.safety_slots`` samples (its end first: the cheap rejection)."""
     if tp.xy.shape[1] == 0:
         return True
     bodies, robot, levers = scene.bodies, scene.robot, scene.levers
-    if not people_kernel.people_clearance(q_b, t_b, bodies, robot, tp.xy, tp.present, tp.radii, tp.max_speeds,
+    xy, present = tp.xy[:tp.safety_slots], tp.present[:tp.safety_slots]  # the safety horizon's samples
+    if not people_kernel.people_clearance(q_b, t_b, bodies, robot, xy, present, tp.radii, tp.max_speeds,
                                           tp.t0, tp.dt) > tp.safety:
         return False
-    return people_kernel.motion_clear_of_people(q_a, q_b, t_a, t_b, bodies, robot, levers, tp.xy, tp.present,
+    return people_kernel.motion_clear_of_people(q_a, q_b, t_a, t_b, bodies, robot, levers, xy, present,
                                                 tp.radii, tp.max_speeds, tp.t0, tp.dt, tp.safety)
 
 

@@ -1,0 +1,102 @@
+"""Who made a path unsafe (drake_social.control.replan_culprit): the person
+whose prediction comes nearest the robot over the reason's window (not the
+one nearest now), nobody for a cheaper route or the room."""
+
+from __future__ import annotations
+
+import dataclasses as dc
+import math
+
+import numpy as np
+import pytest
+
+from drake_social.collision.drake_checker import make_checker
+from drake_social.control.replan_culprit import culprit, robot_along
+from drake_social.kinematics import nominal_path_times
+from drake_social.people import PeopleState, constant_velocity, without_people
+from drake_social.scenario import load_scenario
+
+
+@dc.dataclass(frozen=True)
+class Result:
+    """The fields of a ReplanResult culprit() reads."""
+
+    t: float
+    status: str
+    reason: str
+    candidate_cost: float = math.inf
+
+
+@pytest.fixture(scope="module")
+def room(tiny_scenario_path):
+    scenario = load_scenario(tiny_scenario_path)
+    scene = make_checker(without_people(scenario), "planar").compiled_scene()
+    ex = scenario.execution
+    return scenario, scene, (ex.max_base_speed, ex.arm_max_velocity)
+
+
+T0 = 1.0
+
+
+def _setup(scenario, limits):
+    """The path: 3 m east from the start. A (index 1) walks north across it, on the base's
+    centre when the robot is there at the motion's middle time; B (index 0) stands 1.2 m north
+    of the start, nearer the robot than A now."""
+    q = np.array(scenario.start, float)
+    path = np.array([q, q + [3.0, 0.0, 0.0, 0.0]])
+    times = nominal_path_times(path, *limits, T0)
+    mid = 0.5 * (times[0] + times[1])
+    at_mid = robot_along(path, T0, np.array([mid]), *limits)[0, :2]
+    speed = 1.0
+    a_now = at_mid - [0.0, speed * (mid - T0)]
+    state = PeopleState(t=T0, positions=np.array([q[:2] + [0.0, 1.2], a_now]), headings=np.array([0.0, math.pi / 2]),
+                        velocities=np.array([[0.0, 0.0], [0.0, speed]]), radii=np.array([0.25, 0.25]),
+                        names=("B", "A"))
+    assert np.linalg.norm(state.positions[0] - q[:2]) < np.linalg.norm(state.positions[1] - q[:2])
+    return q, path, times, constant_velocity(state, horizon=max(5.0, times[1] - T0 + 1.0))
+
+
+def test_robot_along_passes_its_waypoints_at_their_times(room):
+    scenario, _, limits = room
+    q, path, times, _ = _setup(scenario, limits)
+    np.testing.assert_allclose(robot_along(path, T0, times, *limits), path, atol=1e-12)
+    half = robot_along(path, T0, np.array([0.5 * (times[0] + times[1])]), *limits)[0]
+    np.testing.assert_allclose(half, 0.5 * (path[0] + path[1]), atol=1e-12)
+    np.testing.assert_allclose(robot_along(path, T0, np.array([T0 - 1.0, times[1] + 1.0]), *limits), path,
+                               atol=1e-12)  # held before and after
+
+
+def test_the_person_on_the_path_in_the_window_not_the_nearest_now(room):
+    scenario, scene, limits = room
+    q, path, times, prediction = _setup(scenario, limits)
+    reason = (f"the current path is not safe any more (motion 0, t = {times[0]:.2f} .. {times[1]:.2f} s comes "
+              "within 0.05 m of a predicted person); the search's path costs 12.3")
+    assert culprit(Result(T0, "new", reason), prediction, path, q, scene, *limits) == 1
+    wait = Result(T0, "wait", f"waiting: the current path is not safe ({reason[35:]}")
+    assert culprit(wait, prediction, path, q, scene, *limits) == 1
+
+
+def test_now_the_nearest_person_standing(room):
+    scenario, scene, limits = room
+    q, path, _, prediction = _setup(scenario, limits)
+    reason = "waiting: a person is 0.020 m from the robot now (safety distance 0.05 m)"
+    assert culprit(Result(T0, "wait", reason), prediction, path, q, scene, *limits) == 0
+
+
+@pytest.mark.parametrize("result", [
+    Result(T0, "new", "the search's path costs 3, below (1 - 0.05) x 4 of the current path", candidate_cost=4.0),
+    Result(T0, "new", "the current path is not safe any more (motion 0, t = 1.00 .. 2.00 s collides with the room)"),
+    Result(T0, "initial", "the first plan: cost 3 after 300 samples"),
+    Result(T0, "kept", "the current path (cost 3) stays"),
+])
+def test_no_culprit_for_a_cheaper_route_the_room_or_no_change(room, result):
+    scenario, scene, limits = room
+    q, path, _, prediction = _setup(scenario, limits)
+    assert culprit(result, prediction, path, q, scene, *limits) == -1
+
+
+def test_no_culprit_without_a_scene(room):
+    scenario, _, limits = room
+    q, path, times, prediction = _setup(scenario, limits)
+    reason = f"motion 0, t = {times[0]:.2f} .. {times[1]:.2f} s comes within 0.05 m of a predicted person"
+    assert culprit(Result(T0, "wait", reason), prediction, path, q, None, *limits) == -1
