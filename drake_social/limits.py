@@ -86,6 +86,14 @@ MAX_REPLAN_BUDGET = 60.0
 #: no run lasts longer (MAX_TIME_LIMIT). The prediction holds one sample per
 #: 0.1 s per person (6,001 samples here).
 MAX_REPLAN_HORIZON = MAX_TIME_LIMIT
+#: Largest courtesy bound on the deceleration a plan may ask of a person,
+#: m/s^2 (``planner.courtesy_deceleration``): a person's braking in the
+#: social force model reaches about v / tau, 1.34 / 0.5 = 2.7 m/s^2 from a
+#: walk to a stop, and a hard stop about 10 m/s^2; 20 leaves the bound off in effect.
+MAX_COURTESY_DECELERATION = 20.0
+#: Largest courtesy bound on a person's deviation, metres (``planner.courtesy_deviation``):
+#: farther than anyone walks over the longest useful horizon at a walking pace.
+MAX_COURTESY_DEVIATION = 100.0
 #: Largest weight of the planners' objectives (``social.weights``,
 #: ``social.length_weight``, ``planner.replan_length_weight``): a motion's cost
 #: sums weight x AGF (at most 1) x metres over every point and person, so with

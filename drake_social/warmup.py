@@ -114,7 +114,8 @@ def _warm_up_people(scenario) -> None:
     the diagram gives them: the tracks' evaluation
     (:mod:`drake_social.people.tracks_kernel`), the crowd's step with and
     without the robot (:mod:`drake_social.people.social_force_kernel`) and the
-    safety monitor's distance (:mod:`drake_social.people.proximity_kernel`)."""
+    safety monitor's distance (:mod:`drake_social.people.proximity_kernel`), and
+    the interactive prediction's rollout (:mod:`drake_social.people.interactive_kernel`)."""
     from drake_social.control import SafetyMonitor
     from drake_social.scenario.geometry import arm_geometry
     from drake_social.people.compose import people_model
@@ -128,6 +129,10 @@ def _warm_up_people(scenario) -> None:
     q = np.array(scenario.start, float)
     model.crowd.step(np.array(model.crowd.initial_state(), float), 0.0, model.open_loop_state(0.0), q.copy())
     SafetyMonitor(arm_geometry(people), safety_distance=0.05, period=0.01).too_close(q, state)
+    # The replanner's interactive prediction (drake_social.people.interactive_kernel).
+    from drake_social.people.interactive import InteractiveModel, predict_interactive
+
+    predict_interactive(state, (np.stack([q, q]), np.array([0.5, 1.0])), 0.5, InteractiveModel.from_scenario(people))
 
 
 def _warm_up_timed(scenario) -> None:

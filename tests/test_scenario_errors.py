@@ -694,3 +694,44 @@ def test_objective_weights_are_bounded_at_max_cost_weight(field, override):
         shown = f"[1.0, 1.0, 1.0, 1.0, {bad!r}]" if field == "social.weights" else repr(bad)
         assert _message(TINY, [override % bad]) == (
             f"{TINY} (--set {(override % bad)!r}): {field}: must be in [0, 1e+06], got {shown}")
+
+
+# ---- the courtesy bounds of the interactive prediction
+
+ABOVE_20 = 20.000000000000004  # math.nextafter(20.0, inf)
+ABOVE_1E6 = 1000000.0000000001  # math.nextafter(1e6, inf)
+
+
+@pytest.mark.parametrize("override, message", [
+    ("planner: {courtesy_deceleration: 0}", "planner.courtesy_deceleration: must be in (0, 20] m/s^2, got 0.0"),
+    ("planner: {courtesy_deceleration: -1.5}", "planner.courtesy_deceleration: must be in (0, 20] m/s^2, got -1.5"),
+    (f"planner: {{courtesy_deceleration: {ABOVE_20!r}}}",
+     "planner.courtesy_deceleration: must be in (0, 20] m/s^2, got 20.000000000000004"),
+    ("planner: {courtesy_deceleration: .nan}", "planner.courtesy_deceleration: must be finite numbers, got nan"),
+    ("planner: {courtesy_deviation: 0}", "planner.courtesy_deviation: must be in (0, 100] metres, got 0.0"),
+    ("planner: {courtesy_deviation: 100.00000000000001}",
+     "planner.courtesy_deviation: must be in (0, 100] metres, got 100.00000000000001"),
+    ("planner: {courtesy_deviation: .inf}", "planner.courtesy_deviation: must be finite numbers, got inf"),
+    ("planner: {courtesy_weight: -1e-300}", "planner.courtesy_weight: must be in [0, 1e+06], got -1e-300"),
+    (f"planner: {{courtesy_weight: {ABOVE_1E6!r}}}",
+     "planner.courtesy_weight: must be in [0, 1e+06], got 1000000.0000000001"),
+    ("planner: {prediction: psychic}",
+     "planner.prediction: unknown prediction 'psychic'; allowed: constant_velocity, perfect, interactive"),
+])
+def test_courtesy_settings_beyond_their_bounds_are_refused_naming_the_field(override, message):
+    assert _message(TINY, [override]) == f"{TINY} (--set {override!r}): {message}"
+
+
+def test_courtesy_settings_at_and_just_within_their_bounds_load():
+    import math
+
+    dut = load_scenario(TINY, ["planner: {prediction: interactive, courtesy_deceleration: 20, courtesy_deviation: 100, "
+                               "courtesy_weight: 1e6}"])
+    p = dut.planner
+    assert (p.prediction, p.courtesy_deceleration, p.courtesy_deviation, p.courtesy_weight) == \
+        ("interactive", 20.0, 100.0, 1e6)
+    tiny = math.nextafter(0.0, 1.0)
+    dut = load_scenario(TINY, [f"planner: {{courtesy_deceleration: {tiny!r}, courtesy_deviation: {tiny!r}, "
+                               "courtesy_weight: 0}"])
+    assert (dut.planner.courtesy_deceleration, dut.planner.courtesy_deviation, dut.planner.courtesy_weight) == \
+        (tiny, tiny, 0.0)

@@ -106,6 +106,7 @@ from pydrake.systems.framework import BasicVector, Context, EventStatus, LeafSys
 from drake_social.arguments import require_instance, require_int, require_scenario
 from drake_social.control.replan_culprit import culprit
 from drake_social.people import PeopleModel, PeopleState, people_model, predict
+from drake_social.people.interactive import InteractiveModel
 from drake_social.people.predicted import predicted_people
 from drake_social.scenario import Scenario, replan_rate_problem
 
@@ -253,6 +254,8 @@ class ReplanningPlannerSystem(LeafSystem):
         self._replanner = replanner
         self._people = people_model(scenario) if people is None else people
         self._prediction = scenario.planner.prediction
+        # The interactive prediction: the replanner rolls the people out per judged path from their state now.
+        self._interactive = InteractiveModel.from_scenario(scenario) if self._prediction == "interactive" else None
         self._horizon = float(scenario.planner.replan_horizon)
         self._period = 1.0 / rate
         self._search_period = float(scenario.planner.replan_search_period)
@@ -328,9 +331,13 @@ class ReplanningPlannerSystem(LeafSystem):
         q = np.array(self._q_port.Eval(context), float)
         people = self._people_port.Eval(context)
         t = context.get_time()
-        prediction = predict(self._prediction, self._people, people.at_time(t) if people.t != t else people,
-                             self._horizon)
-        return q, t, prediction
+        now = people.at_time(t) if people.t != t else people
+        prediction = predict(self._prediction, self._people, now, self._horizon, interactive=self._interactive)
+        return q, t, prediction, now
+
+    def _people_now(self, now: PeopleState) -> dict:
+        """The replanner's ``people`` argument: the people now under the interactive prediction, else none."""
+        return {} if self._interactive is None else {"people": now}
 
     def _moving(self, context: Context) -> bool:
         """Whether the motion being driven is under way: the ``velocity`` input
@@ -340,8 +347,8 @@ class ReplanningPlannerSystem(LeafSystem):
         return bool(np.any(np.abs(self._velocity_port.Eval(context)) > MOVING_SPEED))
 
     def _FirstPlan(self, context: Context, state: State) -> None:
-        q, t, prediction = self._inputs(context)
-        result = self._replanner.plan(q, t, prediction, None, replan_index=0, deadline=False)
+        q, t, prediction, now = self._inputs(context)
+        result = self._replanner.plan(q, t, prediction, None, replan_index=0, deadline=False, **self._people_now(now))
         if result.status != "wait" and result.status != "initial":
             result = dc.replace(result, status="initial")
         waiting = result.status == "wait"
@@ -357,7 +364,7 @@ class ReplanningPlannerSystem(LeafSystem):
         if old.path is None:  # not initialized (a forced update before the first plan)
             raise RuntimeError(f"{self.get_name() or 'ReplanningPlannerSystem'}: replan before the first plan; "
                                "run the initialization events first")
-        q, t, prediction = self._inputs(context)
+        q, t, prediction, now = self._inputs(context)
         index = 0
         if self._index_port.HasValue(context):
             index = min(max(int(round(self._index_port.Eval(context)[0])), 0), len(old.path) - 1)
@@ -367,7 +374,7 @@ class ReplanningPlannerSystem(LeafSystem):
         search = old.hold or t - old.searched_at >= self._search_period - 1e-9
         committed = old.planned and not old.hold
         result = self._replanner.plan(q, t, prediction, previous, replan_index=len(old.log), deadline=True,
-                                      commit=committed, search=search)
+                                      commit=committed, search=search, **self._people_now(now))
         if result.changed and (result.status == "evade" or not committed) and self._moving(context):
             result = _braking_first(result, q)
         log = old.log + (result,)

@@ -10,14 +10,16 @@ The arrays are the layout the compiled kernels read
 :mod:`drake_social.collision.people_kernel`): they take the prediction's
 fields as plain arrays and look them up with the same kernel.
 
-Two predictors:
+Three predictors:
 
-* :func:`constant_velocity` (the default): every present person goes on at
+* :func:`constant_velocity`: every present person goes on at
   the velocity of the state now, facing the way they face now;
 * :func:`perfect_prediction`: the open-loop people of a
   :class:`~drake_social.people.compose.ScenarioPeople` (scripted and recorded)
   exactly as they will walk, a crowd (which reacts to the robot) at constant
-  velocity. For studies: no deployed robot knows this.
+  velocity. For studies: no deployed robot knows this;
+* :func:`drake_social.people.interactive.predict_interactive`: a social-force
+  rollout in which the people react to the robot's planned motion.
 """
 
 from __future__ import annotations
@@ -30,7 +32,7 @@ import numpy as np
 from drake_social.people import prediction_kernel
 from drake_social.people.model import PeopleModel, PeopleState
 
-__all__ = ["DEFAULT_PREDICTION_STEP", "Prediction", "constant_velocity", "perfect_prediction", "predict"]
+__all__ = ["DEFAULT_PREDICTION_STEP", "Prediction", "constant_velocity", "perfect_prediction", "predict", "sample_times"]
 
 #: Seconds between the samples of a prediction.
 DEFAULT_PREDICTION_STEP = 0.1
@@ -135,7 +137,8 @@ class Prediction:
                            radii=self.radii, names=self.names, present=self.present[k])
 
 
-def _sample_times(t0: float, horizon: float, dt: float) -> np.ndarray:
+def sample_times(t0: float, horizon: float, dt: float) -> np.ndarray:
+    """The sample times ``t0 + k dt`` of a prediction over ``horizon`` seconds (the last at or past it)."""
     if not (math.isfinite(horizon) and horizon > 0 and math.isfinite(dt) and dt > 0):
         raise ValueError(f"a prediction needs horizon > 0 and dt > 0 seconds, got horizon={horizon!r}, dt={dt!r}")
     return float(t0) + dt * np.arange(int(math.ceil(horizon / dt - 1e-9)) + 1)
@@ -151,7 +154,7 @@ def _max_speeds(positions: np.ndarray, dt: float) -> np.ndarray:
 def constant_velocity(state: PeopleState, horizon: float, dt: float = DEFAULT_PREDICTION_STEP) -> Prediction:
     """Everyone in ``state`` going on at their velocity for ``horizon``
     seconds from ``state.t``, facing and present as now."""
-    times = _sample_times(state.t, horizon, dt)
+    times = sample_times(state.t, horizon, dt)
     lag = (times - state.t)[:, None, None]
     positions = state.positions[None] + lag * state.velocities[None]
     h = len(times)
@@ -171,7 +174,7 @@ def perfect_prediction(model: PeopleModel, state: PeopleState, horizon: float,
     A model without ``open_loop_state`` is open loop as a whole."""
     if model.count != state.count:
         raise ValueError(f"perfect_prediction: the model has {model.count} people, the state {state.count}")
-    times = _sample_times(state.t, horizon, dt)
+    times = sample_times(state.t, horizon, dt)
     cv = constant_velocity(state, horizon, dt)
     positions, headings, present = cv.positions.copy(), cv.headings.copy(), cv.present.copy()
     crowd = getattr(model, "crowd", None)
@@ -186,10 +189,19 @@ def perfect_prediction(model: PeopleModel, state: PeopleState, horizon: float,
 
 
 def predict(kind: str, model: PeopleModel, state: PeopleState, horizon: float,
-            dt: float = DEFAULT_PREDICTION_STEP) -> Prediction:
-    """The prediction ``kind`` (``planner.prediction``: "constant_velocity" or "perfect")."""
+            dt: float = DEFAULT_PREDICTION_STEP, interactive=None) -> Prediction:
+    """The prediction ``kind`` (``planner.prediction``: "constant_velocity",
+    "perfect" or "interactive"). "interactive" needs ``interactive``, an
+    :class:`~drake_social.people.interactive.InteractiveModel`, and gives its
+    rollout without the robot (the reference the replanner measures the
+    people's effort against; each judged path is judged against the
+    rollout it induces, :mod:`drake_social.planning.replan_interactive`)."""
     if kind == "constant_velocity":
         return constant_velocity(state, horizon, dt)
     if kind == "perfect":
         return perfect_prediction(model, state, horizon, dt)
-    raise ValueError(f"predict: unknown prediction {kind!r}; allowed: constant_velocity, perfect")
+    if kind == "interactive":
+        if interactive is None:
+            raise ValueError("predict: the interactive prediction needs interactive= (an InteractiveModel)")
+        return interactive.predict(state, horizon, dt)
+    raise ValueError(f"predict: unknown prediction {kind!r}; allowed: constant_velocity, perfect, interactive")

@@ -48,6 +48,12 @@ class PathEvaluation(NamedTuple):
         static_bad: the first motion the room's checker rejects, -1 when none.
         people_bad: the first motion that comes within the safety distance of
             a predicted person, -1 when none.
+        courtesy: under the interactive prediction, why the path asks too
+            much of a person (:mod:`.replan_interactive`); empty when it
+            does not, and for the other predictions.
+        effort: under the interactive prediction, the people's effort the
+            path induces (m^2 s; ``cost`` includes it times
+            ``planner.courtesy_weight``); 0 for the other predictions.
     """
 
     times: np.ndarray
@@ -56,11 +62,13 @@ class PathEvaluation(NamedTuple):
     length: float
     static_bad: int
     people_bad: int
+    courtesy: str = ""
+    effort: float = 0.0
 
     @property
     def safe(self) -> bool:
-        """Valid in the room and clear of every predicted person."""
-        return self.static_bad < 0 and self.people_bad < 0
+        """Valid in the room, clear of every predicted person, and courteous."""
+        return self.static_bad < 0 and self.people_bad < 0 and not self.courtesy
 
     @property
     def first_bad(self) -> int:
@@ -132,6 +140,8 @@ class PathJudge:
     def unsafe_words(self, ev: PathEvaluation) -> str:
         """Why a judged path is not safe, in words."""
         k = ev.first_bad
+        if k < 0:
+            return ev.courtesy or "safe"
         span = f"motion {k}, t = {ev.times[k]:.2f} .. {ev.times[k + 1]:.2f} s"
         if ev.static_bad == k:
             return f"{span} collides with the room"

@@ -54,7 +54,7 @@ __all__ = [
 #: Modes of the informed sampler (see ``drake_social.planning.sampling``).
 INFORMED_MODES = ("paper", "admissible")
 #: How the replanner predicts people (``planner.prediction``).
-PREDICTIONS = ("constant_velocity", "perfect")
+PREDICTIONS = ("constant_velocity", "perfect", "interactive")
 
 #: Simulation modes (see ``drake_social.sim``): the base integrates its
 #: commanded velocity and the arm follows its reference exactly, or the
@@ -379,9 +379,23 @@ class PlannerOptions:
     # may take any of many near-zero-cost detours: the replan margin of a
     # route's cost by length alone is too small to hold it; docs/replanning.md).
     replan_length_weight: float = 0.1
-    # How people are predicted: "constant_velocity" (from their state now) or
-    # "perfect" (scripted and recorded people as they will walk; a crowd at constant velocity).
-    prediction: str = "constant_velocity"
+    # How people are predicted: "interactive" (a social-force rollout in
+    # which the people react to each judged path; docs/replanning.md,
+    # "Interactive prediction"), "constant_velocity" (from their state now)
+    # or "perfect" (scripted and recorded people as they will walk; a crowd
+    # at constant velocity).
+    prediction: str = "interactive"
+    # Interactive prediction only: a path is not safe when it makes a person
+    # brake harder than this beyond what they do without the robot, m/s^2
+    # (in (0, MAX_COURTESY_DECELERATION]) ...
+    courtesy_deceleration: float = 1.5
+    # ... or moves a person further than this from where they would be
+    # without the robot, metres (in (0, MAX_COURTESY_DEVIATION]), unless
+    # the robot holding still asks as much of them.
+    courtesy_deviation: float = 1.0
+    # Weight of the people's effort (sum of their squared deviations over
+    # the horizon, m^2 s) in a judged path's cost (in [0, 1e6]).
+    courtesy_weight: float = 0.1
 
 
 @dc.dataclass

@@ -22,7 +22,8 @@ from drake_social.scenario.geometry import arm_geometry
 from drake_social.limits import (ALGORITHMS, CONTACT_APPROXIMATIONS, INFORMED_ALGORITHMS, INTEGRATION_SCHEMES,
                                  MAX_CONTROL_STEPS, MAX_DYNAMIC_PLANT_TIME_STEP,
                                  MAX_ITERATIONS, MAX_MOTION_STEPS, MAX_OBJECT_POINTS, MAX_PLANT_STEPS,
-                                 MAX_COST_WEIGHT, MAX_REPLAN_BUDGET, MAX_REPLAN_HORIZON,
+                                 MAX_COST_WEIGHT, MAX_COURTESY_DECELERATION, MAX_COURTESY_DEVIATION,
+                                 MAX_REPLAN_BUDGET, MAX_REPLAN_HORIZON,
                                  MAX_REPLAN_ITERATIONS,
                                  MAX_REPLANS_PER_CONTROL_PERIOD, MAX_REPLAY_FPS, MAX_TIME_LIMIT, MIN_CONTROL_PERIODS,
                                  SERVO_BANDWIDTH)
@@ -62,6 +63,17 @@ def _check_slow_down(c: "_Checker", e) -> None:
     if e.slow_speed > e.max_base_speed:
         c.fail("execution.slow_speed", f"must be <= execution.max_base_speed {e.max_base_speed:g} m/s, "
                                        f"got {e.slow_speed}")
+
+
+def _courtesy(c, p) -> None:
+    """The interactive prediction's courtesy bounds (``planner.courtesy_*``)."""
+    for name, most, unit in (("courtesy_deceleration", MAX_COURTESY_DECELERATION, "m/s^2"),
+                             ("courtesy_deviation", MAX_COURTESY_DEVIATION, "metres")):
+        value = getattr(p, name)
+        c.finite(f"planner.{name}", value)
+        if not 0.0 < value <= most:
+            c.fail(f"planner.{name}", f"must be in (0, {most:g}] {unit}, got {_shown(value)}")
+    c.weight("planner.courtesy_weight", p.courtesy_weight)
 
 
 class _Checker:
@@ -420,6 +432,7 @@ def validate_scenario(scenario: Scenario, source: str = "<scenario>") -> None:
         c.fail("planner.replan_search_period", f"must be >= 0 seconds, got {p.replan_search_period}")
     if p.prediction not in PREDICTIONS:
         c.fail("planner.prediction", f"unknown prediction {_shown(p.prediction)}; allowed: {', '.join(PREDICTIONS)}")
+    _courtesy(c, p)
     e = scenario.execution
     if e.mode not in SIM_MODES:
         c.fail("execution.mode", f"unknown mode {_shown(e.mode)}; allowed: {', '.join(SIM_MODES)}")

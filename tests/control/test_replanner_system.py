@@ -48,10 +48,11 @@ class ScriptedReplanner:
         self.calls: list[dict] = []
 
     def plan(self, q_now, t_now, prediction, previous=None, *, replan_index, deadline=True, commit=False,
-             search=True):
+             search=True, people=None):
         self.calls.append(dict(q=np.array(q_now), t=t_now, prediction=prediction,
                                previous=None if previous is None else np.array(previous),
-                               replan_index=replan_index, deadline=deadline, commit=commit, search=search))
+                               replan_index=replan_index, deadline=deadline, commit=commit, search=search,
+                               people=people))
         status = self.script.get(replan_index, "kept")
         q = np.asarray(q_now, float)
         if status == "initial":
@@ -406,3 +407,30 @@ def test_an_unconnected_version_changes_nothing():
     _sequencer_step(dut, context)
     np.testing.assert_array_equal(context.get_discrete_state_vector().value(), [1.0, 0.0, 0.0])
     np.testing.assert_array_equal(dut.GetOutputPort("target").Eval(context), WAYPOINTS[1])
+
+
+@pytest.mark.parametrize("kind", ["interactive", "constant_velocity"])
+def test_the_interactive_prediction_passes_the_people_now(scenario, kind):
+    """Under the interactive prediction the replanner is given the people now
+    (it rolls them out per judged path) and, as the prediction, their rollout
+    without the robot (the default); under the others no people argument."""
+    from drake_social.people.interactive import InteractiveModel, predict_interactive
+
+    sc = dc.replace(scenario, planner=dc.replace(scenario.planner, prediction=kind))
+    double = ScriptedReplanner({0: "initial"})
+    dut = ReplanningPlannerSystem(sc, double, people=PEOPLE)
+    context = _context(dut)
+    dut.ExecuteInitializationEvents(context)
+    context.SetTime(0.3)
+    _replan(dut, context)
+    assert [c["replan_index"] for c in double.calls] == [0, 1]
+    for call, t in zip(double.calls, (0.0, 0.3)):
+        if kind == "constant_velocity":
+            assert call["people"] is None
+            continue
+        now = call["people"]
+        assert now.t == t and now.names == ("ann",)
+        np.testing.assert_array_equal(now.positions, [[2.0, 1.0]])
+        expected = predict_interactive(now, None, sc.planner.replan_horizon, InteractiveModel.from_scenario(sc))
+        np.testing.assert_array_equal(call["prediction"].positions, expected.positions)
+        assert call["prediction"].t0 == t

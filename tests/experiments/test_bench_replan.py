@@ -140,3 +140,13 @@ def test_bench_with_replanning_runs(tiny_scenario_path, tmp_path):
     assert sim["replan_time"]["n"] >= 1 and sim["replan_time"]["initial_plan_time"] is not None
     md = (tmp_path / "bench.md").read_text()
     assert "## Replanning (tiny)" in md and "| simulated run (kinematic) |" in md
+
+
+def test_rollout_under_the_interactive_prediction(tiny_scenario):
+    """The benchmark gives the replanner the people now when it predicts them interactively."""
+    import dataclasses as dc
+
+    sc = dc.replace(tiny_scenario, planner=dc.replace(tiny_scenario.planner, prediction="interactive"))
+    replans = dut.rollout_replans(sc, 3, warm=False)
+    assert [x.replan_index for x in replans] == [0, 1, 2, 3] and replans[0].status == "initial"
+    assert all(x.status in ("new", "kept", "wait", "evade") for x in replans[1:])

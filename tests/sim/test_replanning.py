@@ -36,7 +36,7 @@ class Detour:
         self.goal, self.turn, self.waits = np.asarray(goal, float), turn, set(waits)
 
     def plan(self, q_now, t_now, prediction, previous=None, *, replan_index, deadline=True, commit=False,
-             search=True):
+             search=True, people=None):
         q = np.asarray(q_now, float)
         if replan_index in self.waits:
             wp, status = q[None], "wait"

@@ -124,16 +124,21 @@ def rollout_replans(scenario: Scenario, count: int, *, checker: str = "planar", 
     model = people_model(scenario)
     goal = np.asarray(scenario.goal, float)
 
+    interactive = replanner.interactive  # the interactive prediction: the replanner rolls the people out itself
+
     def prediction(t: float):
-        return predict(p.prediction, model, model.state_at(t), float(p.replan_horizon))
+        return predict(p.prediction, model, model.state_at(t), float(p.replan_horizon), interactive=interactive)
+
+    def people(t: float) -> dict:
+        return {} if interactive is None else {"people": model.state_at(t)}
 
     def timed(path: np.ndarray, t0: float) -> np.ndarray:
         return nominal_path_times(path, ex.max_base_speed, ex.arm_max_velocity, t0)
 
     q = np.asarray(scenario.start, float)
     if warm:  # compiles the kernels (or loads numba's cache) outside the log's times
-        replanner.plan(q, 0.0, prediction(0.0), None, replan_index=0)
-    first = replanner.plan(q, 0.0, prediction(0.0), None, replan_index=0)
+        replanner.plan(q, 0.0, prediction(0.0), None, replan_index=0, **people(0.0))
+    first = replanner.plan(q, 0.0, prediction(0.0), None, replan_index=0, **people(0.0))
     log = [first]
     # The path being driven from time t_path, or waited on (it starts where the robot holds); None: no path.
     path, t_path, waiting = (None if first.waiting else first.waypoints), 0.0, first.waiting
@@ -150,7 +155,7 @@ def rollout_replans(scenario: Scenario, count: int, *, checker: str = "planar", 
         # replan_search_period s while the path stays safe, or after a wait.
         search = waiting or t - searched_at >= float(p.replan_search_period) - 1e-9
         r = replanner.plan(q, t, prediction(t), remaining, replan_index=k, commit=path is not None and not waiting,
-                           search=search)
+                           search=search, **people(t))
         searched_at = t if r.searched else searched_at
         log.append(r)
         waiting = r.waiting
