@@ -19,6 +19,8 @@ import math
 import numpy as np
 from numba import njit
 
+from drake_social.people.social_force_kernel import box_push
+
 __all__ = ["PARAMS", "rollout"]
 
 #: Layout of the ``params`` vector of :func:`rollout`.
@@ -139,22 +141,8 @@ def rollout(pos0, vel0, heading0, active, radii, speeds, max_speeds, goals, walk
                 fy += a_int * (along * ty + turn * tx)
             body = radii[i]
             for kb in range(boxes.shape[0]):
-                co, si = boxes[kb, 4], boxes[kb, 5]
-                rx, ry = px - boxes[kb, 0], py - boxes[kb, 1]
-                lx, ly = co * rx + si * ry, -si * rx + co * ry
-                ox, oy = abs(lx) - boxes[kb, 2], abs(ly) - boxes[kb, 3]
-                cx, cy = max(ox, 0.0), max(oy, 0.0)
-                outside = math.hypot(cx, cy)
-                sx = 1.0 if lx >= 0 else -1.0
-                sy = 1.0 if ly >= 0 else -1.0
-                if outside > 0:
-                    nlx, nly = sx * cx / outside, sy * cy / outside
-                elif ox >= oy:
-                    nlx, nly = sx, 0.0
-                else:
-                    nlx, nly = 0.0, sy
-                distance = outside + min(max(ox, oy), 0.0) - body
-                fx, fy = _repel(fx, fy, distance, co * nlx - si * nly, si * nlx + co * nly, a_obs, b_obs)
+                distance, nx, ny = box_push(px, py, boxes[kb], body)
+                fx, fy = _repel(fx, fy, distance, nx, ny, a_obs, b_obs)
             if has_robot:
                 fx, fy = _capsule(fx, fy, px, py, bx, by, bx, by, base_r, body, a_obs, b_obs)
                 fx, fy = _capsule(fx, fy, px, py, bx, by, ex, ey, link_r, body, a_obs, b_obs)

@@ -52,6 +52,30 @@ def _capsule(out, i, px, py, ax, ay, bx, by, radius, body, strength, range_):
 
 
 @njit(cache=True)
+def box_push(px, py, box, body):
+    """The surface distance of a body disc (centre (px, py), radius ``body``)
+    from the oriented box ``box`` ([cx, cy, half_x, half_y, cos, sin]) and
+    the world unit normal pointing from the box to the disc, as ``(distance,
+    nx, ny)`` (negative distance: overlapping; inside: the nearest face's
+    normal)."""
+    co, si = box[4], box[5]
+    rx, ry = px - box[0], py - box[1]
+    lx, ly = co * rx + si * ry, -si * rx + co * ry
+    ox, oy = abs(lx) - box[2], abs(ly) - box[3]
+    cx, cy = max(ox, 0.0), max(oy, 0.0)
+    outside = math.hypot(cx, cy)
+    sx = 1.0 if lx >= 0 else -1.0
+    sy = 1.0 if ly >= 0 else -1.0
+    if outside > 0:
+        nlx, nly = sx * cx / outside, sy * cy / outside
+    elif ox >= oy:
+        nlx, nly = sx, 0.0
+    else:
+        nlx, nly = 0.0, sy
+    return outside + min(max(ox, oy), 0.0) - body, co * nlx - si * nly, si * nlx + co * nly
+
+
+@njit(cache=True)
 def crowd_step(state, goal_table, people, others, boxes, robot_q, object_points, params):
     """The crowd's state one step later (see ``SocialForceCrowd.step``).
 
@@ -148,22 +172,8 @@ def crowd_step(state, goal_table, people, others, boxes, robot_q, object_points,
             force[i, 1] += a_int * (along * ty + turn * tx)
         body = people[i, 0]
         for k in range(boxes.shape[0]):
-            co, si = boxes[k, 4], boxes[k, 5]
-            rx, ry = pos[i, 0] - boxes[k, 0], pos[i, 1] - boxes[k, 1]
-            lx, ly = co * rx + si * ry, -si * rx + co * ry
-            ox, oy = abs(lx) - boxes[k, 2], abs(ly) - boxes[k, 3]
-            cx, cy = max(ox, 0.0), max(oy, 0.0)
-            outside = math.hypot(cx, cy)
-            sx = 1.0 if lx >= 0 else -1.0
-            sy = 1.0 if ly >= 0 else -1.0
-            if outside > 0:
-                nlx, nly = sx * cx / outside, sy * cy / outside
-            elif ox >= oy:
-                nlx, nly = sx, 0.0
-            else:
-                nlx, nly = 0.0, sy
-            distance = outside + min(max(ox, oy), 0.0) - body
-            _repel(force, i, distance, co * nlx - si * nly, si * nlx + co * nly, a_obs, b_obs)
+            distance, nx, ny = box_push(pos[i, 0], pos[i, 1], boxes[k], body)
+            _repel(force, i, distance, nx, ny, a_obs, b_obs)
         if has_robot:
             px, py = pos[i, 0], pos[i, 1]
             _capsule(force, i, px, py, bx, by, bx, by, params[13], body, a_obs, b_obs)
