@@ -10,6 +10,9 @@ distance to the robot
 * driving the replaced path (timed from the replan at the execution limits,
   as the replanner times it) at :data:`WINDOW_SAMPLES` times over the
   reason's ``t = a .. b s``;
+* or, when the reason is a courtesy bound (the interactive prediction:
+  "courtesy: NAME would have to brake ..." or "... would be moved ..."), the
+  person it names (``person i`` for one without a name);
 * or, when the reason says a person is near the robot now, where it is at
   the replan's time;
 * or, when the reason names no such window but a person (or the robot
@@ -44,6 +47,19 @@ WINDOW_SAMPLES = 9
 #: Seconds ahead the robot is taken to stand when the reason names no window.
 STANDING_LOOKAHEAD = 3.0
 _WINDOW = re.compile(r"t = (-?\d+(?:\.\d+)?) \.\. (-?\d+(?:\.\d+)?) s comes within")
+_COURTESY = re.compile(r"courtesy: (.*?) would (?:have to brake at|be moved) ")
+_UNNAMED = re.compile(r"person (\d+)")
+
+
+def _named(name: str, names: tuple[str, ...]) -> int:
+    """The index of the person a courtesy reason names (the first of that
+    name; ``person i`` is the unnamed person i), -1 when none matches."""
+    if name in names:
+        return names.index(name)
+    unnamed = _UNNAMED.fullmatch(name)
+    if unnamed is not None and int(unnamed.group(1)) < len(names) and not names[int(unnamed.group(1))]:
+        return int(unnamed.group(1))
+    return -1
 
 
 def robot_along(path: np.ndarray, t0: float, times: np.ndarray, max_base_speed: float,
@@ -79,6 +95,9 @@ def culprit(result, prediction: Prediction, replaced: np.ndarray | None, q: np.n
     if scene is None or prediction.count == 0 or kind in ("initial", "cheaper", "kept"):
         return -1
     reason = str(result.reason)
+    courtesy = _COURTESY.search(reason)
+    if courtesy is not None:
+        return _named(courtesy.group(1), tuple(prediction.names))
     window = _WINDOW.search(reason)
     t0 = float(result.t)
     if window is not None and replaced is not None:

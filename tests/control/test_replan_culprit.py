@@ -100,3 +100,31 @@ def test_no_culprit_without_a_scene(room):
     q, path, times, prediction = _setup(scenario, limits)
     reason = f"motion 0, t = {times[0]:.2f} .. {times[1]:.2f} s comes within 0.05 m of a predicted person"
     assert culprit(Result(T0, "wait", reason), prediction, path, q, None, *limits) == -1
+
+
+@pytest.mark.parametrize("status, named, who", [
+    ("new", "A would have to brake at 2.10 m/s^2, more than planner.courtesy_deceleration 1.5 m/s^2", 1),
+    ("wait", "B would be moved 1.20 m off their way, more than planner.courtesy_deviation 1 m", 0),
+    ("new", "C would be moved 1.20 m off their way, more than planner.courtesy_deviation 1 m", -1),  # nobody's name
+])
+def test_a_courtesy_bound_names_its_person(room, status, named, who):
+    """Under the interactive prediction a path asking too much of someone is
+    not safe, the person named in the reason: that person is the culprit
+    (not the one nearest the robot standing, B, nor nobody)."""
+    scenario, scene, limits = room
+    q, path, _, prediction = _setup(scenario, limits)
+    reason = f"the current path is not safe any more (courtesy: {named}); the search's path costs 12.3"
+    if status == "wait":
+        reason = f"waiting: the current path is not safe (courtesy: {named}), and the search found no safe path"
+    assert culprit(Result(T0, status, reason), prediction, path, q, scene, *limits) == who
+
+
+def test_a_courtesy_bound_names_an_unnamed_person_by_index(room):
+    scenario, scene, limits = room
+    q, path, _, prediction = _setup(scenario, limits)
+    unnamed = dc.replace(prediction, names=("", ""))
+    reason = ("the current path is not safe any more (courtesy: person 1 would be moved 1.20 m off their way, "
+              "more than planner.courtesy_deviation 1 m); the search's path costs 12.3")
+    assert culprit(Result(T0, "new", reason), unnamed, path, q, scene, *limits) == 1
+    # "person 1" of a named crowd is nobody's name: no culprit.
+    assert culprit(Result(T0, "new", reason), prediction, path, q, scene, *limits) == -1

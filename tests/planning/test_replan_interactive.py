@@ -139,6 +139,11 @@ def test_a_path_the_walker_must_brake_hard_for_is_refused(scenario, room):
     assert dut.status in ("new", "wait") and dut.candidate_cost == math.inf
     assert "courtesy: walker would have to brake at" in dut.reason and "planner.courtesy_deceleration 1.5" in \
         dut.reason
+    # The replay's culprit is the walker the reason names.
+    from drake_social.control.replan_culprit import culprit
+    ex = scenario.execution
+    assert culprit(dut, constant_velocity(state, HORIZON), straight(scenario), q, room.compiled_scene(),
+                   ex.max_base_speed, ex.arm_max_velocity) == 0
     if dut.status == "new":
         judge = r.interactive_judge(state, 0.0, constant_velocity(state, HORIZON), q[None])
         ev = judge.evaluate(dut.waypoints, 0.0)
