@@ -77,7 +77,7 @@ def robot_along(path: np.ndarray, t0: float, times: np.ndarray, max_base_speed: 
 
 
 def culprit(result, prediction: Prediction, replaced: np.ndarray | None, q: np.ndarray, scene,
-            max_base_speed: float, arm_max_velocity) -> int:
+            max_base_speed: float, arm_max_velocity, *, standing: Prediction | None = None) -> int:
     """The index (among ``prediction``'s people) of the person who made the
     replan ``result`` replace its path or hold, -1 when it was not a person
     (a cheaper route, the room, nobody present) or no scene is given.
@@ -90,6 +90,9 @@ def culprit(result, prediction: Prediction, replaced: np.ndarray | None, q: np.n
         q: (4,) the robot's configuration at the replan.
         scene: the robot's planar scene (``checker.compiled_scene()``), None: no culprit.
         max_base_speed, arm_max_velocity: the execution limits that time a path.
+        standing: the people the replan predicted with the robot standing at
+            ``q`` (the interactive prediction: they react to where it is),
+            read when the robot's standing is the question; None: ``prediction``.
     """
     kind = decision(result)
     if scene is None or prediction.count == 0 or kind in ("initial", "cheaper", "kept"):
@@ -108,6 +111,7 @@ def culprit(result, prediction: Prediction, replaced: np.ndarray | None, q: np.n
         times = np.array([t0]) if "from the robot now" in reason else \
             np.linspace(t0, t0 + STANDING_LOOKAHEAD, WINDOW_SAMPLES)
         configs = np.repeat(np.asarray(q, float).reshape(1, 4), len(times), axis=0)
+        prediction = prediction if standing is None else standing
     else:
         return -1
     bodies, robot = np.ascontiguousarray(scene.bodies, float), np.ascontiguousarray(scene.robot, float)

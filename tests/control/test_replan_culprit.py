@@ -128,3 +128,18 @@ def test_a_courtesy_bound_names_an_unnamed_person_by_index(room):
     assert culprit(Result(T0, "new", reason), unnamed, path, q, scene, *limits) == 1
     # "person 1" of a named crowd is nobody's name: no culprit.
     assert culprit(Result(T0, "new", reason), prediction, path, q, scene, *limits) == -1
+
+
+def test_the_standing_cases_read_the_people_predicted_with_the_robot_standing(room):
+    """Under the interactive prediction the people react to the robot: who
+    is near the robot standing is read from ``standing`` (here A and B
+    swapped places), the replaced path's window from ``prediction``."""
+    scenario, scene, limits = room
+    q, path, times, prediction = _setup(scenario, limits)
+    swapped = dc.replace(prediction, positions=prediction.positions[:, ::-1])
+    near = Result(T0, "wait", "waiting: a person is 0.020 m from the robot now (safety distance 0.05 m)")
+    assert culprit(near, prediction, path, q, scene, *limits, standing=swapped) == 1
+    assert culprit(near, prediction, path, q, scene, *limits) == 0
+    window = Result(T0, "new", f"the current path is not safe any more (motion 0, t = {times[0]:.2f} .. "
+                               f"{times[1]:.2f} s comes within 0.05 m of a predicted person)")
+    assert culprit(window, prediction, path, q, scene, *limits, standing=swapped) == 1
