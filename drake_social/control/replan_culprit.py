@@ -23,7 +23,7 @@ A path that collides with the room, or a cheaper route, has no culprit.
 
 The distances are those of the replanner's safety check
 (:func:`drake_social.collision.people_kernel.people_clearance`, one person
-at a time), so the person named is the one whose prediction came within the
+at a time, over the safety horizon: beyond it only people who stand), so the person named is the one whose prediction came within the
 safety distance (the check itself is sound and a little conservative: at
 the sampled times the least distance may be a little above it).
 """
@@ -77,7 +77,8 @@ def robot_along(path: np.ndarray, t0: float, times: np.ndarray, max_base_speed: 
 
 
 def culprit(result, prediction: Prediction, replaced: np.ndarray | None, q: np.ndarray, scene,
-            max_base_speed: float, arm_max_velocity, *, standing: Prediction | None = None) -> int:
+            max_base_speed: float, arm_max_velocity, *, standing: Prediction | None = None,
+            safety_horizon: float = math.inf) -> int:
     """The index (among ``prediction``'s people) of the person who made the
     replan ``result`` replace its path or hold, -1 when it was not a person
     (a cheaper route, the room, nobody present) or no scene is given.
@@ -93,6 +94,9 @@ def culprit(result, prediction: Prediction, replaced: np.ndarray | None, q: np.n
         standing: the people the replan predicted with the robot standing at
             ``q`` (the interactive prediction: they react to where it is),
             read when the robot's standing is the question; None: ``prediction``.
+        safety_horizon: ``planner.safety_horizon``: as in the replanner's
+            safety check, beyond it only people who stand are considered
+            (:meth:`~drake_social.people.prediction.Prediction.until`).
     """
     kind = decision(result)
     if scene is None or prediction.count == 0 or kind in ("initial", "cheaper", "kept"):
@@ -114,6 +118,7 @@ def culprit(result, prediction: Prediction, replaced: np.ndarray | None, q: np.n
         prediction = prediction if standing is None else standing
     else:
         return -1
+    prediction = prediction.until(safety_horizon)
     bodies, robot = np.ascontiguousarray(scene.bodies, float), np.ascontiguousarray(scene.robot, float)
     xy, radii, speeds = prediction.positions, prediction.radii, prediction.max_speeds
     best, who = math.inf, -1

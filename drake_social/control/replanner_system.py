@@ -430,7 +430,8 @@ class ReplanningPlannerSystem(LeafSystem):
             shown = self._driving(now, prediction, chosen_path)
             judged = self._driving(now, prediction, q[None] if replaced is None else replaced)
             standing = self._driving(now, prediction, q[None])
-        who = culprit(result, judged, replaced, q, scene, ex.max_base_speed, ex.arm_max_velocity, standing=standing)
+        who = culprit(result, judged, replaced, q, scene, ex.max_base_speed, ex.arm_max_velocity, standing=standing,
+                      safety_horizon=float(self._scenario.planner.safety_horizon))
         chosen = chosen_path[:, :2]
         near = chosen if replaced is None else np.vstack([replaced[::-1, :2], chosen])
         if len(kept) + 1 == self._max_predicted:

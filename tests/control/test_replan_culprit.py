@@ -143,3 +143,20 @@ def test_the_standing_cases_read_the_people_predicted_with_the_robot_standing(ro
     window = Result(T0, "new", f"the current path is not safe any more (motion 0, t = {times[0]:.2f} .. "
                                f"{times[1]:.2f} s comes within 0.05 m of a predicted person)")
     assert culprit(window, prediction, path, q, scene, *limits, standing=swapped) == 1
+
+
+def test_beyond_the_safety_horizon_only_who_stands_is_the_culprit(room):
+    """The replaced path's window lies after the safety horizon: there the
+    replanner's check sees only people who stand (B), not the walker A who
+    crosses the path then; within the horizon A is the culprit."""
+    scenario, scene, limits = room
+    q, path, times, prediction = _setup(scenario, limits)
+    reason = (f"the current path is not safe any more (motion 0, t = {times[0]:.2f} .. {times[1]:.2f} s comes "
+              "within 0.05 m of a predicted person)")
+    result = Result(T0, "new", reason)
+    short = 0.05  # the horizon ends before the window's middle, where A crosses
+    mid = 0.5 * (times[0] + times[1])
+    assert T0 + short < mid
+    assert culprit(result, prediction, path, q, scene, *limits, safety_horizon=short) == 0
+    assert culprit(result, prediction, path, q, scene, *limits, safety_horizon=mid - T0 + 1.0) == 1
+    assert culprit(result, prediction, path, q, scene, *limits) == 1
