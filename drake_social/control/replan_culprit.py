@@ -23,9 +23,10 @@ A path that collides with the room, or a cheaper route, has no culprit.
 
 The distances are those of the replanner's safety check
 (:func:`drake_social.collision.people_kernel.people_clearance`, one person
-at a time, over the safety horizon: beyond it only people who stand), so the person named is the one whose prediction came within the
-safety distance (the check itself is sound and a little conservative: at
-the sampled times the least distance may be a little above it).
+at a time, over the safety horizon: beyond it only people who stand), so
+the person named is the one whose prediction came within the safety
+distance (the check itself is sound and a little conservative: at the
+sampled times the least distance may be a little above it).
 """
 
 from __future__ import annotations
