@@ -10,6 +10,9 @@ distance to the robot
 * driving the replaced path (timed from the replan at the execution limits,
   as the replanner times it) at :data:`WINDOW_SAMPLES` times over the
   reason's ``t = a .. b s``;
+* or, when the reason is a courtesy bound (the interactive prediction:
+  "courtesy: NAME would have to brake ..." or "... would be moved ..."), the
+  person it names (``person i`` for one without a name);
 * or, when the reason says a person is near the robot now, where it is at
   the replan's time;
 * or, when the reason names no such window but a person (or the robot
@@ -20,9 +23,10 @@ A path that collides with the room, or a cheaper route, has no culprit.
 
 The distances are those of the replanner's safety check
 (:func:`drake_social.collision.people_kernel.people_clearance`, one person
-at a time), so the person named is the one whose prediction came within the
-safety distance (the check itself is sound and a little conservative: at
-the sampled times the least distance may be a little above it).
+at a time, over the safety horizon: beyond it only people who stand), so
+the person named is the one whose prediction came within the safety
+distance (the check itself is sound and a little conservative: at the
+sampled times the least distance may be a little above it).
 """
 
 from __future__ import annotations
@@ -44,6 +48,19 @@ WINDOW_SAMPLES = 9
 #: Seconds ahead the robot is taken to stand when the reason names no window.
 STANDING_LOOKAHEAD = 3.0
 _WINDOW = re.compile(r"t = (-?\d+(?:\.\d+)?) \.\. (-?\d+(?:\.\d+)?) s comes within")
+_COURTESY = re.compile(r"courtesy: (.*?) would (?:have to brake at|be moved) ")
+_UNNAMED = re.compile(r"person (\d+)")
+
+
+def _named(name: str, names: tuple[str, ...]) -> int:
+    """The index of the person a courtesy reason names (the first of that
+    name; ``person i`` is the unnamed person i), -1 when none matches."""
+    if name in names:
+        return names.index(name)
+    unnamed = _UNNAMED.fullmatch(name)
+    if unnamed is not None and int(unnamed.group(1)) < len(names) and not names[int(unnamed.group(1))]:
+        return int(unnamed.group(1))
+    return -1
 
 
 def robot_along(path: np.ndarray, t0: float, times: np.ndarray, max_base_speed: float,
@@ -61,7 +78,8 @@ def robot_along(path: np.ndarray, t0: float, times: np.ndarray, max_base_speed: 
 
 
 def culprit(result, prediction: Prediction, replaced: np.ndarray | None, q: np.ndarray, scene,
-            max_base_speed: float, arm_max_velocity) -> int:
+            max_base_speed: float, arm_max_velocity, *, standing: Prediction | None = None,
+            safety_horizon: float = math.inf) -> int:
     """The index (among ``prediction``'s people) of the person who made the
     replan ``result`` replace its path or hold, -1 when it was not a person
     (a cheaper route, the room, nobody present) or no scene is given.
@@ -74,11 +92,20 @@ def culprit(result, prediction: Prediction, replaced: np.ndarray | None, q: np.n
         q: (4,) the robot's configuration at the replan.
         scene: the robot's planar scene (``checker.compiled_scene()``), None: no culprit.
         max_base_speed, arm_max_velocity: the execution limits that time a path.
+        standing: the people the replan predicted with the robot standing at
+            ``q`` (the interactive prediction: they react to where it is),
+            read when the robot's standing is the question; None: ``prediction``.
+        safety_horizon: ``planner.safety_horizon``: as in the replanner's
+            safety check, beyond it only people who stand are considered
+            (:meth:`~drake_social.people.prediction.Prediction.until`).
     """
     kind = decision(result)
     if scene is None or prediction.count == 0 or kind in ("initial", "cheaper", "kept"):
         return -1
     reason = str(result.reason)
+    courtesy = _COURTESY.search(reason)
+    if courtesy is not None:
+        return _named(courtesy.group(1), tuple(prediction.names))
     window = _WINDOW.search(reason)
     t0 = float(result.t)
     if window is not None and replaced is not None:
@@ -89,8 +116,10 @@ def culprit(result, prediction: Prediction, replaced: np.ndarray | None, q: np.n
         times = np.array([t0]) if "from the robot now" in reason else \
             np.linspace(t0, t0 + STANDING_LOOKAHEAD, WINDOW_SAMPLES)
         configs = np.repeat(np.asarray(q, float).reshape(1, 4), len(times), axis=0)
+        prediction = prediction if standing is None else standing
     else:
         return -1
+    prediction = prediction.until(safety_horizon)
     bodies, robot = np.ascontiguousarray(scene.bodies, float), np.ascontiguousarray(scene.robot, float)
     xy, radii, speeds = prediction.positions, prediction.radii, prediction.max_speeds
     best, who = math.inf, -1

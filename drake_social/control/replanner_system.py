@@ -67,7 +67,9 @@ What the robot predicted is kept for the replay and the figures: for each
 replan that changed the path (status ``"initial"``, ``"new"``, ``"evade"``)
 or began a wait (``"wait"`` after a replan that did not wait), a
 :class:`~drake_social.people.predicted.PredictedPeople`: the prediction it
-judged against at a few times (at most 10, about 0.5 s apart or more), the
+judged against at a few times (at most 10, about 0.5 s apart or more; under
+the interactive prediction the people reacting to the robot driving the path
+chosen, or standing while it waits), the
 16 people nearest the paths chosen and replaced, and the person who made the
 replaced path unsafe (:func:`~drake_social.control.replan_culprit.culprit`),
 in ``ReplanState.predicted`` (:meth:`ReplanningPlannerSystem.predictions`).
@@ -106,7 +108,8 @@ from pydrake.systems.framework import BasicVector, Context, EventStatus, LeafSys
 from drake_social.arguments import require_instance, require_int, require_scenario
 from drake_social.control.replan_culprit import culprit
 from drake_social.people import PeopleModel, PeopleState, people_model, predict
-from drake_social.people.interactive import InteractiveModel
+from drake_social.kinematics import nominal_path_times
+from drake_social.people.interactive import InteractiveModel, InteractivePeople
 from drake_social.people.predicted import predicted_people
 from drake_social.scenario import Scenario, replan_rate_problem
 
@@ -355,7 +358,7 @@ class ReplanningPlannerSystem(LeafSystem):
         path = _frozen(result.waypoints)
         new = ReplanState(path=path, planned=not waiting, version=0, hold=waiting, result=result, log=(result,),
                           followed=path, offset=0, judged=path, judged_offset=0, searched_at=t,
-                          predicted=self._kept((), result, 0, prediction, q, None, False))
+                          predicted=self._kept((), result, 0, prediction, q, None, False, now))
         _log.info("first plan at t = %.2f s: %s", t, _describe(result))
         state.get_mutable_abstract_state(self._state_index).set_value(new)
 
@@ -401,29 +404,49 @@ class ReplanningPlannerSystem(LeafSystem):
         if getattr(result, "searched", True):
             new = dc.replace(new, searched_at=t)
         new = dc.replace(new, predicted=self._kept(old.predicted, result, len(old.log), prediction, q, previous,
-                                                   old.hold))
+                                                   old.hold, now))
         if new.hold != old.hold or new.version != old.version:
             _log.debug("replan %d at t = %.2f s: %s", len(old.log), t, _describe(result))
         state.get_mutable_abstract_state(self._state_index).set_value(new)
         return EventStatus.Succeeded()
 
     def _kept(self, kept: tuple, result, index: int, prediction, q: np.ndarray, replaced: np.ndarray | None,
-              waiting: bool) -> tuple:
+              waiting: bool, now: PeopleState) -> tuple:
         """``kept`` with the prediction of replan ``index`` added when it
         changed the path or began a wait (``waiting``: the replan before
-        waited), within :data:`MAX_PREDICTED_REPLANS`."""
+        waited), within :data:`MAX_PREDICTED_REPLANS`. Under the interactive
+        prediction, the people (from ``now``) reacting to the robot driving the
+        path chosen, the culprit from the people reacting to the replaced path
+        (:meth:`_driving`)."""
         status = result.status
         if status not in KEPT_PREDICTIONS or (status == "wait" and waiting) or len(kept) >= self._max_predicted:
             return kept
         checker = getattr(self._replanner, "checker", None)
         scene = checker.compiled_scene() if callable(getattr(checker, "compiled_scene", None)) else None
         ex = self._scenario.execution
-        who = culprit(result, prediction, replaced, q, scene, ex.max_base_speed, ex.arm_max_velocity)
-        chosen = np.asarray(result.waypoints, float).reshape(-1, 4)[:, :2]
+        chosen_path = np.asarray(result.waypoints, float).reshape(-1, 4)
+        shown, judged, standing = prediction, prediction, None
+        if self._interactive is not None:
+            shown = self._driving(now, prediction, chosen_path)
+            judged = self._driving(now, prediction, q[None] if replaced is None else replaced)
+            standing = self._driving(now, prediction, q[None])
+        who = culprit(result, judged, replaced, q, scene, ex.max_base_speed, ex.arm_max_velocity, standing=standing,
+                      safety_horizon=float(self._scenario.planner.safety_horizon))
+        chosen = chosen_path[:, :2]
         near = chosen if replaced is None else np.vstack([replaced[::-1, :2], chosen])
         if len(kept) + 1 == self._max_predicted:
             _log.info("kept the predictions of %d replans: no more are kept this run", self._max_predicted)
-        return kept + (predicted_people(prediction, index, near=near, culprit=who),)
+        return kept + (predicted_people(shown, index, near=near, culprit=who),)
+
+    def _driving(self, now: PeopleState, prediction, waypoints: np.ndarray):
+        """The people of ``now`` over ``prediction``'s samples reacting to the
+        robot driving ``waypoints`` (N, 4) from ``now.t`` at the execution
+        limits and then holding still (the interactive prediction's rollout, as
+        the replanner judges a path; (1, 4): the robot standing)."""
+        ex = self._scenario.execution
+        wp = np.asarray(waypoints, float).reshape(-1, 4)
+        people = InteractivePeople(self._interactive, now, prediction.horizon - prediction.t0, prediction.dt)
+        return people.driving(wp, nominal_path_times(wp, ex.max_base_speed, ex.arm_max_velocity, float(now.t)))[0]
 
     # ---- outputs ---------------------------------------------------------------
 

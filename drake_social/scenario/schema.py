@@ -389,9 +389,11 @@ class PlannerOptions:
     # brake harder than this beyond what they do without the robot, m/s^2
     # (in (0, MAX_COURTESY_DECELERATION]) ...
     courtesy_deceleration: float = 1.5
-    # ... or moves a person further than this from where they would be
-    # without the robot, metres (in (0, MAX_COURTESY_DEVIATION]), unless
-    # the robot holding still asks as much of them.
+    # ... or moves a person further than this off their way, metres (in
+    # (0, MAX_COURTESY_DEVIATION]): from where they would be without the
+    # robot, across the way they would walk (lagging behind is braking; the
+    # whole distance for who would stand), unless the robot holding still
+    # asks as much of them.
     courtesy_deviation: float = 1.0
     # Weight of the people's effort (sum of their squared deviations over
     # the horizon, m^2 s) in a judged path's cost (in [0, 1e6]).

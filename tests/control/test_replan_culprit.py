@@ -100,3 +100,63 @@ def test_no_culprit_without_a_scene(room):
     q, path, times, prediction = _setup(scenario, limits)
     reason = f"motion 0, t = {times[0]:.2f} .. {times[1]:.2f} s comes within 0.05 m of a predicted person"
     assert culprit(Result(T0, "wait", reason), prediction, path, q, None, *limits) == -1
+
+
+@pytest.mark.parametrize("status, named, who", [
+    ("new", "A would have to brake at 2.10 m/s^2, more than planner.courtesy_deceleration 1.5 m/s^2", 1),
+    ("wait", "B would be moved 1.20 m off their way, more than planner.courtesy_deviation 1 m", 0),
+    ("new", "C would be moved 1.20 m off their way, more than planner.courtesy_deviation 1 m", -1),  # nobody's name
+])
+def test_a_courtesy_bound_names_its_person(room, status, named, who):
+    """Under the interactive prediction a path asking too much of someone is
+    not safe, the person named in the reason: that person is the culprit
+    (not the one nearest the robot standing, B, nor nobody)."""
+    scenario, scene, limits = room
+    q, path, _, prediction = _setup(scenario, limits)
+    reason = f"the current path is not safe any more (courtesy: {named}); the search's path costs 12.3"
+    if status == "wait":
+        reason = f"waiting: the current path is not safe (courtesy: {named}), and the search found no safe path"
+    assert culprit(Result(T0, status, reason), prediction, path, q, scene, *limits) == who
+
+
+def test_a_courtesy_bound_names_an_unnamed_person_by_index(room):
+    scenario, scene, limits = room
+    q, path, _, prediction = _setup(scenario, limits)
+    unnamed = dc.replace(prediction, names=("", ""))
+    reason = ("the current path is not safe any more (courtesy: person 1 would be moved 1.20 m off their way, "
+              "more than planner.courtesy_deviation 1 m); the search's path costs 12.3")
+    assert culprit(Result(T0, "new", reason), unnamed, path, q, scene, *limits) == 1
+    # "person 1" of a named crowd is nobody's name: no culprit.
+    assert culprit(Result(T0, "new", reason), prediction, path, q, scene, *limits) == -1
+
+
+def test_the_standing_cases_read_the_people_predicted_with_the_robot_standing(room):
+    """Under the interactive prediction the people react to the robot: who
+    is near the robot standing is read from ``standing`` (here A and B
+    swapped places), the replaced path's window from ``prediction``."""
+    scenario, scene, limits = room
+    q, path, times, prediction = _setup(scenario, limits)
+    swapped = dc.replace(prediction, positions=prediction.positions[:, ::-1])
+    near = Result(T0, "wait", "waiting: a person is 0.020 m from the robot now (safety distance 0.05 m)")
+    assert culprit(near, prediction, path, q, scene, *limits, standing=swapped) == 1
+    assert culprit(near, prediction, path, q, scene, *limits) == 0
+    window = Result(T0, "new", f"the current path is not safe any more (motion 0, t = {times[0]:.2f} .. "
+                               f"{times[1]:.2f} s comes within 0.05 m of a predicted person)")
+    assert culprit(window, prediction, path, q, scene, *limits, standing=swapped) == 1
+
+
+def test_beyond_the_safety_horizon_only_who_stands_is_the_culprit(room):
+    """The replaced path's window lies after the safety horizon: there the
+    replanner's check sees only people who stand (B), not the walker A who
+    crosses the path then; within the horizon A is the culprit."""
+    scenario, scene, limits = room
+    q, path, times, prediction = _setup(scenario, limits)
+    reason = (f"the current path is not safe any more (motion 0, t = {times[0]:.2f} .. {times[1]:.2f} s comes "
+              "within 0.05 m of a predicted person)")
+    result = Result(T0, "new", reason)
+    short = 0.05  # the horizon ends before the window's middle, where A crosses
+    mid = 0.5 * (times[0] + times[1])
+    assert T0 + short < mid
+    assert culprit(result, prediction, path, q, scene, *limits, safety_horizon=short) == 0
+    assert culprit(result, prediction, path, q, scene, *limits, safety_horizon=mid - T0 + 1.0) == 1
+    assert culprit(result, prediction, path, q, scene, *limits) == 1

@@ -104,3 +104,31 @@ def test_the_bound_is_refused_beyond_max_predicted_replans(scenario):
                                 max_predicted=MAX_PREDICTED_REPLANS + 1)
     with pytest.raises(ValueError, match="max_predicted"):
         ReplanningPlannerSystem(scenario, ScriptedReplanner({}), people=PEOPLE, max_predicted=-1)
+
+
+def test_under_the_interactive_prediction_the_people_react_to_the_plan_chosen(tiny_scenario_path):
+    """The kept positions are those of the people reacting to the robot
+    driving the plan chosen (rolled out here from the people now with the
+    plan's nominal times), not the robot-free reference the replanner is
+    given; a wait keeps the people reacting to the robot standing."""
+    from drake_social.kinematics import nominal_path_times
+    from drake_social.people.interactive import InteractiveModel, predict_interactive
+
+    scenario = load_scenario(tiny_scenario_path, ["planner: {prediction: interactive}"])
+    dut, context, double = _run(scenario)
+    model = InteractiveModel.from_scenario(scenario)
+    ex, horizon = scenario.execution, float(scenario.planner.replan_horizon)
+    kept = dut.predictions(context)
+    assert [p.replan for p in kept] == KEPT
+    differs = 0
+    for p in kept:
+        result, now = dut.replans(context)[p.replan], _walkers(0.1 * p.replan)
+        wp = np.asarray(result.waypoints, float)
+        induced = predict_interactive(now, (wp, nominal_path_times(wp, ex.max_base_speed, ex.arm_max_velocity,
+                                                                   now.t)), horizon, model)
+        reference = double.calls[p.replan]["prediction"]
+        for j, t in enumerate(p.times):
+            np.testing.assert_allclose(p.positions[j], induced.state_at(float(t)).positions, rtol=0, atol=1e-12)
+        differs += not np.allclose(p.positions, [reference.state_at(float(t)).positions for t in p.times],
+                                   rtol=0, atol=1e-3)
+    assert differs >= 2  # the robot's plans come near the walkers: they react

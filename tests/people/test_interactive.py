@@ -191,7 +191,18 @@ def test_people_react_to_each_other_within_the_range(model):
     state = people([[0.0, 0.05], [3.0, 0.0]], [[1.0, 0.0], [-1.0, 0.0]])
     dut = predict_interactive(state, None, 3.0, model)
     assert abs(dut.positions[-1, 0, 1] - dut.positions[-1, 1, 1]) > 0.4
-    for gap, apart in ((INTERACTION_RANGE + 0.01, False), (INTERACTION_RANGE - 0.01, True)):
+    for gap, apart in ((INTERACTION_RANGE + 0.01, False), (INTERACTION_RANGE, True), (INTERACTION_RANGE - 0.01, True)):
         pair = people([[0.0, 0.0], [0.0, gap]], [[1.0, 0.0], [1.0, 0.0]])
         got = predict_interactive(pair, None, 1.0, model).positions[-1, :, 1]
         assert bool(got[1] - got[0] > gap + 1e-6) is apart and got[1] - got[0] >= gap - 1e-12
+
+
+def test_walking_is_faster_than_the_standing_speed(model):
+    """The goal inference's threshold at its value and either side: exactly
+    STANDING_SPEED stands, a hair faster walks (towards GOAL_DISTANCE ahead)."""
+    speeds = [math.nextafter(STANDING_SPEED, 0.0), STANDING_SPEED, math.nextafter(STANDING_SPEED, 1.0)]
+    state = people([[0.0, 0.0], [0.0, 2.0], [0.0, 4.0]], [[v, 0.0] for v in speeds])
+    dut = InteractivePeople(model, state, 1.0)
+    np.testing.assert_array_equal(dut.walking, [False, False, True])
+    np.testing.assert_array_equal(dut.preferred, [0.0, 0.0, speeds[2]])
+    np.testing.assert_allclose(dut.goals[2], [GOAL_DISTANCE, 4.0], rtol=0, atol=1e-9)

@@ -139,6 +139,11 @@ def test_a_path_the_walker_must_brake_hard_for_is_refused(scenario, room):
     assert dut.status in ("new", "wait") and dut.candidate_cost == math.inf
     assert "courtesy: walker would have to brake at" in dut.reason and "planner.courtesy_deceleration 1.5" in \
         dut.reason
+    # The replay's culprit is the walker the reason names.
+    from drake_social.control.replan_culprit import culprit
+    ex = scenario.execution
+    assert culprit(dut, constant_velocity(state, HORIZON), straight(scenario), q, room.compiled_scene(),
+                   ex.max_base_speed, ex.arm_max_velocity) == 0
     if dut.status == "new":
         judge = r.interactive_judge(state, 0.0, constant_velocity(state, HORIZON), q[None])
         ev = judge.evaluate(dut.waypoints, 0.0)
@@ -211,3 +216,27 @@ def test_judging_stops_at_the_deadline(scenario, room, monkeypatch):
                                                  constant_velocity(state, HORIZON), None, replan_index=3,
                                                  people=state)
     assert len(clock["rollouts"]) > 3
+
+
+def test_a_committed_replan_counts_the_peoples_effort_once(scenario, room):
+    """Driving on along its current path (committed to the motion to (4, 4)),
+    the replan's cost is that of the whole path judged from the robot at
+    rest (:meth:`InteractiveJudge.evaluate`'s cost: the same motion), the people's effort over it counted once (the
+    committed motion's cost adds no effort of its own)."""
+    r = Replanner(scenario, room, budget=60.0)
+    q = np.asarray(scenario.start, float)
+    path = np.array([q, [4.0, 4.0, q[2], q[3]], scenario.goal])
+    state = walker(3.0)  # steps aside for the robot driving on: a large effort
+    prediction = constant_velocity(state, HORIZON)
+    dut = r.plan(q, 0.0, prediction, path, replan_index=1, commit=True, search=False, people=state)
+    assert dut.status == "kept"
+    np.testing.assert_array_equal(dut.waypoints, path)
+    whole = r.interactive_judge(state, 0.0, prediction, q[None]).evaluate(path, 0.0)
+    committed = r.interactive_judge(state, 0.0, prediction, path[:2])
+    assert scenario.planner.courtesy_weight * whole.effort > 1.0  # (its courtesy is not the question here)
+    assert dut.cost == pytest.approx(whole.cost, rel=1e-12)
+    # The committed motion alone: its cost against the basis, no effort, nothing asked beyond holding.
+    head = committed.evaluate(path[:2], 0.0)
+    assert head.effort == 0.0 and head.courtesy == ""
+    assert head.cost == pytest.approx(committed.make_judge(committed.prediction).evaluate(path[:2], 0.0).cost,
+                                      rel=1e-15)
