@@ -427,6 +427,8 @@ def validate_scenario(scenario: Scenario, source: str = "<scenario>") -> None:
     if not 0.0 <= p.replan_margin < 1.0:
         c.fail("planner.replan_margin", f"must be in [0, 1), got {p.replan_margin}")
     c.weight("planner.replan_length_weight", p.replan_length_weight)
+    c.weight("planner.time_weight", p.time_weight)
+    c.weight("planner.switch_weight", p.switch_weight)
     c.finite("planner.replan_search_period", p.replan_search_period)
     if not p.replan_search_period >= 0.0:
         c.fail("planner.replan_search_period", f"must be >= 0 seconds, got {p.replan_search_period}")
