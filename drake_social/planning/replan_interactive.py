@@ -34,7 +34,6 @@ from __future__ import annotations
 from typing import Callable
 
 import numpy as np
-import os as _os
 
 from drake_social.people.interactive import Demands, InteractivePeople, demands
 from drake_social.people.prediction import Prediction
@@ -104,7 +103,7 @@ class InteractiveJudge(PathJudge):
                 (asked.deviation, self.holding.deviation, self.deviation,
                  lambda i, v: f"{names[i] or f'person {i}'} would be moved {v:.2f} m off their way, more than "
                               f"planner.courtesy_deviation {self.deviation:g} m")):
-            over = (values > held + bound + _SAME) if _os.environ.get("DS_CX") else ((values > bound) & (values > held + _SAME))
+            over = (values > bound) & (values > held + _SAME)
             if over.any():
                 ratio = np.where(over, values / bound, 0.0)
                 i = int(np.argmax(ratio))

@@ -384,12 +384,12 @@ class PlannerOptions:
     # replan may also wait for the current path to clear, at this price per
     # second waited, rather than take a new route (docs/replanning.md,
     # "Progress and commitment").
-    time_weight: float = 0.1
+    time_weight: float = 0.2
     # Cost of leaving the current route, per metre of the new path's mean
     # distance from it over its first replan_horizon seconds (in [0, 1e6]):
     # a new route must be cheaper by this too, so the robot does not swing
     # between routes of about equal cost.
-    switch_weight: float = 0.1
+    switch_weight: float = 1.0
     # How people are predicted: "interactive" (a social-force rollout in
     # which the people react to each judged path; docs/replanning.md,
     # "Interactive prediction"), "constant_velocity" (from their state now)
