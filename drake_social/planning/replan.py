@@ -14,10 +14,14 @@ A :class:`Replanner` plans from the robot's configuration ``q_now`` at time
 3. the search's best few goal connections (in ascending tree cost) are
    **judged exactly** (the tree's costs of rewired subtrees are approximate:
    their times moved);
-4. the best safe search path **replaces** the candidate only when it is
-   cheaper by the margin (``cost_new < (1 - margin) cost_candidate``) or the
-   candidate is no longer safe; when neither is safe the robot **waits**,
-   with the reason in words.
+4. the best safe search path (the cheapest with its cost of leaving the
+   current route, :mod:`.replan_commit`) **replaces** the candidate only
+   when it is cheaper by the margin with that cost (``cost_new + switch <
+   (1 - margin) cost_candidate``), or the candidate is no longer safe and no
+   short pause makes it safe for less; a safe candidate is kept otherwise;
+   an unsafe one is waited for (a pause) or, when nothing is safe, the
+   robot **waits**, with the reason in words. Every judged cost
+   includes ``planner.time_weight`` per second of the path.
 
 Every stage keeps to ``budget`` (:mod:`.replan_deadline`): the search
 stops early enough to leave time for the judgement (and for a way out of a
@@ -102,8 +106,9 @@ class ReplanResult:
             holds the robot; its last path stays the one to resume).
         status: "initial" (the first plan, ``replan_index`` 0), "new" (the
             search's path replaced the candidate), "kept" (the candidate
-            stays), "wait" (nothing safe: the robot holds), "evade" (nothing
-            safe, and a person is predicted to come within the safety
+            stays), "wait" (the robot holds: nothing is safe, or a pause
+            before the current path costs less than a new one,
+            :mod:`.replan_commit`), "evade" (nothing safe, and a person is predicted to come within the safety
             distance of the robot standing still: the path steps the base
             aside first, :mod:`.replan_evade`, then comes back to the
             current path).
