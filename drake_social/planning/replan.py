@@ -498,10 +498,10 @@ class Replanner:
             if short is not best:
                 best, best_eval, best_switch = short, short_eval, self._switch(short, short_eval, candidate)
         search_cost = best_eval.cost if best_eval is not None else math.inf
+        cand_safe = math.isfinite(cand_cost)
+        pause = None if cand_safe or initial else self._pause(judge, q, t_now, prediction, candidate, clock)
         common = dict(iterations=search.iterations, deadline_hit=search.deadline_hit or clock.hit,
                       candidate_cost=cand_cost, search_cost=search_cost, searched=True)
-        cand_safe = math.isfinite(cand_cost)
-        pause = None if cand_safe or initial else self._pause(judge, q, t_now, candidate, clock)
         pause_cost = math.inf if pause is None else pause[1].cost + self.time_weight * pause[0]
         leave = search_cost + best_switch  # what taking the search's path costs, leaving the route included
         whole_search, whole_cand = head_cost + search_cost, head_cost + cand_cost  # the paths from the robot
@@ -546,15 +546,23 @@ class Replanner:
             return 0.0
         return self.switch_weight * route_deviation(path, evaluation.times, current, self.horizon)
 
-    def _pause(self, judge: PathJudge, q: np.ndarray, t_now: float, candidate: np.ndarray | None,
-               clock: Deadline) -> tuple[float, PathEvaluation] | None:
+    def _pause(self, judge: PathJudge, q: np.ndarray, t_now: float, prediction: Prediction,
+               candidate: np.ndarray | None, clock: Deadline) -> tuple[float, PathEvaluation] | None:
         """The shortest pause of :func:`~.replan_commit.pause_steps` after
         which ``candidate`` (from ``q``) is safe, the robot standing at ``q``
         clear of everyone until then, and its evaluation driven from then;
-        None when there is none (or the deadline passed first)."""
+        None when there is none (or the deadline passed first). The pauses
+        are shares of what is left at ``t_now`` of the seconds over which
+        paths are checked (``planner.safety_horizon`` from the prediction's
+        start, at most the prediction): after a pause at the end of a
+        committed motion, or with a safety horizon longer than the
+        prediction, the resumed path is still checked over a quarter of it."""
         if candidate is None or len(candidate) < 2:
             return None
-        for w in pause_steps(self.safety_horizon):
+        left = min(prediction.t0 + self.safety_horizon, prediction.horizon) - t_now
+        if not left > 0.0:
+            return None
+        for w in pause_steps(left):
             if clock.passed() or not standing_clear(judge, q, t_now, t_now + w):
                 return None
             ev = judge.evaluate(candidate, t_now + w)

@@ -15,8 +15,8 @@ takes):
   about equal cost then do not take turns as the prediction moves.
 * **waiting may beat a detour** (:func:`pause_steps`): when the current path
   is not safe any more, the replanner judges it driven again after a pause
-  of each of these steps (the robot standing where it is until then, clear
-  of everyone), and waits when the cheapest such pause, at
+  of each of these steps (shares of the safety horizon left; the robot
+  standing where it is until then, clear of everyone), and waits when the cheapest such pause, at
   ``planner.time_weight`` per second waited, costs less than the search's
   path with its switching cost. A person crossing the route then makes the
   robot wait a moment, not turn round.
@@ -30,13 +30,16 @@ __all__ = ["PAUSE_SHARES", "SWITCH_STEP", "pause_steps", "route_deviation"]
 
 #: Seconds between the samples of a new path at which its distance from the current route is measured.
 SWITCH_STEP = 0.25
-#: The pauses tried, as shares of ``planner.safety_horizon``: the resumed path is then still checked
-#: for safety over the last quarter of the safety horizon at least (and again at every replan).
+#: The pauses tried, as shares of what is left of the safety horizon where the pause begins (of
+#: ``planner.safety_horizon``, at most the prediction's length, from the prediction's start): the
+#: resumed path is then still checked for safety over the last quarter of that at least (and again
+#: at every replan).
 PAUSE_SHARES = (0.25, 0.5, 0.75)
 
 
 def pause_steps(safety_horizon: float) -> tuple[float, ...]:
-    """The pauses (seconds, ascending) tried before the current path is driven again."""
+    """The pauses (seconds, ascending) tried before the current path is driven again, given the
+    seconds of the safety horizon left where the pause begins."""
     return tuple(share * float(safety_horizon) for share in PAUSE_SHARES)
 
 

@@ -302,3 +302,75 @@ def test_a_walker_heading_at_the_standing_robot(prediction):
     d = part_distances(arm_geometry(sc), np.repeat(start[None], ahead.sum(), axis=0), rolled.positions[ahead],
                        rolled.radii)["robot"]
     assert d.min() > sc.execution.safety_distance
+
+
+def test_the_pauses_keep_within_the_prediction(corridor, room, first):
+    """A safety horizon longer than the prediction checks paths over the whole prediction and no
+    further, so the replan is the one with the safety horizon equal to the prediction's length:
+    the same pause (a quarter of the prediction), not one after which the resumed path starts
+    beyond the prediction and is checked over nothing."""
+    t = 2.0
+    q_now, previous = along(first, t)
+    script = crossing(q_now, t)
+    people = walkers(t, [script], horizon=SAFETY_HORIZON)
+    assert people.horizon == pytest.approx(t + SAFETY_HORIZON, abs=1e-12)
+    reference = Replanner(corridor, room, budget=60.0).plan(q_now, t, people, previous, replan_index=1)
+    assert "waiting 0.5 s for the current path" in reference.reason, reference.reason
+    longer = dc.replace(corridor, planner=dc.replace(corridor.planner, safety_horizon=4.0 * SAFETY_HORIZON))
+    dut = Replanner(longer, room, budget=60.0).plan(q_now, t, people, previous, replan_index=1)
+    assert dut.status == reference.status and dut.reason == reference.reason, dut.reason
+    np.testing.assert_array_equal(dut.waypoints, reference.waypoints)
+
+
+def test_a_pause_cut_by_the_deadline_is_recorded(corridor, room, first, monkeypatch):
+    """The deadline passes as the pauses are about to be judged: none is (the robot takes the
+    search's path), and the replan says that the deadline cut it."""
+    import time
+
+    t = 2.0
+    q_now, previous = along(first, t)
+    people = walkers(t, [crossing(q_now, t)])
+    clock = {"now": 1000.0}
+    monkeypatch.setattr(time, "perf_counter", lambda: clock["now"])
+    pause = Replanner._pause
+
+    def late(self, *args, **kwargs):
+        clock["now"] += 10.0
+        return pause(self, *args, **kwargs)
+
+    full = Replanner(corridor, room, budget=1.0).plan(q_now, t, people, previous, replan_index=1)
+    assert full.status == "wait" and not full.deadline_hit, full.reason
+    monkeypatch.setattr(Replanner, "_pause", late)
+    dut = Replanner(corridor, room, budget=1.0).plan(q_now, t, people, previous, replan_index=1)
+    assert dut.status == "new" and "waiting" not in dut.reason, dut.reason
+    assert dut.deadline_hit
+
+
+def test_a_pause_from_the_end_of_a_committed_motion_leaves_a_quarter_checked(corridor, room, first):
+    """From a later time than the prediction's start (the end of the motion being driven), the
+    pauses tried are shares of what is left of the safety horizon there: each resumed path is
+    checked over a quarter of it at least; none is tried once it is spent."""
+    from drake_social.planning.replan_deadline import Deadline
+
+    t = 2.0
+    q_now, previous = along(first, t)
+    people = nobody(t)
+    dut = Replanner(corridor, room, budget=60.0)
+    judge = dut.judge(people)
+    starts = []
+    evaluate = judge.evaluate
+
+    def recorded(waypoints, t0):  # every resumed path judged not safe: each pause is tried
+        starts.append(t0)
+        return evaluate(waypoints, t0)._replace(people_bad=0)
+
+    judge.evaluate = recorded
+    for later in (0.0, 0.8, 1.6):
+        starts.clear()
+        assert dut._pause(judge, q_now, t + later, people, previous, Deadline()) is None
+        left = SAFETY_HORIZON - later
+        np.testing.assert_allclose(starts, t + later + np.array(PAUSE_SHARES) * left, rtol=0, atol=1e-12)
+        assert t + SAFETY_HORIZON - max(starts) >= 0.25 * left - 1e-12
+    for spent in (SAFETY_HORIZON, SAFETY_HORIZON + 0.5):
+        starts.clear()
+        assert dut._pause(judge, q_now, t + spent, people, previous, Deadline()) is None and starts == []
