@@ -12,7 +12,9 @@ group the replans by :func:`decision`, from the structured fields alone
 * ``"cheaper"``: a new route because it was cheaper by the margin (status
   ``"new"``, the candidate safe);
 * ``"evade"``: a way out of a person's path (status ``"evade"``);
-* ``"wait"``: nothing safe: the robot holds (status ``"wait"``);
+* ``"wait"``: the robot holds (status ``"wait"``): nothing is safe, or
+  the current path is safe after a pause that costs less than a new route
+  (:mod:`~drake_social.planning.replan_commit`);
 * ``"kept"``: the current path stays.
 """
 
@@ -27,7 +29,7 @@ DECISIONS = ("initial", "unsafe", "cheaper", "evade", "wait", "kept")
 #: A short label of each category.
 DECISION_LABELS = {"initial": "first plan", "unsafe": "new route: not safe any more",
                    "cheaper": "new route: cheaper", "evade": "evasion: steps aside",
-                   "wait": "wait: nothing safe", "kept": "path kept"}
+                   "wait": "wait: nothing safe, or a pause", "kept": "path kept"}
 
 
 def decision(result) -> str:

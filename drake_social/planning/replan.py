@@ -14,10 +14,14 @@ A :class:`Replanner` plans from the robot's configuration ``q_now`` at time
 3. the search's best few goal connections (in ascending tree cost) are
    **judged exactly** (the tree's costs of rewired subtrees are approximate:
    their times moved);
-4. the best safe search path **replaces** the candidate only when it is
-   cheaper by the margin (``cost_new < (1 - margin) cost_candidate``) or the
-   candidate is no longer safe; when neither is safe the robot **waits**,
-   with the reason in words.
+4. the best safe search path (the cheapest with its cost of leaving the
+   current route, :mod:`.replan_commit`) **replaces** the candidate only
+   when it is cheaper by the margin with that cost (``cost_new + switch <
+   (1 - margin) cost_candidate``), or the candidate is no longer safe and no
+   short pause makes it safe for less; a safe candidate is kept otherwise;
+   an unsafe one is waited for (a pause) or, when nothing is safe, the
+   robot **waits**, with the reason in words. Every judged cost
+   includes ``planner.time_weight`` per second of the path.
 
 Every stage keeps to ``budget`` (:mod:`.replan_deadline`): the search
 stops early enough to leave time for the judgement (and for a way out of a
@@ -55,6 +59,7 @@ from drake_social.people.interactive import InteractiveModel, InteractivePeople
 from drake_social.people.model import PeopleState
 from drake_social.people.prediction import Prediction
 from drake_social.planning.algorithms import AlgorithmSpec, algorithm_spec, base_only_weights, make_objective
+from drake_social.planning.replan_commit import pause_steps, route_deviation
 from drake_social.planning.replan_deadline import Deadline
 from drake_social.planning.replan_eval import VERIFY_PATHS, PathEvaluation, PathJudge
 from drake_social.planning.replan_evade import LOOKAHEAD, escape, standing_clear
@@ -101,8 +106,9 @@ class ReplanResult:
             holds the robot; its last path stays the one to resume).
         status: "initial" (the first plan, ``replan_index`` 0), "new" (the
             search's path replaced the candidate), "kept" (the candidate
-            stays), "wait" (nothing safe: the robot holds), "evade" (nothing
-            safe, and a person is predicted to come within the safety
+            stays), "wait" (the robot holds: nothing is safe, or a pause
+            before the current path costs less than a new one,
+            :mod:`.replan_commit`), "evade" (nothing safe, and a person is predicted to come within the safety
             distance of the robot standing still: the path steps the base
             aside first, :mod:`.replan_evade`, then comes back to the
             current path).
@@ -254,6 +260,10 @@ class Replanner:
         self.safety = safety
         #: seconds of a prediction over which paths must keep the safety distance (planner.safety_horizon)
         self.safety_horizon = float(scenario.planner.safety_horizon)
+        #: cost per second a path takes, and per metre a new path swings from the current route (.replan_commit)
+        self.time_weight = float(p.time_weight)
+        self.switch_weight = float(p.switch_weight)
+        self.horizon = float(p.replan_horizon)
         self.lookahead = float(lookahead)
         self.seed = scenario.random_seed if seed is None else int(seed)
         self.goal = np.asarray(scenario.goal, float)
@@ -285,7 +295,8 @@ class Replanner:
         """The exact judge of paths under ``prediction`` (:class:`~.replan_eval.PathJudge`)."""
         ex = self.scenario.execution
         return PathJudge(self.objective, self.social_for(prediction), self.checker, prediction, self.safety,
-                         ex.max_base_speed, ex.arm_max_velocity, safety_horizon=self.safety_horizon)
+                         ex.max_base_speed, ex.arm_max_velocity, safety_horizon=self.safety_horizon,
+                         time_weight=self.time_weight)
 
     def evaluate(self, waypoints: np.ndarray, t0: float, prediction: Prediction) -> PathEvaluation:
         """A path's exact nominal times, time-indexed cost and safety.
@@ -473,40 +484,91 @@ class Replanner:
         iterations = self.initial_iterations if initial else self.iterations
         search = run_search(self.search, judge.social, q, t_now, prediction, candidate, iterations, stop,
                             np.random.default_rng([self.seed, int(replan_index)]))
-        best, best_eval = None, None
+        best, best_eval, best_switch = None, None, 0.0
         for judged, path in enumerate(search.paths):
             if clock.passed() or (judged >= VERIFY_PATHS and best is not None):
                 break  # the first few, and more only while none is safe; all within the budget
             ev = judge.evaluate(path, t_now)
-            if ev.safe and (best_eval is None or ev.cost < best_eval.cost):
-                best, best_eval = path, ev
+            if ev.safe:
+                switch = self._switch(path, ev, candidate)
+                if best_eval is None or ev.cost + switch < best_eval.cost + best_switch:
+                    best, best_eval, best_switch = path, ev, switch
         if best is not None:
-            best, best_eval = shortcut(judge, best, t_now, best_eval, clock)
+            short, short_eval = shortcut(judge, best, t_now, best_eval, clock)
+            if short is not best:
+                best, best_eval, best_switch = short, short_eval, self._switch(short, short_eval, candidate)
         search_cost = best_eval.cost if best_eval is not None else math.inf
+        cand_safe = math.isfinite(cand_cost)
+        pause = None if cand_safe or initial else self._pause(judge, q, t_now, prediction, candidate, clock)
         common = dict(iterations=search.iterations, deadline_hit=search.deadline_hit or clock.hit,
                       candidate_cost=cand_cost, search_cost=search_cost, searched=True)
-        cand_safe = math.isfinite(cand_cost)
+        pause_cost = math.inf if pause is None else pause[1].cost + self.time_weight * pause[0]
+        leave = search_cost + best_switch  # what taking the search's path costs, leaving the route included
         whole_search, whole_cand = head_cost + search_cost, head_cost + cand_cost  # the paths from the robot
-        if best is not None and (not cand_safe or whole_search < (1.0 - self.margin) * whole_cand):
+        switch_words = f" and {best_switch:.4g} for leaving the current route" if best_switch > 0.0 else ""
+        if best is not None and (leave < pause_cost if not cand_safe
+                                 else head_cost + leave < (1.0 - self.margin) * whole_cand):
             if initial:
                 why = f"the first plan: cost {search_cost:.4g} after {search.iterations} samples"
             elif candidate is None:
                 why = f"no current path: the search's path costs {search_cost:.4g}"
             elif not cand_safe:
                 why = f"the current path is not safe any more ({judge.unsafe_words(cand)}); " \
-                      f"the search's path costs {whole_search:.4g}"
+                      f"the search's path costs {whole_search:.4g}{switch_words}" + (
+                          "" if pause is None else f", less than waiting {pause[0]:.2g} s for the current path "
+                                                   f"({head_cost + pause_cost:.4g})")
             else:
-                why = (f"the search's path costs {whole_search:.4g}, below (1 - {self.margin:g}) x "
+                why = (f"the search's path costs {whole_search:.4g}{switch_words}, below (1 - {self.margin:g}) x "
                        f"{whole_cand:.4g} of the current path")
             return result(best, search_cost, "initial" if initial else "new", why, **common)
         if cand_safe:
             why = (f"the current path (cost {whole_cand:.4g}) stays: " +
-                   (f"the search's best costs {whole_search:.4g}, not below (1 - {self.margin:g}) x {whole_cand:.4g}"
-                    if best is not None else f"the search found no safe path ({search.message})"))
+                   (f"the search's best costs {whole_search:.4g}{switch_words}, not below (1 - {self.margin:g}) x "
+                    f"{whole_cand:.4g}" if best is not None
+                    else f"the search found no safe path ({search.message})"))
             return result(candidate, cand_cost, "initial" if initial else "kept", why, **common)
+        if pause is not None:
+            w = pause[0]
+            why = (f"waiting: the current path is not safe now ({judge.unsafe_words(cand)}); after a pause of "
+                   f"{w:.2g} s it is, and costs {head_cost + pause_cost:.4g} with the {self.time_weight:g} per "
+                   "second waited" + (f", less than the search's path ({whole_search:.4g}{switch_words})"
+                                      if best is not None else f" (the search found no safe path: {search.message})"))
+            return result(q[None], math.inf, "wait", why, **common)
         held = result(q[None], math.inf, "wait", judge.wait_words(q, t_now, cand, search.message), **common)
         return held if initial else self._hold_or_evade(held, q, t_now, judge, prediction, candidate, t_start,
                                                         clock)
+
+    def _switch(self, path: np.ndarray, evaluation: PathEvaluation, current: np.ndarray | None) -> float:
+        """What taking ``path`` (judged as ``evaluation``) in place of the
+        ``current`` path costs (:func:`~.replan_commit.route_deviation`
+        times ``planner.switch_weight``; 0 without a current path)."""
+        if current is None or self.switch_weight == 0.0:
+            return 0.0
+        return self.switch_weight * route_deviation(path, evaluation.times, current, self.horizon)
+
+    def _pause(self, judge: PathJudge, q: np.ndarray, t_now: float, prediction: Prediction,
+               candidate: np.ndarray | None, clock: Deadline) -> tuple[float, PathEvaluation] | None:
+        """The shortest pause of :func:`~.replan_commit.pause_steps` after
+        which ``candidate`` (from ``q``) is safe, the robot standing at ``q``
+        clear of everyone until then, and its evaluation driven from then;
+        None when there is none (or the deadline passed first). The pauses
+        are shares of what is left at ``t_now`` of the seconds over which
+        paths are checked (``planner.safety_horizon`` from the prediction's
+        start, at most the prediction): after a pause at the end of a
+        committed motion, or with a safety horizon longer than the
+        prediction, the resumed path is still checked over a quarter of it."""
+        if candidate is None or len(candidate) < 2:
+            return None
+        left = min(prediction.t0 + self.safety_horizon, prediction.horizon) - t_now
+        if not left > 0.0:
+            return None
+        for w in pause_steps(left):
+            if clock.passed() or not standing_clear(judge, q, t_now, t_now + w):
+                return None
+            ev = judge.evaluate(candidate, t_now + w)
+            if ev.safe:
+                return w, ev
+        return None
 
     def _hold_or_evade(self, held: ReplanResult, q: np.ndarray, t_now: float, judge: PathJudge,
                        prediction: Prediction, candidate: np.ndarray | None, t_start: float,

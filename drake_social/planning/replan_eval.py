@@ -40,8 +40,10 @@ class PathEvaluation(NamedTuple):
     Attributes:
         times: (N,) the time each waypoint is reached, seconds.
         cost: the objective along the path: the time-indexed social cost
-            (the objective's weights; 0 for the length objective) plus its
-            length term; 0 for a single waypoint.
+            (the objective's weights; 0 for the length objective), its
+            length term and the time term (``time_weight`` times the
+            seconds from the first waypoint to the last); 0 for a single
+            waypoint.
         social: the time-indexed social part of ``cost``.
         length: the weighted configuration-space length (the length term
             before ``length_weight``).
@@ -92,11 +94,12 @@ class PathJudge:
         safety_horizon: seconds of ``prediction`` over which a path must keep
             ``safety`` from everyone (:meth:`Prediction.until`); the cost
             looks over all of it.
+        time_weight: cost per second the path takes (``planner.time_weight``, >= 0).
     """
 
     def __init__(self, objective: Objective, social: SocialCost | None, checker: CompiledSceneChecker,
                  prediction: Prediction, safety: float, max_base_speed: float, arm_max_velocity, *,
-                 safety_horizon: float = math.inf) -> None:
+                 safety_horizon: float = math.inf, time_weight: float = 0.0) -> None:
         self.objective = objective
         self.social = social
         self.checker = checker
@@ -105,6 +108,7 @@ class PathJudge:
         self.max_base_speed = float(max_base_speed)
         self.arm_max_velocity = np.asarray(arm_max_velocity, float).reshape(2)
         self.safety_horizon = float(safety_horizon)
+        self.time_weight = float(time_weight)
         self.people_safety = PeopleSafety(checker.compiled_scene(), prediction.until(self.safety_horizon), self.safety)
 
     def times(self, waypoints: np.ndarray, t0: float) -> np.ndarray:
@@ -131,10 +135,11 @@ class PathJudge:
         # The objective's own sum: social + lambda * length per motion (the length term only when lambda > 0,
         # as SocialObjective.motion_cost adds it), summed over the motions.
         per_motion = social + lw * length if lw > 0 else social
+        spent = self.time_weight * (float(times[-1]) - float(times[0]))
         ok = np.asarray(self.checker.are_motions_valid(wp[:-1], wp[1:]), bool)
         static_bad = int(np.argmin(ok)) if not ok.all() else -1
         clear, people_bad = self.people_safety.path_clear(wp, times)
-        return PathEvaluation(times, float(per_motion.sum()), float(social.sum()), float(length.sum()),
+        return PathEvaluation(times, float(per_motion.sum()) + spent, float(social.sum()), float(length.sum()),
                               static_bad, -1 if clear else int(people_bad))
 
     def unsafe_words(self, ev: PathEvaluation) -> str:

@@ -73,14 +73,17 @@ class InteractiveJudge(PathJudge):
         self.weight = float(weight)
         judge = make_judge(basis)
         super().__init__(judge.objective, judge.social, judge.checker, basis, judge.safety, judge.max_base_speed,
-                         judge.arm_max_velocity, safety_horizon=judge.safety_horizon)
+                         judge.arm_max_velocity, safety_horizon=judge.safety_horizon, time_weight=judge.time_weight)
 
     def motion(self, waypoints: np.ndarray, times: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """The robot's whole motion when it drives ``waypoints`` at ``times``: the committed motion first
-        when the path starts where and when it ends."""
-        if (len(self.prefix) > 1 and np.array_equal(waypoints[0], self.prefix[-1])
-                and abs(float(times[0]) - float(self.prefix_times[-1])) <= 1e-9):
-            return np.vstack([self.prefix[:-1], waypoints]), np.concatenate([self.prefix_times[:-1], times])
+        when the path starts where it ends, when it ends (or later: the robot stands there until then)."""
+        if len(self.prefix) > 1 and np.array_equal(waypoints[0], self.prefix[-1]):
+            pause = float(times[0]) - float(self.prefix_times[-1])
+            if abs(pause) <= 1e-9:
+                return np.vstack([self.prefix[:-1], waypoints]), np.concatenate([self.prefix_times[:-1], times])
+            if pause > 0.0:
+                return np.vstack([self.prefix, waypoints]), np.concatenate([self.prefix_times, times])
         return waypoints, times
 
     def induced(self, waypoints: np.ndarray, t0: float) -> tuple[Prediction, Demands]:

@@ -379,6 +379,17 @@ class PlannerOptions:
     # may take any of many near-zero-cost detours: the replan margin of a
     # route's cost by length alone is too small to hold it; docs/replanning.md).
     replan_length_weight: float = 0.1
+    # Cost of each second a judged path takes to the goal at the execution
+    # limits (in [0, 1e6], per second): waiting and detours cost time. A
+    # replan may also wait for the current path to clear, at this price per
+    # second waited, rather than take a new route (docs/replanning.md,
+    # "Progress and commitment").
+    time_weight: float = 0.2
+    # Cost of leaving the current route, per metre of the new path's mean
+    # distance from it over its first replan_horizon seconds (in [0, 1e6]):
+    # a new route must be cheaper by this too, so the robot does not swing
+    # between routes of about equal cost.
+    switch_weight: float = 1.0
     # How people are predicted: "interactive" (a social-force rollout in
     # which the people react to each judged path; docs/replanning.md,
     # "Interactive prediction"), "constant_velocity" (from their state now)

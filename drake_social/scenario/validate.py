@@ -65,6 +65,16 @@ def _check_slow_down(c: "_Checker", e) -> None:
                                        f"got {e.slow_speed}")
 
 
+def _commitment(c, p) -> None:
+    """What keeps a replanning robot on its route: the margin and the length, time and switching weights."""
+    c.finite("planner.replan_margin", p.replan_margin)
+    if not 0.0 <= p.replan_margin < 1.0:
+        c.fail("planner.replan_margin", f"must be in [0, 1), got {p.replan_margin}")
+    c.weight("planner.replan_length_weight", p.replan_length_weight)
+    c.weight("planner.time_weight", p.time_weight)
+    c.weight("planner.switch_weight", p.switch_weight)
+
+
 def _courtesy(c, p) -> None:
     """The interactive prediction's courtesy bounds (``planner.courtesy_*``)."""
     for name, most, unit in (("courtesy_deceleration", MAX_COURTESY_DECELERATION, "m/s^2"),
@@ -423,10 +433,7 @@ def validate_scenario(scenario: Scenario, source: str = "<scenario>") -> None:
     if not 1 <= p.replan_iterations <= MAX_REPLAN_ITERATIONS:
         c.fail("planner.replan_iterations", f"must be in [1, {MAX_REPLAN_ITERATIONS:,}] (samples of one replan's "
                                             f"search), got {p.replan_iterations}")
-    c.finite("planner.replan_margin", p.replan_margin)
-    if not 0.0 <= p.replan_margin < 1.0:
-        c.fail("planner.replan_margin", f"must be in [0, 1), got {p.replan_margin}")
-    c.weight("planner.replan_length_weight", p.replan_length_weight)
+    _commitment(c, p)
     c.finite("planner.replan_search_period", p.replan_search_period)
     if not p.replan_search_period >= 0.0:
         c.fail("planner.replan_search_period", f"must be >= 0 seconds, got {p.replan_search_period}")

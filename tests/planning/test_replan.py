@@ -8,7 +8,8 @@ People are given as hand-made predictions (a scripted walker's timed
 points, sampled at 0.1 s), with a horizon longer than any path here: the
 scenario pins ``planner.prediction: constant_velocity``, under which the
 replanner judges every path against the prediction it is given (the
-interactive prediction's own tests: test_replan_interactive.py).
+interactive prediction's own tests: test_replan_interactive.py) and no time
+or switching term (their tests: test_replan_commit.py).
 
 Every returned path's distance to the people is checked again with an
 independent computation: the people's surface distances
@@ -50,7 +51,7 @@ goal: [10.8, 3.5, -1.2292, 2.8]
 random_seed: 3
 social: {length_weight: 1.0}
 planner: {iterations: 1500, planning_range: 2.0, near_radius: 3.0, replan_iterations: 400, replan_length_weight: 0.0,
-          prediction: constant_velocity, safety_horizon: 60.0}
+          prediction: constant_velocity, safety_horizon: 60.0, time_weight: 0.0, switch_weight: 0.0}
 """
 NORTH_Y, SOUTH_Y = 6.0, 1.0  # corridor centre lines
 HORIZON = 60.0  # seconds: longer than any path here

@@ -17,7 +17,7 @@ import pytest
 
 from drake_social.collision.drake_checker import make_checker
 from drake_social.people import PeopleState, constant_velocity, without_people
-from drake_social.people.interactive import InteractivePeople, demands
+from drake_social.people.interactive import InteractivePeople, demands, robot_samples
 from drake_social.planning.replan import Replanner
 from drake_social.planning.replan_interactive import InteractiveJudge
 from drake_social.scenario.load import load_scenario_text
@@ -240,3 +240,32 @@ def test_a_committed_replan_counts_the_peoples_effort_once(scenario, room):
     assert head.effort == 0.0 and head.courtesy == ""
     assert head.cost == pytest.approx(committed.make_judge(committed.prediction).evaluate(path[:2], 0.0).cost,
                                       rel=1e-15)
+
+
+def test_a_path_after_a_pause_at_the_end_of_the_committed_motion(scenario, room):
+    """A path from the committed motion's end that starts later than the motion ends (a
+    pause there): the robot drives the motion, stands at its end until the path starts,
+    then drives it; a path starting when the motion ends has no pause, and one starting
+    elsewhere is the path alone."""
+    r = Replanner(scenario, room, budget=60.0)
+    q = np.asarray(scenario.start, float)
+    end = np.array([4.0, 4.0, q[2], q[3]])
+    state = walker(9.0)
+    dut = r.interactive_judge(state, 0.0, constant_velocity(state, HORIZON), np.array([q, end]))
+    t_end = float(dut.prefix_times[-1])
+    assert t_end == pytest.approx(3.0 / scenario.execution.max_base_speed, rel=1e-12)
+    rest = np.array([end, scenario.goal], float)
+    for pause in (0.0, 0.5):
+        wp, times = dut.motion(rest, np.array([t_end + pause, t_end + pause + 18.0]))
+        rows = 3 if pause == 0.0 else 4
+        assert len(wp) == rows and len(times) == rows
+        np.testing.assert_array_equal(wp[0], q)
+        np.testing.assert_array_equal(wp[-1], scenario.goal)
+        at = np.array([t_end - 1.0, t_end, t_end + pause / 2, t_end + pause, t_end + pause + 9.0])
+        placed = robot_samples(wp, times, at)
+        np.testing.assert_allclose(placed[0, :2], [3.5, 4.0], atol=1e-12)  # 1 s before the end: 0.5 m short
+        np.testing.assert_allclose(placed[1:4], np.repeat(end[None], 3, axis=0), atol=1e-12)  # standing there
+        np.testing.assert_allclose(placed[4, :2], [8.5, 4.0], atol=1e-12)  # half-way along the rest
+    elsewhere = np.array([q + [0.0, 1.0, 0.0, 0.0], scenario.goal])
+    wp, times = dut.motion(elsewhere, np.array([0.0, 20.0]))
+    np.testing.assert_array_equal(wp, elsewhere)

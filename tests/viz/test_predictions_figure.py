@@ -75,7 +75,7 @@ def test_figure_axes_and_labels(tiny_scenario_path):
     ax_dec, ax_map, ax_err = fig.axes
     labels = [t.get_text() for t in ax_dec.get_yticklabels()]
     # Counts: 1 unsafe (3.0 s), 1 cheaper (1.0 s), 1 evasion, 2 waiting replans.
-    assert labels == ["wait: nothing safe (2)", "evasion: steps aside (1)", "new route: cheaper (1)",
+    assert labels == ["wait: nothing safe, or a pause (2)", "evasion: steps aside (1)", "new route: cheaper (1)",
                       "new route: not safe any more (1)"]
     assert ax_dec.get_xlabel() == "simulated time (s)"
     assert ax_map.get_xlabel() == "x (m)" and ax_map.get_ylabel() == "y (m)"
