@@ -39,6 +39,7 @@ from drake_social.scenario.load import load_scenario_text
 
 sys.path.insert(0, str(Path(__file__).parent))
 from test_replan import CORRIDOR, SOUTH_Y, along, nobody, route, walkers  # noqa: E402  (the corridor's helpers)
+from test_replan_interactive import OPEN as OPEN_ROOM  # noqa: E402
 
 SAFETY_HORIZON = 2.0
 
@@ -255,16 +256,9 @@ def test_a_new_route_pays_for_leaving_the_current_one(room):
 
 # ---- no side-step unless the predicted contact is real -------------------------------------------
 
-OPEN = """
-description: "an open room"
-world: {bounds: [0.0, 0.0, 14.0, 8.0]}
-robot: {base_radius: 0.35, link_lengths: [0.6, 0.5], link_width: 0.08}
-object: !Bar {length: 1.5, thickness: 0.05}
-start: [3.0, 4.0, -1.2292, 2.8]
-goal: [3.0, 7.0, -1.2292, 2.8]
-random_seed: 3
-planner: {iterations: 800, replan_iterations: 200, safety_horizon: 2.0}
-"""
+# test_replan_interactive.py's open room, the task north from (3, 4), the safety horizon 2 s.
+OPEN = (OPEN_ROOM.replace("start: [1.0, 4.0,", "start: [3.0, 4.0,").replace("goal: [13.0, 4.0,", "goal: [3.0, 7.0,")
+        .replace("prediction: interactive}", "safety_horizon: 2.0}"))
 
 
 @pytest.mark.parametrize("prediction", ["constant_velocity", "interactive"])
@@ -277,6 +271,7 @@ def test_a_walker_heading_at_the_standing_robot(prediction):
     independently): the robot does not step aside."""
     sc = load_scenario_text(OPEN.replace("safety_horizon: 2.0", f"safety_horizon: 2.0, prediction: {prediction}"),
                             "open")
+    assert sc.start[:2] == [3.0, 4.0] and sc.goal[:2] == [3.0, 7.0] and sc.planner.prediction == prediction
     room = make_checker(without_people(sc), "planar")
     dut = Replanner(sc, room, budget=60.0)
     start = np.asarray(sc.start, float)
