@@ -49,8 +49,8 @@ chromium:
 #               tests/conftest.py to every test calling browser.require_chromium())
 #   subprocess  starts another process, mostly a Python interpreter or drake-social
 #               paying pydrake's imports (by rule in tests/conftest.py)
-# make test runs them all (3,221 tests; 11 min 26 s on two cores); make test-fast
-# leaves the three out (2,797 tests, about 100 s idle) to iterate with. tests/test_docs.py keeps both counts
+# make test runs them all (3,244 tests; 13 min 17 s on two cores); make test-fast
+# leaves the three out (2,820 tests, about 100 s idle) to iterate with. tests/test_docs.py keeps both counts
 # within 15 % of what pytest collects. PYTEST_ARGS adds options to both, e.g.
 # make test-fast PYTEST_ARGS='-x -k social'. pytest exits 5 when it collected no
 # test: that is a failure here too.
