@@ -213,6 +213,12 @@ def probe(html_path: str | os.PathLike, times: Sequence[float], path: str | None
     return result
 
 
+def visible_at(html_path: str | os.PathLike, times: Sequence[float], path: str, **kwargs) -> list[bool]:
+    """Whether the scene-tree node ``path`` (and all its parents) is visible
+    with the page's animation seeked to each of ``times`` (seconds)."""
+    return [bool(frame[2]) for frame in probe(html_path, times, path, **kwargs)["frames"]]
+
+
 def seek_positions(html_path: str | os.PathLike, times: Sequence[float], path: str = BASE_PATH,
                    **kwargs) -> dict[float, np.ndarray]:
     """Positions (3,) in Drake's world frame, metres, of the scene-tree node
