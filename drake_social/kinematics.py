@@ -26,6 +26,7 @@ __all__ = [
     "displacement_bound",
     "nominal_durations",
     "nominal_path_times",
+    "polyline_distance",
 ]
 
 
@@ -277,3 +278,18 @@ def nominal_path_times(waypoints: np.ndarray, max_base_speed: float, arm_max_vel
         return np.full(len(wp), float(t0))
     return float(t0) + np.concatenate([[0.0], np.cumsum(nominal_durations(wp[:-1], wp[1:], max_base_speed,
                                                                           arm_max_velocity))])
+
+
+def polyline_distance(points: np.ndarray, line: np.ndarray) -> np.ndarray:
+    """The distance (...,) of each point (..., 2) to the polyline ``line``
+    (L, 2), L >= 1 (a point when L = 1), metres."""
+    points, line = np.asarray(points, float), np.asarray(line, float).reshape(-1, 2)
+    if len(line) == 1:
+        return np.linalg.norm(points - line[0], axis=-1)
+    a, b = line[:-1], line[1:]
+    ab = b - a
+    den = np.maximum(np.einsum("sd,sd->s", ab, ab), 1e-300)
+    rel = points[..., None, :] - a  # (..., S, 2)
+    u = np.clip(np.einsum("...sd,sd->...s", rel, ab) / den, 0.0, 1.0)
+    nearest = a + u[..., None] * ab
+    return np.linalg.norm(points[..., None, :] - nearest, axis=-1).min(axis=-1)

@@ -38,6 +38,7 @@ import numpy as np
 
 from drake_social.collision import people_kernel
 from drake_social.kinematics import nominal_path_times
+from drake_social.people.interactive import robot_samples
 from drake_social.people.prediction import Prediction
 from drake_social.planning.decisions import decision
 
@@ -69,12 +70,7 @@ def robot_along(path: np.ndarray, t0: float, times: np.ndarray, max_base_speed: 
     ``t0`` at the execution limits, at ``times`` (T,) seconds (linear in
     each motion; the first and last waypoints before and after)."""
     wp = np.asarray(path, float).reshape(-1, 4)
-    keep = np.concatenate([[True], np.any(wp[1:] != wp[:-1], axis=1)])
-    wp = wp[keep]
-    at = nominal_path_times(wp, max_base_speed, arm_max_velocity, t0)
-    if len(wp) == 1:
-        return np.repeat(wp, len(times), axis=0)
-    return np.stack([np.interp(times, at, wp[:, j]) for j in range(4)], axis=1)
+    return robot_samples(wp, nominal_path_times(wp, max_base_speed, arm_max_velocity, t0), np.asarray(times, float))
 
 
 def culprit(result, prediction: Prediction, replaced: np.ndarray | None, q: np.ndarray, scene,

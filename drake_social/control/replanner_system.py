@@ -111,6 +111,7 @@ from drake_social.people import PeopleModel, PeopleState, people_model, predict
 from drake_social.kinematics import nominal_path_times
 from drake_social.people.interactive import InteractiveModel, InteractivePeople
 from drake_social.people.predicted import predicted_people
+from drake_social.planning.decisions import decision
 from drake_social.scenario import Scenario, replan_rate_problem
 
 __all__ = ["KEPT_PREDICTIONS", "MAX_PREDICTED_REPLANS", "MOVING_SPEED", "ReplanState", "ReplanningPlannerSystem",
@@ -428,8 +429,9 @@ class ReplanningPlannerSystem(LeafSystem):
         shown, judged, standing = prediction, prediction, None
         if self._interactive is not None:
             shown = self._driving(now, prediction, chosen_path)
-            judged = self._driving(now, prediction, q[None] if replaced is None else replaced)
-            standing = self._driving(now, prediction, q[None])
+            if scene is not None and decision(result) not in ("initial", "cheaper"):  # else no culprit is sought
+                standing = shown if len(chosen_path) == 1 else self._driving(now, prediction, q[None])
+                judged = standing if replaced is None else self._driving(now, prediction, replaced)
         who = culprit(result, judged, replaced, q, scene, ex.max_base_speed, ex.arm_max_velocity, standing=standing,
                       safety_horizon=float(self._scenario.planner.safety_horizon))
         chosen = chosen_path[:, :2]

@@ -29,6 +29,7 @@ import math
 
 import numpy as np
 
+from drake_social.kinematics import polyline_distance
 from drake_social.people.prediction import Prediction
 
 __all__ = ["MAX_PREDICTED_PEOPLE", "MAX_PREDICTED_SAMPLES", "PREDICTED_STEP", "PredictedPeople",
@@ -119,22 +120,11 @@ def sample_stride(samples: int, dt: float, *, step: float = PREDICTED_STEP,
     the ``samples`` sample times (``(samples - 1) // stride + 1``)."""
     if samples < 1 or max_samples < 1:
         raise ValueError(f"sample_stride: samples and max_samples must be >= 1, got {samples}, {max_samples}")
+    if not (math.isfinite(dt) and dt > 0.0 and math.isfinite(step) and step >= 0.0):
+        raise ValueError(f"sample_stride: dt must be > 0 and step >= 0 seconds (finite), got {dt!r}, {step!r}")
     at_least = max(1, int(math.ceil(step / dt - 1e-9)))
     fit = int(math.ceil((samples - 1) / (max_samples - 1))) if max_samples > 1 else samples
     return max(at_least, fit, 1)
-
-
-def _polyline_distance(points: np.ndarray, line: np.ndarray) -> np.ndarray:
-    """The distance (...,) of each point (..., 2) to the polyline ``line`` (L, 2), metres."""
-    if len(line) == 1:
-        return np.linalg.norm(points - line[0], axis=-1)
-    a, b = line[:-1], line[1:]
-    ab = b - a
-    den = np.maximum(np.einsum("sd,sd->s", ab, ab), 1e-300)
-    rel = points[..., None, :] - a  # (..., S, 2)
-    u = np.clip(np.einsum("...sd,sd->...s", rel, ab) / den, 0.0, 1.0)
-    nearest = a + u[..., None] * ab
-    return np.linalg.norm(points[..., None, :] - nearest, axis=-1).min(axis=-1)
 
 
 def predicted_people(prediction: Prediction, replan: int, *, near: np.ndarray | None = None, culprit: int = -1,
@@ -160,14 +150,17 @@ def predicted_people(prediction: Prediction, replan: int, *, near: np.ndarray | 
     if not 1 <= max_people <= MAX_PREDICTED_PEOPLE or not 1 <= max_samples <= MAX_PREDICTED_SAMPLES:
         raise ValueError(f"predicted_people: max_people in [1, {MAX_PREDICTED_PEOPLE}] and max_samples in "
                          f"[1, {MAX_PREDICTED_SAMPLES}], got {max_people}, {max_samples}")
+    line = None if near is None else np.asarray(near, float)
+    if line is not None and (line.ndim != 2 or line.shape[1] != 2 or not np.isfinite(line).all()):
+        raise ValueError(f"predicted_people: near must be (L, 2) finite base positions [x, y], got shape "
+                         f"{line.shape}")
     stride = sample_stride(prediction.samples, prediction.dt, step=step, max_samples=max_samples)
     rows = np.arange(0, prediction.samples, stride)
     positions, present = prediction.positions[rows], prediction.present[rows]
     order = np.arange(prediction.count)
     if prediction.count > max_people:
-        if near is not None and len(near):
-            line = np.asarray(near, float).reshape(-1, 2)
-            distance = np.where(present, _polyline_distance(positions, line), math.inf).min(axis=0)
+        if line is not None and len(line):
+            distance = np.where(present, polyline_distance(positions, line), math.inf).min(axis=0)
         else:
             distance = order.astype(float)
         if culprit >= 0:

@@ -26,6 +26,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from drake_social.kinematics import polyline_distance
+
 __all__ = ["PAUSE_SHARES", "SWITCH_STEP", "pause_steps", "route_deviation"]
 
 #: Seconds between the samples of a new path at which its distance from the current route is measured.
@@ -41,21 +43,6 @@ def pause_steps(safety_horizon: float) -> tuple[float, ...]:
     """The pauses (seconds, ascending) tried before the current path is driven again, given the
     seconds of the safety horizon left where the pause begins."""
     return tuple(share * float(safety_horizon) for share in PAUSE_SHARES)
-
-
-def _point_polyline_distance(points: np.ndarray, polyline: np.ndarray) -> np.ndarray:
-    """The distance (M,) of each point (M, 2) from the polyline (K, 2) (a point when K = 1)."""
-    if len(polyline) == 1:
-        return np.hypot(*(points - polyline[0]).T)
-    a, b = polyline[:-1], polyline[1:]
-    ab = b - a
-    length2 = np.einsum("ij,ij->i", ab, ab)
-    rel = points[:, None, :] - a[None, :, :]
-    s = np.where(length2 > 0.0, np.einsum("mij,ij->mi", rel, ab) / np.where(length2 > 0.0, length2, 1.0), 0.0)
-    s = np.clip(s, 0.0, 1.0)
-    nearest = a[None] + s[..., None] * ab[None]
-    gap = points[:, None, :] - nearest
-    return np.sqrt(np.einsum("mij,mij->mi", gap, gap)).min(axis=1)
 
 
 def route_deviation(path: np.ndarray, times: np.ndarray, current: np.ndarray, window: float) -> float:
@@ -79,4 +66,4 @@ def route_deviation(path: np.ndarray, times: np.ndarray, current: np.ndarray, wi
     at = np.append(np.arange(float(tt[0]), end, SWITCH_STEP), end)
     points = np.column_stack([np.interp(at, tt, wp[:, 0]), np.interp(at, tt, wp[:, 1])])
     route = np.asarray(current, float).reshape(-1, 4)[:, :2]
-    return float(_point_polyline_distance(points, route).mean())
+    return float(polyline_distance(points, route).mean())

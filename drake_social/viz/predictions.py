@@ -135,6 +135,7 @@ def _map(ax, scenario: Scenario, replans: Sequence, chosen: PredictedPeople, peo
     draw_world(ax, scenario, names=False, people=real_now)
     where = _log_index(chosen, people)
     times = chosen.times[chosen.times <= people.times[-1] + 1e-9]
+    real_at = [people.state_at(float(t)).positions for t in times]  # (P, 2) each: the people at the kept times
     xs, ys = [], []
     for k, i in enumerate(where):
         colour = _CULPRIT if k == chosen.culprit else _PREDICTED
@@ -147,7 +148,7 @@ def _map(ax, scenario: Scenario, replans: Sequence, chosen: PredictedPeople, peo
         xs += list(pred[:, 0])
         ys += list(pred[:, 1])
         if i >= 0 and len(times):
-            real = np.array([people.state_at(float(t)).positions[i] for t in times])
+            real = np.array([positions[i] for positions in real_at])
             ax.plot(real[:, 0], real[:, 1], "-o", color=colour, markersize=3, linewidth=1.2, alpha=0.8, zorder=5)
             xs += list(real[:, 0])
             ys += list(real[:, 1])
@@ -184,11 +185,18 @@ def _map(ax, scenario: Scenario, replans: Sequence, chosen: PredictedPeople, peo
     ax.legend(fontsize=6.5, loc="best", framealpha=0.85)
 
 
+def _moved(error: np.ndarray, who: np.ndarray) -> list:
+    """The people (values of ``who``) whose prediction erred by ``_STOOD`` or more: not standing as predicted."""
+    return [k for k in np.unique(who) if error[who == k].max() >= _STOOD]
+
+
 def _errors(ax, predicted: Sequence[PredictedPeople], chosen: PredictedPeople, people: PeopleLog) -> None:
-    all_ahead, all_error = [], []
+    all_ahead, all_error, chosen_errors = [], [], None
     for p in predicted:
         a, e, who = prediction_errors(p, people)
-        moved = np.isin(who, [k for k in np.unique(who) if e[who == k].max() >= _STOOD])
+        if p is chosen:
+            chosen_errors = (a, e, who)
+        moved = np.isin(who, _moved(e, who))
         all_ahead.append(a[moved])
         all_error.append(e[moved])
     ahead, error = np.concatenate(all_ahead), np.concatenate(all_error)
@@ -197,8 +205,8 @@ def _errors(ax, predicted: Sequence[PredictedPeople], chosen: PredictedPeople, p
         levels = np.unique(np.round(ahead, 6))
         ax.plot(levels, [np.median(error[np.isclose(ahead, v)]) for v in levels], "-", color="k", linewidth=1.2,
                 label="median")
-    a, e, who = prediction_errors(chosen, people)
-    for k in [k for k in np.unique(who) if e[who == k].max() >= _STOOD]:
+    a, e, who = chosen_errors if chosen_errors is not None else prediction_errors(chosen, people)
+    for k in _moved(e, who):
         colour = _CULPRIT if k == chosen.culprit else _PREDICTED
         ax.plot(a[who == k], e[who == k], "-o", color=colour, markersize=3, linewidth=0.9, alpha=0.9)
     ax.plot([], [], "-o", color=_PREDICTED, markersize=3, label=f"the replan at t = {chosen.t:.1f} s")

@@ -76,6 +76,29 @@ def test_the_person_on_the_path_in_the_window_not_the_nearest_now(room):
     assert culprit(wait, prediction, path, q, scene, *limits) == 1
 
 
+def test_the_judges_own_words_name_the_culprit(room):
+    """The reasons as the replanner's judge words them (PathJudge.unsafe_words and wait_words,
+    not hand-written): the window of the unsafe motion, and a person near now."""
+    from types import SimpleNamespace
+
+    from drake_social.planning.replan_eval import PathEvaluation, PathJudge
+
+    scenario, scene, limits = room
+    q, path, times, prediction = _setup(scenario, limits)
+    ev = PathEvaluation(times, math.inf, 0.0, 3.0, -1, 0)  # motion 0 comes within the safety distance
+    judge = SimpleNamespace(safety=0.05, unsafe_words=lambda e: PathJudge.unsafe_words(judge, e),
+                            people_safety=SimpleNamespace(clearance=lambda q_, t_: 1.0))
+    unsafe = PathJudge.unsafe_words(judge, ev)
+    assert culprit(Result(T0, "new", f"the current path is not safe any more ({unsafe})"), prediction, path, q,
+                   scene, *limits) == 1
+    wait = PathJudge.wait_words(judge, q, T0, ev, "500 samples")
+    assert culprit(Result(T0, "wait", wait), prediction, path, q, scene, *limits) == 1
+    judge.people_safety = SimpleNamespace(clearance=lambda q_, t_: 0.02)  # someone within the distance now
+    near = PathJudge.wait_words(judge, q, T0, ev, "500 samples")
+    assert "from the robot now" in near
+    assert culprit(Result(T0, "wait", near), prediction, path, q, scene, *limits) == 0
+
+
 def test_now_the_nearest_person_standing(room):
     scenario, scene, limits = room
     q, path, _, prediction = _setup(scenario, limits)

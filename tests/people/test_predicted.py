@@ -11,7 +11,6 @@ import numpy as np
 import pytest
 
 from drake_social.people import PeopleState, constant_velocity
-from drake_social.people import predicted as dut_module
 from drake_social.people.predicted import (MAX_PREDICTED_PEOPLE, MAX_PREDICTED_SAMPLES, PREDICTED_STEP,
                                            PredictedPeople, predicted_people, sample_stride)
 
@@ -90,4 +89,17 @@ def test_refuses_more_than_its_bounds():
                         tuple("abcdefghijklmnopq"))
     with pytest.raises(ValueError, match="1 to 10 times"):
         PredictedPeople(0, 0.0, np.arange(11.0), np.zeros((11, 1, 2)), np.ones((11, 1), bool), [0.2], [0], ("a",))
-    assert dut_module.__all__  # the module's names are public
+
+
+@pytest.mark.parametrize("near", [np.zeros((3, 4)), np.zeros(6), np.array([[0.0, math.nan]])])
+def test_refuses_a_near_path_that_is_not_base_positions(near):
+    prediction = constant_velocity(_state(MAX_PREDICTED_PEOPLE + 2), horizon=5.0)
+    with pytest.raises(ValueError, match=r"near must be \(L, 2\) finite base positions"):
+        predicted_people(prediction, 1, near=near)
+
+
+@pytest.mark.parametrize("dt, step", [(0.0, 0.5), (-0.1, 0.5), (math.nan, 0.5), (0.1, -1e-9), (0.1, math.inf)])
+def test_refuses_steps_that_are_not_times(dt, step):
+    with pytest.raises(ValueError, match="dt must be > 0 and step >= 0"):
+        sample_stride(51, dt, step=step)
+    assert sample_stride(51, 0.1, step=0.0) == 6  # step 0: only the bound on samples: ceil(50 / 9)

@@ -128,17 +128,24 @@ def test_label_lines():
     assert lines[0] == "t = 2.5 s: new route: cheaper"
 
 
-def test_without_predictions_the_page_is_as_before(tiny_scenario_path):
+def test_without_predictions_the_page_is_as_before(tiny_scenario_path, tmp_path):
+    """No predictions, or only one of a replan that began no plan or wait (replan 1 kept the
+    path): the page is the one drawn without the argument, with no predicted node in its
+    decoded commands; a prediction of a replan that began a span is drawn."""
     scenario = load_scenario(tiny_scenario_path)
     pages = []
-    for predicted in ((), None):
+    for k, predicted in enumerate(((_predicted(1, 0.5),), None, (_predicted(2, 1.0),))):
         meshcat = replay.make_meshcat()
         if predicted is None:
             replay.draw_overlays(meshcat, scenario, KNOTS, replans=log())
         else:
             replay.draw_overlays(meshcat, scenario, KNOTS, replans=log(), predicted=predicted)
-        pages.append(meshcat.StaticHtml())
-    assert pages[0] == pages[1] and NODE not in pages[0]
+        page = tmp_path / f"page{k}.html"
+        page.write_text(meshcat.StaticHtml(), encoding="utf-8")
+        pages.append(page)
+    drawn = [any(str(c.get("path", "")).startswith(NODE) for c in commands(p)) for p in pages]
+    assert pages[0].read_text(encoding="utf-8") == pages[1].read_text(encoding="utf-8")
+    assert drawn == [False, False, True]
 
 
 @pytest.mark.slow
