@@ -49,7 +49,7 @@ chromium:
 #               tests/conftest.py to every test calling browser.require_chromium())
 #   subprocess  starts another process, mostly a Python interpreter or drake-social
 #               paying pydrake's imports (by rule in tests/conftest.py)
-# make test runs them all (3,244 tests; 13 min 17 s on two cores); make test-fast
+# make test runs them all (3,253 tests; 13 min 22 s on two cores); make test-fast
 # leaves the three out (2,820 tests, about 100 s idle) to iterate with. tests/test_docs.py keeps both counts
 # within 15 % of what pytest collects. PYTEST_ARGS adds options to both, e.g.
 # make test-fast PYTEST_ARGS='-x -k social'. pytest exits 5 when it collected no
